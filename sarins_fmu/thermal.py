@@ -1,0 +1,150 @@
+"""Lumped thermal model of the IMU.
+
+Each sensor (gyro x, y, z, accelerometer x, y, z) is a first-order lumped
+body heated by the electronics and coupled to the ambient (or thermal
+chamber) temperature:
+
+    dT_j/dt = (T_amb(t) + dT_self_j - T_j) / tau_j
+
+A **cold start** begins at the ambient temperature and warms up by
+``dT_self`` with time constant ``tau`` (seed 000: the temperature rises by
+more than 10 degC during a 4 h alignment); a **hot start** begins in
+equilibrium, so only ambient changes move it (seed 000: less than 3 degC).
+
+The ambient is sampled on the simulation grid and taken piecewise linear in
+between; each step is then integrated exactly, so the solution does not
+depend on the step size.  Temperatures in degC, times in s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._jit import jit
+
+SENSORS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
+N_SENSORS = len(SENSORS)
+START_KINDS = ("hot", "cold")
+
+
+@dataclass(frozen=True)
+class ThermalParams:
+    """Constants of the lumped thermal model.
+
+    Attributes
+    ----------
+    self_heating : tuple of 6 floats
+        Equilibrium rise of each sensor above ambient, degC.
+    time_constant : tuple of 6 floats
+        Warm-up time constant of each sensor, s.
+    """
+
+    self_heating: tuple = (16.0, 16.5, 17.0, 15.0, 15.2, 15.4)
+    time_constant: tuple = (5400.0, 5600.0, 5800.0, 5000.0, 5100.0, 5200.0)
+
+    def __post_init__(self):
+        for name in ("self_heating", "time_constant"):
+            value = np.asarray(getattr(self, name), float)
+            if value.shape != (N_SENSORS,) or not np.all(np.isfinite(value)):
+                raise ValueError(f"thermal {name} needs {N_SENSORS} finite values")
+        if np.any(np.asarray(self.time_constant) <= 0):
+            raise ValueError("thermal time constants must be positive")
+
+
+@dataclass(frozen=True)
+class Ambient:
+    """Ambient (or chamber) temperature: mean + daily sinusoid + linear drift.
+
+    T_amb(t) = mean + amplitude sin(2 pi t / period + phase) + slope t, degC.
+    For a chamber profile pass ``profile`` = (times s, temperatures degC): it
+    replaces the formula and is interpolated linearly (held at both ends).
+    """
+
+    mean: float = 20.0
+    amplitude: float = 0.0
+    period: float = 86400.0
+    phase: float = 0.0
+    slope: float = 0.0
+    profile: tuple | None = field(default=None)
+
+    def __call__(self, time):
+        t = np.asarray(time, dtype=float)
+        if self.profile is not None:
+            pt, pv = (np.asarray(x, float) for x in self.profile)
+            return np.interp(t, pt, pv)
+        return self.mean + self.amplitude * np.sin(2 * math.pi * t / self.period + self.phase) + self.slope * t
+
+
+class ThermalModel:
+    """Stateful lumped thermal model stepped on a time grid.
+
+    Parameters
+    ----------
+    params : ThermalParams
+    ambient : callable
+        T_amb(time s) -> degC, vectorised (e.g. :class:`Ambient`).
+    start : {'hot', 'cold'}
+        Initial condition at ``t0``.
+    t0 : float
+        Start time, s.
+    """
+
+    def __init__(self, params: ThermalParams = ThermalParams(), ambient=Ambient(), start: str = "hot",
+                 t0: float = 0.0):
+        if start not in START_KINDS:
+            raise ValueError(f"thermal start must be 'hot' or 'cold', got {start!r}")
+        self.params, self.ambient, self.start = params, ambient, start
+        self._heat = np.asarray(params.self_heating, float)
+        self._tau = np.asarray(params.time_constant, float)
+        self.reset(t0)
+
+    def reset(self, t0: float = 0.0) -> None:
+        """Return to the initial condition at ``t0``."""
+        self.time = float(t0)
+        t_amb = float(self.ambient(t0))
+        self.temperature = np.full(N_SENSORS, t_amb) + (self._heat if self.start == "hot" else 0.0)
+
+    def rate(self, temperature, time):
+        """dT/dt (degC/s) for temperatures (..., 6) at times (...)."""
+        t_amb = np.asarray(self.ambient(time), float)[..., None]
+        return (t_amb + self._heat - temperature) / self._tau
+
+    def advance(self, times):
+        """Integrate exactly to each of ``times`` (K,) and return T (K, 6), degC.
+
+        ``times`` must be increasing and not before the current time.  The
+        ambient is taken linear between successive times.
+        """
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        if times.size == 0:
+            return np.empty((0, N_SENSORS))
+        grid = np.concatenate([[self.time], times])
+        h = np.diff(grid)
+        if np.any(h < 0) or not np.all(np.isfinite(h)):
+            raise ValueError("thermal model times must be finite and increasing")
+        amb = np.asarray(self.ambient(grid), float)
+        slope = np.divide(np.diff(amb), h, out=np.zeros_like(h), where=h > 0)
+        out = np.empty((len(times), N_SENSORS))
+        for j in range(N_SENSORS):  # 6 sensors: the recurrence below is vectorised over time
+            tau = self._tau[j]
+            decay = np.exp(-h / tau)
+            # exact step of dT/dt = (A_k + s tau' + dT - T)/tau, see module docstring
+            forcing = (amb[:-1] + self._heat[j] - slope * tau) * (1.0 - decay) + slope * h
+            out[:, j] = _linear_recurrence(decay, forcing, self.temperature[j])
+        self.time = float(times[-1])
+        self.temperature = out[-1].copy()
+        return out
+
+
+@jit
+def _linear_recurrence(a, b, x0):
+    """x_k = a_k x_{k-1} + b_k for k = 1..K (returns x_1..x_K); compiled loop."""
+    out = np.empty_like(b)
+    x = x0
+    for k in range(a.shape[0]):
+        x = a[k] * x + b[k]
+        out[k] = x
+    return out
