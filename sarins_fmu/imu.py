@@ -281,6 +281,19 @@ class StaticBase:
         """Specific force of the static base resolved in t, m/s^2 (-gravity)."""
         return -(self.mat_nt.T @ earth.gravity_n(self.lat, self.height))
 
+    def base_motion(self, t_start, h):
+        """The moving-base interface: inertial rate (rad/s) and specific force
+        (m/s^2) of the base frame t, resolved in t, held over each interval
+        [t_start[k], t_start[k] + h).  (K, 3) each; constant for a static base.
+
+        A moving base (vehicle) implements the same method; its heading
+        changes belong in an outer gimbal of the schedule (piecewise-constant
+        yaw acceleration, rebuilt exactly inside an interval), so that what
+        is held over an interval is only the slowly varying part.
+        """
+        n = len(t_start)
+        return np.tile(self.inertial_rate_t(), (n, 1)), np.tile(self.specific_force_t(), (n, 1))
+
 
 class IMU:
     """Increment-output IMU stepped over output intervals.
@@ -288,7 +301,8 @@ class IMU:
     Parameters
     ----------
     model : ImuModel
-    base : StaticBase
+    base : StaticBase or any object with ``base_motion(t_start, h)`` (the
+        moving-base interface, see :meth:`StaticBase.base_motion`)
     gimbal_axes : (A, 3) turntable gimbal axes (see :mod:`turntable`)
     output_interval : float, s (one Delta theta / Delta v per interval)
     internal_rate : float, Hz (minor loop rate; must give a whole number of
@@ -316,8 +330,6 @@ class IMU:
         self.h, self.n_sub = float(output_interval), int(round(n_sub))
         self.seed, self.t0, self.aging_days = int(seed), float(t0), float(aging_days)
         self.thermal = ThermalModel(model.thermal, ambient, thermal_start, t0)
-        self._w_t = base.inertial_rate_t()
-        self._f_t = base.specific_force_t()
         poly = model.axial_drift_poly
         if aging_days > 0 and np.any(model.aging_sigma > 0):
             poly = aged_drift_poly(model, [aging_days], seed=self.seed + 7919)[0]
@@ -391,8 +403,10 @@ class IMU:
         dtemp = (temps - t_start) / self.h
         g_bias, g_sf, a_bias, a_sf = self._triad_terms(t_mid, dtemp, self._gauss_markov(n))
         m = self.model
+        w_t, f_t = self.base.base_motion(t_end - self.h, self.h)
         dtheta, dv = _increments_kernel(
-            self.axes, angle0, rate0, accel, self._w_t, self._f_t, self.h, self.n_sub,
+            self.axes, angle0, rate0, accel, np.ascontiguousarray(w_t, float), np.ascontiguousarray(f_t, float),
+            self.h, self.n_sub,
             g_sf, m.gyro.misalignment, g_bias, m.gyro.quadratic, m.lowrate_gain, m.lowrate_width,
             m.g_sensitivity, a_sf, m.accel.misalignment, a_bias, m.accel.quadratic)
         noise = self._rng_noise.standard_normal((n, 6)) * math.sqrt(self.h)

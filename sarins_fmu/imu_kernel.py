@@ -52,8 +52,8 @@ def _rot_t(ax, ay, az, c, s, vx, vy, vz):
 @jit
 def _truth(axes, angle0, rate0, accel, k, tau, w_t, f_t):
     """True omega_ib_b and f_b at time tau into interval k."""
-    wx, wy, wz = w_t[0], w_t[1], w_t[2]
-    fx, fy, fz = f_t[0], f_t[1], f_t[2]
+    wx, wy, wz = w_t[k, 0], w_t[k, 1], w_t[k, 2]
+    fx, fy, fz = f_t[k, 0], f_t[k, 1], f_t[k, 2]
     sx = sy = sz = 0.0
     for j in range(axes.shape[0]):
         th = angle0[k, j] + (rate0[k, j] + 0.5 * accel[k, j] * tau) * tau
@@ -99,8 +99,8 @@ def increments(axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
     ----------
     axes : (A, 3) gimbal axes; angle0, rate0, accel : (K, A) gimbal state at
         each interval start (rad, rad/s, rad/s^2).
-    w_t, f_t : (3,) inertial rate (rad/s) and specific force (m/s^2) of the
-        base frame, resolved in it.
+    w_t, f_t : (K, 3) inertial rate (rad/s) and specific force (m/s^2) of the
+        base frame, resolved in it, held over each interval.
     h : interval, s; n_sub : minor steps per interval.
     g_sf, a_sf : (K, 3) scale-factor errors; g_mis, a_mis : (3, 3) misalignment
         (diagonal ignored); g_bias, a_bias : (K, 3) biases (rad/s, m/s^2);
