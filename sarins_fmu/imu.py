@@ -336,10 +336,11 @@ class IMU:
         self.drift_poly = poly
         self.reset()
 
-    def reset(self) -> None:
-        """Return to the state at construction (time, temperatures, random streams)."""
+    def reset(self, ambient0: float | None = None) -> None:
+        """Return to the state at construction (time, temperatures, random
+        streams); ``ambient0`` (degC) overrides the ambient function at t0."""
         self.time = self.t0
-        self.thermal.reset(self.t0)
+        self.thermal.reset(self.t0, ambient0)
         seq = np.random.SeedSequence(self.seed)
         self._rng_noise, self._rng_gm = (np.random.default_rng(s) for s in seq.spawn(2))
         m = self.model
@@ -382,6 +383,8 @@ class IMU:
         ----------
         angle0, rate0, accel : (K, A) gimbal angles, rates and accelerations
             at the start of each interval (rad, rad/s, rad/s^2).
+        ambient : (K,) ambient temperature at each interval end, degC
+            (default: the ambient function given at construction).
 
         Returns
         -------
@@ -397,7 +400,7 @@ class IMU:
         n = angle0.shape[0]
         t_end = self._times(n)
         t_prev = self.thermal.temperature.copy()
-        temps = self.thermal.advance(t_end)
+        temps = self.thermal.advance(t_end, ambient)
         t_start = np.vstack([t_prev, temps[:-1]])
         t_mid = 0.5 * (t_start + temps)
         dtemp = (temps - t_start) / self.h

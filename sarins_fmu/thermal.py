@@ -101,10 +101,13 @@ class ThermalModel:
         self._tau = np.asarray(params.time_constant, float)
         self.reset(t0)
 
-    def reset(self, t0: float = 0.0) -> None:
-        """Return to the initial condition at ``t0``."""
+    def reset(self, t0: float = 0.0, ambient0: float | None = None) -> None:
+        """Return to the initial condition at ``t0`` (ambient there from the
+        ambient function, or ``ambient0`` degC when given)."""
         self.time = float(t0)
-        t_amb = float(self.ambient(t0))
+        t_amb = float(self.ambient(t0) if ambient0 is None else ambient0)
+        _check_temperature(t_amb)
+        self._ambient_now = t_amb
         self.temperature = np.full(N_SENSORS, t_amb) + (self._heat if self.start == "hot" else 0.0)
 
     def rate(self, temperature, time):
@@ -112,11 +115,13 @@ class ThermalModel:
         t_amb = np.asarray(self.ambient(time), float)[..., None]
         return (t_amb + self._heat - temperature) / self._tau
 
-    def advance(self, times):
+    def advance(self, times, ambient=None):
         """Integrate exactly to each of ``times`` (K,) and return T (K, 6), degC.
 
         ``times`` must be increasing and not before the current time.  The
-        ambient is taken linear between successive times.
+        ambient is taken linear between successive times; its values at
+        ``times`` come from the ambient function, or from ``ambient`` (K,)
+        degC when given (e.g. a chamber temperature received as an input).
         """
         times = np.atleast_1d(np.asarray(times, dtype=float))
         if times.size == 0:
@@ -125,7 +130,9 @@ class ThermalModel:
         h = np.diff(grid)
         if np.any(h < 0) or not np.all(np.isfinite(h)):
             raise ValueError("thermal model times must be finite and increasing")
-        amb = np.asarray(self.ambient(grid), float)
+        amb_new = np.asarray(self.ambient(times) if ambient is None else ambient, float).reshape(times.shape)
+        _check_temperature(amb_new)
+        amb = np.concatenate([[self._ambient_now], amb_new])
         slope = np.divide(np.diff(amb), h, out=np.zeros_like(h), where=h > 0)
         out = np.empty((len(times), N_SENSORS))
         for j in range(N_SENSORS):  # 6 sensors: the recurrence below is vectorised over time
@@ -135,8 +142,15 @@ class ThermalModel:
             forcing = (amb[:-1] + self._heat[j] - slope * tau) * (1.0 - decay) + slope * h
             out[:, j] = _linear_recurrence(decay, forcing, self.temperature[j])
         self.time = float(times[-1])
+        self._ambient_now = float(amb[-1])
         self.temperature = out[-1].copy()
         return out
+
+
+def _check_temperature(values) -> None:
+    values = np.asarray(values, float)
+    if not np.all(np.isfinite(values)) or np.any(values < -273.15):
+        raise ValueError("ambient temperature must be finite and above absolute zero (degC)")
 
 
 @jit

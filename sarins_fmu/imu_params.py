@@ -1,0 +1,116 @@
+"""Flat, named parameters of an :class:`~sarins_fmu.imu.ImuModel`.
+
+Tools that speak in scalar parameters (FMUs, CSV sweeps) see an IMU model as
+a list of names such as ``gyro_bias_x`` or ``accel_misalignment_yz``, each in
+SI units.  :func:`flatten` turns a model into ``{name: value}``,
+:func:`apply_overrides` builds a model from a preset plus any subset of those
+names, and :data:`UNITS` gives the unit of each name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields, replace
+
+import numpy as np
+
+from .imu import ImuModel, TriadErrors
+from .thermal import SENSORS, ThermalParams
+
+AXES = "xyz"
+_TRIAD_UNITS = {  # field -> (gyro unit, accelerometer unit)
+    "bias": ("rad/s", "m/s2"),
+    "scale_factor": ("1", "1"),
+    "random_walk": ("rad/sqrt(s)", "m/s/sqrt(s)"),
+    "bias_instability": ("rad/s", "m/s2"),
+    "bias_corr_time": ("s", "s"),
+    "bias_tc1": ("rad/s/degC", "m/s2/degC"),
+    "bias_tc2": ("rad/s/degC2", "m/s2/degC2"),
+    "scale_factor_tc": ("1/degC", "1/degC"),
+    "quadratic": ("s/rad", "s2/m"),
+}
+_OFF_DIAGONAL = [(i, j) for i in range(3) for j in range(3) if i != j]
+
+
+def _names():
+    """(name, unit, getter, setter-key) for every flat parameter."""
+    out = []
+    for t, triad in enumerate(("gyro", "accel")):
+        for f, units in _TRIAD_UNITS.items():
+            for i, ax in enumerate(AXES):
+                out.append((f"{triad}_{f}_{ax}", units[t], (triad, f, i)))
+        for i, j in _OFF_DIAGONAL:
+            out.append((f"{triad}_misalignment_{AXES[i]}{AXES[j]}", "rad", (triad, "misalignment", (i, j))))
+    for i in range(3):
+        for j in range(3):
+            out.append((f"g_sensitivity_{AXES[i]}{AXES[j]}", "rad/s/(m/s2)", ("g_sensitivity", (i, j))))
+    for i, ax in enumerate(AXES):
+        out.append((f"lowrate_gain_{ax}", "1", ("lowrate_gain", i)))
+        out.append((f"lowrate_width_{ax}", "rad/s", ("lowrate_width", i)))
+    for i, (coef, unit) in enumerate(zip("abc", ("rad/s/degC2", "rad/s/degC", "rad/s"))):
+        out.append((f"axial_drift_{coef}", unit, ("axial_drift_poly", i)))
+        out.append((f"aging_sigma_{coef}", unit, ("aging_sigma", i)))
+    out.append(("axial_drift_dtdt", "rad/degC", ("axial_drift_dtdt",)))
+    out.append(("aging_corr_time", "s", ("aging_corr_time",)))
+    for j, sensor in enumerate(SENSORS):
+        out.append((f"self_heating_{sensor}", "degC", ("thermal", "self_heating", j)))
+        out.append((f"time_constant_{sensor}", "s", ("thermal", "time_constant", j)))
+    return out
+
+
+PARAMETERS = _names()
+UNITS = {name: unit for name, unit, _ in PARAMETERS}
+
+
+def _get(model: ImuModel, key):
+    if key[0] in ("gyro", "accel"):
+        value = getattr(getattr(model, key[0]), key[1])
+        return float(value[key[2]])
+    if key[0] == "thermal":
+        return float(getattr(model.thermal, key[1])[key[2]])
+    value = getattr(model, key[0])
+    return float(value if len(key) == 1 else np.asarray(value)[key[1]])
+
+
+def flatten(model: ImuModel) -> dict:
+    """All flat parameters of ``model`` as {name: float} (SI units, see UNITS)."""
+    return {name: _get(model, key) for name, _, key in PARAMETERS}
+
+
+def apply_overrides(model: ImuModel, overrides: dict) -> ImuModel:
+    """Copy of ``model`` with the named flat parameters replaced.
+
+    Raises ValueError naming any unknown parameter or non-finite value.
+    """
+    keys = {name: key for name, _, key in PARAMETERS}
+    unknown = sorted(set(overrides) - set(keys))
+    if unknown:
+        raise ValueError(f"unknown IMU parameter(s): {', '.join(unknown)}")
+    arrays = {
+        "gyro": {f.name: np.array(getattr(model.gyro, f.name), float) for f in fields(TriadErrors)},
+        "accel": {f.name: np.array(getattr(model.accel, f.name), float) for f in fields(TriadErrors)},
+        "thermal": {f.name: list(getattr(model.thermal, f.name)) for f in fields(ThermalParams)},
+        "top": {name: np.array(getattr(model, name), float) for name in
+                ("g_sensitivity", "lowrate_gain", "lowrate_width", "axial_drift_poly", "aging_sigma",
+                 "axial_drift_dtdt", "aging_corr_time")},
+    }
+    for name, value in overrides.items():
+        value = float(value)
+        if not np.isfinite(value):
+            raise ValueError(f"IMU parameter {name} must be finite, got {value}")
+        key = keys[name]
+        if key[0] in ("gyro", "accel", "thermal"):
+            arrays[key[0]][key[1]][key[2]] = value
+        elif len(key) == 1:
+            arrays["top"][key[0]] = np.array(value)
+        else:
+            arrays["top"][key[0]][key[1]] = value
+    top = arrays["top"]
+    return replace(
+        model,
+        gyro=TriadErrors(**arrays["gyro"]),
+        accel=TriadErrors(**arrays["accel"]),
+        thermal=ThermalParams(**{k: tuple(v) for k, v in arrays["thermal"].items()}),
+        g_sensitivity=top["g_sensitivity"], lowrate_gain=top["lowrate_gain"], lowrate_width=top["lowrate_width"],
+        axial_drift_poly=top["axial_drift_poly"], aging_sigma=top["aging_sigma"],
+        axial_drift_dtdt=float(top["axial_drift_dtdt"]), aging_corr_time=float(top["aging_corr_time"]),
+    )
