@@ -33,6 +33,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from . import earth
+from ._jit import jit
 from .imu_kernel import increments as _increments_kernel
 from .thermal import Ambient, ThermalModel, ThermalParams
 from .units import ARCSEC_TO_RAD, DAY, DEG_TO_RAD, DPH_TO_RPS, DPSH_TO_RPSS, PPM, UG_TO_MPS2
@@ -42,7 +43,7 @@ T_REF = 25.0  # reference temperature of the linear/quadratic coefficients, degC
 
 def _vec3(value, name):
     arr = np.broadcast_to(np.asarray(value, dtype=float), (3,)).copy()
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise ValueError(f"IMU parameter {name} must be finite")
     return arr
 
@@ -79,7 +80,7 @@ class TriadErrors:
                      "bias_tc1", "bias_tc2", "scale_factor_tc", "quadratic"):
             object.__setattr__(self, name, _vec3(getattr(self, name), name))
         mis = np.asarray(self.misalignment, dtype=float)
-        if mis.shape != (3, 3) or not np.all(np.isfinite(mis)):
+        if mis.shape != (3, 3) or not np.isfinite(mis).all():
             raise ValueError("misalignment must be a finite (3, 3) matrix")
         object.__setattr__(self, "misalignment", mis * (1.0 - np.eye(3)))
         if np.any(self.random_walk < 0) or np.any(self.bias_instability < 0):
@@ -122,7 +123,7 @@ class ImuModel:
         for name in ("lowrate_gain", "lowrate_width", "axial_drift_poly", "aging_sigma"):
             object.__setattr__(self, name, _vec3(getattr(self, name), name))
         gs = np.asarray(self.g_sensitivity, dtype=float)
-        if gs.shape != (3, 3) or not np.all(np.isfinite(gs)):
+        if gs.shape != (3, 3) or not np.isfinite(gs).all():
             raise ValueError("g_sensitivity must be a finite (3, 3) matrix")
         object.__setattr__(self, "g_sensitivity", gs)
         if np.any(self.lowrate_width <= 0):
@@ -344,37 +345,18 @@ class IMU:
         seq = np.random.SeedSequence(self.seed)
         self._rng_noise, self._rng_gm = (np.random.default_rng(s) for s in seq.spawn(2))
         m = self.model
-        std = np.concatenate([m.gyro.bias_instability, m.accel.bias_instability])
-        self._gm = self._rng_gm.standard_normal(6) * std  # stationary start
+        self._gm_std = np.concatenate([m.gyro.bias_instability, m.accel.bias_instability])
+        tau = np.concatenate([m.gyro.bias_corr_time, m.accel.bias_corr_time])
+        self._gm_phi = np.exp(-self.h / tau)
+        self._gm = self._rng_gm.standard_normal(6) * self._gm_std  # stationary start
+        self._coef = self._coefficients()
         self.temperature = self.thermal.temperature.copy()
 
-    def _gauss_markov(self, n: int):
-        """Bias-instability values held over each of the next n intervals, (n, 6)."""
+    def _coefficients(self):
+        """Per-triad coefficient table (2, 5, 3): bias, tc1, tc2, sf, sf_tc."""
         m = self.model
-        std = np.concatenate([m.gyro.bias_instability, m.accel.bias_instability])
-        tau = np.concatenate([m.gyro.bias_corr_time, m.accel.bias_corr_time])
-        phi = np.exp(-self.h / tau)
-        w = self._rng_gm.standard_normal((n, 6)) * std * np.sqrt(1.0 - phi**2)
-        out = np.empty((n, 6))
-        x = self._gm
-        for j in range(6):  # the GM recurrence, vectorised over time via the thermal helper
-            out[:, j] = _recurrence(np.full(n, phi[j]), w[:, j], x[j])
-        self._gm = out[-1].copy() if n else x
-        return out
-
-    def _triad_terms(self, temps, dtemp, gm):
-        """Per-interval biases and scale factors of both triads."""
-        m = self.model
-        dT = temps - T_REF
-        g, a = m.gyro, m.accel
-        g_bias = g.bias + g.bias_tc1 * dT[:, :3] + g.bias_tc2 * dT[:, :3] ** 2 + gm[:, :3]
-        tz = temps[:, 2]
-        pa, pb, pc = self.drift_poly
-        g_bias[:, 2] += pa * tz**2 + pb * tz + pc + m.axial_drift_dtdt * dtemp[:, 2]
-        a_bias = a.bias + a.bias_tc1 * dT[:, 3:] + a.bias_tc2 * dT[:, 3:] ** 2 + gm[:, 3:]
-        g_sf = g.scale_factor + g.scale_factor_tc * dT[:, :3]
-        a_sf = a.scale_factor + a.scale_factor_tc * dT[:, 3:]
-        return g_bias, g_sf, a_bias, a_sf
+        return np.array([[t.bias, t.bias_tc1, t.bias_tc2, t.scale_factor, t.scale_factor_tc]
+                         for t in (m.gyro, m.accel)])
 
     def step(self, angle0, rate0, accel, ambient=None):
         """Produce the increments of the next K output intervals.
@@ -395,17 +377,17 @@ class IMU:
         angle0, rate0, accel = (np.ascontiguousarray(np.atleast_2d(x), dtype=float) for x in (angle0, rate0, accel))
         if not (angle0.shape == rate0.shape == accel.shape and angle0.shape[1] == self.axes.shape[0]):
             raise ValueError(f"gimbal state arrays must all have shape (K, {self.axes.shape[0]})")
-        if not (np.all(np.isfinite(angle0)) and np.all(np.isfinite(rate0)) and np.all(np.isfinite(accel))):
+        if not (np.isfinite(angle0).all() and np.isfinite(rate0).all() and np.isfinite(accel).all()):
             raise ValueError("gimbal state contains NaN or infinity")
         n = angle0.shape[0]
         t_end = self._times(n)
         t_prev = self.thermal.temperature.copy()
         temps = self.thermal.advance(t_end, ambient)
-        t_start = np.vstack([t_prev, temps[:-1]])
-        t_mid = 0.5 * (t_start + temps)
-        dtemp = (temps - t_start) / self.h
-        g_bias, g_sf, a_bias, a_sf = self._triad_terms(t_mid, dtemp, self._gauss_markov(n))
         m = self.model
+        gm_noise = self._rng_gm.standard_normal((n, 6))
+        g_bias, g_sf, a_bias, a_sf = _interval_terms(
+            t_prev, temps, self.h, self._coef, self.drift_poly, m.axial_drift_dtdt,
+            self._gm, self._gm_phi, self._gm_std, gm_noise)
         w_t, f_t = self.base.base_motion(t_end - self.h, self.h)
         dtheta, dv = _increments_kernel(
             self.axes, angle0, rate0, accel, np.ascontiguousarray(w_t, float), np.ascontiguousarray(f_t, float),
@@ -425,4 +407,42 @@ class IMU:
         return self.t0 + (k0 + np.arange(1, n + 1)) * self.h
 
 
-from .thermal import _linear_recurrence as _recurrence  # noqa: E402  (compiled x_k = a x_{k-1} + b)
+
+@jit
+def _interval_terms(temp0, temps, h, coef, drift_poly, drift_dtdt, gm, gm_phi, gm_std, gm_noise):
+    """Biases and scale-factor errors held over each of K intervals.
+
+    Temperatures at interval midpoints (mean of the ends) and their rates
+    enter the models of the module docstring; the Gauss-Markov bias
+    instability advances one exact step per interval,
+    x_k = phi x_{k-1} + std sqrt(1 - phi^2) w_k  (``gm`` updated in place).
+    Returns g_bias, g_sf, a_bias, a_sf, each (K, 3).
+    """
+    n = temps.shape[0]
+    g_bias = np.empty((n, 3))
+    a_bias = np.empty((n, 3))
+    g_sf = np.empty((n, 3))
+    a_sf = np.empty((n, 3))
+    prev = temp0.copy()
+    for k in range(n):
+        for j in range(6):
+            gm[j] = gm_phi[j] * gm[j] + gm_std[j] * math.sqrt(1.0 - gm_phi[j] ** 2) * gm_noise[k, j]
+        for t in range(2):
+            for i in range(3):
+                s = 3 * t + i
+                mid = 0.5 * (prev[s] + temps[k, s])
+                d = mid - T_REF
+                bias = coef[t, 0, i] + coef[t, 1, i] * d + coef[t, 2, i] * d * d + gm[s]
+                sf = coef[t, 3, i] + coef[t, 4, i] * d
+                if t == 0:
+                    if i == 2:  # azimuth drift model eps(T) + d dT/dt
+                        bias += (drift_poly[0] * mid + drift_poly[1]) * mid + drift_poly[2]
+                        bias += drift_dtdt * (temps[k, s] - prev[s]) / h
+                    g_bias[k, i] = bias
+                    g_sf[k, i] = sf
+                else:
+                    a_bias[k, i] = bias
+                    a_sf[k, i] = sf
+        for s in range(6):
+            prev[s] = temps[k, s]
+    return g_bias, g_sf, a_bias, a_sf

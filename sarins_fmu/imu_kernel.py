@@ -89,7 +89,71 @@ def _qrot(w, x, y, z, vx, vy, vz):
             vz + 2.0 * (w * cz + x * cy - y * cx))
 
 
-@jit(parallel=True)
+@jit
+def _interval(k, dtheta, dv, axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
+              g_sf, g_mis, g_bias, g_quad, g_lowrate, g_lowrate_width, g_sens,
+              a_sf, a_mis, a_bias, a_quad):
+    """Minor loop of output interval k; writes dtheta[k], dv[k]."""
+    dt = h / n_sub
+    w0x, w0y, w0z, f0x, f0y, f0z = _truth(axes, angle0, rate0, accel, k, 0.0, w_t, f_t)
+    qw, qx, qy, qz = 1.0, 0.0, 0.0, 0.0  # q_{b(k-1) b(m)}
+    vx = vy = vz = 0.0  # velocity increment in b(k-1)
+    pax = pay = paz = 0.0  # previous minor angle increment
+    pvx = pvy = pvz = 0.0  # previous minor velocity increment
+    for i in range(1, n_sub + 1):
+        w1x, w1y, w1z, f1x, f1y, f1z = _truth(axes, angle0, rate0, accel, k, i * dt, w_t, f_t)
+        ux, uy, uz = 0.5 * (f0x + f1x) * dt, 0.5 * (f0y + f1y) * dt, 0.5 * (f0z + f1z) * dt
+        ex, ey, ez = 0.5 * (w0x + w1x) * dt, 0.5 * (w0y + w1y) * dt, 0.5 * (w0z + w1z) * dt
+        # g-sensitivity and low-rate nonlinearity, then the linear triad errors
+        gx = g_sens[0, 0] * ux + g_sens[0, 1] * uy + g_sens[0, 2] * uz
+        gy = g_sens[1, 0] * ux + g_sens[1, 1] * uy + g_sens[1, 2] * uz
+        gz = g_sens[2, 0] * ux + g_sens[2, 1] * uy + g_sens[2, 2] * uz
+        if g_lowrate[0] != 0.0 or g_lowrate[1] != 0.0 or g_lowrate[2] != 0.0:
+            gx += g_lowrate[0] * ex * math.exp(-(ex / (dt * g_lowrate_width[0])) ** 2)
+            gy += g_lowrate[1] * ey * math.exp(-(ey / (dt * g_lowrate_width[1])) ** 2)
+            gz += g_lowrate[2] * ez * math.exp(-(ez / (dt * g_lowrate_width[2])) ** 2)
+        dax, day, daz = _apply_errors(ex, ey, ez, dt, g_sf, g_mis, g_bias, g_quad, k)
+        dax += gx
+        day += gy
+        daz += gz
+        dvx, dvy, dvz = _apply_errors(ux, uy, uz, dt, a_sf, a_mis, a_bias, a_quad, k)
+        # minor-step velocity in b(m-1): rotation compensation + sculling
+        sx = dvx + 0.5 * (day * dvz - daz * dvy) + ((pay * dvz - paz * dvy) + (pvy * daz - pvz * day)) / 12.0
+        sy = dvy + 0.5 * (daz * dvx - dax * dvz) + ((paz * dvx - pax * dvz) + (pvz * dax - pvx * daz)) / 12.0
+        sz = dvz + 0.5 * (dax * dvy - day * dvx) + ((pax * dvy - pay * dvx) + (pvx * day - pvy * dax)) / 12.0
+        rx, ry, rz = _qrot(qw, qx, qy, qz, sx, sy, sz)
+        vx += rx
+        vy += ry
+        vz += rz
+        # coning-corrected minor rotation vector, composed into q
+        px = dax + (pay * daz - paz * day) / 12.0
+        py = day + (paz * dax - pax * daz) / 12.0
+        pz = daz + (pax * day - pay * dax) / 12.0
+        th2 = px * px + py * py + pz * pz
+        c = 1.0 - th2 / 8.0 + th2 * th2 / 384.0
+        s = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0
+        qw, qx, qy, qz = (qw * c - s * (qx * px + qy * py + qz * pz),
+                          qw * s * px + qx * c + s * (qy * pz - qz * py),
+                          qw * s * py + qy * c + s * (qz * px - qx * pz),
+                          qw * s * pz + qz * c + s * (qx * py - qy * px))
+        pax, pay, paz, pvx, pvy, pvz = dax, day, daz, dvx, dvy, dvz
+        w0x, w0y, w0z, f0x, f0y, f0z = w1x, w1y, w1z, f1x, f1y, f1z
+    # rotation vector of q (sign fixed so that the angle is in [0, pi])
+    if qw < 0.0:
+        qw, qx, qy, qz = -qw, -qx, -qy, -qz
+    vn = math.sqrt(qx * qx + qy * qy + qz * qz)
+    scale = 2.0 * math.atan2(vn, qw) / vn if vn > 1e-300 else 2.0
+    dtheta[k, 0] = qx * scale
+    dtheta[k, 1] = qy * scale
+    dtheta[k, 2] = qz * scale
+    dv[k, 0] = vx
+    dv[k, 1] = vy
+    dv[k, 2] = vz
+
+
+PARALLEL_MIN = 64  # intervals; below this the thread start-up costs more than it saves
+
+
 def increments(axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
                g_sf, g_mis, g_bias, g_quad, g_lowrate, g_lowrate_width, g_sens,
                a_sf, a_mis, a_bias, a_quad):
@@ -112,64 +176,35 @@ def increments(axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
     Returns
     -------
     dtheta, dv : (K, 3) rotation vector (rad) and velocity increment (m/s).
+
+    Batches run in parallel threads; a few intervals (an FMU step) run
+    serially, which avoids the thread pool's start-up cost.
     """
     n_int = angle0.shape[0]
     dtheta = np.empty((n_int, 3))
     dv = np.empty((n_int, 3))
-    dt = h / n_sub
-    for k in prange(n_int):
-        w0x, w0y, w0z, f0x, f0y, f0z = _truth(axes, angle0, rate0, accel, k, 0.0, w_t, f_t)
-        qw, qx, qy, qz = 1.0, 0.0, 0.0, 0.0  # q_{b(k-1) b(m)}
-        vx = vy = vz = 0.0  # velocity increment in b(k-1)
-        pax = pay = paz = 0.0  # previous minor angle increment
-        pvx = pvy = pvz = 0.0  # previous minor velocity increment
-        for i in range(1, n_sub + 1):
-            w1x, w1y, w1z, f1x, f1y, f1z = _truth(axes, angle0, rate0, accel, k, i * dt, w_t, f_t)
-            ux, uy, uz = 0.5 * (f0x + f1x) * dt, 0.5 * (f0y + f1y) * dt, 0.5 * (f0z + f1z) * dt
-            ex, ey, ez = 0.5 * (w0x + w1x) * dt, 0.5 * (w0y + w1y) * dt, 0.5 * (w0z + w1z) * dt
-            # g-sensitivity and low-rate nonlinearity, then the linear triad errors
-            gx = g_sens[0, 0] * ux + g_sens[0, 1] * uy + g_sens[0, 2] * uz
-            gy = g_sens[1, 0] * ux + g_sens[1, 1] * uy + g_sens[1, 2] * uz
-            gz = g_sens[2, 0] * ux + g_sens[2, 1] * uy + g_sens[2, 2] * uz
-            if g_lowrate[0] != 0.0 or g_lowrate[1] != 0.0 or g_lowrate[2] != 0.0:
-                gx += g_lowrate[0] * ex * math.exp(-(ex / (dt * g_lowrate_width[0])) ** 2)
-                gy += g_lowrate[1] * ey * math.exp(-(ey / (dt * g_lowrate_width[1])) ** 2)
-                gz += g_lowrate[2] * ez * math.exp(-(ez / (dt * g_lowrate_width[2])) ** 2)
-            dax, day, daz = _apply_errors(ex, ey, ez, dt, g_sf, g_mis, g_bias, g_quad, k)
-            dax += gx
-            day += gy
-            daz += gz
-            dvx, dvy, dvz = _apply_errors(ux, uy, uz, dt, a_sf, a_mis, a_bias, a_quad, k)
-            # minor-step velocity in b(m-1): rotation compensation + sculling
-            sx = dvx + 0.5 * (day * dvz - daz * dvy) + ((pay * dvz - paz * dvy) + (pvy * daz - pvz * day)) / 12.0
-            sy = dvy + 0.5 * (daz * dvx - dax * dvz) + ((paz * dvx - pax * dvz) + (pvz * dax - pvx * daz)) / 12.0
-            sz = dvz + 0.5 * (dax * dvy - day * dvx) + ((pax * dvy - pay * dvx) + (pvx * day - pvy * dax)) / 12.0
-            rx, ry, rz = _qrot(qw, qx, qy, qz, sx, sy, sz)
-            vx += rx
-            vy += ry
-            vz += rz
-            # coning-corrected minor rotation vector, composed into q
-            px = dax + (pay * daz - paz * day) / 12.0
-            py = day + (paz * dax - pax * daz) / 12.0
-            pz = daz + (pax * day - pay * dax) / 12.0
-            th2 = px * px + py * py + pz * pz
-            c = 1.0 - th2 / 8.0 + th2 * th2 / 384.0
-            s = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0
-            qw, qx, qy, qz = (qw * c - s * (qx * px + qy * py + qz * pz),
-                              qw * s * px + qx * c + s * (qy * pz - qz * py),
-                              qw * s * py + qy * c + s * (qz * px - qx * pz),
-                              qw * s * pz + qz * c + s * (qx * py - qy * px))
-            pax, pay, paz, pvx, pvy, pvz = dax, day, daz, dvx, dvy, dvz
-            w0x, w0y, w0z, f0x, f0y, f0z = w1x, w1y, w1z, f1x, f1y, f1z
-        # rotation vector of q (sign fixed so that the angle is in [0, pi])
-        if qw < 0.0:
-            qw, qx, qy, qz = -qw, -qx, -qy, -qz
-        vn = math.sqrt(qx * qx + qy * qy + qz * qz)
-        scale = 2.0 * math.atan2(vn, qw) / vn if vn > 1e-300 else 2.0
-        dtheta[k, 0] = qx * scale
-        dtheta[k, 1] = qy * scale
-        dtheta[k, 2] = qz * scale
-        dv[k, 0] = vx
-        dv[k, 1] = vy
-        dv[k, 2] = vz
+    run = _serial if n_int < PARALLEL_MIN else _parallel
+    run(dtheta, dv, axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
+                  g_sf, g_mis, g_bias, g_quad, g_lowrate, g_lowrate_width, g_sens,
+                  a_sf, a_mis, a_bias, a_quad)
     return dtheta, dv
+
+
+@jit(parallel=True)
+def _parallel(dtheta, dv, axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
+                  g_sf, g_mis, g_bias, g_quad, g_lowrate, g_lowrate_width, g_sens,
+                  a_sf, a_mis, a_bias, a_quad):
+    for k in prange(angle0.shape[0]):
+        _interval(k, dtheta, dv, axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
+                  g_sf, g_mis, g_bias, g_quad, g_lowrate, g_lowrate_width, g_sens,
+                  a_sf, a_mis, a_bias, a_quad)
+
+
+@jit
+def _serial(dtheta, dv, axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
+                  g_sf, g_mis, g_bias, g_quad, g_lowrate, g_lowrate_width, g_sens,
+                  a_sf, a_mis, a_bias, a_quad):
+    for k in range(angle0.shape[0]):
+        _interval(k, dtheta, dv, axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
+                  g_sf, g_mis, g_bias, g_quad, g_lowrate, g_lowrate_width, g_sens,
+                  a_sf, a_mis, a_bias, a_quad)

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import earth
-from .ins_kernel import align_steps, nav_steps
+from .ins_kernel import align_steps, coarse_steps, nav_steps
 from .rotations import mat_to_quat, quat_mult, quat_to_mat, rotvec_to_quat
 from .units import DEG_TO_RAD, DPH_TO_RPS, DPSH_TO_RPSS, UG_TO_MPS2
 
@@ -189,11 +189,11 @@ class StrapdownINS:
         dv = np.ascontiguousarray(np.atleast_2d(dv), dtype=float)
         if dtheta.shape != dv.shape or dtheta.shape[1] != 3:
             raise ValueError("dtheta and dv must both have shape (K, 3)")
-        if not (np.all(np.isfinite(dtheta)) and np.all(np.isfinite(dv))):
+        if not (np.isfinite(dtheta).all() and np.isfinite(dv).all()):
             raise ValueError("increments contain NaN or infinity")
         n = dtheta.shape[0]
         corr = np.broadcast_to(np.asarray(axial_correction, float), (n,)).copy()
-        if not np.all(np.isfinite(corr)):
+        if not np.isfinite(corr).all():
             raise ValueError("axial correction contains NaN or infinity")
         out = np.empty((n, 9))
         k = 0
@@ -236,18 +236,13 @@ class StrapdownINS:
         return quat_to_mat(self.q)
 
     def _coarse(self, dtheta, dv):
-        """Accumulate the inertial-frame coarse alignment (one Python step per
-        major-loop step: at most coarse_time / step iterations)."""
-        c = self.config
-        for k in range(dtheta.shape[0]):
-            self._v_b0 += quat_to_mat(self._q_b0b) @ dv[k]
-            self._q_b0b = quat_mult(self._q_b0b, rotvec_to_quat(dtheta[k]))
-            self.steps += 1
-            if self.steps == self._n_coarse // 2:
-                self._v_b0_half = self._v_b0.copy()
-            if self.steps == self._n_coarse:
-                self._finish_coarse()
-        self.steps -= dtheta.shape[0]  # step() advances the counter
+        """Accumulate the inertial-frame coarse alignment; finish it on its last step."""
+        hist = coarse_steps(self._q_b0b, self._v_b0, dtheta, dv)
+        half = self._n_coarse // 2 - self.steps  # index of the half-way step in this batch
+        if 1 <= half <= len(hist):
+            self._v_b0_half = hist[half - 1].copy()
+        if self.steps + len(hist) == self._n_coarse:
+            self._finish_coarse()
 
     def _finish_coarse(self):
         c = self.config

@@ -171,3 +171,21 @@ def align_steps(q, v, pos, dtheta, dv, h, gyro_comp, accel_comp, x, p, q_diag, r
         for i in range(9):
             hist[k, i] = p[i, i]
     return hist
+
+
+@jit
+def coarse_steps(q_b0b, v_b0, dtheta, dv):
+    """Inertial-frame coarse alignment accumulators over K steps (in place):
+    v_b0 += mat_b0b dv ; q_b0b = q_b0b * q(dtheta).  Returns v_b0 after each
+    step, (K, 3)."""
+    n = dtheta.shape[0]
+    hist = np.empty((n, 3))
+    for k in range(n):
+        c = quat_to_mat(q_b0b)
+        for i in range(3):
+            v_b0[i] += c[i, 0] * dv[k, 0] + c[i, 1] * dv[k, 1] + c[i, 2] * dv[k, 2]
+        qn = quat_mult(q_b0b, rotvec_to_quat(dtheta[k].copy()))
+        q_b0b[:] = qn / math.sqrt(qn[0] ** 2 + qn[1] ** 2 + qn[2] ** 2 + qn[3] ** 2)
+        for i in range(3):
+            hist[k, i] = v_b0[i]
+    return hist

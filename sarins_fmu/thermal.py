@@ -48,7 +48,7 @@ class ThermalParams:
     def __post_init__(self):
         for name in ("self_heating", "time_constant"):
             value = np.asarray(getattr(self, name), float)
-            if value.shape != (N_SENSORS,) or not np.all(np.isfinite(value)):
+            if value.shape != (N_SENSORS,) or not np.isfinite(value).all():
                 raise ValueError(f"thermal {name} needs {N_SENSORS} finite values")
         if np.any(np.asarray(self.time_constant) <= 0):
             raise ValueError("thermal time constants must be positive")
@@ -128,19 +128,12 @@ class ThermalModel:
             return np.empty((0, N_SENSORS))
         grid = np.concatenate([[self.time], times])
         h = np.diff(grid)
-        if np.any(h < 0) or not np.all(np.isfinite(h)):
+        if np.any(h < 0) or not np.isfinite(h).all():
             raise ValueError("thermal model times must be finite and increasing")
         amb_new = np.asarray(self.ambient(times) if ambient is None else ambient, float).reshape(times.shape)
         _check_temperature(amb_new)
         amb = np.concatenate([[self._ambient_now], amb_new])
-        slope = np.divide(np.diff(amb), h, out=np.zeros_like(h), where=h > 0)
-        out = np.empty((len(times), N_SENSORS))
-        for j in range(N_SENSORS):  # 6 sensors: the recurrence below is vectorised over time
-            tau = self._tau[j]
-            decay = np.exp(-h / tau)
-            # exact step of dT/dt = (A_k + s tau' + dT - T)/tau, see module docstring
-            forcing = (amb[:-1] + self._heat[j] - slope * tau) * (1.0 - decay) + slope * h
-            out[:, j] = _linear_recurrence(decay, forcing, self.temperature[j])
+        out = _exact_steps(h, amb, self._heat, self._tau, self.temperature)
         self.time = float(times[-1])
         self._ambient_now = float(amb[-1])
         self.temperature = out[-1].copy()
@@ -149,7 +142,7 @@ class ThermalModel:
 
 def _check_temperature(values) -> None:
     values = np.asarray(values, float)
-    if not np.all(np.isfinite(values)) or np.any(values < -273.15):
+    if not np.isfinite(values).all() or np.any(values < -273.15):
         raise ValueError("ambient temperature must be finite and above absolute zero (degC)")
 
 
@@ -161,4 +154,22 @@ def _linear_recurrence(a, b, x0):
     for k in range(a.shape[0]):
         x = a[k] * x + b[k]
         out[k] = x
+    return out
+
+
+@jit
+def _exact_steps(h, amb, heat, tau, temp0):
+    """Exact steps of dT_j/dt = (A(t) + dT_j - T_j)/tau_j with A linear on each
+    step: with s the ambient slope over a step of length h,
+    T_{k+1} = e T_k + (A_k + dT_j - s tau_j)(1 - e) + s h,  e = exp(-h/tau_j).
+    Returns (K, 6) temperatures at the step ends."""
+    n = h.shape[0]
+    out = np.empty((n, heat.shape[0]))
+    for j in range(heat.shape[0]):
+        x = temp0[j]
+        for k in range(n):
+            slope = (amb[k + 1] - amb[k]) / h[k] if h[k] > 0 else 0.0
+            decay = math.exp(-h[k] / tau[j])
+            x = decay * x + (amb[k] + heat[j] - slope * tau[j]) * (1.0 - decay) + slope * h[k]
+            out[k, j] = x
     return out

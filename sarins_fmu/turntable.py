@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._jit import jit
 from .units import DEG_TO_RAD
 
 AXIS_X = (1.0, 0.0, 0.0)
@@ -68,7 +69,7 @@ class GimbalSchedule:
         if times.ndim != 1 or len(times) < 1 or np.any(np.diff(times) <= 0):
             raise ValueError("breakpoint times must be strictly increasing")
         for name, value in (("times", times), ("accel", accel)):
-            if not np.all(np.isfinite(value)):
+            if not np.isfinite(value).all():
                 raise ValueError(f"schedule {name} contains NaN or infinity")
         object.__setattr__(self, "axes", axes)
         object.__setattr__(self, "times", times)
@@ -102,21 +103,9 @@ class GimbalSchedule:
         angle, rate, accel : ndarray (K, A)
         """
         t = np.atleast_1d(np.asarray(time, dtype=float))
-        if not np.all(np.isfinite(t)):
+        if not np.isfinite(t).all():
             raise ValueError("time must be finite")
-        seg = np.searchsorted(self.times, t, side="right") - 1
-        before = seg < 0
-        seg = np.clip(seg, 0, len(self.times) - 1)
-        tau = t - self.times[seg]
-        last = len(self.times) - 1
-        acc = np.where((seg < last)[:, None], self.accel[np.minimum(seg, last - 1)] if last > 0 else 0.0, 0.0)
-        acc[before] = 0.0
-        rate = self._rate_bp[seg] + acc * tau[:, None]
-        angle = self._angle_bp[seg] + self._rate_bp[seg] * tau[:, None] + 0.5 * acc * tau[:, None] ** 2
-        if np.any(before):  # hold the initial state before the schedule starts
-            rate[before] = self.rate0
-            angle[before] = self.angle0 + self.rate0 * (t[before] - self.times[0])[:, None]
-        return angle, rate, acc
+        return _state_kernel(t, self.times, self._angle_bp, self._rate_bp, self.accel, self.angle0, self.rate0)
 
     def check_grid(self, step: float, start: float = 0.0, tol: float = 1e-9) -> None:
         """Raise ValueError unless every breakpoint lies on start + n*step."""
@@ -129,6 +118,31 @@ class GimbalSchedule:
             raise ValueError(
                 f"turntable breakpoint at t={t_bad:.9g} s is not on the output grid of step {step} s: "
                 "the IMU cannot rebuild the motion inside a step exactly")
+
+
+@jit
+def _state_kernel(t, times, angle_bp, rate_bp, accel, angle0, rate0):
+    """Exact gimbal state at times t (see GimbalSchedule.state)."""
+    n, n_axes = t.shape[0], angle_bp.shape[1]
+    last = times.shape[0] - 1
+    angle = np.empty((n, n_axes))
+    rate = np.empty((n, n_axes))
+    acc = np.zeros((n, n_axes))
+    seg = np.searchsorted(times, t, side="right") - 1
+    for k in range(n):
+        if seg[k] < 0:  # before the schedule: hold the initial state
+            for j in range(n_axes):
+                rate[k, j] = rate0[j]
+                angle[k, j] = angle0[j] + rate0[j] * (t[k] - times[0])
+            continue
+        s = seg[k]
+        tau = t[k] - times[s]
+        for j in range(n_axes):
+            a = accel[s, j] if s < last else 0.0
+            acc[k, j] = a
+            rate[k, j] = rate_bp[s, j] + a * tau
+            angle[k, j] = angle_bp[s, j] + rate_bp[s, j] * tau + 0.5 * a * tau * tau
+    return angle, rate, acc
 
 
 # --------------------------------------------------------------------------

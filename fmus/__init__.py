@@ -1,0 +1,13 @@
+"""FMI 2.0 co-simulation slaves (pythonfmu) over the sarins_fmu library, and their build step.
+
+Each slave module holds one class deriving from ``Fmi2Slave``; it declares
+the variables, converts between FMI scalars and library arrays, and calls
+the library.  No physics lives here.  ``fmus.build`` turns the slaves into
+self-contained FMUs (the library travels in each FMU's resources).
+"""
+
+SLAVES = {
+    "Turntable": "turntable_slave.py",
+    "IMUThermal": "imu_thermal_slave.py",
+    "StrapdownINS": "strapdown_ins_slave.py",
+}

@@ -1,0 +1,159 @@
+"""Build the slaves into self-contained FMI 2.0 co-simulation FMUs.
+
+``build_fmus(out_dir)`` runs pythonfmu's builder on every slave with the
+``sarins_fmu`` and ``fmus`` packages as resources (so a host Python with
+numpy and scipy, without this project installed, runs them; numba is used
+when the host has it), then rewrites each modelDescription.xml:
+
+* ``unit`` / ``displayUnit`` attributes from the ``[unit; display]`` suffix
+  of each variable's description, with ``<UnitDefinitions>`` (SI base-unit
+  exponents, display-unit factors);
+* ``<InitialUnknowns>`` (pythonfmu leaves it out; FMI 2.0 requires every
+  output with initial = approx/calculated there, which ``fmpy validate``
+  checks);
+* a ``documentation/index.html`` with the slave's contract.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import shutil
+import tempfile
+import zipfile
+from pathlib import Path
+from xml.etree import ElementTree as ET
+
+import sarins_fmu
+
+from . import SLAVES
+
+HERE = Path(__file__).resolve().parent
+DEFAULT_OUT = Path("build") / "fmus"
+
+# unit -> SI base-unit exponents (FMI 2.0 BaseUnit attributes) and factor/offset
+BASE_UNITS = {
+    "rad": {"rad": 1}, "rad/s": {"rad": 1, "s": -1}, "rad/s2": {"rad": 1, "s": -2},
+    "m": {"m": 1}, "m/s": {"m": 1, "s": -1}, "m/s2": {"m": 1, "s": -2}, "s": {"s": 1},
+    "s2/m": {"s": 2, "m": -1}, "s/rad": {"s": 1, "rad": -1}, "Hz": {"s": -1},
+    "degC": {"K": 1, "offset": 273.15}, "d": {"s": 1, "factor": 86400.0},
+    "1/degC": {"K": -1}, "rad/degC": {"rad": 1, "K": -1},
+    "rad/s/degC": {"rad": 1, "s": -1, "K": -1}, "rad/s/degC2": {"rad": 1, "s": -1, "K": -2},
+    "m/s2/degC": {"m": 1, "s": -2, "K": -1}, "m/s2/degC2": {"m": 1, "s": -2, "K": -2},
+    "rad/s/(m/s2)": {"rad": 1, "s": 1, "m": -1},
+}
+# display unit -> (unit it displays, factor); display = factor * value
+DISPLAY_UNITS = {
+    "deg": ("rad", 180.0 / math.pi), "deg/s": ("rad/s", 180.0 / math.pi),
+    "deg/s2": ("rad/s2", 180.0 / math.pi), "deg/h": ("rad/s", 180.0 / math.pi * 3600.0),
+    "nmi": ("m", 1.0 / 1852.0),
+}
+_UNIT_RE = re.compile(r"\[([^\[\];]+)(?:;\s*([^\[\]]+))?\]\s*$")
+
+
+def parse_unit(description: str):
+    """(unit, display unit or None) from a description ending in [unit; display]."""
+    m = _UNIT_RE.search(description or "")
+    if not m:
+        return None, None
+    return m.group(1).strip(), (m.group(2).strip() if m.group(2) else None)
+
+
+def _unit_definitions(root, used):
+    defs = ET.Element("UnitDefinitions")
+    for unit in sorted(used):
+        node = ET.SubElement(defs, "Unit", name=unit)
+        base = dict(BASE_UNITS.get(unit, {}))
+        if base:
+            attrs = {k: (repr(float(v)) if k in ("factor", "offset") else str(v)) for k, v in base.items()}
+            ET.SubElement(node, "BaseUnit", attrs)
+        for display in sorted(used[unit]):
+            _, factor = DISPLAY_UNITS[display]
+            ET.SubElement(node, "DisplayUnit", name=display, factor=repr(factor))
+    return defs
+
+
+def fix_model_description(xml_bytes: bytes) -> bytes:
+    """Add units, display units, UnitDefinitions and InitialUnknowns."""
+    root = ET.fromstring(xml_bytes)
+    variables = root.find("ModelVariables")
+    used: dict[str, set] = {}
+    initial_unknowns = []
+    for index, var in enumerate(variables.findall("ScalarVariable"), start=1):
+        unit, display = parse_unit(var.get("description"))
+        real = var.find("Real")
+        if real is not None and unit and unit != "1":
+            real.set("unit", unit)
+            used.setdefault(unit, set())
+            if display:
+                if DISPLAY_UNITS.get(display, (None,))[0] != unit:
+                    raise ValueError(f"display unit {display!r} does not fit unit {unit!r} of {var.get('name')}")
+                real.set("displayUnit", display)
+                used[unit].add(display)
+        if var.get("causality") == "output" and var.get("initial", "calculated") in ("approx", "calculated"):
+            initial_unknowns.append(index)
+    old = root.find("UnitDefinitions")
+    if old is not None:
+        root.remove(old)
+    if used:
+        # FMI 2.0 element order: CoSimulation, UnitDefinitions, TypeDefinitions, LogCategories, ...
+        position = list(root).index(root.find("CoSimulation")) + 1
+        root.insert(position, _unit_definitions(root, used))
+    structure = root.find("ModelStructure")
+    for node in structure.findall("InitialUnknowns"):
+        structure.remove(node)
+    if initial_unknowns:
+        node = ET.SubElement(structure, "InitialUnknowns")
+        for index in initial_unknowns:
+            ET.SubElement(node, "Unknown", index=str(index))
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def _documentation(model_name: str, description: str) -> str:
+    return (f"<html><head><title>{model_name}</title></head><body><h1>{model_name}</h1>"
+            f"<p>{description}</p><p>Units: each variable's description ends in [unit; display unit]."
+            "</p></body></html>")
+
+
+def build_fmu(slave_file: str, out_dir: Path) -> Path:
+    """Build one slave into ``out_dir`` and fix its model description."""
+    from pythonfmu.builder import FmuBuilder
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="sarins_fmu_build_") as tmp:
+        tmp = Path(tmp)
+        # clean copies of the packages (no caches, no build products)
+        ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "*.fmu")
+        shutil.copytree(Path(sarins_fmu.__file__).parent, tmp / "sarins_fmu", ignore=ignore)
+        shutil.copytree(HERE, tmp / "fmus", ignore=ignore)
+        script = tmp / slave_file
+        shutil.copy2(HERE / slave_file, script)
+        fmu = FmuBuilder.build_FMU(script, dest=tmp / "out", project_files=[tmp / "sarins_fmu", tmp / "fmus"],
+                                   needsExecutionTool=False, canHandleVariableCommunicationStepSize=False)
+        target = out_dir / fmu.name
+        _rewrite(fmu, target)
+    return target
+
+
+def _rewrite(src: Path, dst: Path) -> None:
+    with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w", zipfile.ZIP_DEFLATED) as zout:
+        md = zin.read("modelDescription.xml")
+        root = ET.fromstring(md)
+        for item in zin.infolist():
+            data = zin.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = fix_model_description(data)
+            zout.writestr(item, data)
+        zout.writestr("documentation/index.html",
+                      _documentation(root.get("modelName"), root.get("description", "")))
+
+
+def build_fmus(out_dir: Path | str = DEFAULT_OUT, names=None) -> list[Path]:
+    """Build all (or the named) FMUs into ``out_dir``; returns their paths."""
+    names = list(SLAVES) if names is None else list(names)
+    unknown = [n for n in names if n not in SLAVES]
+    if unknown:
+        raise ValueError(f"unknown FMU(s) {unknown}; known: {', '.join(SLAVES)}")
+    return [build_fmu(SLAVES[n], Path(out_dir)) for n in names]

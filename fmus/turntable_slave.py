@@ -1,0 +1,98 @@
+"""Turntable FMU: gimbal angles, rates and accelerations of a rotation scheme."""
+
+import math
+
+import numpy as np
+from pythonfmu import Fmi2Slave
+from pythonfmu.default_experiment import DefaultExperiment
+
+from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
+                                discard_on_error)
+from sarins_fmu import turntable
+from sarins_fmu.thermal import Ambient
+
+DEG = math.pi / 180.0
+
+
+class Turntable(Fmi2Slave):
+
+    author = "sarins-fmu"
+    description = (
+        "Turntable of a rotating INS (truth motion). Contract: after doStep(t, h) the outputs are the "
+        "gimbal angles and rates at t + h and the angular acceleration that holds from t + h until the "
+        "next acceleration change; accelerations change only on the 'grid' (a multiple of the "
+        "communication step), so a connected IMU rebuilds the motion inside each step exactly from the "
+        "states at both ends. Angles are not wrapped. Also outputs the ambient (chamber) temperature. "
+        "Nothing but the schedule and the time is held between steps.")
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        declare(self, "string", "scheme", PARAMETER,
+                "rotation scheme: none, continuous, forward-reverse, four-position", "forward-reverse")
+        declare(self, "real", "rate", PARAMETER, "peak rotation rate [rad/s; deg/s]", 6.0 * DEG)
+        declare(self, "real", "accel", PARAMETER, "angular acceleration of the moves [rad/s2; deg/s2]", 6.0 * DEG)
+        declare(self, "real", "dwell", PARAMETER, "stop at each position or reversal [s]", 0.0)
+        declare(self, "integer", "revolutions", PARAMETER, "turns each way (forward-reverse) [1]", 1)
+        declare(self, "real", "align_time", PARAMETER,
+                "initial four-position indexing for the alignment (0: none) [s]", 4 * 3600.0)
+        declare(self, "real", "align_dwell", PARAMETER, "stop at each alignment position [s]", 300.0)
+        declare(self, "real", "grid", PARAMETER, "time grid of acceleration changes [s]", 1.0)
+        declare(self, "real", "duration", PARAMETER, "length of the generated pattern [s]", 100 * 3600.0)
+        declare(self, "real", "ambient_mean", PARAMETER, "ambient temperature mean [degC]", 20.0)
+        declare(self, "real", "ambient_amplitude", PARAMETER, "ambient daily amplitude [degC]", 0.0)
+        declare(self, "real", "ambient_period", PARAMETER, "ambient period [s]", 86400.0)
+        for j in (1, 2, 3):
+            declare(self, "real", f"angle_{j}", OUTPUT, f"angle of gimbal {j} (outer = 1) [rad; deg]", 0.0)
+            declare(self, "real", f"rate_{j}", OUTPUT, f"angular rate of gimbal {j} [rad/s; deg/s]", 0.0)
+            declare(self, "real", f"accel_{j}", OUTPUT,
+                    f"angular acceleration of gimbal {j} from this time on [rad/s2; deg/s2]", 0.0)
+        declare(self, "real", "ambient_temp", OUTPUT, "ambient / chamber temperature [degC]", 20.0)
+        declare(self, "integer", "n_gimbals", OUTPUT, "number of gimbals in use [1]", 1)
+        self._schedule = None
+        self._ambient = None
+        self._step = None
+
+    def enter_initialization_mode(self):
+        self._build()
+
+    def exit_initialization_mode(self):
+        self._build()
+
+    def _build(self):
+        check_finite(self, ["rate", "accel", "dwell", "align_time", "align_dwell", "grid", "duration",
+                            "ambient_mean", "ambient_amplitude", "ambient_period"],
+                     positive=["grid", "duration", "ambient_period"],
+                     non_negative=["rate", "accel", "dwell", "align_time", "align_dwell"])
+        if self.scheme not in turntable.ROTATION_SCHEMES:
+            raise ParameterError(f"unknown scheme {self.scheme!r}; choose one of "
+                                 f"{', '.join(turntable.ROTATION_SCHEMES)}")
+        try:
+            self._schedule = turntable.single_axis(
+                self.scheme, self.duration, rate_dps=self.rate / DEG, accel_dps2=self.accel / DEG,
+                dwell=self.dwell, grid=self.grid, revolutions=int(self.revolutions),
+                align_time=self.align_time, align_dwell=self.align_dwell)
+        except ValueError as exc:
+            raise ParameterError(str(exc)) from None
+        self._ambient = Ambient(mean=self.ambient_mean, amplitude=self.ambient_amplitude, period=self.ambient_period)
+        self.n_gimbals = self._schedule.n_axes
+        self._publish(0.0)
+
+    def _publish(self, time):
+        angle, rate, acc = (x[0] for x in self._schedule.state(time))
+        for j in range(3):
+            inside = j < len(angle)
+            setattr(self, f"angle_{j + 1}", float(angle[j]) if inside else 0.0)
+            setattr(self, f"rate_{j + 1}", float(rate[j]) if inside else 0.0)
+            setattr(self, f"accel_{j + 1}", float(acc[j]) if inside else 0.0)
+        self.ambient_temp = float(self._ambient(time))
+
+    def do_step(self, current_time, step_size):
+        try:
+            if self._step is None:
+                self._schedule.check_grid(step_size)
+            self._step = check_step(self, step_size, self._step)
+            self._publish(current_time + step_size)
+        except ValueError as exc:
+            return discard_on_error(self, exc)
+        return True
