@@ -1,0 +1,225 @@
+"""Multi-gimbal turntable profiles: dual-axis RINS (seed 002), seed 003's
+three-axis rate table, chamber profile, 24-position tumble and rate test.
+
+The kinematics is checked independently of the package: mat_tb(t) is built
+here from the schedule's angles with a plain Rodrigues formula, the body rate
+omega_tb^b is obtained by finite-differencing it, and both are compared with
+the chain-rate formula and with the IMU kernel's truth."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from sarins_fmu import imu_kernel
+from sarins_fmu import turntable as tt
+
+E = np.eye(3)
+AXIS_INDEX = {"x": 0, "y": 1, "z": 2}
+
+
+# ---------------------------------------------------------------- helpers
+
+def rot(axis, angle):
+    """Rodrigues: exp(angle [axis x])."""
+    a = np.asarray(axis, float)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return E + math.sin(angle) * k + (1 - math.cos(angle)) * k @ k
+
+
+def mat_tb(sched, t):
+    angles, _, _ = sched.state(t)
+    m = E.copy()
+    for a, th in zip(sched.axes, angles[0]):
+        m = m @ rot(a, th)
+    return m
+
+
+def log_so3(m):
+    """Rotation vector of a rotation matrix (angle < pi)."""
+    c = np.clip((np.trace(m) - 1) / 2, -1, 1)
+    angle = math.acos(c)
+    v = np.array([m[2, 1] - m[1, 2], m[0, 2] - m[2, 0], m[1, 0] - m[0, 1]]) / 2
+    return v if angle < 1e-12 else v * angle / math.sin(angle)
+
+
+def rate_fd(sched, t, h=1e-4):
+    """omega_tb^b by central differences: mat_tb(t-h)^T mat_tb(t+h) = exp(2h [w x])."""
+    return log_so3(mat_tb(sched, t - h).T @ mat_tb(sched, t + h)) / (2 * h)
+
+
+def rate_chain(sched, t):
+    """omega_tb^b = sum_j (R_{j+1} ... R_{A-1})^T thetadot_j a_j, accumulated outside in."""
+    angles, rates, _ = sched.state(t)
+    w = np.zeros(3)
+    for a, th, thd in zip(sched.axes, angles[0], rates[0]):
+        w = rot(a, th).T @ w + thd * a
+    return w
+
+
+def check_kinematics(sched, times):
+    """Finite-difference body rate == chain formula == IMU kernel truth; f_b = mat_bt f_t."""
+    f_t = np.array([0.0, 0.0, 9.8])
+    for t in times:
+        w_chain = rate_chain(sched, t)
+        assert_allclose(rate_fd(sched, t), w_chain, atol=1e-7, err_msg=f"t={t}")
+        angle, rate, acc = sched.state(t)
+        truth = imu_kernel._truth(sched.axes, angle, rate, acc, 0, 0.0, np.zeros(3), f_t)
+        assert_allclose(truth[:3], w_chain, atol=1e-13)
+        assert_allclose(truth[3:], mat_tb(sched, t).T @ f_t, atol=1e-12)
+
+
+def sample_times(sched, n, seed=0):
+    """Random times inside the schedule, off the grid."""
+    rng = np.random.default_rng(seed)
+    return np.sort(rng.uniform(sched.times[0] + 0.5, sched.end_time - 0.5, n)) + 0.123
+
+
+def test_imports_from_this_worktree():
+    root = Path(__file__).resolve().parents[1]
+    assert Path(tt.__file__).resolve().is_relative_to(root), tt.__file__
+
+
+def test_chain_matrix_matches_the_yaw_pitch_roll_order():
+    from sarins_fmu.rotations import euler_to_mat
+    angles = [0.3, -0.7, 1.1]
+    assert_allclose(tt.chain_matrix(tt.RATE_TABLE_AXES, angles), euler_to_mat(*angles), atol=1e-14)
+    assert_allclose(tt.chain_matrix(tt.DUAL_AXIS_AXES, [0.4, 0.9]), rot([0, 1, 0], 0.4) @ rot([0, 0, 1], 0.9),
+                    atol=1e-15)
+
+
+# ---------------------------------------------------------------- dual axis
+
+def test_dual_axis_sequence_and_modulation():
+    sched = tt.dual_axis(600.0, dwell=10.0)
+    assert_allclose(sched.axes, [[0, 1, 0], [0, 0, 1]])
+    sched.check_grid(1.0)
+    t = np.arange(0.0, sched.end_time + 1.0, 1.0)
+    angle, rate, _ = sched.state(t)
+    # the two gimbals never move together; every move is rest to rest
+    assert not np.any((rate[:, 0] != 0) & (rate[:, 1] != 0))
+    assert np.max(np.abs(rate[:, 1])) == pytest.approx(math.radians(6), rel=1e-12)
+    # positions at rest, in order: (outer, inner) deg
+    still = np.all(rate == 0, axis=1)
+    pos = np.round(np.degrees(angle[still]), 9)
+    pos = pos[np.r_[True, np.any(np.diff(pos, axis=0) != 0, axis=1)]]
+    expected = [(0, 0), (0, 360), (0, 0), (180, 0), (180, 360), (180, 0), (0, 0)]
+    assert len(pos) >= len(expected)
+    assert_allclose(pos[:len(expected)], expected, atol=1e-9)
+    assert sched.end_time >= 600.0
+    assert_allclose(sched.state(sched.end_time)[0], 0.0, atol=1e-12)
+    # modulation: over whole periods the azimuth gyro axis spends as long up
+    # as down (mean vertical component 0) and the horizontal axes average out
+    tf = np.arange(0.0, sched.end_time, 0.05) + 0.025
+    ang = sched.state(tf)[0]
+    z_up = np.cos(ang[:, 0])  # (mat_tb e_z) . e_z = cos(eta_out)
+    assert abs(z_up.mean()) < 1e-6
+    x_b = np.stack([np.cos(ang[:, 0]) * np.cos(ang[:, 1]), np.sin(ang[:, 1]),
+                    -np.sin(ang[:, 0]) * np.cos(ang[:, 1])], axis=1)  # mat_tb e_x
+    assert_allclose(x_b.mean(axis=0)[:2], 0.0, atol=1e-6)
+
+
+def test_dual_axis_kinematics_during_simultaneous_rotation_parts():
+    sched = tt.dual_axis(400.0, inner_rate_dps=20, inner_accel_dps2=4, outer_rate_dps=15, outer_accel_dps2=3)
+    check_kinematics(sched, sample_times(sched, 40))
+
+
+def test_dual_axis_alignment_matches_single_axis_indexing():
+    dual = tt.dual_axis(7200.0, align_time=3600.0, align_dwell=300.0)
+    single = tt.single_axis("forward-reverse", 7200.0, align_time=3600.0, align_dwell=300.0)
+    t = np.arange(0.0, 3600.0, 0.5)
+    a_d, r_d, _ = dual.state(t)
+    a_s, r_s, _ = single.state(t)
+    assert np.all(a_d[:, 0] == 0) and np.all(r_d[:, 0] == 0)
+    assert_allclose(a_d[:, 1], a_s[:, 0], atol=1e-12)
+    assert_allclose(r_d[:, 1], r_s[:, 0], atol=1e-15)
+    _, r, _ = dual.state([3599.0, 3600.0, 3600.5])
+    assert np.all(r[:2] == 0) and r[2, 1] > 0
+
+
+@pytest.mark.parametrize("kwargs", [
+    dict(duration=float("nan")), dict(duration=-1.0), dict(duration=0.0), dict(grid=0.0),
+    dict(inner_rate_dps=-6), dict(outer_rate_dps=0), dict(inner_accel_dps2=float("nan")),
+    dict(dwell=-1.0), dict(align_time=float("inf")), dict(align_dwell=-5),
+])
+def test_dual_axis_rejects_bad_input(kwargs):
+    args = dict(duration=600.0) | kwargs
+    with pytest.raises(ValueError, match="must be"):
+        tt.dual_axis(args.pop("duration"), **args)
+
+
+# ---------------------------------------------------------------- seed 003 rate table
+
+def test_rate_table_triangle_waves_at_the_papers_values():
+    sched = tt.rate_table_3axis(2000.0)
+    assert_allclose(sched.axes, [[0, 0, 1], [1, 0, 0], [0, 1, 0]])
+    sched.check_grid(1.0)
+    assert sched.end_time == 600.0 + 4 * 400.0  # whole 400 s periods after 10 min warm-up
+    t = np.arange(0.0, sched.end_time + 50, 0.5)
+    angle, rate, acc = sched.state(t)
+    warm = t < 600
+    assert np.all(angle[warm] == 0) and np.all(rate[warm] == 0)
+    max_dps = np.array([100.0, 10.0, 1.0])  # outer, middle, inner
+    assert_allclose(np.degrees(np.abs(rate).max(axis=0)), max_dps, rtol=1e-12)
+    assert_allclose(np.degrees(np.abs(acc[~warm & (t < sched.end_time)]).max(axis=0)), max_dps / 100, rtol=1e-12)
+    assert_allclose(np.degrees(np.abs(acc[~warm & (t < sched.end_time)]).min(axis=0)), max_dps / 100, rtol=1e-12)
+    # the triangle: rate(600 + tau) = max * tri(tau / 400 s), angle back to 0 each period
+    tau = (t[~warm] - 600.0) % 400.0
+    tri = np.where(tau < 100, tau / 100, np.where(tau < 300, 2 - tau / 100, tau / 100 - 4))
+    inside = t[~warm] < sched.end_time
+    assert_allclose(np.degrees(rate[~warm][inside]), tri[inside, None] * max_dps, atol=1e-10)
+    k = np.searchsorted(t, 600.0 + 400.0 * np.arange(5))
+    assert_allclose(angle[k], 0.0, atol=1e-9)
+    assert np.all(rate[t >= sched.end_time] == 0)
+
+
+def test_rate_table_kinematics_and_grid():
+    sched = tt.rate_table_3axis(1500.0, warmup=100.0, inner_rate_dps=30, inner_accel_dps2=3,
+                                middle_rate_dps=45, middle_accel_dps2=2)
+    check_kinematics(sched, sample_times(sched, 60, seed=1))
+    fine = tt.rate_table_3axis(900.0, warmup=7.0, grid=0.3, outer_accel_dps2=0.7)
+    fine.check_grid(0.3)
+    # the quarter period 100/0.7 s is rounded up to the grid: rate kept, acceleration lowered
+    rate, acc = fine.state(np.arange(0, fine.end_time, 0.3))[1:]
+    assert np.degrees(np.abs(rate[:, 0]).max()) == pytest.approx(100.0, rel=1e-9)
+    assert np.degrees(np.abs(acc[:, 0]).max()) <= 0.7
+
+
+@pytest.mark.parametrize("kwargs", [
+    dict(duration=float("nan")), dict(duration=0.0), dict(grid=0.0), dict(grid=-1.0),
+    dict(outer_rate_dps=-100), dict(middle_accel_dps2=0.0), dict(inner_rate_dps=float("nan")), dict(warmup=-1),
+])
+def test_rate_table_rejects_bad_input(kwargs):
+    args = dict(duration=3600.0) | kwargs
+    with pytest.raises(ValueError, match="must be"):
+        tt.rate_table_3axis(args.pop("duration"), **args)
+
+
+def test_chamber_profile_ramps_and_holds():
+    from sarins_fmu.thermal import Ambient
+    times, temps = tt.chamber_profile(8 * 3600.0)
+    assert times[0] == 0 and times[-1] == 8 * 3600.0 and np.all(np.diff(times) > 0)
+    assert temps[0] == 20.0 and temps.min() == -25.0 and temps.max() == 40.0
+    slope = np.diff(temps) / np.diff(times) * 60.0  # degC/min
+    assert set(np.round(np.abs(slope), 12)) == {0.0, 1.0}
+    holds = np.diff(times)[slope == 0]
+    assert_allclose(holds, [1800.0] * 5)
+    assert temps[-1] == pytest.approx(0.0)  # cut 25 min into the last ramp up from -25
+    # first the cold end: 45 min down to -25, 30 min hold, 65 min up to 40
+    assert_allclose(times[1:4], [2700.0, 4500.0, 8400.0])
+    amb = Ambient(profile=(times, temps))
+    assert amb(2700.0 + 900.0) == -25.0 and amb(4500.0 + 600.0) == pytest.approx(-15.0)
+    t2, v2 = tt.chamber_profile(600.0, delay=600.0, start_c=-25.0, hold_min=0.0)
+    assert_allclose(v2, -25.0) and t2[-1] == 600.0
+
+
+@pytest.mark.parametrize("kwargs", [
+    dict(duration=float("nan")), dict(duration=-1.0), dict(ramp_c_per_min=0.0), dict(hold_min=-1.0),
+    dict(low_c=50.0), dict(high_c=float("nan")), dict(delay=-1.0),
+])
+def test_chamber_profile_rejects_bad_input(kwargs):
+    args = dict(duration=3600.0) | kwargs
+    with pytest.raises(ValueError, match="must be"):
+        tt.chamber_profile(args.pop("duration"), **args)
