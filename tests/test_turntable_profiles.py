@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from numpy.testing import assert_allclose
+from numpy.testing import assert_allclose, assert_array_equal
 
 from sarins_fmu import imu_kernel
 from sarins_fmu import turntable as tt
@@ -223,3 +223,113 @@ def test_chamber_profile_rejects_bad_input(kwargs):
     args = dict(duration=3600.0) | kwargs
     with pytest.raises(ValueError, match="must be"):
         tt.chamber_profile(args.pop("duration"), **args)
+
+
+# ---------------------------------------------------------------- 24-position tumble
+
+@pytest.mark.parametrize("grid", [1.0, 0.01])
+def test_tumble_24_positions_are_static_and_level(grid):
+    sched, pos = tt.tumble_24(grid=grid)
+    sched.check_grid(grid)
+    assert len(pos) == 24 and pos.dtype == tt.TUMBLE_DTYPE
+    assert_allclose(pos["end"] - pos["start"], 180.0)
+    assert np.all(pos["start"][1:] > pos["end"][:-1])  # a move between consecutive positions
+    # each body axis up and down, at each of the 4 headings
+    combos = {(str(u), round(math.degrees(h)) % 360) for u, h in zip(pos["up"], pos["heading"])}
+    assert combos == {(s + a, h) for s in "+-" for a in "xyz" for h in (0, 90, 180, 270)}
+    z = E[2]
+    for row in pos:
+        t = np.linspace(row["start"], row["end"], 7)
+        angle, rate, acc = sched.state(t)
+        assert np.all(np.abs(rate) < 1e-15) and np.all(acc[:-1] == 0)  # acc at `end` is the next move's
+        assert_allclose(angle, np.broadcast_to(row["angles"], angle.shape), atol=1e-12)
+        for tk in t:
+            m = mat_tb(sched, tk)
+            e_up = E[AXIS_INDEX[row["up"][1]]]
+            assert_allclose(m @ e_up, z if row["up"][0] == "+" else -z, atol=1e-12)
+            assert_allclose(m.T @ z, row["up_b"], atol=1e-12)
+    # the 4 positions of an orientation differ only by the heading, a turn about the vertical
+    for up in np.unique(pos["up"]):
+        rows = pos[pos["up"] == up]
+        levelled = [rot(z, -r["heading"]) @ mat_tb(sched, r["start"]) for r in rows]
+        assert_allclose(levelled, np.broadcast_to(levelled[0], (4, 3, 3)), atol=1e-12)
+
+
+def test_tumble_moves_only_the_gimbals_that_must_change():
+    sched, pos = tt.tumble_24(dwell=30.0, rate_dps=20.0, accel_dps2=5.0)
+    for a, b in zip(pos[:-1], pos[1:]):
+        t = np.arange(a["end"], b["start"], 0.25)
+        rate = sched.state(t)[1]
+        moving = np.any(np.abs(rate) > 0, axis=0)
+        changed = np.abs(b["angles"] - a["angles"]) > 1e-12
+        assert_array_equal(moving, changed)
+        assert changed.sum() == 1
+        assert np.abs(rate).max() <= math.radians(20.0) * (1 + 1e-12)
+    check_kinematics(sched, sample_times(sched, 40, seed=2))
+
+
+@pytest.mark.parametrize("kwargs", [dict(dwell=0.0), dict(dwell=float("nan")), dict(rate_dps=-10),
+                                    dict(accel_dps2=0), dict(grid=0.0)])
+def test_tumble_rejects_bad_input(kwargs):
+    with pytest.raises(ValueError, match="must be"):
+        tt.tumble_24(**kwargs)
+
+
+# ---------------------------------------------------------------- rate test
+
+def test_rate_test_windows_are_whole_revolutions_at_constant_rate():
+    sched, win = tt.rate_test()
+    sched.check_grid(1.0)
+    assert len(win) == 66 and win.dtype == tt.RATE_WINDOW_DTYPE
+    nominal = np.degrees(win["rate_nominal"][:22])
+    assert_allclose(sorted(nominal), sorted(np.r_[tt.RATE_TEST_MAGNITUDES_DPS, -np.array(tt.RATE_TEST_MAGNITUDES_DPS)]))
+    assert np.abs(nominal).max() == 200.0 and len(set(nominal)) == 22
+    assert_allclose(win["rate"], win["rate_nominal"], rtol=1e-12)  # exact on a 1 s grid
+    assert list(dict.fromkeys(win["axis"])) == ["+x", "+y", "+z"]
+    z = E[2]
+    for w in win:
+        a0, r0, _ = sched.state(w["start"])
+        a1, r1, _ = sched.state(w["end"])
+        # whole revolutions of the outer gimbal, middle and inner still
+        assert_allclose(a1[0, 0] - a0[0, 0], 2 * math.pi * w["revolutions"] * np.sign(w["rate"]), atol=1e-9)
+        assert_allclose(a1[0, 1:], a0[0, 1:], atol=0)
+        t = np.linspace(w["start"], w["end"], 9)
+        _, rate, acc = sched.state(t[:-1])
+        assert np.all(acc == 0)
+        assert_allclose(rate[:, 0], w["rate"], rtol=1e-12)
+        assert np.all(rate[:, 1:] == 0)
+        # the named body axis is vertical, and the body rate is rate * up_b
+        m = mat_tb(sched, 0.5 * (w["start"] + w["end"]))
+        assert_allclose(m @ E[AXIS_INDEX[w["axis"][1]]], z, atol=1e-12)
+        assert_allclose(rate_chain(sched, w["start"] + 0.3), w["rate_b"], atol=1e-13)
+        # acceleration and deceleration lie outside the window
+        assert sched.state(w["start"] - 0.5)[2][0, 0] != 0 and sched.state(w["end"])[2][0, 0] != 0
+
+
+def test_rate_test_options_and_kinematics():
+    sched, win = tt.rate_test(rates_dps=[7.3, -250.0, 0.7], axis_up=["-y", "X", "-z"], min_duration=60.0,
+                              accel_dps2=25.0, grid=0.01, settle=2.0, rate_tol=1e-4)
+    sched.check_grid(0.01)
+    assert list(win["axis"]) == ["-y"] * 3 + ["+x"] * 3 + ["-z"] * 3
+    assert np.all(win["end"] - win["start"] >= 60.0 - 1e-9)
+    assert_allclose(win["rate"], win["rate_nominal"], rtol=1e-4)
+    assert_allclose(np.abs(win["rate"]) * (win["end"] - win["start"]), 2 * math.pi * win["revolutions"], rtol=1e-12)
+    for w in win:
+        a0, a1 = sched.state(w["start"])[0][0, 0], sched.state(w["end"])[0][0, 0]
+        assert abs(abs(a1 - a0) - 2 * math.pi * w["revolutions"]) < 1e-9
+        assert sched.state(w["start"] - 1.0)[2][0, 0] == 0  # settling at constant rate
+        assert_allclose(mat_tb(sched, w["start"]).T @ E[2], w["up_b"], atol=1e-12)
+    assert_allclose(win["up_b"][win["axis"] == "-y"], [[0, -1, 0]] * 3)
+    check_kinematics(sched, sample_times(sched, 40, seed=3))
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(rates_dps=[10.0, 0.0]), "non-zero"), (dict(rates_dps=[float("nan")]), "non-zero"),
+    (dict(rates_dps=[]), "empty"), (dict(axis_up=("w",)), "unknown body axis"), (dict(axis_up=()), "at least one"),
+    (dict(min_duration=-1.0), "must be"), (dict(accel_dps2=-1.0), "must be"), (dict(grid=0.0), "must be"),
+    (dict(settle=float("nan")), "must be"), (dict(rate_tol=0.5), "at most"),
+    (dict(rates_dps=[100 * math.sqrt(2)], grid=0.7, rate_tol=1e-15), "whole revolutions"),
+])
+def test_rate_test_rejects_bad_input(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        tt.rate_test(**kwargs)
