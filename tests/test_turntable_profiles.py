@@ -333,3 +333,35 @@ def test_rate_test_options_and_kinematics():
 def test_rate_test_rejects_bad_input(kwargs, match):
     with pytest.raises(ValueError, match=match):
         tt.rate_test(**kwargs)
+
+
+# ---------------------------------------------------------------- through the IMU
+
+def test_ideal_imu_on_the_rate_test_and_tumble_sees_rate_and_gravity_on_the_named_axis(lat):
+    from sarins_fmu.earth import RATE as EARTH_RATE
+    from sarins_fmu.imu import IMU, ImuModel, StaticBase
+    base = StaticBase(lat)
+    f_t, w_t = base.specific_force_t(), base.inertial_rate_t()
+    sched, win = tt.rate_test(rates_dps=[50.0, -20.0], axis_up=["-x", "y"], accel_dps2=20.0)
+    imu = IMU(ImuModel(), base, sched.axes, output_interval=1.0, internal_rate=50.0)
+    t = np.arange(0.0, sched.end_time)
+    dtheta, dv, _ = imu.step(*sched.state(t))
+    for w in win:
+        k = slice(int(w["start"]), int(w["end"]))
+        T = w["end"] - w["start"]
+        # whole revolutions about the vertical: the horizontal Earth rate and
+        # the horizontal components average out; the up axis sees rate + Earth's vertical rate
+        assert_allclose(dtheta[k].sum(axis=0), (w["rate"] + EARTH_RATE * math.sin(lat)) * T * w["up_b"], atol=1e-8)
+        assert_allclose(dv[k].sum(axis=0), f_t[2] * T * w["up_b"], atol=1e-8)
+    sched, pos = tt.tumble_24(dwell=20.0, rate_dps=30.0, accel_dps2=30.0)
+    imu = IMU(ImuModel(), base, sched.axes, output_interval=1.0, internal_rate=50.0)
+    t = np.arange(0.0, sched.end_time)
+    dtheta, dv, _ = imu.step(*sched.state(t))
+    for p in pos:
+        k = slice(int(p["start"]), int(p["end"]))
+        mat_bt = tt.chain_matrix(sched.axes, p["angles"]).T
+        w_b, f_b = mat_bt @ w_t, mat_bt @ f_t
+        # dv in b at the interval start: f T + (w x f) T^2 / 2 (rotation compensation, T = 1 s)
+        assert_allclose(dv[k], np.broadcast_to(f_b + 0.5 * np.cross(w_b, f_b), dv[k].shape), atol=1e-8)
+        assert_allclose(dv[k] @ p["up_b"], f_t[2], rtol=1e-8)  # gravity on the named axis
+        assert_allclose(dtheta[k], np.broadcast_to(w_b, dtheta[k].shape), atol=1e-16)
