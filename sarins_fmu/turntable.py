@@ -286,7 +286,8 @@ RATE_TABLE_AXES = (AXIS_Z, AXIS_X, AXIS_Y)
 
 # seed 003's rate test: 22 rates within +-200 deg/s; the paper does not list
 # them.  Our choice: 11 magnitudes on a 1-2-3-5 pattern (roughly log-spaced,
-# two points in the MEMS low-rate region below 2 deg/s, the range end 200),
+# 1 and 2 deg/s in the low-rate region of the MEMS preset (nonlinearity
+# width 2 deg/s), the range end 200),
 # each with both signs.
 RATE_TEST_MAGNITUDES_DPS = (1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 30.0, 50.0, 100.0, 150.0, 200.0)
 
