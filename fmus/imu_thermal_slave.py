@@ -7,7 +7,7 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
-                                discard_on_error)
+                                discard_on_error, guarded)
 from sarins_fmu import imu, imu_params
 from sarins_fmu.thermal import SENSORS, ThermalModel
 
@@ -78,6 +78,7 @@ class IMUThermal(Fmi2Slave):
                                     description=f"IMU coefficient, overrides the preset when set [{unit}]",
                                     getter=lambda name=name: getattr(self, name), setter=setter))
 
+    @guarded
     def exit_initialization_mode(self):
         check_finite(self, ["lat", "height", "base_yaw", "internal_rate", "aging_days"],
                      positive=["internal_rate"], non_negative=["aging_days"])
@@ -120,6 +121,7 @@ class IMUThermal(Fmi2Slave):
             raise ParameterError(str(exc)) from None
         self._sensor.reset(ambient0=self._ambient0)
 
+    @guarded
     def do_step(self, current_time, step_size):
         try:
             self._step = check_step(self, step_size, self._step)

@@ -5,17 +5,21 @@ square brackets, optionally followed by a display unit after a semicolon,
 e.g. ``"angular rate of gimbal 1 [rad/s; deg/s]"``.  The build step turns
 that into FMI ``unit``/``displayUnit`` attributes and ``<UnitDefinitions>``.
 
-Error handling (pythonfmu 0.7): a Python exception raised from a slave
-method becomes ``fmi2Fatal`` with the exception logged; ``do_step`` returning
-False becomes ``fmi2Discard``.  pythonfmu has no path to ``fmi2Error``.  So
-invalid parameters raise :class:`ParameterError` from
-``exit_initialization_mode`` (the host gets a fatal status and the message,
-the instance must be freed), and invalid inputs during a step are logged as
-errors and the step is discarded (outputs keep their previous values).
+Error handling (pythonfmu 0.7).  A Python exception escaping a slave method
+becomes ``fmi2Fatal``, but pythonfmu's wrapper then releases the Python
+objects twice (once in its exception handler, again in ``fmi2FreeInstance``),
+which corrupts the host's heap: the host crashes later, at some garbage
+collection.  So no exception may leave a slave method.  :func:`guarded`
+catches them: the message is logged with status ``fmi2Error`` (category
+``logStatusError``), a failed initialisation is remembered, and every
+``doStep`` after it, or any step that fails itself, returns ``False``, which
+pythonfmu reports as ``fmi2Discard`` (the outputs keep their last values).
+pythonfmu has no way to return ``fmi2Error`` itself.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 
 from pythonfmu import Fmi2Causality, Fmi2Variability, Integer, Real, String
@@ -71,3 +75,28 @@ def discard_on_error(slave, exc: Exception) -> bool:
     """Log ``exc`` as an error and tell the host the step was discarded."""
     slave.log(f"{type(exc).__name__}: {exc}", Fmi2Status.error)
     return False
+
+
+def guarded(method):
+    """Wrap a slave method so that no exception reaches pythonfmu (see module
+    docstring).  ``do_step`` returns False on any failure, including a failed
+    initialisation; other methods log and record the failure."""
+    name = method.__name__
+
+    @functools.wraps(method)
+    def wrapper(self, *args):
+        failure = getattr(self, "_failure", None)
+        if name == "do_step" and failure is not None:
+            self.log(f"cannot step: {failure}", Fmi2Status.error)
+            return False
+        try:
+            result = method(self, *args)
+        except Exception as exc:  # noqa: BLE001 - nothing may escape to the C++ wrapper
+            message = f"{name}: {type(exc).__name__}: {exc}"
+            self.log(message, Fmi2Status.error)
+            if name != "do_step":
+                self._failure = message
+            return False if name == "do_step" else None
+        return True if name == "do_step" and result is None else result
+
+    return wrapper

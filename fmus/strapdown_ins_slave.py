@@ -7,7 +7,7 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
-                                discard_on_error)
+                                discard_on_error, guarded)
 from sarins_fmu import ins
 
 DEG = math.pi / 180.0
@@ -85,6 +85,7 @@ class StrapdownINS(Fmi2Slave):
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
 
+    @guarded
     def exit_initialization_mode(self):
         if self.align_time <= 0:
             raise ParameterError("align_time must be positive (the FMU aligns on its static start)")
@@ -93,6 +94,7 @@ class StrapdownINS(Fmi2Slave):
         self.nav_time = -self.align_time
         self.temp_align_start = self.temp_gyro_z
 
+    @guarded
     def do_step(self, current_time, step_size):
         try:
             self._step = check_step(self, step_size, self._step)

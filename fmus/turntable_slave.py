@@ -7,7 +7,7 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
-                                discard_on_error)
+                                discard_on_error, guarded)
 from sarins_fmu import turntable
 from sarins_fmu.thermal import Ambient
 
@@ -53,9 +53,11 @@ class Turntable(Fmi2Slave):
         self._ambient = None
         self._step = None
 
+    @guarded
     def enter_initialization_mode(self):
         self._build()
 
+    @guarded
     def exit_initialization_mode(self):
         self._build()
 
@@ -87,6 +89,7 @@ class Turntable(Fmi2Slave):
             setattr(self, f"accel_{j + 1}", float(acc[j]) if inside else 0.0)
         self.ambient_temp = float(self._ambient(time))
 
+    @guarded
     def do_step(self, current_time, step_size):
         try:
             if self._step is None:
