@@ -8,6 +8,9 @@ rbf
     Gaussian RBF network grown like MATLAB's ``newrb`` (seed 000).
 grnn
     Specht's general regression network (seed 003).
+rls
+    Quadratic temperature model of a drift and its forgetting-factor RLS
+    (seed 002).
 modelfile
     Reading and writing plain-data model files, :class:`ModelFileError`.
 preprocessing
@@ -17,5 +20,27 @@ preprocessing
 from .grnn import GRNN, GRNNSettings
 from .modelfile import ModelFileError
 from .rbf import RBFNetwork, RBFSettings
+from .rls import (
+    MONTH,
+    ForgettingRLS,
+    QuadraticFit,
+    RLSSettings,
+    fit_quadratic_temperature_model,
+    forgetting_least_squares,
+    weighted_least_squares,
+)
 
-__all__ = ["GRNN", "GRNNSettings", "ModelFileError", "RBFNetwork", "RBFSettings"]
+__all__ = [
+    "GRNN",
+    "GRNNSettings",
+    "ModelFileError",
+    "RBFNetwork",
+    "RBFSettings",
+    "MONTH",
+    "ForgettingRLS",
+    "QuadraticFit",
+    "RLSSettings",
+    "fit_quadratic_temperature_model",
+    "forgetting_least_squares",
+    "weighted_least_squares",
+]
