@@ -8,6 +8,9 @@ rbf
     Gaussian RBF network grown like MATLAB's ``newrb`` (seed 000).
 grnn
     Specht's general regression network (seed 003).
+calibration
+    Traditional bias / scale-factor / misalignment model per sensor triad
+    (seed 003 eqs 1-2), its least-squares fit and compensation.
 rls
     Quadratic temperature model of a drift and its forgetting-factor RLS
     (seed 002).
@@ -17,6 +20,15 @@ preprocessing
     Input checks and per-column standardisation.
 """
 
+from .calibration import (
+    TriadCalibration,
+    compensate_triad,
+    cube_orientations,
+    fit_triad,
+    rate_test_truth,
+    triad_model,
+    tumble_truth,
+)
 from .grnn import GRNN, GRNNSettings
 from .modelfile import ModelFileError
 from .rbf import RBFNetwork, RBFSettings
@@ -31,6 +43,13 @@ from .rls import (
 )
 
 __all__ = [
+    "TriadCalibration",
+    "compensate_triad",
+    "cube_orientations",
+    "fit_triad",
+    "rate_test_truth",
+    "triad_model",
+    "tumble_truth",
     "GRNN",
     "GRNNSettings",
     "ModelFileError",
