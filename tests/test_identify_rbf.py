@@ -139,6 +139,7 @@ def test_candidate_subset_and_chunking_do_not_change_small_fits(sine_data):
 def test_save_load_round_trip(tmp_path, sine_data, suffix):
     x, y = sine_data
     net = RBFNetwork(spread=0.5, goal=1e-3).fit(x, y, input_names=["t"], target_name="y")
+    net.metadata = {"site": "lab", "lat_deg": 28.222}
     path = net.save(tmp_path / f"model{suffix}")
     back = RBFNetwork.load(path)
     x_new = np.linspace(-1.0, 7.0, 33)
@@ -147,6 +148,7 @@ def test_save_load_round_trip(tmp_path, sine_data, suffix):
     assert back.input_names == ("t",)
     assert back.target_name == "y"
     assert back.settings == net.settings
+    assert back.metadata == net.metadata
 
 
 def _saved_json(tmp_path, sine_data):

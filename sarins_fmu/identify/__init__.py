@@ -14,6 +14,10 @@ calibration
 rls
     Quadratic temperature model of a drift and its forgetting-factor RLS
     (seed 002).
+tables
+    CSV tables of named columns; seed 000's Tables 2 and 4 (packaged data).
+cli
+    ``sarins identify train|predict`` (``register(subparsers)``, ``run(args)``).
 modelfile
     Reading and writing plain-data model files, :class:`ModelFileError`.
 preprocessing
@@ -41,6 +45,14 @@ from .rls import (
     forgetting_least_squares,
     weighted_least_squares,
 )
+from .tables import (
+    SEED000_SITE_LAT_DEG,
+    TableError,
+    read_table,
+    seed000_table2_hot,
+    seed000_table4_cold,
+    write_table,
+)
 
 __all__ = [
     "TriadCalibration",
@@ -62,4 +74,10 @@ __all__ = [
     "fit_quadratic_temperature_model",
     "forgetting_least_squares",
     "weighted_least_squares",
+    "SEED000_SITE_LAT_DEG",
+    "TableError",
+    "read_table",
+    "seed000_table2_hot",
+    "seed000_table4_cold",
+    "write_table",
 ]

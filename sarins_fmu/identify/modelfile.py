@@ -208,8 +208,10 @@ def load_model_file(
         On any problem with the file.
     """
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise ModelFileError(path, "no such file")
+    if not path.is_file():
+        raise ModelFileError(path, "not a regular file")
     header, arrays = _read_npz(path) if _is_npz(path) else _read_json(path)
     tag = header.get("format")
     if tag != format_tag:

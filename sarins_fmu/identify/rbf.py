@@ -199,6 +199,8 @@ class RBFNetwork:
         Names of the input columns, if given to :meth:`fit`.
     target_name : str or None
         Name of the target, if given to :meth:`fit`.
+    metadata : dict
+        Free JSON-ready data saved with the model (e.g. how it was trained).
     """
 
     def __init__(
@@ -230,6 +232,7 @@ class RBFNetwork:
         self.stop_reason_: str | None = None
         self.input_names: tuple[str, ...] | None = None
         self.target_name: str | None = None
+        self.metadata: dict = {}
 
     # ------------------------------------------------------------------ info
     @property
@@ -357,6 +360,7 @@ class RBFNetwork:
             "stop_reason": self.stop_reason_,
             "input_names": None if self.input_names is None else list(self.input_names),
             "target_name": self.target_name,
+            "metadata": self.metadata,
         }
         arrays = {
             "centers": self.centers_,
@@ -407,8 +411,12 @@ class RBFNetwork:
         net.training_curve_ = curve
         net.training_mse_ = float(meta.get("training_mse", np.nan))
         net.stop_reason_ = meta.get("stop_reason")
+        metadata = meta.get("metadata", {})
+        if not isinstance(metadata, dict):
+            raise ValueError("'metadata' must be an object")
         net.input_names = names
         net.target_name = target
+        net.metadata = metadata
         return net
 
     def save(self, path: str | Path) -> Path:
