@@ -164,14 +164,17 @@ def _saved_json(tmp_path, sine_data):
         lambda doc: json.dumps({**doc, "format": "sarins_fmu.identify.grnn"}),
         lambda doc: json.dumps({**doc, "version": 99}),
         lambda doc: json.dumps({k: v for k, v in doc.items() if k != "arrays"}),
-        lambda doc: json.dumps({**doc, "meta": {k: v for k, v in doc["meta"].items() if k != "bias"}}),
+        lambda doc: json.dumps({**doc, "arrays": {k: v for k, v in doc["arrays"].items() if k != "bias"}}),
         lambda doc: json.dumps(
             {**doc, "arrays": {**doc["arrays"], "weights": {"shape": [1], "data": [0.5]}}}
         ),
         lambda doc: json.dumps(
             {**doc, "arrays": {**doc["arrays"], "centers": {"shape": [2, 2], "data": [1, 2, 3]}}}
         ),
-        lambda doc: json.dumps(doc).replace(str(doc["meta"]["bias"]), "NaN", 1),
+        lambda doc: json.dumps(
+            {**doc, "arrays": {**doc["arrays"], "weights": {**doc["arrays"]["weights"],
+                               "data": [float("nan")] + doc["arrays"]["weights"]["data"][1:]}}}
+        ),
         lambda doc: json.dumps({**doc, "meta": {**doc["meta"], "settings": {"spread": -1}}}),
         lambda doc: "[1, 2, 3]",
     ],
@@ -202,7 +205,7 @@ def test_missing_and_corrupt_npz_rejected(tmp_path):
         ([0.0, 1.0, 2.0], [1.0, 2.0], "samples"),
         ([1.0], [2.0], "at least 2"),
         (np.zeros((3, 1, 1)), [1.0, 2.0, 3.0], "shape"),
-        ([0.0, 1.0, 2.0], [[1.0], [2.0], [3.0]], "dimension"),
+        ([0.0, 1.0, 2.0], np.zeros((3, 1, 1)), "dimension"),
         ([0.0, 1.0, 2.0], [1.0, np.inf, 3.0], "NaN"),
     ],
 )
@@ -229,3 +232,26 @@ def test_bad_prediction_inputs_rejected(sine_data):
 def test_bad_settings_rejected(kwargs):
     with pytest.raises(ValueError):
         RBFNetwork(**kwargs)
+
+
+def test_multi_output_shares_centres(tmp_path, sine_data):
+    x, y = sine_data
+    single = RBFNetwork(spread=0.5, goal=1e-3).fit(x, y)
+    # two identical outputs: same centres, same curve, same predictions per column
+    double = RBFNetwork(spread=0.5, goal=1e-3).fit(x, np.column_stack([y, y]))
+    assert_array_equal(double.centers_, single.centers_)
+    assert_allclose(double.training_curve_, single.training_curve_, rtol=1e-12)
+    pred = double.predict(x)
+    assert pred.shape == (len(x), 2)
+    assert_allclose(pred, np.column_stack([single.predict(x)] * 2), rtol=1e-9, atol=1e-12)
+    back = RBFNetwork.load(double.save(tmp_path / "two.json"))
+    assert_array_equal(back.predict(x), pred)
+
+
+def test_multi_output_exact_interpolation():
+    rng = np.random.default_rng(11)
+    x = rng.uniform(-2.0, 2.0, (7, 3))
+    y = rng.standard_normal((7, 4))
+    for selection in ("ols", "residual"):
+        net = RBFNetwork(spread=1.0, standardize=False, selection=selection).fit(x, y)
+        assert_allclose(net.predict(x), y, atol=1e-10)

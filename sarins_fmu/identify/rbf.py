@@ -35,15 +35,22 @@ Growing the network
         (numerically dependent) are skipped.
     ``selection="residual"``
         The rule ``newrb``'s documentation describes: the training sample with
-        the largest absolute residual becomes the next centre.
+        the largest absolute residual (Euclidean norm over the outputs)
+        becomes the next centre.
 
     After each addition the output weights and the bias are the linear
     least-squares solution; the mean squared error after each addition is
     kept in ``training_curve_`` (entry 0: bias only, no neuron).
 
+    Several outputs (``y`` of shape (n, m), as ``newrb`` with a matrix of
+    targets) share the centres; the error is then the mean over all n·m
+    target elements and OLS sums the error reductions over the outputs.
+
     With more than ``max_candidates`` training samples, only an evenly spaced
     subset of them (in the order given) are candidates; every sample still
-    counts in the error.
+    counts in the error. One OLS step evaluates n x max_candidates basis
+    values (in blocks of at most ``chunk_elements``; cached when they fit):
+    n = 1e5 with 2000 candidates takes a few seconds per neuron.
 
 Model files are plain JSON (or ``.npz``), see :mod:`.modelfile`.
 """
@@ -183,9 +190,9 @@ class RBFNetwork:
     ----------
     centers_ : ndarray, shape (k, d)
         Centres, in the inputs' units (they are training samples).
-    weights_ : ndarray, shape (k,)
+    weights_ : ndarray, shape (k,), or (k, m) for m outputs
         Output weights, target unit.
-    bias_ : float
+    bias_ : float, or ndarray of shape (m,) for m outputs
         Output bias, target unit.
     scaling_ : Scaling
         Input standardisation (identity when ``standardize`` is off).
@@ -225,7 +232,8 @@ class RBFNetwork:
         )
         self.centers_: np.ndarray | None = None
         self.weights_: np.ndarray | None = None
-        self.bias_: float | None = None
+        self.bias_: float | np.ndarray | None = None
+        self._single_output = True
         self.scaling_: Scaling | None = None
         self.training_curve_: np.ndarray | None = None
         self.training_mse_: float | None = None
@@ -265,8 +273,8 @@ class RBFNetwork:
         ----------
         X : array_like, shape (n, d) or (n,)
             Training inputs (a 1-D array is one input column). n >= 2.
-        y : array_like, shape (n,)
-            Training targets.
+        y : array_like, shape (n,) or (n, m)
+            Training targets (m outputs sharing the centres).
         input_names : sequence of str, optional
             Names of the d input columns (stored in the model file).
         target_name : str, optional
@@ -287,7 +295,9 @@ class RBFNetwork:
         n, d = x.shape
         if n < 2:
             raise ValueError(f"RBF training needs at least 2 samples, got {n}")
-        t = check_targets(y, n, "y", ndim=(1,))
+        t = check_targets(y, n, "y", ndim=(1, 2))
+        single = t.ndim == 1
+        t = t[:, None] if single else t
         if input_names is not None:
             input_names = tuple(str(v) for v in input_names)
             if len(input_names) != d:
@@ -306,13 +316,15 @@ class RBFNetwork:
 
         self.scaling_ = scaling
         self.centers_ = x[chosen].copy()
-        self.weights_ = weights
-        self.bias_ = bias
+        self._single_output = single
+        self.weights_ = weights[:, 0].copy() if single else weights
+        self.bias_ = float(bias[0]) if single else bias
         self.training_curve_ = np.asarray(curve, dtype=float)
         self.stop_reason_ = reason
         self.input_names = input_names
         self.target_name = None if target_name is None else str(target_name)
-        self.training_mse_ = float(np.mean((t - self.predict(x)) ** 2))
+        fitted = self.predict(x)
+        self.training_mse_ = float(np.mean((t - (fitted[:, None] if single else fitted)) ** 2))
         return self
 
     # ----------------------------------------------------------- prediction
@@ -330,14 +342,14 @@ class RBFNetwork:
 
         Returns
         -------
-        ndarray, shape (n,)
+        ndarray, shape (n,), or (n, m) if trained with m outputs
             Outputs, target unit.
         """
         self._check_fitted()
         x = check_inputs(X, "X", n_features=self.n_features)
         z = self.scaling_.apply(x)
         zc = self.scaling_.apply(self.centers_)
-        out = np.empty(x.shape[0])
+        out = np.empty((x.shape[0],) + np.shape(self.bias_))
         rows = max(1, self.settings.chunk_elements // max(1, zc.shape[0]))
         for start in range(0, x.shape[0], rows):
             stop = start + rows
@@ -355,7 +367,7 @@ class RBFNetwork:
         meta = {
             "settings": asdict(self.settings),
             "n_features": self.n_features,
-            "bias": float(self.bias_),
+            "single_output": self._single_output,
             "training_mse": float(self.training_mse_),
             "stop_reason": self.stop_reason_,
             "input_names": None if self.input_names is None else list(self.input_names),
@@ -365,6 +377,7 @@ class RBFNetwork:
         arrays = {
             "centers": self.centers_,
             "weights": self.weights_,
+            "bias": np.atleast_1d(self.bias_),
             "scaling_mean": self.scaling_.mean,
             "scaling_scale": self.scaling_.scale,
             "training_curve": self.training_curve_,
@@ -389,13 +402,14 @@ class RBFNetwork:
             raise ValueError(f"'n_features' must be a positive integer, got {d!r}")
         centers = get_array(arrays, "centers", (None, d))
         k = centers.shape[0]
-        weights = get_array(arrays, "weights", (k,))
+        single = meta["single_output"]
+        if not isinstance(single, bool):
+            raise ValueError(f"'single_output' must be a boolean, got {single!r}")
+        bias = get_array(arrays, "bias", (1,) if single else (None,))
+        weights = get_array(arrays, "weights", (k,) if single else (k, bias.size))
         mean = get_array(arrays, "scaling_mean", (d,))
         scale = get_array(arrays, "scaling_scale", (d,))
         curve = get_array(arrays, "training_curve", (None,))
-        bias = meta["bias"]
-        if not isinstance(bias, (int, float)) or isinstance(bias, bool) or not np.isfinite(bias):
-            raise ValueError(f"'bias' must be a finite number, got {bias!r}")
         names = meta.get("input_names")
         if names is not None:
             if not isinstance(names, list) or len(names) != d or not all(isinstance(v, str) for v in names):
@@ -406,8 +420,9 @@ class RBFNetwork:
             raise ValueError("'target_name' must be a string")
         net.scaling_ = Scaling(mean, scale)
         net.centers_ = centers
+        net._single_output = single
         net.weights_ = weights
-        net.bias_ = float(bias)
+        net.bias_ = float(bias[0]) if single else bias
         net.training_curve_ = curve
         net.training_mse_ = float(meta.get("training_mse", np.nan))
         net.stop_reason_ = meta.get("stop_reason")
@@ -451,12 +466,12 @@ def _design(z: np.ndarray, zc: np.ndarray, s: RBFSettings) -> np.ndarray:
     return _basis_from_sq(cdist(z, zc, "sqeuclidean"), s.spread)
 
 
-def _solve_output_layer(phi: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, float]:
-    """Least-squares output weights (k,) and bias for basis matrix phi (n, k)."""
-    # [Phi 1] [w; w0] = t  in the least-squares sense
+def _solve_output_layer(phi: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares output weights (k, m) and bias (m,) for basis phi (n, k), targets t (n, m)."""
+    # [Phi 1] [W; w0'] = T  in the least-squares sense
     a = np.hstack([phi, np.ones((phi.shape[0], 1))])
     sol, *_ = np.linalg.lstsq(a, t, rcond=None)
-    return sol[:-1].copy(), float(sol[-1])
+    return sol[:-1].copy(), sol[-1].copy()
 
 
 def _candidate_blocks(z: np.ndarray, cand: np.ndarray, s: RBFSettings):
@@ -476,18 +491,18 @@ def _grow_ols(
     # orthonormal basis of the chosen columns; column 0 is the (normalised) bias
     q_basis = np.empty((n, max_k + 1))
     q_basis[:, 0] = 1.0 / np.sqrt(n)
-    resid = t - q_basis[:, 0] * (q_basis[:, 0] @ t)
+    resid = t - np.outer(q_basis[:, 0], q_basis[:, 0] @ t)  # (n, m)
     curve = [float(np.mean(resid**2))]
-    target_energy = float(t @ t) or 1.0
+    target_energy = float(np.sum(t * t)) or 1.0
 
     energy = np.empty(n_cand)  # ||phi_c||^2
     proj2 = np.empty(n_cand)  # ||Q' phi_c||^2, grows as columns are chosen
-    r_phi = np.empty(n_cand)  # r' phi_c for the current residual r
+    r_phi = np.empty((n_cand, t.shape[1]))  # phi_c' r for the current residuals r
     cache = [] if n * n_cand <= s.chunk_elements else None
     for sl, block in _candidate_blocks(z, cand, s):
         energy[sl] = np.einsum("ij,ij->j", block, block)
         proj2[sl] = (q_basis[:, 0] @ block) ** 2
-        r_phi[sl] = resid @ block
+        r_phi[sl] = block.T @ resid
         if cache is not None:
             cache.append((sl, block))
     blocks = (lambda: iter(cache)) if cache is not None else (lambda: _candidate_blocks(z, cand, s))
@@ -509,7 +524,8 @@ def _grow_ols(
             reason = "no_candidate"
             break
         gain = np.full(n_cand, -np.inf)
-        gain[usable] = r_phi[usable] ** 2 / perp[usable]
+        # error reduction (summed over outputs) if candidate c were added
+        gain[usable] = np.sum(r_phi[usable] ** 2, axis=1) / perp[usable]
         j = int(np.argmax(gain))
         if gain[j] <= _NO_GAIN_TOL * target_energy:
             reason = "no_candidate"
@@ -522,13 +538,13 @@ def _grow_ols(
         q /= np.linalg.norm(q)
         q_basis[:, k] = q
         # r <- r - q (q' r)
-        resid = resid - q * (q @ resid)
+        resid = resid - np.outer(q, q @ resid)
         curve.append(float(np.mean(resid**2)))
         chosen.append(int(cand[j]))
         available[j] = False
         for sl, block in blocks():
             proj2[sl] += (q @ block) ** 2
-            r_phi[sl] = resid @ block
+            r_phi[sl] = block.T @ resid
     return np.asarray(chosen, dtype=int), curve, reason
 
 
@@ -536,7 +552,7 @@ def _grow_residual(
     z: np.ndarray, t: np.ndarray, cand: np.ndarray, max_k: int, s: RBFSettings
 ) -> tuple[np.ndarray, list[float], str]:
     """Add the candidate sample with the largest residual, refit, repeat."""
-    resid = t - t.mean()
+    resid = t - t.mean(axis=0)
     curve = [float(np.mean(resid**2))]
     available = np.ones(len(cand), dtype=bool)
     chosen: list[int] = []
@@ -551,7 +567,7 @@ def _grow_residual(
         if not available.any():
             reason = "no_candidate"
             break
-        score = np.where(available, np.abs(resid[cand]), -np.inf)
+        score = np.where(available, np.sum(resid[cand] ** 2, axis=1), -np.inf)
         j = int(np.argmax(score))
         chosen.append(int(cand[j]))
         available[j] = False
