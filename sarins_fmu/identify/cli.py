@@ -81,7 +81,10 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     train = sub.add_parser(
         "train",
         help="train an RBF network on a CSV table",
-        description="Grow an RBF network (newrb-style, orthogonal least squares) on CSV columns.",
+        description="Grow an RBF network (newrb-style, orthogonal least squares) on CSV columns. "
+        "Seed 000 feeds the latitude reading after 4 h alignment + 12 h navigation; this command "
+        "takes the latitude error (lat_error_deg) and, if the CSV only has the reading (lat_deg), "
+        "computes it as lat_deg - local_lat_deg. With standardised inputs both give the same network.",
     )
     train.add_argument("--data", required=True, type=Path, help="training CSV with a header row")
     train.add_argument(
@@ -193,7 +196,9 @@ def _train(args: argparse.Namespace) -> None:
 def _predict(args: argparse.Namespace) -> None:
     net = RBFNetwork.load(args.model)
     if net.input_names is None:
-        raise _UsageError(f"{args.model}: model file has no input column names; retrain with 'identify train'")
+        raise _UsageError(
+            f"{args.model}: model file has no input column names; retrain with 'identify train'"
+        )
     lat = args.local_lat_deg
     if lat is None:
         lat = float(net.metadata.get("local_lat_deg", SEED000_SITE_LAT_DEG))
@@ -206,7 +211,8 @@ def _predict(args: argparse.Namespace) -> None:
     summary = f"predicted {target} for {len(pred)} rows with {args.model}"
     if target in table and table[target].dtype.kind == "f" and np.all(np.isfinite(table[target])):
         err = pred - table[target]
-        summary += f"; error vs '{target}': RMS {np.sqrt(np.mean(err**2)):.4g}, max |err| {np.abs(err).max():.4g}"
+        rms, worst = np.sqrt(np.mean(err**2)), np.abs(err).max()
+        summary += f"; error vs '{target}': RMS {rms:.4g}, max |err| {worst:.4g}"
     if args.out is None:
         write_table(sys.stdout, result)
         print(summary, file=sys.stderr)

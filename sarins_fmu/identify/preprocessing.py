@@ -129,7 +129,8 @@ def check_targets(y: object, n: int, name: str = "y", ndim: tuple[int, ...] = (1
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name} is not a numeric array: {exc}") from None
     if arr.ndim not in ndim:
-        raise ValueError(f"{name} must have {' or '.join(map(str, ndim))} dimension(s), got shape {arr.shape}")
+        allowed = " or ".join(map(str, ndim))
+        raise ValueError(f"{name} must have {allowed} dimension(s), got shape {arr.shape}")
     if arr.shape[0] != n:
         raise ValueError(f"{name} has {arr.shape[0]} samples but the inputs have {n}")
     if arr.ndim == 2 and arr.shape[1] == 0:

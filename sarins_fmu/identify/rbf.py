@@ -153,9 +153,8 @@ class RBFSettings:
             raise ValueError(f"spread must be positive and finite, got {self.spread!r}")
         if not (np.isfinite(self.goal) and self.goal >= 0.0):
             raise ValueError(f"goal must be zero or positive, got {self.goal!r}")
-        if self.max_neurons is not None and (
-            isinstance(self.max_neurons, bool) or int(self.max_neurons) != self.max_neurons or self.max_neurons < 0
-        ):
+        k = self.max_neurons
+        if k is not None and (isinstance(k, bool) or int(k) != k or k < 0):
             raise ValueError(f"max_neurons must be None or an integer >= 0, got {self.max_neurons!r}")
         if self.selection not in ("ols", "residual"):
             raise ValueError(f"selection must be 'ols' or 'residual', got {self.selection!r}")

@@ -472,7 +472,10 @@ class ForgettingRLS:
 
     def __repr__(self) -> str:
         a, b, c = self._x
-        return f"ForgettingRLS(a={a:.6g}, b={b:.6g}, c={c:.6g}, time={self.time:.6g} s, updates={self.n_updates})"
+        return (
+            f"ForgettingRLS(a={a:.6g}, b={b:.6g}, c={c:.6g}, "
+            f"time={self.time:.6g} s, updates={self.n_updates})"
+        )
 
     def update(self, temperature: float, drift: float, time: float) -> np.ndarray:
         """Add one drift measurement (e.g. from a stop's Kalman filter).
