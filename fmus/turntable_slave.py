@@ -18,7 +18,8 @@ class Turntable(Fmi2Slave):
 
     author = "sarins-fmu"
     description = (
-        "Turntable of a rotating INS (truth motion). Contract: after doStep(t, h) the outputs are the "
+        "Turntable of a rotating INS or a rate table (truth motion). Gimbal chains: single-axis schemes 'z'; "
+        "dual-axis 'y,z'; rate-table-3axis 'z,x,y' (set the IMU's 'gimbals' to match). Contract: after doStep(t, h) the outputs are the "
         "gimbal angles and rates at t + h and the angular acceleration that holds from t + h until the "
         "next acceleration change; accelerations change only on the 'grid' (a multiple of the "
         "communication step), so a connected IMU rebuilds the motion inside each step exactly from the "
@@ -29,7 +30,7 @@ class Turntable(Fmi2Slave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         declare(self, "string", "scheme", PARAMETER,
-                "rotation scheme: none, continuous, forward-reverse, four-position", "forward-reverse")
+                "rotation scheme: " + ", ".join(turntable.SCHEMES), "forward-reverse")
         declare(self, "real", "rate", PARAMETER, "peak rotation rate [rad/s; deg/s]", 6.0 * DEG)
         declare(self, "real", "accel", PARAMETER, "angular acceleration of the moves [rad/s2; deg/s2]", 6.0 * DEG)
         declare(self, "real", "dwell", PARAMETER, "stop at each position or reversal [s]", 0.0)
@@ -39,7 +40,22 @@ class Turntable(Fmi2Slave):
         declare(self, "real", "align_dwell", PARAMETER, "stop at each alignment position [s]", 300.0)
         declare(self, "real", "grid", PARAMETER, "time grid of acceleration changes [s]", 1.0)
         declare(self, "real", "duration", PARAMETER, "length of the generated pattern [s]", 100 * 3600.0)
-        declare(self, "real", "ambient_mean", PARAMETER, "ambient temperature mean [degC]", 20.0)
+        declare(self, "real", "outer_rate", PARAMETER, "dual-axis: outer flip rate [rad/s; deg/s]", 6.0 * DEG)
+        declare(self, "real", "outer_accel", PARAMETER, "dual-axis: outer flip acceleration [rad/s2; deg/s2]",
+                6.0 * DEG)
+        for name, rate, acc in (("inner", 1.0, 0.01), ("middle", 10.0, 0.1), ("outer", 100.0, 1.0)):
+            declare(self, "real", f"table_{name}_rate", PARAMETER,
+                    f"rate-table-3axis: {name} gimbal peak rate [rad/s; deg/s]", rate * DEG)
+            declare(self, "real", f"table_{name}_accel", PARAMETER,
+                    f"rate-table-3axis: {name} gimbal acceleration [rad/s2; deg/s2]", acc * DEG)
+        declare(self, "real", "warmup", PARAMETER, "rate-table-3axis: static warm-up [s]", 600.0)
+        declare(self, "string", "ambient_mode", PARAMETER,
+                "ambient: 'sinusoid' (mean, amplitude, period) or 'chamber' (ramp/hold cycle)", "sinusoid")
+        declare(self, "real", "chamber_low", PARAMETER, "chamber low temperature [degC]", -25.0)
+        declare(self, "real", "chamber_high", PARAMETER, "chamber high temperature [degC]", 40.0)
+        declare(self, "real", "chamber_ramp", PARAMETER, "chamber ramp rate [degC/s]", 1.0 / 60.0)
+        declare(self, "real", "chamber_hold", PARAMETER, "chamber hold at each end [s]", 1800.0)
+        declare(self, "real", "ambient_mean", PARAMETER, "ambient temperature mean (chamber start) [degC]", 20.0)
         declare(self, "real", "ambient_amplitude", PARAMETER, "ambient daily amplitude [degC]", 0.0)
         declare(self, "real", "ambient_period", PARAMETER, "ambient period [s]", 86400.0)
         for j in (1, 2, 3):
@@ -63,20 +79,33 @@ class Turntable(Fmi2Slave):
 
     def _build(self):
         check_finite(self, ["rate", "accel", "dwell", "align_time", "align_dwell", "grid", "duration",
-                            "ambient_mean", "ambient_amplitude", "ambient_period"],
+                            "ambient_mean", "ambient_amplitude", "ambient_period", "outer_rate", "outer_accel",
+                            "warmup", "chamber_low", "chamber_high", "chamber_ramp", "chamber_hold"]
+                     + [f"table_{n}_{q}" for n in ("inner", "middle", "outer") for q in ("rate", "accel")],
                      positive=["grid", "duration", "ambient_period"],
                      non_negative=["rate", "accel", "dwell", "align_time", "align_dwell"])
-        if self.scheme not in turntable.ROTATION_SCHEMES:
-            raise ParameterError(f"unknown scheme {self.scheme!r}; choose one of "
-                                 f"{', '.join(turntable.ROTATION_SCHEMES)}")
         try:
-            self._schedule = turntable.single_axis(
+            self._schedule = turntable.schedule_for(
                 self.scheme, self.duration, rate_dps=self.rate / DEG, accel_dps2=self.accel / DEG,
                 dwell=self.dwell, grid=self.grid, revolutions=int(self.revolutions),
-                align_time=self.align_time, align_dwell=self.align_dwell)
+                align_time=self.align_time, align_dwell=self.align_dwell,
+                outer_rate_dps=self.outer_rate / DEG, outer_accel_dps2=self.outer_accel / DEG,
+                table_rates_dps=[getattr(self, f"table_{n}_rate") / DEG for n in ("inner", "middle", "outer")],
+                table_accels_dps2=[getattr(self, f"table_{n}_accel") / DEG for n in ("inner", "middle", "outer")],
+                warmup=self.warmup)
+            if self.ambient_mode == "chamber":
+                profile = turntable.chamber_profile(
+                    self.duration, low_c=self.chamber_low, high_c=self.chamber_high,
+                    ramp_c_per_min=self.chamber_ramp * 60.0, hold_min=self.chamber_hold / 60.0,
+                    start_c=self.ambient_mean)
+                self._ambient = Ambient(profile=profile)
+            elif self.ambient_mode == "sinusoid":
+                self._ambient = Ambient(mean=self.ambient_mean, amplitude=self.ambient_amplitude,
+                                        period=self.ambient_period)
+            else:
+                raise ValueError(f"ambient_mode must be 'sinusoid' or 'chamber', got {self.ambient_mode!r}")
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
-        self._ambient = Ambient(mean=self.ambient_mean, amplitude=self.ambient_amplitude, period=self.ambient_period)
         self.n_gimbals = self._schedule.n_axes
         self._publish(0.0)
 
