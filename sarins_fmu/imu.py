@@ -293,7 +293,12 @@ class StaticBase:
         is held over an interval is only the slowly varying part.
         """
         n = len(t_start)
-        return np.tile(self.inertial_rate_t(), (n, 1)), np.tile(self.specific_force_t(), (n, 1))
+        cache = self.__dict__.setdefault("_motion_cache", {})
+        if n not in cache:  # constant: build once per batch size (an FMU asks for n = 1 every step)
+            if len(cache) > 8:
+                cache.clear()
+            cache[n] = (np.tile(self.inertial_rate_t(), (n, 1)), np.tile(self.specific_force_t(), (n, 1)))
+        return cache[n]
 
 
 class IMU:
@@ -390,8 +395,7 @@ class IMU:
             self._gm, self._gm_phi, self._gm_std, gm_noise)
         w_t, f_t = self.base.base_motion(t_end - self.h, self.h)
         dtheta, dv = _increments_kernel(
-            self.axes, angle0, rate0, accel, np.ascontiguousarray(w_t, float), np.ascontiguousarray(f_t, float),
-            self.h, self.n_sub,
+            self.axes, angle0, rate0, accel, w_t, f_t, self.h, self.n_sub,
             g_sf, m.gyro.misalignment, g_bias, m.gyro.quadratic, m.lowrate_gain, m.lowrate_width,
             m.g_sensitivity, a_sf, m.accel.misalignment, a_bias, m.accel.quadratic)
         noise = self._rng_noise.standard_normal((n, 6)) * math.sqrt(self.h)

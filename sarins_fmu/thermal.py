@@ -72,6 +72,8 @@ class Ambient:
 
     def __call__(self, time):
         t = np.asarray(time, dtype=float)
+        if self.profile is None and self.amplitude == 0.0 and self.slope == 0.0:
+            return np.full(t.shape, float(self.mean)) if t.ndim else float(self.mean)
         if self.profile is not None:
             pt, pv = (np.asarray(x, float) for x in self.profile)
             return np.interp(t, pt, pv)
@@ -123,16 +125,18 @@ class ThermalModel:
         ``times`` come from the ambient function, or from ``ambient`` (K,)
         degC when given (e.g. a chamber temperature received as an input).
         """
-        times = np.atleast_1d(np.asarray(times, dtype=float))
+        times = np.asarray(times, dtype=float).reshape(-1)
         if times.size == 0:
             return np.empty((0, N_SENSORS))
-        grid = np.concatenate([[self.time], times])
-        h = np.diff(grid)
-        if np.any(h < 0) or not np.isfinite(h).all():
+        h = np.empty_like(times)
+        h[0] = times[0] - self.time
+        h[1:] = times[1:] - times[:-1]
+        if not (h.min() >= 0 and np.isfinite(h).all()):
             raise ValueError("thermal model times must be finite and increasing")
-        amb_new = np.asarray(self.ambient(times) if ambient is None else ambient, float).reshape(times.shape)
-        _check_temperature(amb_new)
-        amb = np.concatenate([[self._ambient_now], amb_new])
+        amb = np.empty(times.size + 1)
+        amb[0] = self._ambient_now
+        amb[1:] = self.ambient(times) if ambient is None else ambient
+        _check_temperature(amb)
         out = _exact_steps(h, amb, self._heat, self._tau, self.temperature)
         self.time = float(times[-1])
         self._ambient_now = float(amb[-1])
