@@ -10,7 +10,7 @@ to the names (SSP 1.0 rule); connections between component connectors; the
 
 Not supported (a :class:`~orchestration.errors.SystemFileError` says so):
 nested systems, system-level connectors, parameter mappings, signal
-dictionaries, linear transformations on connections, non-FMU components.
+dictionaries, transformations on connections, non-FMU components.
 """
 from __future__ import annotations
 
@@ -115,6 +115,7 @@ def read_system(path: str | Path) -> System:
         ssd_text = path.read_bytes()
         archive_source = _pack_ssd(path, ssd_text)
     description = _read_with_fmpy(archive_source, path)
+    _refuse_transformations(ssd_text, path)
     system = _convert(description, path, base_dir)
     system.start_time, system.stop_time, system.step_size = _read_experiment(ssd_text, path)
     system._workdir = workdir
@@ -213,12 +214,20 @@ def _connection(connection, file: str) -> Connection:
         raise SystemFileError("connections to system-level connectors are not supported "
                               f"({connection.startConnector} -> {connection.endConnector})",
                               file=file)
-    if getattr(connection, "linearTransformation", None) is not None:
-        raise SystemFileError("linear transformations on connections are not supported",
-                              file=file, component=connection.endElement,
-                              variable=connection.endConnector)
     return Connection(connection.startElement, connection.startConnector,
                       connection.endElement, connection.endConnector)
+
+
+def _refuse_transformations(ssd_text: bytes, path: Path) -> None:
+    """Refuse connections with a transformation (fmpy's reader does not see them)."""
+    root = etree.fromstring(ssd_text)
+    for connection in root.iter(f"{{{_NS['ssd']}}}Connection"):
+        for child in connection:
+            if isinstance(child.tag, str) and child.tag.endswith("Transformation"):
+                raise SystemFileError(
+                    f"transformations on connections ({etree.QName(child).localname}) are "
+                    "not supported", file=str(path), component=connection.get("endElement"),
+                    variable=connection.get("endConnector"))
 
 
 def _read_experiment(ssd_text: bytes, path: Path) -> tuple[float | None, ...]:
