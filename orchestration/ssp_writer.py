@@ -4,7 +4,9 @@
 relative to the SSD's folder; :func:`write_ssp` writes an ``.ssp`` archive
 with the FMUs under ``resources/``.  Start values go inline, as
 ``ParameterBindings/ParameterBinding/ParameterValues/ssv:ParameterSet`` of
-each component, which fmpy, Ecos and other SSP tools read.  Each component
+each component, all named ``start_values`` (Ecos applies parameter sets by
+name, so one common name lets it apply them all), which fmpy, Ecos and other
+SSP tools read.  Each component
 declares connectors for its inputs, outputs and the parameters it sets, with
 their types read from the FMU.  The step size, which SSP 1.0 has no element
 for, is kept in a ``DefaultExperiment`` annotation of type
@@ -23,7 +25,9 @@ from .fmu import read_description
 from .ssp_reader import ANNOTATION_TYPE, SSD_NAME
 from .system import System
 
-__all__ = ["write_ssd", "write_ssp", "ssd_bytes"]
+__all__ = ["write_ssd", "write_ssp", "ssd_bytes", "START_VALUES_SET"]
+
+START_VALUES_SET = "start_values"  # one ParameterSet name for all components (Ecos applies sets by name)
 
 _SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 _SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
@@ -92,7 +96,7 @@ def _component_element(parent, system: System, component, source: str) -> None:
     binding = etree.SubElement(bindings, _tag(_SSD, "ParameterBinding"))
     values = etree.SubElement(binding, _tag(_SSD, "ParameterValues"))
     pset = etree.SubElement(values, _tag(_SSV, "ParameterSet"), version="1.0",
-                            name=f"{component.name}_start_values")
+                            name=START_VALUES_SET)
     parameters = etree.SubElement(pset, _tag(_SSV, "Parameters"))
     for name, value in component.parameters.items():
         variable = variables.get(name)

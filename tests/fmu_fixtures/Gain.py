@@ -25,12 +25,16 @@ class Gain(Fmi2Slave):
         self.register_variable(Real("k", causality=Fmi2Causality.parameter,
                                     variability=Fmi2Variability.tunable))
         self.register_variable(Real("u", causality=Fmi2Causality.input))
-        self.register_variable(Integer("n_in", causality=Fmi2Causality.input))
-        self.register_variable(Boolean("flag_in", causality=Fmi2Causality.input))
+        self.register_variable(Integer("n_in", causality=Fmi2Causality.input,
+                                         variability=Fmi2Variability.discrete))
+        self.register_variable(Boolean("flag_in", causality=Fmi2Causality.input,
+                                         variability=Fmi2Variability.discrete))
         self.register_variable(Real("y", causality=Fmi2Causality.output))
         self.register_variable(Real("x", causality=Fmi2Causality.output))
-        self.register_variable(Integer("n_out", causality=Fmi2Causality.output))
-        self.register_variable(Boolean("flag_out", causality=Fmi2Causality.output))
+        self.register_variable(Integer("n_out", causality=Fmi2Causality.output,
+                                         variability=Fmi2Variability.discrete))
+        self.register_variable(Boolean("flag_out", causality=Fmi2Causality.output,
+                                         variability=Fmi2Variability.discrete))
 
     def do_step(self, current_time, step_size):
         self.x += self.u * step_size

@@ -23,8 +23,10 @@ class Ramp(Fmi2Slave):
         self.register_variable(Real("offset", causality=Fmi2Causality.parameter,
                                     variability=Fmi2Variability.tunable))
         self.register_variable(Real("y", causality=Fmi2Causality.output))
-        self.register_variable(Integer("count", causality=Fmi2Causality.output))
-        self.register_variable(Boolean("positive", causality=Fmi2Causality.output))
+        self.register_variable(Integer("count", causality=Fmi2Causality.output,
+                                         variability=Fmi2Variability.discrete))
+        self.register_variable(Boolean("positive", causality=Fmi2Causality.output,
+                                         variability=Fmi2Variability.discrete))
 
     def exit_initialization_mode(self):
         self.y = self.offset
