@@ -7,6 +7,7 @@ with the FMUs beside it) or built in python (:class:`System`); the master
 numpy structured array (``time`` first, then ``component.variable`` fields).
 This package knows nothing about the FMUs it runs.
 """
+from .container import build_container_fmu
 from .errors import (AlgebraicLoopWarning, FMUCallError, FMUFatalError,
                      ImporterUnavailableError, IncompatibleConnectionError,
                      OrchestrationError, OrchestrationWarning, RealTimeLagWarning,
@@ -24,6 +25,6 @@ __all__ = [
     "OrchestrationError", "OrchestrationWarning", "RealTimeLagWarning", "ResultArray",
     "SCHEMES", "ScheduleError", "StartValueError", "System", "SystemDescriptionError",
     "SystemFileError", "UnconnectedInputWarning", "UnknownComponentError",
-    "UnknownVariableError", "read_system", "simulate_system",
+    "UnknownVariableError", "build_container_fmu", "read_system", "simulate_system",
     "write_csv", "write_ssd", "write_ssp",
 ]
