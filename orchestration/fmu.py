@@ -157,6 +157,23 @@ class FMUInstance:
         except Exception:  # fmpy raises bare Exception when fmi2Instantiate returns NULL
             self._raise("fmi2Instantiate", FMI_ERROR)
         self._state = "instantiated"
+        if self._logging_on:
+            self._restrict_logging()
+
+    def _restrict_logging(self) -> None:
+        """Keep only the ``logStatus*`` categories when the FMU declares them.
+
+        Those carry warnings and errors (FMI 2.0 recommends these names);
+        chatty categories such as OpenModelica's ``logFmi2Call`` would
+        otherwise send a message through python on every call.
+        """
+        categories = [c.name for c in self.description.logCategories
+                      if c.name.startswith("logStatus")]
+        if categories:
+            try:
+                self.slave.setDebugLogging(True, categories)
+            except Exception:  # noqa: BLE001 - logging is a courtesy, not a requirement
+                pass
 
     def call(self, function: str, *args):
         """Call an FMPy ``FMU2Slave`` method, turning failures into FMUCallError.

@@ -10,7 +10,9 @@ Algorithm (per communication step ``[t, t + h]``, ``t = t0 + n h``):
 - **Jacobi**: all inputs are set from the outputs at ``t``, then every
   component is stepped (a one-step delay per connection).
 
-Initialisation: ``fmi2Instantiate``, ``fmi2SetupExperiment``, start values,
+Initialisation: ``fmi2Instantiate``, ``fmi2SetupExperiment`` (start time, no
+stop time: some FMUs, OpenModelica's among them, refuse a step that passes a
+defined stop time by a rounding error), start values,
 ``fmi2EnterInitializationMode``, ``fmi2ExitInitializationMode`` for every
 component, then outputs are copied to inputs once, in stepping order, and the
 first row is recorded at ``t0``.  Rows after that are recorded after
@@ -251,7 +253,7 @@ class Master:
         pacer = None if realtime is None else RealTimePacer(realtime, start)
         bar = Progress(total, progress, description=self.system.name)
         try:
-            self._initialize(start, segments[-1].end)
+            self._initialize(start)
             recorder = Recorder([inst.slave for inst in self.instances], self.names,
                                 self.selection, total // output_every + 3)
             self._sample(recorder, start)
@@ -279,14 +281,16 @@ class Master:
                 "planned_steps": total, "output_every": every, "realtime_factor": realtime,
                 "unconnected_inputs": list(self.unconnected)}
 
-    def _initialize(self, start: float, stop: float) -> None:
+    def _initialize(self, start: float) -> None:
         self.time = None
         for name, unit in zip(self.names, self.units):
             instance = FMUInstance(name, unit, logging_on=self.logging_on)
             self.instances.append(instance)
             instance.instantiate()
         for instance, values in zip(self.instances, self.start_values):
-            instance.call("setupExperiment", None, start, stop)
+            # no stop time: FMUs such as OpenModelica's refuse a doStep whose t + h passes a
+            # defined stop time by one rounding error
+            instance.call("setupExperiment", None, start, None)
             for var, value in values.values():
                 instance.call(f"set{value_type(var)}", [var.valueReference], [value])
         for instance in self.instances:
@@ -339,29 +343,34 @@ class Master:
 
     def _loop(self, segments, total: int, recorder: Recorder, every: int, bar: Progress,
               pacer: RealTimePacer | None, callback: StepCallback | None) -> int:
-        plan, transfer = self._plan, self._transfer
+        plan, fail, sample = self._plan, self._fail, recorder.sample
         done = 0
         next_record = min(every, total)
+        next_tick = bar.next_tick
         for segment in segments:
             begin, h, count = segment.begin, segment.step, segment.count
             for j in range(count):
                 t = begin + j * h
                 for transfers, step, component, index in plan:
-                    if transfers:
-                        transfer(transfers, t)
-                    status = step(component, t, h, 1)
-                    if status > FMI_WARNING:
-                        self._fail(index, "fmi2DoStep", status, t)
+                    for get, src, src_vrs, n, buffer, set_, dst, dst_vrs, link in transfers:
+                        if (status := get(src, src_vrs, n, buffer)) > FMI_WARNING:
+                            fail(link.source, f"fmi2Get{link.kind}", status, t)
+                        if (status := set_(dst, dst_vrs, n, buffer)) > FMI_WARNING:
+                            fail(link.target, f"fmi2Set{link.kind}", status, t)
+                    if (status := step(component, t, h, 1)) > FMI_WARNING:
+                        fail(index, "fmi2DoStep", status, t)
                 done += 1
                 t_end = segment.end if j == count - 1 else begin + (j + 1) * h
                 self.time = t_end
                 if done == next_record:
-                    self._sample(recorder, t_end)
+                    if sample(t_end) >= 0:
+                        self._sample(recorder, t_end)
                     next_record = min(next_record + every, total)
                 if pacer is not None:
                     pacer.wait(t_end, h)
-                if done == bar.next_tick:
+                if done == next_tick:
                     bar.tick(done)
+                    next_tick = bar.next_tick
                 if callback is not None and callback(t_end, self) is False:
                     if recorder.time[recorder.count - 1] != t_end:
                         self._sample(recorder, t_end)

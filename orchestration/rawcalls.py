@@ -25,10 +25,14 @@ def raw_function(slave, name: str, argtypes: list):
     return function
 
 
-def getter(slave, kind: str):
-    """``fmi2Get<kind>(c, vr[], nvr, value[])`` for ``kind`` in Real/Integer/Boolean."""
-    return raw_function(slave, f"fmi2Get{kind}",
-                        [c_void_p, POINTER(c_uint), c_size_t, POINTER(C_TYPES[kind])])
+def getter(slave, kind: str, to_address: bool = False):
+    """``fmi2Get<kind>(c, vr[], nvr, value[])`` for ``kind`` in Real/Integer/Boolean.
+
+    With ``to_address`` the value argument is a plain address (an ``int``),
+    so that values can be written straight into a slice of a larger array.
+    """
+    values = c_void_p if to_address else POINTER(C_TYPES[kind])
+    return raw_function(slave, f"fmi2Get{kind}", [c_void_p, POINTER(c_uint), c_size_t, values])
 
 
 def setter(slave, kind: str):

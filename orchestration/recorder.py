@@ -9,6 +9,7 @@ scheme, stepping order, step, ...).
 from __future__ import annotations
 
 import csv
+import ctypes
 import fnmatch
 from collections.abc import Sequence
 from pathlib import Path
@@ -17,7 +18,7 @@ import numpy as np
 
 from .coupling import VALUE_TYPES
 from .errors import UnknownVariableError
-from .rawcalls import getter, value_buffer, vr_array
+from .rawcalls import C_TYPES, getter, value_buffer, vr_array
 
 __all__ = ["ResultArray", "Recorder", "select_variables", "write_csv", "NUMPY_TYPES"]
 
@@ -114,17 +115,20 @@ class Recorder:
         self.time = np.empty(rows)
         self.count = 0
         self.columns: list[tuple[str, str, int, int]] = []  # (field, kind, block, column)
-        self.blocks = []  # (get, component ptr, vr array, n, buffer, view, data)
+        self.storage = []  # keeps the C arrays alive
+        self.blocks = []  # (get, component ptr, vr array, n, address, row bytes, data, i, kind)
         groups: dict[tuple[int, str], list] = {}
         for i, var in selection:
             groups.setdefault((i, VALUE_TYPES[var.type]), []).append(var)
         for (i, kind), members in groups.items():
-            buffer = value_buffer(kind, len(members))
-            data = np.empty((rows, len(members)), dtype=np.float64 if kind == "Real"
-                            else np.int32)
-            self.blocks.append((getter(slaves[i], kind), slaves[i].component,
-                                vr_array(v.valueReference for v in members), len(members),
-                                buffer, np.ctypeslib.as_array(buffer), data, i, kind))
+            n = len(members)
+            storage = value_buffer(kind, rows * n)  # fmi2Get* writes rows in place
+            data = np.ctypeslib.as_array(storage).reshape(rows, n)
+            self.storage.append(storage)
+            self.blocks.append((getter(slaves[i], kind, to_address=True), slaves[i].component,
+                                vr_array(v.valueReference for v in members), n,
+                                ctypes.addressof(storage),
+                                n * ctypes.sizeof(C_TYPES[kind]), data, i, kind))
         position = {(block[7], v.name): (b, k) for b, block in enumerate(self.blocks)
                     for k, v in enumerate(groups[(block[7], block[8])])}
         for i, var in selection:
@@ -135,14 +139,13 @@ class Recorder:
         """Store the current values as a row at ``time``; return a failing block or -1.
 
         Returns the index of the block whose ``fmi2Get*`` returned an error
-        status (the row is then incomplete), or -1 on success.
+        status (the row is then not kept), or -1 on success.
         """
         row = self.count
         self.time[row] = time
-        for b, (get, component, vrs, n, buffer, view, data, _, _) in enumerate(self.blocks):
-            if get(component, vrs, n, buffer) > 1:
+        for b, (get, component, vrs, n, address, row_bytes, _, _, _) in enumerate(self.blocks):
+            if get(component, vrs, n, address + row * row_bytes) > 1:
                 return b
-            data[row] = view
         self.count = row + 1
         return -1
 
