@@ -22,7 +22,7 @@ import uuid
 from pathlib import Path
 
 from .coupling import check_connections, value_type
-from .errors import SystemDescriptionError
+from .errors import ImporterUnavailableError, SystemDescriptionError
 from .master import coerce_value
 from .ssp_reader import parse_literal, read_system
 from .system import System
@@ -57,12 +57,19 @@ def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
     ------
     SystemDescriptionError
         For the same description errors the master reports.
+    ImporterUnavailableError
+        If the installed fmpy has no (JSON-configured) ``container_fmu``.
     """
     from fmpy import read_model_description
-    from fmpy.container_fmu import Configuration
-    from fmpy.container_fmu import config as cfg
-    from fmpy.container_fmu.cli import create_container_fmu
     from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription
+
+    try:
+        from fmpy.container_fmu import Configuration
+        from fmpy.container_fmu import config as cfg
+        from fmpy.container_fmu.cli import create_container_fmu
+    except ImportError as error:
+        raise ImporterUnavailableError(f"this fmpy has no JSON container_fmu ({error}); "
+                                       "fmpy 0.3.32 is known to work") from None
 
     system = system if isinstance(system, System) else read_system(system)
     out_path = Path(out_path).resolve()

@@ -195,3 +195,17 @@ def test_master_order_is_kept_when_rerun(om_fmus):
         first = master.simulate(0.5, 0.01)
         second = master.simulate(0.5, 0.01)
     assert_array_equal(first.view(np.ndarray), second.view(np.ndarray))
+
+
+def test_missing_importers_say_what_to_install(monkeypatch, ramp_gain):
+    import sys
+
+    from orchestration import ImporterUnavailableError
+    from orchestration.importers import simulate_with_ecos, simulate_with_libcosim
+
+    monkeypatch.setitem(sys.modules, "ecospy", None)
+    monkeypatch.setitem(sys.modules, "libcosimpy", None)
+    with pytest.raises(ImporterUnavailableError, match="pip install ecospy"):
+        simulate_with_ecos(ramp_gain, 1.0, 0.5)
+    with pytest.raises(ImporterUnavailableError, match="pip install libcosimpy"):
+        simulate_with_libcosim(ramp_gain, 1.0, 0.5)
