@@ -10,6 +10,7 @@ nothing after a fatal status).
 from __future__ import annotations
 
 import shutil
+import weakref
 import zipfile
 from collections import deque
 from ctypes import byref
@@ -88,10 +89,11 @@ class UnpackedFMU:
             raise SystemFileError(f"cannot extract FMU: {error}", file=str(self.path),
                                   component=component) from None
         self.variables = {v.name: v for v in self.description.modelVariables}
+        self._finalizer = weakref.finalize(self, shutil.rmtree, self.unzipdir, True)
 
     def remove(self) -> None:
-        """Delete the extracted folder."""
-        shutil.rmtree(self.unzipdir, ignore_errors=True)
+        """Delete the extracted folder (also done when the object is garbage collected)."""
+        self._finalizer()
 
 
 class FMUInstance:

@@ -20,12 +20,14 @@ first row is recorded at ``t0``.  Rows after that are recorded after
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from .coupling import (check_connections, find_variable, gauss_seidel_order, group_links,
                        value_type, warn_unconnected)
-from .errors import ScheduleError, StartValueError, SystemDescriptionError
+from .errors import (OrchestrationError, ScheduleError, StartValueError,
+                     UnknownComponentError)
 from .fmu import FMUInstance, UnpackedFMU
 from .pacing import Progress, RealTimePacer
 from .rawcalls import FMI_WARNING, do_step, getter, setter, value_buffer, vr_array
@@ -165,14 +167,13 @@ class Master:
     def _resolve(self, qualified: str):
         component, variable = split_name(qualified)
         if component not in self.names:
-            raise SystemDescriptionError("unknown component", component=component)
+            raise UnknownComponentError("unknown component", component=component)
         i = self.names.index(component)
         var = find_variable(self.variables[i], variable, component=component,
                             file=self.files[i])
         if not self.instances:
-            raise SystemDescriptionError("values can only be read or set during a run "
-                                         "(from a step callback)", component=component,
-                                         variable=variable)
+            raise OrchestrationError(f"'{qualified}': values can only be read or set during "
+                                     "a run (from a step callback)")
         return self.instances[i], var
 
     def get(self, qualified: str) -> StartValue:
@@ -248,6 +249,7 @@ class Master:
         segments = make_schedule(start, stop, step)
         if not (isinstance(output_every, int) and output_every >= 1):
             raise ScheduleError(f"output_every must be a positive integer, got {output_every!r}")
+        self._check_variable_steps(segments)
         total = sum(s.count for s in segments)
         meta = self._meta(start, segments, total, output_every, realtime)
         pacer = None if realtime is None else RealTimePacer(realtime, start)
@@ -267,6 +269,16 @@ class Master:
         if pacer is not None:
             meta["max_realtime_lag"] = pacer.max_lag
         return recorder.result(meta)
+
+    def _check_variable_steps(self, segments) -> None:
+        """Refuse a varying step for FMUs that declare they cannot handle one."""
+        steps = [s.step for s in segments]
+        if all(math.isclose(h, steps[0], rel_tol=1e-9) for h in steps):
+            return
+        for name, unit in zip(self.names, self.units):
+            if not unit.description.coSimulation.canHandleVariableCommunicationStepSize:
+                raise ScheduleError(f"component '{name}' (FMU '{unit.path}') cannot handle a "
+                                    "variable communication step; use a fixed step")
 
     def _meta(self, start: float, segments, total: int, every: int,
               realtime: float | None) -> dict:

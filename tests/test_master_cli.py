@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from fmu_fixtures.fixtures import fixture_fmus, ramp_gain  # noqa: F401 (fixtures)
-from orchestration import Component, Connection, System, write_ssp
+from orchestration import Component, System, write_ssp
 from orchestration.cli import main, register
 
 pytestmark = pytest.mark.integration

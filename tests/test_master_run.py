@@ -4,7 +4,6 @@ from __future__ import annotations
 import subprocess
 import sys
 import textwrap
-import warnings
 
 import numpy as np
 import pytest
@@ -191,3 +190,11 @@ def test_many_runs_in_one_process_exit_cleanly(fixture_fmus, tmp_path):
                                                      .parents[1])})
         assert done.returncode == 0, done.stderr
         assert "final" in done.stdout
+
+
+def test_variable_steps_are_refused_for_fmus_that_cannot_take_them(fixture_fmus):
+    system = System("r", [Component("ramp", fixture_fmus["RampFixedStep"])])
+    with Master(system) as master:
+        with pytest.raises(ScheduleError, match="component 'ramp'.*variable communication"):
+            master.simulate(None, [(0.5, 0.25), (1.0, 0.5)])
+        assert master.simulate(1.0, 0.25)["ramp.y"][-1] == 1.0

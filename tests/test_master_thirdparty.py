@@ -209,3 +209,4 @@ def test_missing_importers_say_what_to_install(monkeypatch, ramp_gain):
         simulate_with_ecos(ramp_gain, 1.0, 0.5)
     with pytest.raises(ImporterUnavailableError, match="pip install libcosimpy"):
         simulate_with_libcosim(ramp_gain, 1.0, 0.5)
+

@@ -15,7 +15,8 @@ def build_fixture_fmus(destination: Path) -> dict[str, Path]:
     Returns
     -------
     dict
-        ``{slave name: FMU path}``.
+        ``{slave name: FMU path}``, plus ``'RampFixedStep'``: the Ramp built
+        with ``canHandleVariableCommunicationStepSize=false``.
     """
     destination.mkdir(parents=True, exist_ok=True)
     fmus = {}
@@ -26,4 +27,11 @@ def build_fixture_fmus(destination: Path) -> dict[str, Path]:
                             str(HERE / f"{name}.py"), "-d", str(destination)],
                            check=True, capture_output=True, cwd=destination)
         fmus[name] = fmu
+    fixed = destination / "fixed_step" / "Ramp.fmu"
+    if not fixed.is_file():
+        fixed.parent.mkdir(exist_ok=True)
+        subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f",
+                        str(HERE / "Ramp.py"), "-d", str(fixed.parent), "--no-variable-step"],
+                       check=True, capture_output=True, cwd=fixed.parent)
+    fmus["RampFixedStep"] = fixed
     return fmus
