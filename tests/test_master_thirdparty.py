@@ -19,9 +19,12 @@ EXACT = dict(rtol=1e-12, atol=1e-12)
 
 
 @pytest.fixture(scope="session")
-def om_fmus(request):
+def om_fmus(request, tmp_path_factory):
     """OpenModelica-built FMUs shipped by the gemseo-fmu wheel (see fmu_fixtures.thirdparty)."""
-    found = openmodelica_fmus(request.config.cache.mkdir("openmodelica_fmus"))
+    cache = getattr(request.config, "cache", None)
+    folder = cache.mkdir("openmodelica_fmus") if cache is not None else \
+        tmp_path_factory.mktemp("openmodelica_fmus")
+    found = openmodelica_fmus(folder)
     if isinstance(found, str):
         pytest.skip(found)
     return found
