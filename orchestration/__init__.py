@@ -6,6 +6,16 @@ with the FMUs beside it) or built in python (:class:`System`); the master
 ``FMU2Slave`` API under a Gauss-Seidel or Jacobi coupling scheme and returns a
 numpy structured array (``time`` first, then ``component.variable`` fields).
 This package knows nothing about the FMUs it runs.
+
+Main entry points
+-----------------
+- :func:`read_system`, :func:`write_ssd`, :func:`write_ssp`, :class:`System`,
+  :class:`Component`, :class:`Connection` - system files (SSP 1.0).
+- :class:`Master`, :func:`simulate_system` - the fixed-step master.
+- :func:`write_csv` - results to CSV.
+- :func:`build_container_fmu` - the system as one FMI 2.0 container FMU.
+- :mod:`orchestration.importers` - the same system under Ecos or libcosim.
+- :mod:`orchestration.cli` - the ``cosim`` subcommand.
 """
 from .container import build_container_fmu
 from .errors import (AlgebraicLoopWarning, FMUCallError, FMUFatalError,
