@@ -1,0 +1,6 @@
+"""``python -m orchestration cosim SYSTEM ...``."""
+import sys
+
+from .cli import main
+
+sys.exit(main())

@@ -1,0 +1,186 @@
+"""Package a whole system as one FMU with FMPy's container FMU.
+
+:func:`build_container_fmu` writes an **FMI 2.0** co-simulation FMU (FMPy's
+``fmpy.container_fmu`` writes FMI 2.0 or 3.0 depending on the model
+description it is given; we give it 2.0) whose prebuilt ``container_fmu``
+binary loads the nested FMUs from ``resources/`` and couples them by the
+system's connections.  Its variables are ``time`` (independent, value
+reference 0, which the container binary expects) and, named
+``component.variable``: every
+output of every component, every start value of the system (as a parameter
+whose start is applied by the container), and every unconnected input.
+
+The container's ``doStep`` first copies every connection (output to input)
+and then steps all components: a **Jacobi** scheme, to be compared with
+``Master(..., scheme='jacobi')``.
+"""
+from __future__ import annotations
+
+import shutil
+import tempfile
+import uuid
+from pathlib import Path
+
+from .coupling import check_connections, value_type
+from .errors import ImporterUnavailableError, SystemDescriptionError
+from .master import coerce_value
+from .ssp_reader import parse_literal, read_system
+from .system import System
+
+__all__ = ["build_container_fmu", "CONTAINER_FMI_VERSION"]
+
+CONTAINER_FMI_VERSION = "2.0"
+
+
+def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
+                        step_size: float | None = None, parallel: bool = False) -> Path:
+    """Write ``system`` as one FMI 2.0 co-simulation container FMU.
+
+    Parameters
+    ----------
+    system : System, str or Path
+        System or SSP/SSD file.
+    out_path : str or Path
+        FMU file to write.
+    step_size : float, optional
+        Fixed step written as the default experiment's step (default: the
+        system's).
+    parallel : bool
+        Let the container step the components in parallel threads.
+
+    Returns
+    -------
+    Path
+        The written FMU.
+
+    Raises
+    ------
+    SystemDescriptionError
+        For the same description errors the master reports.
+    ImporterUnavailableError
+        If the installed fmpy has no (JSON-configured) ``container_fmu``.
+    """
+    from fmpy import read_model_description
+    from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription
+
+    try:
+        from fmpy.container_fmu import Configuration
+        from fmpy.container_fmu import config as cfg
+        from fmpy.container_fmu.cli import create_container_fmu
+    except ImportError as error:
+        raise ImporterUnavailableError(f"this fmpy has no JSON container_fmu ({error}); "
+                                       "fmpy 0.3.32 is known to work") from None
+
+    system = system if isinstance(system, System) else read_system(system)
+    out_path = Path(out_path).resolve()
+    step = system.step_size if step_size is None else step_size
+    with tempfile.TemporaryDirectory(prefix="orchestration_container_") as scratch:
+        components, variables, files = [], [], []
+        for component in system.components:
+            path = _unique_copy(system.fmu_path(component), Path(scratch) / "fmus")
+            description = read_model_description(str(path), validate=False)
+            components.append(cfg.Component(name=component.name, filename=path,
+                                            modelDescription=description))
+            variables.append({v.name: v for v in description.modelVariables})
+            files.append(str(path))
+        names = [c.name for c in system.components]
+        checked = check_connections(system.connections, names, variables, files)
+        connections = [cfg.Connection(startElement=components[i],
+                                      startConnectors=[_json_typed(start)],
+                                      endElement=components[j], endConnectors=[end])
+                       for i, start, j, end, _ in checked]
+        mappings = _exposed_variables(system, components, variables, checked)
+        description = ModelDescription(
+            fmiVersion=CONTAINER_FMI_VERSION, modelName=system.name,
+            instantiationToken="{" + str(uuid.uuid4()) + "}",
+            generationTool="orchestration (fmpy.container_fmu)",
+            coSimulation=CoSimulation(modelIdentifier="container_fmu",
+                                      fixedInternalStepSize=step,
+                                      canHandleVariableCommunicationStepSize=True),
+            defaultExperiment=DefaultExperiment(startTime=system.start_time,
+                                                stopTime=system.stop_time, stepSize=step),
+            modelVariables=[_time_variable()] + list(mappings))
+        configuration = Configuration(parallelDoStep=parallel, modelDescription=description,
+                                      components=components, connections=connections,
+                                      variableMappings=mappings)
+        unzipdir = Path(scratch) / "container"
+        unzipdir.mkdir()
+        out_path.parent.mkdir(parents=True, exist_ok=True)
+        if out_path.exists():
+            out_path.unlink()
+        create_container_fmu(configuration, unzipdir, out_path)
+    return out_path
+
+
+def _time_variable():
+    """The independent variable ``time``; the container binary reserves value reference 0
+    for it (its variable ``k`` in container.json has value reference ``k + 1``)."""
+    from fmpy.model_description import ModelVariable
+
+    return ModelVariable(name="time", type="Real", causality="independent",
+                         variability="continuous")
+
+
+def _json_typed(variable):
+    """Copy of a variable whose type uses the container's JSON names (Float64, Int32).
+
+    fmpy 0.3.32 converts these names for mapped variables but not for
+    connections, whose type it writes verbatim.
+    """
+    import attrs
+
+    names = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Int32"}
+    return attrs.evolve(variable, type=names.get(variable.type, variable.type))
+
+
+def _unique_copy(fmu: Path, folder: Path) -> Path:
+    """Copy an FMU so that different FMUs get different file stems (nested folder names)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    target = folder / fmu.name
+    if target.exists():
+        if target.read_bytes() == fmu.read_bytes():
+            return target
+        target = folder / f"{fmu.stem}_{len(list(folder.iterdir()))}{fmu.suffix}"
+    if not fmu.is_file():
+        raise SystemDescriptionError("FMU file not found", file=str(fmu))
+    shutil.copyfile(fmu, target)
+    return target
+
+
+def _exposed_variables(system: System, components, variables, checked) -> dict:
+    """Container variables -> [(component, component variable)]."""
+    from fmpy.model_description import ModelVariable
+
+    fed = {(j, end.name) for _, _, j, end, _ in checked}
+    mappings = {}
+    for i, component in enumerate(system.components):
+        for var in variables[i].values():
+            exposed = var.causality == "output" or var.name in component.parameters or \
+                (var.causality == "input" and (i, var.name) not in fed)
+            if not exposed or value_type(var) == "String":
+                continue
+            start = None
+            if var.name in component.parameters:
+                start = coerce_value(var, component.parameters[var.name],
+                                     component=component.name, file=None)
+            elif var.causality == "input" and var.start is not None:
+                start = parse_literal(value_type(var), var.start, component=component.name,
+                                      variable=var.name)
+            causality = "output" if var.causality == "output" else \
+                "parameter" if var.causality == "parameter" else "input"
+            variability = var.variability if causality != "input" else "continuous"
+            if var.type != "Real" and variability == "continuous":
+                variability = "discrete"
+            mapped = ModelVariable(name=f"{component.name}.{var.name}", type=var.type,
+                                   causality=causality, variability=variability,
+                                   start=None if start is None else _literal(start),
+                                   initial="exact" if causality == "parameter" else None)
+            mappings[mapped] = [(components[i], var)]
+    return mappings
+
+
+def _literal(value) -> str:
+    """XML/JSON literal of a start value (the container reads starts as strings)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return repr(value) if isinstance(value, float) else str(value)

@@ -1,0 +1,195 @@
+"""Connection checks and the Gauss-Seidel stepping order.
+
+Connections are checked against the FMUs' model descriptions, then grouped
+into :class:`Link` s: all connections of one value type from one source
+component to one destination component, so that one ``fmi2Get*`` and one
+``fmi2Set*`` call move them per step.
+"""
+from __future__ import annotations
+
+import difflib
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+from .errors import (AlgebraicLoopWarning, IncompatibleConnectionError,
+                     UnconnectedInputWarning, UnknownComponentError, UnknownVariableError)
+from .system import Connection
+
+__all__ = ["Link", "VALUE_TYPES", "value_type", "find_variable", "check_connections",
+           "group_links", "gauss_seidel_order", "warn_unconnected"]
+
+# FMI 2.0 type -> the getter/setter family used for it
+VALUE_TYPES = {"Real": "Real", "Integer": "Integer", "Enumeration": "Integer",
+               "Boolean": "Boolean", "String": "String"}
+
+
+def value_type(variable) -> str:
+    """Return the get/set family (``Real``, ``Integer``, ``Boolean``, ``String``)."""
+    return VALUE_TYPES[variable.type]
+
+
+@dataclass(frozen=True)
+class Link:
+    """Connections of one type from component ``source`` to component ``target``.
+
+    Attributes
+    ----------
+    source, target : int
+        Component indices in the system's declaration order.
+    kind : str
+        ``'Real'``, ``'Integer'`` or ``'Boolean'``.
+    source_vrs, target_vrs : tuple of int
+        Value references, element ``i`` of one feeds element ``i`` of the other.
+    connections : tuple of Connection
+        The connections grouped here.
+    """
+
+    source: int
+    target: int
+    kind: str
+    source_vrs: tuple[int, ...]
+    target_vrs: tuple[int, ...]
+    connections: tuple[Connection, ...]
+
+
+def find_variable(variables: Mapping, name: str, *, component: str, file: str | None,
+                  role: str = "variable"):
+    """Return the model variable ``name`` or raise UnknownVariableError with hints."""
+    try:
+        return variables[name]
+    except KeyError:
+        close = difflib.get_close_matches(name, list(variables), n=3)
+        hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
+        raise UnknownVariableError(f"the FMU has no {role} of this name{hint}", file=file,
+                                   component=component, variable=name) from None
+
+
+def _endpoint(component: str, variable: str, index: Mapping[str, int],
+              variables: Sequence[Mapping], files: Sequence[str], system_file: str | None,
+              role: str):
+    if component not in index:
+        raise UnknownComponentError(f"connection {role} names an unknown component "
+                                    f"(known: {', '.join(index)})", file=system_file,
+                                    component=component, variable=variable)
+    i = index[component]
+    return i, find_variable(variables[i], variable, component=component, file=files[i])
+
+
+def check_connections(connections: Sequence[Connection], names: Sequence[str],
+                      variables: Sequence[Mapping], files: Sequence[str],
+                      system_file: str | None = None) -> list[tuple]:
+    """Check every connection; return ``(src index, src var, dst index, dst var, c)``.
+
+    Raises
+    ------
+    UnknownComponentError, UnknownVariableError
+        For names not in the system / the FMU.
+    IncompatibleConnectionError
+        For a start that is not an output, an end that is not an input, a type
+        mismatch, a String connection, or an input fed twice.
+    """
+    index = {name: i for i, name in enumerate(names)}
+    checked = []
+    fed: dict[tuple[int, str], Connection] = {}
+    for c in connections:
+        i, start = _endpoint(c.start_component, c.start_variable, index, variables, files,
+                             system_file, "start")
+        j, end = _endpoint(c.end_component, c.end_variable, index, variables, files,
+                           system_file, "end")
+        _check_pair(c, start, end, files[j])
+        if (j, end.name) in fed:
+            raise IncompatibleConnectionError(
+                f"input is fed by two connections ({fed[(j, end.name)]} and {c})",
+                file=files[j], component=c.end_component, variable=c.end_variable)
+        fed[(j, end.name)] = c
+        checked.append((i, start, j, end, c))
+    return checked
+
+
+def _check_pair(c: Connection, start, end, end_file: str) -> None:
+    def fail(message: str) -> None:
+        raise IncompatibleConnectionError(f"connection {c}: {message}", file=end_file,
+                                          component=c.end_component, variable=c.end_variable)
+
+    if start.causality != "output":
+        fail(f"start variable '{c.start}' has causality '{start.causality}'; only outputs "
+             "can drive a connection")
+    if end.causality != "input":
+        extra = "; give it a start value instead" if end.causality == "parameter" else ""
+        fail(f"end variable '{c.end}' has causality '{end.causality}'; only inputs can be "
+             f"driven by a connection{extra}")
+    if value_type(start) != value_type(end):
+        fail(f"type mismatch: {start.type} output to {end.type} input")
+    if value_type(start) == "String":
+        fail("String connections are not supported")
+
+
+def group_links(checked) -> list[Link]:
+    """Group checked connections by (source, target, type), in first-seen order."""
+    groups: dict[tuple[int, int, str], list] = {}
+    for i, start, j, end, c in checked:
+        groups.setdefault((i, j, value_type(start)), []).append((start, end, c))
+    links = []
+    for (i, j, kind), triples in groups.items():
+        links.append(Link(i, j, kind, tuple(s.valueReference for s, _, _ in triples),
+                          tuple(e.valueReference for _, e, _ in triples),
+                          tuple(c for _, _, c in triples)))
+    return links
+
+
+def gauss_seidel_order(names: Sequence[str], links: Sequence[Link]
+                       ) -> tuple[list[int], list[tuple[int, int]]]:
+    """Order components so each one is stepped after the ones it reads from.
+
+    Kahn's topological sort, taking the earliest-declared ready component
+    first.  When only components on cycles remain, the earliest-declared of
+    them is stepped next and its incoming edges from the remaining ones are
+    *broken*: over those edges it reads values from the start of the step.
+    An :class:`AlgebraicLoopWarning` lists the broken connections.
+
+    Returns
+    -------
+    order : list of int
+        Component indices in stepping order.
+    broken : list of (int, int)
+        ``(source, target)`` component pairs whose edges were broken.
+    """
+    n = len(names)
+    preds = [set() for _ in range(n)]
+    for link in links:
+        if link.source != link.target:
+            preds[link.target].add(link.source)
+    remaining = set(range(n))
+    order, broken = [], []
+    while remaining:
+        ready = [i for i in sorted(remaining) if not (preds[i] & remaining)]
+        if ready:
+            chosen = ready[0]
+        else:
+            chosen = min(remaining)
+            broken += [(p, chosen) for p in sorted(preds[chosen] & remaining)]
+        order.append(chosen)
+        remaining.remove(chosen)
+    if broken:
+        pairs = ", ".join(f"{names[a]} -> {names[b]}" for a, b in broken)
+        warnings.warn(f"algebraic loop in the connections: Gauss-Seidel order "
+                      f"{' -> '.join(names[i] for i in order)} reads {pairs} from the start "
+                      "of each step", AlgebraicLoopWarning, stacklevel=4)
+    return order, broken
+
+
+def warn_unconnected(names: Sequence[str], variables: Sequence[Mapping], checked,
+                     start_values: Sequence[Mapping]) -> list[str]:
+    """Warn about inputs with neither a connection nor a start value; return them."""
+    fed = {(j, end.name) for _, _, j, end, _ in checked}
+    missing = []
+    for i, name in enumerate(names):
+        for var in variables[i].values():
+            if var.causality == "input" and (i, var.name) not in fed \
+                    and var.name not in start_values[i]:
+                missing.append(f"{name}.{var.name}")
+    if missing:
+        warnings.warn(f"inputs left unconnected (they keep their start values): "
+                      f"{', '.join(missing)}", UnconnectedInputWarning, stacklevel=4)
+    return missing

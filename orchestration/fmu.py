@@ -1,0 +1,243 @@
+"""One FMI 2.0 co-simulation FMU instance, driven through FMPy's ``FMU2Slave``.
+
+:class:`FMUInstance` wraps the low-level FMPy object: it installs a logger
+callback that keeps the FMU's recent log messages, turns every failed call
+into an :class:`~orchestration.errors.FMUCallError` that names the component,
+the call and the simulated time, and frees itself according to the FMI 2.0
+state machine (terminate + free when healthy, free only after an error,
+nothing after a fatal status).
+"""
+from __future__ import annotations
+
+import shutil
+import weakref
+import zipfile
+from collections import deque
+from ctypes import byref
+from pathlib import Path
+
+from .errors import FMUCallError, FMUFatalError, SystemFileError, status_label
+
+__all__ = ["read_description", "FMUInstance", "UnpackedFMU", "FMI_FATAL"]
+
+FMI_ERROR = 3
+FMI_FATAL = 4
+LOG_MESSAGES_KEPT = 50
+
+
+def read_description(path: Path, component: str | None = None):
+    """Read and check the model description of a co-simulation FMU.
+
+    Parameters
+    ----------
+    path : Path
+        FMU file (or unzipped FMU folder).
+    component : str, optional
+        Component name, for error messages.
+
+    Returns
+    -------
+    fmpy.model_description.ModelDescription
+
+    Raises
+    ------
+    SystemFileError
+        If the file is missing, not an FMU, not FMI 2.0 or not co-simulation.
+    """
+    from fmpy import read_model_description
+
+    path = Path(path)
+    if not path.exists():
+        raise SystemFileError("FMU file not found", file=str(path), component=component)
+    try:
+        description = read_model_description(str(path), validate=False)
+    except (zipfile.BadZipFile, KeyError, OSError) as error:
+        raise SystemFileError(f"not a readable FMU: {error}", file=str(path),
+                              component=component) from None
+    except Exception as error:  # fmpy raises bare Exception on malformed XML
+        raise SystemFileError(f"not a readable FMU: {error}", file=str(path),
+                              component=component) from None
+    if description.fmiVersion != "2.0":
+        raise SystemFileError(f"FMI version {description.fmiVersion} is not supported "
+                              "(FMI 2.0 co-simulation only)", file=str(path),
+                              component=component)
+    if description.coSimulation is None:
+        raise SystemFileError("the FMU does not support co-simulation", file=str(path),
+                              component=component)
+    return description
+
+
+class UnpackedFMU:
+    """An FMU file extracted once and shared by all instances of it.
+
+    Parameters
+    ----------
+    path : Path
+        FMU file.
+    component : str
+        Name of the first component using it (error messages).
+    """
+
+    def __init__(self, path: Path, component: str):
+        from fmpy import extract
+
+        self.path = Path(path)
+        self.description = read_description(self.path, component)
+        try:
+            self.unzipdir = extract(str(self.path))
+        except (zipfile.BadZipFile, OSError) as error:
+            raise SystemFileError(f"cannot extract FMU: {error}", file=str(self.path),
+                                  component=component) from None
+        self.variables = {v.name: v for v in self.description.modelVariables}
+        self._finalizer = weakref.finalize(self, shutil.rmtree, self.unzipdir, True)
+
+    def remove(self) -> None:
+        """Delete the extracted folder (also done when the object is garbage collected)."""
+        self._finalizer()
+
+
+class FMUInstance:
+    """A co-simulation slave with error reporting.
+
+    Parameters
+    ----------
+    name : str
+        Instance (component) name.
+    unpacked : UnpackedFMU
+        The extracted FMU.
+    logging_on : bool
+        Passed to ``fmi2Instantiate``; keep it on to receive error messages.
+    """
+
+    def __init__(self, name: str, unpacked: UnpackedFMU, logging_on: bool = True):
+        self.name = name
+        self.unpacked = unpacked
+        self.description = unpacked.description
+        self.variables = unpacked.variables
+        self.messages: deque[str] = deque(maxlen=LOG_MESSAGES_KEPT)
+        self.time: float | None = None
+        self.slave = None
+        self._state = "loaded"
+        self._logging_on = logging_on
+        self._callbacks = self._make_callbacks()
+
+    def _make_callbacks(self):
+        from fmpy import calloc, free
+        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+        from fmpy.logging import addLoggerProxy
+
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(byref(callbacks))
+        return callbacks
+
+    def _log(self, environment, instance_name, status, category, message) -> None:
+        text = message.decode("utf-8", "replace") if message else ""
+        label = status_label(status)
+        cat = category.decode("utf-8", "replace") if category else ""
+        self.messages.append(f"[{label}]{f' {cat}' if cat else ''} {text}")
+
+    # life cycle -----------------------------------------------------------
+    def instantiate(self) -> None:
+        """Load the shared library and call ``fmi2Instantiate``."""
+        from fmpy.fmi2 import FMU2Slave
+
+        description = self.description
+        try:
+            self.slave = FMU2Slave(guid=description.guid, unzipDirectory=self.unpacked.unzipdir,
+                                   modelIdentifier=description.coSimulation.modelIdentifier,
+                                   instanceName=self.name)
+        except Exception as error:  # fmpy raises bare Exception when the library is missing
+            raise SystemFileError(f"cannot load the FMU's shared library: {error}",
+                                  file=str(self.unpacked.path), component=self.name) from None
+        self._state = "library"
+        try:
+            self.slave.instantiate(callbacks=self._callbacks, loggingOn=self._logging_on)
+        except Exception:  # fmpy raises bare Exception when fmi2Instantiate returns NULL
+            self._raise("fmi2Instantiate", FMI_ERROR)
+        self._state = "instantiated"
+        if self._logging_on:
+            self._restrict_logging()
+
+    def _restrict_logging(self) -> None:
+        """Keep only the ``logStatus*`` categories when the FMU declares them.
+
+        Those carry warnings and errors (FMI 2.0 recommends these names);
+        chatty categories such as OpenModelica's ``logFmi2Call`` would
+        otherwise send a message through python on every call.
+        """
+        categories = [c.name for c in self.description.logCategories
+                      if c.name.startswith("logStatus")]
+        if categories:
+            try:
+                self.slave.setDebugLogging(True, categories)
+            except Exception:  # noqa: BLE001 - logging is a courtesy, not a requirement
+                pass
+
+    def call(self, function: str, *args):
+        """Call an FMPy ``FMU2Slave`` method, turning failures into FMUCallError.
+
+        Parameters
+        ----------
+        function : str
+            Method name of ``FMU2Slave`` (``'doStep'``, ``'setReal'``, ...).
+        *args
+            Its arguments.
+        """
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            return getattr(self.slave, function)(*args)
+        except FMICallException as error:
+            self._raise(error.function, error.status)
+
+    def _raise(self, call: str, status: int) -> None:
+        if status >= FMI_FATAL:
+            self._state = "fatal"
+            error_type = FMUFatalError
+        else:
+            self._state = "error"
+            error_type = FMUCallError
+        raise error_type(self.name, call, status, self.time, list(self.messages),
+                         fmu_file=str(self.unpacked.path))
+
+    def fail(self, call: str, status: int) -> None:
+        """Raise the FMUCallError for a failed raw call made by the master's fast loop."""
+        self._raise(call, status)
+
+    @property
+    def healthy(self) -> bool:
+        """True while no call has returned an error status."""
+        return self._state in ("instantiated", "initialized")
+
+    def mark_initialized(self) -> None:
+        """Record that initialisation completed (terminate is then allowed)."""
+        self._state = "initialized"
+
+    def release(self) -> None:
+        """Terminate and free as far as the FMI state machine allows; never raises.
+
+        Healthy and initialised: ``fmi2Terminate`` then ``fmi2FreeInstance``.
+        After an error status: ``fmi2FreeInstance`` only.  After a fatal
+        status: no call at all (the instance is abandoned).
+        """
+        slave, state = self.slave, self._state
+        self._state = "released"
+        if slave is None or state in ("released", "fatal"):
+            return
+        if state == "initialized":
+            try:
+                slave.terminate()
+            except Exception:  # noqa: BLE001 - release must not raise
+                state = "error"
+        try:
+            if state == "library":
+                slave.freeLibrary()
+            else:
+                slave.freeInstance()
+        except Exception:  # noqa: BLE001 - release must not raise
+            pass
+        self.slave = None

@@ -1,0 +1,441 @@
+"""Fixed-step co-simulation master for FMI 2.0 co-simulation FMUs.
+
+Algorithm (per communication step ``[t, t + h]``, ``t = t0 + n h``):
+
+- **Gauss-Seidel** (default): components are stepped in the order of the
+  connection graph (:func:`~orchestration.coupling.gauss_seidel_order`);
+  before stepping one, its inputs are set from the current outputs of its
+  sources, which were already stepped to ``t + h`` (except over edges broken
+  to cut a cycle, which carry the values at ``t``).
+- **Jacobi**: all inputs are set from the outputs at ``t``, then every
+  component is stepped (a one-step delay per connection).
+
+Initialisation: ``fmi2Instantiate``, ``fmi2SetupExperiment`` (start time, no
+stop time: some FMUs, OpenModelica's among them, refuse a step that passes a
+defined stop time by a rounding error), start values,
+``fmi2EnterInitializationMode``, ``fmi2ExitInitializationMode`` for every
+component, then outputs are copied to inputs once, in stepping order, and the
+first row is recorded at ``t0``.  Rows after that are recorded after
+``fmi2DoStep(t, h)`` with time ``t + h``.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from .coupling import (check_connections, find_variable, gauss_seidel_order, group_links,
+                       value_type, warn_unconnected)
+from .errors import (OrchestrationError, ScheduleError, StartValueError,
+                     UnknownComponentError)
+from .fmu import FMUInstance, UnpackedFMU
+from .pacing import Progress, RealTimePacer
+from .rawcalls import FMI_WARNING, do_step, getter, setter, value_buffer, vr_array
+from .recorder import Recorder, ResultArray, select_variables
+from .schedule import StepSpec, make_schedule
+from .ssp_reader import read_system
+from .system import StartValue, System, split_name
+
+__all__ = ["Master", "simulate_system", "SCHEMES", "StepCallback"]
+
+SCHEMES = ("gauss-seidel", "jacobi")
+StepCallback = Callable[[float, "Master"], bool | None]
+_SETTABLE_CAUSALITIES = ("parameter", "input")
+
+
+def _check_scheme(scheme: str) -> str:
+    normalized = scheme.lower().replace("_", "-")
+    if normalized not in SCHEMES:
+        raise ValueError(f"unknown coupling scheme '{scheme}'; use one of {SCHEMES}")
+    return normalized
+
+
+def coerce_value(variable, value, *, component: str, file: str | None) -> StartValue:
+    """Convert ``value`` to the python type matching the FMI type of ``variable``."""
+    kind = value_type(variable)
+
+    def fail() -> None:
+        raise StartValueError(f"{value!r} is not a valid {variable.type} value",
+                              file=file, component=component, variable=variable.name)
+
+    if kind == "Real":
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            fail()
+        return float(value)
+    if kind == "Integer":
+        if isinstance(value, bool) or not (isinstance(value, int) or
+                                           (isinstance(value, float) and value.is_integer())):
+            fail()
+        return int(value)
+    if kind == "Boolean":
+        if not isinstance(value, (bool, int)) or value not in (0, 1):
+            fail()
+        return bool(value)
+    if not isinstance(value, str):
+        fail()
+    return value
+
+
+class Master:
+    """Run a system of FMI 2.0 co-simulation FMUs.
+
+    Parameters
+    ----------
+    system : System, str or Path
+        A :class:`~orchestration.system.System` or an SSP/SSD file to read.
+    scheme : {'gauss-seidel', 'jacobi'}
+        Coupling scheme.
+    record : sequence of str, optional
+        ``component.variable`` names or shell patterns to record; default:
+        every output of every component.
+    logging_on : bool
+        ``loggingOn`` passed to the FMUs, so that their error messages reach
+        the :class:`~orchestration.errors.FMUCallError` raised on failures.
+
+    Raises
+    ------
+    SystemDescriptionError
+        (and subclasses) for unknown files, components or variables,
+        incompatible connections and invalid start values.
+
+    Notes
+    -----
+    FMUs are extracted once, when the master is created; every
+    :meth:`simulate` instantiates, runs, terminates and frees them, so a
+    master can run many experiments.  Call :meth:`close` (or use ``with``)
+    to delete the extracted files.
+    """
+
+    def __init__(self, system: System | str | Path, *, scheme: str = "gauss-seidel",
+                 record: Sequence[str] | None = None, logging_on: bool = True):
+        self.system = system if isinstance(system, System) else read_system(system)
+        self.scheme = _check_scheme(scheme)
+        self.logging_on = logging_on
+        self.instances: list[FMUInstance] = []
+        self.time: float | None = None
+        self._unpacked: dict[Path, UnpackedFMU] = {}
+        try:
+            self._prepare(record)
+        except BaseException:
+            self.close()
+            raise
+
+    # preparation ------------------------------------------------------------
+    def _prepare(self, record: Sequence[str] | None) -> None:
+        system = self.system
+        file = None if system.source_file is None else str(system.source_file)
+        self.names = [c.name for c in system.components]
+        self.units = []
+        for component in system.components:
+            path = system.fmu_path(component)
+            if path not in self._unpacked:
+                self._unpacked[path] = UnpackedFMU(path, component.name)
+            self.units.append(self._unpacked[path])
+        self.files = [str(u.path) for u in self.units]
+        self.variables = [u.variables for u in self.units]
+        self.start_values = [self._check_start_values(i) for i in range(len(self.names))]
+        checked = check_connections(system.connections, self.names, self.variables,
+                                    self.files, file)
+        self.links = group_links(checked)
+        if self.scheme == "gauss-seidel":
+            self.order, self.broken = gauss_seidel_order(self.names, self.links)
+        else:
+            self.order, self.broken = list(range(len(self.names))), []
+        self.unconnected = warn_unconnected(self.names, self.variables, checked,
+                                            [dict(s) for s in self.start_values])
+        self.selection = select_variables(self.names, self.variables, record, self.files)
+
+    def _check_start_values(self, i: int) -> dict[str, tuple[object, StartValue]]:
+        component = self.system.components[i]
+        checked = {}
+        for name, value in component.parameters.items():
+            var = find_variable(self.variables[i], name, component=component.name,
+                                file=self.files[i], role="variable (start value)")
+            settable = (var.causality in _SETTABLE_CAUSALITIES
+                        or var.initial in ("exact", "approx"))
+            if var.variability == "constant" or var.causality == "independent" \
+                    or not settable:
+                raise StartValueError(
+                    f"cannot set a start value on a variable with causality "
+                    f"'{var.causality}' and variability '{var.variability}'",
+                    file=self.files[i], component=component.name, variable=name)
+            checked[name] = (var, coerce_value(var, value, component=component.name,
+                                               file=self.files[i]))
+        return checked
+
+    # public helpers -----------------------------------------------------------
+    def _resolve(self, qualified: str):
+        component, variable = split_name(qualified)
+        if component not in self.names:
+            raise UnknownComponentError("unknown component", component=component)
+        i = self.names.index(component)
+        var = find_variable(self.variables[i], variable, component=component,
+                            file=self.files[i])
+        if not self.instances:
+            raise OrchestrationError(f"'{qualified}': values can only be read or set during "
+                                     "a run (from a step callback)")
+        return self.instances[i], var
+
+    def get(self, qualified: str) -> StartValue:
+        """Current value of ``component.variable`` (during a run, e.g. in a callback)."""
+        instance, var = self._resolve(qualified)
+        kind = value_type(var)
+        value = instance.call(f"get{kind}", [var.valueReference])[0]
+        if kind == "String":
+            return value.decode("utf-8")
+        return bool(value) if kind == "Boolean" else value
+
+    def set(self, qualified: str, value: StartValue) -> None:
+        """Set an input or tunable parameter ``component.variable`` during a run."""
+        instance, var = self._resolve(qualified)
+        if not (var.causality == "input" or (var.causality == "parameter"
+                                             and var.variability == "tunable")):
+            raise StartValueError("only inputs and tunable parameters can be set during a "
+                                  "run", file=str(instance.unpacked.path),
+                                  component=instance.name, variable=var.name)
+        value = coerce_value(var, value, component=instance.name,
+                             file=str(instance.unpacked.path))
+        instance.call(f"set{value_type(var)}", [var.valueReference], [value])
+
+    # run ----------------------------------------------------------------------
+    def simulate(self, stop_time: float | None = None, step_size: StepSpec | None = None, *,
+                 start_time: float | None = None, output_every: int = 1,
+                 progress: bool | None = None, realtime: float | None = None,
+                 callback: StepCallback | None = None) -> ResultArray:
+        """Run the system and return the recorded results.
+
+        Parameters
+        ----------
+        stop_time : float, optional
+            Stop time, s (default: the system file's).
+        step_size : float, list of (until_time, step) or 1-D array, optional
+            Communication step (s), a step schedule, or the communication
+            points (default: the system file's step).
+        start_time : float, optional
+            Start time, s (default: the system file's, else 0).
+        output_every : int
+            Record every Nth communication step (the first and last rows are
+            always recorded).
+        progress : bool or None
+            Show a tqdm bar; ``None`` shows it for long runs only.
+        realtime : float, optional
+            Real-time pacing factor: wall-clock seconds per simulated second.
+        callback : callable, optional
+            ``callback(time, master)`` after every step; it may read and set
+            values with :meth:`get` / :meth:`set` and stop the run by
+            returning ``False``.
+
+        Returns
+        -------
+        ResultArray
+            Structured array, ``time`` first, then ``component.variable``
+            fields; ``result.meta`` states the scheme, stepping order, broken
+            loop edges, step and whether the run was stopped early.
+
+        Raises
+        ------
+        ScheduleError
+            For invalid times or steps.
+        FMUCallError
+            When an FMU returns discard, error or fatal; all instances are
+            released before it propagates.
+        """
+        start = self.system.start_time if start_time is None else start_time
+        start = 0.0 if start is None else float(start)
+        stop = self.system.stop_time if stop_time is None else stop_time
+        step = self.system.step_size if step_size is None else step_size
+        if step is None:
+            raise ScheduleError("no communication step given and none in the system file")
+        segments = make_schedule(start, stop, step)
+        if not (isinstance(output_every, int) and output_every >= 1):
+            raise ScheduleError(f"output_every must be a positive integer, got {output_every!r}")
+        self._check_variable_steps(segments)
+        total = sum(s.count for s in segments)
+        meta = self._meta(start, segments, total, output_every, realtime)
+        pacer = None if realtime is None else RealTimePacer(realtime, start)
+        bar = Progress(total, progress, description=self.system.name)
+        try:
+            self._initialize(start)
+            recorder = Recorder([inst.slave for inst in self.instances], self.names,
+                                self.selection, total // output_every + 3)
+            self._sample(recorder, start)
+            steps = self._loop(segments, total, recorder, output_every, bar, pacer, callback)
+        finally:
+            bar.close()
+            self._release()
+        meta["steps"] = steps
+        meta["stopped_early"] = steps < total
+        meta["end_time"] = float(recorder.time[recorder.count - 1])
+        if pacer is not None:
+            meta["max_realtime_lag"] = pacer.max_lag
+        return recorder.result(meta)
+
+    def _check_variable_steps(self, segments) -> None:
+        """Refuse a varying step for FMUs that declare they cannot handle one."""
+        steps = [s.step for s in segments]
+        if all(math.isclose(h, steps[0], rel_tol=1e-9) for h in steps):
+            return
+        for name, unit in zip(self.names, self.units):
+            if not unit.description.coSimulation.canHandleVariableCommunicationStepSize:
+                raise ScheduleError(f"component '{name}' (FMU '{unit.path}') cannot handle a "
+                                    "variable communication step; use a fixed step")
+
+    def _meta(self, start: float, segments, total: int, every: int,
+              realtime: float | None) -> dict:
+        single = len({s.step for s in segments}) == 1
+        return {"tool": "orchestration", "system": self.system.name, "scheme": self.scheme,
+                "order": [self.names[i] for i in self.order],
+                "broken_connections": [str(c) for link in self.links
+                                       if (link.source, link.target) in self.broken
+                                       for c in link.connections],
+                "start_time": start, "stop_time": segments[-1].end,
+                "step": segments[0].step if single else "schedule",
+                "planned_steps": total, "output_every": every, "realtime_factor": realtime,
+                "unconnected_inputs": list(self.unconnected)}
+
+    def _initialize(self, start: float) -> None:
+        self.time = None
+        for name, unit in zip(self.names, self.units):
+            instance = FMUInstance(name, unit, logging_on=self.logging_on)
+            self.instances.append(instance)
+            instance.instantiate()
+        for instance, values in zip(self.instances, self.start_values):
+            # no stop time: FMUs such as OpenModelica's refuse a doStep whose t + h passes a
+            # defined stop time by one rounding error
+            instance.call("setupExperiment", None, start, None)
+            for var, value in values.values():
+                instance.call(f"set{value_type(var)}", [var.valueReference], [value])
+        for instance in self.instances:
+            instance.call("enterInitializationMode")
+        for instance in self.instances:
+            instance.call("exitInitializationMode")
+            instance.mark_initialized()
+        self._build_plan()
+        for transfers, _, _, _ in self._plan:
+            self._transfer(transfers, start)
+        self.time = start
+
+    def _build_plan(self) -> None:
+        """Prepare function pointers and buffers for the inner loop."""
+        slaves = [inst.slave for inst in self.instances]
+        transfers: dict[int, list] = {i: [] for i in range(len(slaves))}
+        for link in self.links:
+            src, dst = slaves[link.source], slaves[link.target]
+            transfers[link.target].append(
+                (getter(src, link.kind), src.component, vr_array(link.source_vrs),
+                 len(link.source_vrs), value_buffer(link.kind, len(link.source_vrs)),
+                 setter(dst, link.kind), dst.component, vr_array(link.target_vrs), link))
+        steps = [(do_step(s), s.component) for s in slaves]
+        if self.scheme == "gauss-seidel":
+            self._plan = [(transfers[i], *steps[i], i) for i in self.order]
+        else:
+            everything = [t for i in self.order for t in transfers[i]]
+            self._plan = [(everything if k == 0 else [], *steps[i], i)
+                          for k, i in enumerate(self.order)]
+
+    def _transfer(self, transfers, time: float) -> None:
+        for get, src, src_vrs, n, buffer, set_, dst, dst_vrs, link in transfers:
+            status = get(src, src_vrs, n, buffer)
+            if status > FMI_WARNING:
+                self._fail(link.source, f"fmi2Get{link.kind}", status, time)
+            status = set_(dst, dst_vrs, n, buffer)
+            if status > FMI_WARNING:
+                self._fail(link.target, f"fmi2Set{link.kind}", status, time)
+
+    def _fail(self, index: int, call: str, status: int, time: float) -> None:
+        instance = self.instances[index]
+        instance.time = time
+        instance.fail(call, status)
+
+    def _sample(self, recorder: Recorder, time: float) -> None:
+        block = recorder.sample(time)
+        if block >= 0:
+            index, kind = recorder.block_owner(block)
+            self._fail(index, f"fmi2Get{kind}", 3, time)
+
+    def _loop(self, segments, total: int, recorder: Recorder, every: int, bar: Progress,
+              pacer: RealTimePacer | None, callback: StepCallback | None) -> int:
+        plan, fail, sample = self._plan, self._fail, recorder.sample
+        done = 0
+        next_record = min(every, total)
+        next_tick = bar.next_tick
+        for segment in segments:
+            begin, h, count = segment.begin, segment.step, segment.count
+            for j in range(count):
+                t = begin + j * h
+                for transfers, step, component, index in plan:
+                    for get, src, src_vrs, n, buffer, set_, dst, dst_vrs, link in transfers:
+                        if (status := get(src, src_vrs, n, buffer)) > FMI_WARNING:
+                            fail(link.source, f"fmi2Get{link.kind}", status, t)
+                        if (status := set_(dst, dst_vrs, n, buffer)) > FMI_WARNING:
+                            fail(link.target, f"fmi2Set{link.kind}", status, t)
+                    if (status := step(component, t, h, 1)) > FMI_WARNING:
+                        fail(index, "fmi2DoStep", status, t)
+                done += 1
+                t_end = segment.end if j == count - 1 else begin + (j + 1) * h
+                self.time = t_end
+                if done == next_record:
+                    if sample(t_end) >= 0:
+                        self._sample(recorder, t_end)
+                    next_record = min(next_record + every, total)
+                if pacer is not None:
+                    pacer.wait(t_end, h)
+                if done == next_tick:
+                    bar.tick(done)
+                    next_tick = bar.next_tick
+                if callback is not None and callback(t_end, self) is False:
+                    if recorder.time[recorder.count - 1] != t_end:
+                        self._sample(recorder, t_end)
+                    return done
+        return done
+
+    def _release(self) -> None:
+        """Terminate and free every instance as the FMI state machine allows."""
+        fatal = {inst.unpacked.path for inst in self.instances if inst._state == "fatal"}
+        for instance in reversed(self.instances):
+            if instance.unpacked.path in fatal:
+                instance._state = "fatal"  # FMI 2.0: no call to any instance of that FMU
+            instance.release()
+        self.instances = []
+        self._plan = []
+
+    def close(self) -> None:
+        """Release instances and delete the extracted FMUs (idempotent)."""
+        self._release()
+        for unit in self._unpacked.values():
+            unit.remove()
+        self._unpacked.clear()
+
+    def __enter__(self) -> Master:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def simulate_system(system: System | str | Path, stop_time: float | None = None,
+                    step_size: StepSpec | None = None, *, scheme: str = "gauss-seidel",
+                    record: Sequence[str] | None = None, **options) -> ResultArray:
+    """Read (if needed), run and clean up a system in one call.
+
+    Parameters
+    ----------
+    system : System, str or Path
+        System or SSP/SSD file.
+    stop_time : float, optional
+        Stop time, s.
+    step_size : float, schedule or array, optional
+        See :meth:`Master.simulate`.
+    scheme : {'gauss-seidel', 'jacobi'}
+        Coupling scheme.
+    record : sequence of str, optional
+        Variables to record (default: all outputs).
+    **options
+        Other keyword arguments of :meth:`Master.simulate`.
+
+    Returns
+    -------
+    ResultArray
+    """
+    with Master(system, scheme=scheme, record=record) as master:
+        return master.simulate(stop_time, step_size, **options)

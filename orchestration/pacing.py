@@ -1,0 +1,91 @@
+"""Real-time pacing and the progress bar of a run."""
+from __future__ import annotations
+
+import math
+import time as _time
+import warnings
+
+from .errors import RealTimeLagWarning, ScheduleError
+
+__all__ = ["RealTimePacer", "Progress", "AUTO_PROGRESS_STEPS"]
+
+AUTO_PROGRESS_STEPS = 20_000  # runs with at least this many steps show a bar by default
+LAG_TOLERANCE = 0.010  # s of wall clock behind schedule tolerated before warning
+
+
+class RealTimePacer:
+    """Keep the wall clock in step with simulated time (for hardware in the loop).
+
+    The wall-clock time elapsed since the start is held at
+    ``factor * (t - t0)``: ``factor = 1`` is real time, ``0.5`` runs twice as
+    fast as real time, ``2`` twice as slow.  When the run falls behind by
+    more than one communication step (and at least 10 ms) a
+    :class:`RealTimeLagWarning` giving the lag is issued, once.
+
+    Parameters
+    ----------
+    factor : float
+        Wall-clock seconds per simulated second, > 0.
+    start_time : float
+        Simulated start time, s.
+    """
+
+    def __init__(self, factor: float, start_time: float):
+        if not (math.isfinite(factor) and factor > 0.0):
+            raise ScheduleError(f"real-time factor must be a finite positive number, got "
+                                f"{factor!r}")
+        self.factor = float(factor)
+        self.start_time = start_time
+        self.wall_start = _time.perf_counter()
+        self.max_lag = 0.0
+        self.warned = False
+
+    def wait(self, sim_time: float, step: float) -> None:
+        """Sleep until the wall clock reaches simulated time ``sim_time``."""
+        target = self.wall_start + self.factor * (sim_time - self.start_time)
+        ahead = target - _time.perf_counter()
+        if ahead > 0.0:
+            _time.sleep(ahead)
+            return
+        lag = -ahead
+        self.max_lag = max(self.max_lag, lag)
+        if not self.warned and lag > max(LAG_TOLERANCE, self.factor * step):
+            self.warned = True
+            warnings.warn(f"real-time pacing (factor {self.factor:g}) fell behind by "
+                          f"{lag:.3f} s of wall clock at simulated t = {sim_time:.6g} s",
+                          RealTimeLagWarning, stacklevel=4)
+
+
+class Progress:
+    """A tqdm bar updated in chunks, or nothing.
+
+    Parameters
+    ----------
+    total : int
+        Number of communication steps.
+    enabled : bool or None
+        ``None`` shows the bar for runs of at least ``AUTO_PROGRESS_STEPS`` steps.
+    """
+
+    def __init__(self, total: int, enabled: bool | None, description: str = "cosim"):
+        if enabled is None:
+            enabled = total >= AUTO_PROGRESS_STEPS
+        self.bar = None
+        self.chunk = max(1, total // 200)
+        self.next_tick = self.chunk if enabled else -1
+        self.done = 0
+        if enabled:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, desc=description, unit="step", leave=False)
+
+    def tick(self, steps_done: int) -> None:
+        """Advance the bar to ``steps_done`` steps."""
+        self.bar.update(steps_done - self.done)
+        self.done = steps_done
+        self.next_tick = steps_done + self.chunk
+
+    def close(self) -> None:
+        """Close the bar, if any."""
+        if self.bar is not None:
+            self.bar.close()

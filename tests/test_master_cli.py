@@ -1,0 +1,46 @@
+"""The ``cosim`` subcommand."""
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+import pytest
+
+from fmu_fixtures.fixtures import fixture_fmus, ramp_gain  # noqa: F401 (fixtures)
+from orchestration import Component, System, write_ssp
+from orchestration.cli import main, register
+
+pytestmark = pytest.mark.integration
+
+
+def test_register_adds_cosim_to_a_host_parser(ramp_gain, tmp_path, capsys):
+    parser = argparse.ArgumentParser(prog="sarins")
+    register(parser.add_subparsers(dest="command"))
+    path = write_ssp(ramp_gain, tmp_path / "rg.ssp")
+    args = parser.parse_args(["cosim", str(path), "--stop-time", "1", "--step", "0.25",
+                              "--scheme", "jacobi", "--output", str(tmp_path / "r.csv"),
+                              "--no-progress"])
+    assert args.func(args) == 0
+    out = capsys.readouterr().out
+    assert "scheme jacobi" in out and "t = 1 s" in out
+    assert "gain.y         7.5" in out
+    data = np.genfromtxt(tmp_path / "r.csv", delimiter=",", names=True)
+    assert data["time"][-1] == 1.0
+
+
+def test_defaults_come_from_the_system_file(ramp_gain, tmp_path, capsys):
+    ramp_gain.stop_time, ramp_gain.step_size = 0.5, 0.125
+    path = write_ssp(ramp_gain, tmp_path / "rg.ssp")
+    assert main(["cosim", str(path), "--record", "ramp.*", "--realtime", "0.01"]) == 0
+    out = capsys.readouterr().out
+    assert "4 steps" in out and "ramp.slope" in out and "gain.y" not in out
+
+
+def test_errors_exit_nonzero_with_a_message(fixture_fmus, tmp_path, capsys):
+    bad = System("bad", [Component("f", fixture_fmus["Faulty"], {"mode": 2, "fail_at": 0.2})],
+                 [])
+    path = write_ssp(bad, tmp_path / "bad.ssp")
+    assert main(["cosim", str(path), "--stop-time", "1", "--step", "0.1"]) == 3
+    assert "fmi2DoStep returned DISCARD at t = 0.2 s" in capsys.readouterr().err
+    assert main(["cosim", str(tmp_path / "none.ssp"), "--stop-time", "1", "--step", "1"]) == 2
+    assert "not found" in capsys.readouterr().err
