@@ -73,13 +73,23 @@ def _unit_definitions(root, used):
     return defs
 
 
-def fix_model_description(xml_bytes: bytes) -> bytes:
-    """Add units, display units, UnitDefinitions and InitialUnknowns."""
+def fix_model_description(xml_bytes: bytes, descriptions: dict | None = None) -> bytes:
+    """Add units, display units, UnitDefinitions, Outputs and InitialUnknowns.
+
+    ``descriptions`` ({variable name: description}) fills in missing
+    descriptions first (used for container FMUs, whose variables are the
+    components' ``component.variable``).
+    """
     root = ET.fromstring(xml_bytes)
     variables = root.find("ModelVariables")
     used: dict[str, set] = {}
     initial_unknowns = []
+    outputs = []
     for index, var in enumerate(variables.findall("ScalarVariable"), start=1):
+        if descriptions and not var.get("description") and var.get("name") in descriptions:
+            var.set("description", descriptions[var.get("name")])
+        if var.get("causality") == "output":
+            outputs.append(index)
         unit, display = parse_unit(var.get("description"))
         real = var.find("Real")
         if real is not None and unit and unit != "1":
@@ -100,8 +110,15 @@ def fix_model_description(xml_bytes: bytes) -> bytes:
         position = list(root).index(root.find("CoSimulation")) + 1
         root.insert(position, _unit_definitions(root, used))
     structure = root.find("ModelStructure")
-    for node in structure.findall("InitialUnknowns"):
+    derivatives = structure.find("Derivatives")
+    for node in list(structure):
         structure.remove(node)
+    if outputs:
+        node = ET.SubElement(structure, "Outputs")
+        for index in outputs:
+            ET.SubElement(node, "Unknown", index=str(index))
+    if derivatives is not None:
+        structure.append(derivatives)
     if initial_unknowns:
         node = ET.SubElement(structure, "InitialUnknowns")
         for index in initial_unknowns:
@@ -157,3 +174,25 @@ def build_fmus(out_dir: Path | str = DEFAULT_OUT, names=None) -> list[Path]:
     if unknown:
         raise ValueError(f"unknown FMU(s) {unknown}; known: {', '.join(SLAVES)}")
     return [build_fmu(SLAVES[n], Path(out_dir)) for n in names]
+
+
+def fix_fmu_description(path: Path, components=()) -> None:
+    """Rewrite an existing FMU's model description in place with
+    :func:`fix_model_description`; ``components`` [(name, fmu path)] provide
+    descriptions (and so units) for container variables ``name.variable``."""
+    from fmpy import read_model_description
+
+    descriptions = {}
+    for name, source in components:
+        for v in read_model_description(str(source)).modelVariables:
+            if v.description:
+                descriptions[f"{name}.{v.name}"] = v.description
+    path = Path(path)
+    tmp = path.with_suffix(".tmp.fmu")
+    with zipfile.ZipFile(path) as zin, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zout:
+        for item in zin.infolist():
+            data = zin.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = fix_model_description(data, descriptions)
+            zout.writestr(item, data)
+    tmp.replace(path)

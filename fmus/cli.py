@@ -9,6 +9,8 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("build-fmus", help="build the FMI 2.0 co-simulation FMUs")
     p.add_argument("--out", type=Path, default=Path("build") / "fmus", help="output folder (default build/fmus)")
     p.add_argument("--only", nargs="+", metavar="NAME", help="build only these FMUs")
+    p.add_argument("--system", action="store_true",
+                   help="also write the standard static system as one FMU (FMPy container, FMI 2.0)")
     p.set_defaults(func=run)
 
 
@@ -17,4 +19,24 @@ def run(args) -> int:
 
     for path in build_fmus(args.out, args.only):
         print(path)
+    if not args.only:
+        from .systems import write_systems
+
+        for path in write_systems(args.out):
+            print(path)
+    if args.system:
+        print(build_system_fmu(args.out))
     return 0
+
+
+def build_system_fmu(fmu_dir: Path) -> Path:
+    """The standard static system (FMUs in ``fmu_dir``) packed as one FMU."""
+    from orchestration.container import build_container_fmu
+
+    from .build import fix_fmu_description
+    from .systems import standard_static
+
+    system = standard_static(Path(fmu_dir))
+    path = build_container_fmu(system, Path(fmu_dir) / "StandardStaticSystem.fmu", step_size=1.0)
+    fix_fmu_description(path, [(c.name, c.source) for c in system.components])
+    return path

@@ -13,9 +13,9 @@ import shutil
 import weakref
 import zipfile
 from collections import deque
-from ctypes import byref
 from pathlib import Path
 
+from . import fmilog
 from .errors import FMUCallError, FMUFatalError, SystemFileError, status_label
 
 __all__ = ["read_description", "FMUInstance", "UnpackedFMU", "FMI_FATAL"]
@@ -119,26 +119,12 @@ class FMUInstance:
         self.slave = None
         self._state = "loaded"
         self._logging_on = logging_on
-        self._callbacks = self._make_callbacks()
+        self.instance_name = None
 
-    def _make_callbacks(self):
-        from fmpy import calloc, free
-        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-        from fmpy.logging import addLoggerProxy
-
-        callbacks = fmi2CallbackFunctions()
-        callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
-        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        addLoggerProxy(byref(callbacks))
-        return callbacks
-
-    def _log(self, environment, instance_name, status, category, message) -> None:
-        text = message.decode("utf-8", "replace") if message else ""
+    def _log(self, status, category: str, text: str) -> None:
+        """Sink of :mod:`orchestration.fmilog` for this instance's messages."""
         label = status_label(status)
-        cat = category.decode("utf-8", "replace") if category else ""
-        self.messages.append(f"[{label}]{f' {cat}' if cat else ''} {text}")
+        self.messages.append(f"[{label}]{f' {category}' if category else ''} {text}")
 
     # life cycle -----------------------------------------------------------
     def instantiate(self) -> None:
@@ -146,16 +132,17 @@ class FMUInstance:
         from fmpy.fmi2 import FMU2Slave
 
         description = self.description
+        self.instance_name = fmilog.register(self.name, self._log)
         try:
             self.slave = FMU2Slave(guid=description.guid, unzipDirectory=self.unpacked.unzipdir,
                                    modelIdentifier=description.coSimulation.modelIdentifier,
-                                   instanceName=self.name)
+                                   instanceName=self.instance_name)
         except Exception as error:  # fmpy raises bare Exception when the library is missing
             raise SystemFileError(f"cannot load the FMU's shared library: {error}",
                                   file=str(self.unpacked.path), component=self.name) from None
         self._state = "library"
         try:
-            self.slave.instantiate(callbacks=self._callbacks, loggingOn=self._logging_on)
+            self.slave.instantiate(callbacks=fmilog.callbacks(), loggingOn=self._logging_on)
         except Exception:  # fmpy raises bare Exception when fmi2Instantiate returns NULL
             self._raise("fmi2Instantiate", FMI_ERROR)
         self._state = "instantiated"
@@ -227,6 +214,8 @@ class FMUInstance:
         slave, state = self.slave, self._state
         self._state = "released"
         if slave is None or state in ("released", "fatal"):
+            if self.instance_name is not None:
+                fmilog.unregister(self.instance_name)
             return
         if state == "initialized":
             try:
@@ -241,3 +230,4 @@ class FMUInstance:
         except Exception:  # noqa: BLE001 - release must not raise
             pass
         self.slave = None
+        fmilog.unregister(self.instance_name)

@@ -1,12 +1,10 @@
 """A minimal Gauss-Seidel driver over FMPy's FMU2Slave, for the FMU tests
 (independent of the project's master, so the FMUs are checked on their own)."""
 
-from ctypes import byref
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
 
-from fmpy import calloc, extract, free, read_model_description
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-from fmpy.logging import addLoggerProxy
+from orchestration import fmilog
 
 
 class Slave:
@@ -15,19 +13,10 @@ class Slave:
         self.dir = extract(str(path))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.log = [] if log is None else log
-
-        def logger(env, instance, status, category, message):
-            self.log.append((status, category.decode() if category else "", message.decode()))
-
-        callbacks = fmi2CallbackFunctions()
-        callbacks.logger = fmi2CallbackLoggerTYPE(logger)
-        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        addLoggerProxy(byref(callbacks))  # formats the variadic message
-        self._callbacks = callbacks
+        self.name = fmilog.register(name, lambda status, category, text: self.log.append((status, category, text)))
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
-                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        self.fmu.instantiate(loggingOn=True, callbacks=callbacks)
+                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=self.name)
+        self.fmu.instantiate(loggingOn=True, callbacks=fmilog.callbacks())
         self.fmu.setupExperiment(startTime=0.0)
 
     def set(self, **values):
@@ -48,6 +37,7 @@ class Slave:
         except Exception:
             pass
         self.fmu.freeInstance()
+        fmilog.unregister(self.name)
 
 
 TT_TO_IMU = ["angle_1", "rate_1", "ambient_temp"]

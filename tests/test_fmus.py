@@ -173,7 +173,13 @@ def test_fmu_runs_in_a_host_without_this_project(fmu_dir, tmp_path):
     (and runs without numba too, via the plain-Python path)."""
     import fmpy
 
+    import shutil
+
     site_dirs = sorted({os.path.dirname(os.path.dirname(m.__file__)) for m in (np, fmpy)})
+    host_libs = tmp_path / "host_libs"  # the generic master's logger module, not the project
+    shutil.copytree(os.path.join(os.path.dirname(os.path.dirname(__file__)), "orchestration"),
+                    host_libs / "orchestration")
+    site_dirs.append(str(host_libs))
     script = textwrap.dedent(f"""
         import sys
         sys.path[:0] = {site_dirs!r}

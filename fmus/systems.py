@@ -1,0 +1,69 @@
+"""The project's own co-simulation systems, written as SSP files.
+
+``standard_static(fmu_dir)`` is the standard static single-axis RINS:
+Turntable -> IMUThermal -> StrapdownINS, 1 s communication step, Gauss-Seidel
+order Turntable, IMUThermal, StrapdownINS.  ``write_systems(fmu_dir)`` packs
+each system as ``<name>.ssp`` (FMUs in ``resources/``) beside the FMUs; the
+SSD alone is shipped in ``orchestration/systems/<name>/SystemStructure.ssd``
+(sources ``resources/<FMU>.fmu``, the SSP layout).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from orchestration import Component, Connection, System, write_ssd, write_ssp
+
+GIMBAL_LINKS = ["angle_1", "rate_1", "angle_2", "rate_2", "angle_3", "rate_3", "ambient_temp"]
+INCREMENT_LINKS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z"]
+SHIPPED = Path(__file__).resolve().parents[1] / "orchestration" / "systems"
+
+
+def standard_static(fmu_dir: Path | str = "resources", *, hours: float = 88.0, turntable=None, imu=None,
+                    ins=None) -> System:
+    """Turntable -> IMUThermal -> StrapdownINS on a static base (seed 000 set-up).
+
+    Parameters
+    ----------
+    fmu_dir : folder of the FMUs (relative paths stay relative in the SSD)
+    hours : default stop time of the system, h
+    turntable, imu, ins : dict of extra start values per component
+    """
+    fmu_dir = Path(fmu_dir)
+    components = [
+        Component("turntable", fmu_dir / "Turntable.fmu", dict(turntable or {})),
+        Component("imu", fmu_dir / "IMUThermal.fmu", dict(imu or {})),
+        Component("ins", fmu_dir / "StrapdownINS.fmu", dict(ins or {})),
+    ]
+    connections = [Connection("turntable", v, "imu", v) for v in GIMBAL_LINKS]
+    connections += [Connection("imu", v, "ins", v) for v in INCREMENT_LINKS]
+    return System(name="standard_static", components=components, connections=connections,
+                  start_time=0.0, stop_time=hours * 3600.0, step_size=1.0)
+
+
+SYSTEMS = {"standard_static": standard_static}
+
+
+def write_systems(fmu_dir: Path | str) -> list[Path]:
+    """Write ``<fmu_dir>/<name>.ssp`` for every system; returns the paths."""
+    fmu_dir = Path(fmu_dir)
+    return [write_ssp(make(fmu_dir), fmu_dir / f"{name}.ssp") for name, make in SYSTEMS.items()]
+
+
+def write_shipped_ssds(root: Path = SHIPPED) -> list[Path]:
+    """(Re)write the shipped SSD files (sources resources/<FMU>.fmu); the
+    writer reads the FMUs, so they are built into a scratch folder first."""
+    import shutil
+    import tempfile
+
+    from .build import build_fmus
+
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        build_fmus(Path(tmp) / "resources")
+        for name, make in SYSTEMS.items():
+            ssd = write_ssd(make(Path(tmp) / "resources"), Path(tmp) / "SystemStructure.ssd")
+            folder = root / name
+            folder.mkdir(parents=True, exist_ok=True)
+            out.append(Path(shutil.copy2(ssd, folder / "SystemStructure.ssd")))
+    return out
