@@ -41,3 +41,11 @@ def test_readme_starts_with_the_two_setup_commands_and_ci_runs_the_second():
     assert "pytest" in lines[2] and "pip install" in lines[2]
     ci = (ROOT / ".ci" / "run").read_text()
     assert "sed -n 3p README.md" in ci
+
+
+def test_demo_cosimulates_the_standard_system(tmp_path, capsys):
+    assert main(["demo", "--align-hours", "0.2", "--nav-hours", "0.1", "--no-progress",
+                 "--fmu-dir", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "gauss-seidel" in out and "position error at end" in out
+    assert (tmp_path / "StrapdownINS.fmu").exists()
