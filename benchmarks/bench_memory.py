@@ -1,0 +1,66 @@
+"""Memory of each FMU over many steps (default 10^6), driven through FMPy.
+
+Each FMU runs alone in a fresh subprocess (inputs held at their start
+values; the IMU sees a table at rest), and the resident set size is sampled
+every 10 % of the run.  A flat profile means no per-step growth: the figure
+reported is the RSS increase over the second half of the run, per step.
+
+Usage: ``python benchmarks/bench_memory.py [--steps 1000000]``
+"""
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+CHILD = r"""
+import sys, time
+sys.path[:0] = [{root!r}, {tests!r}]
+from fmu_driver import Slave
+
+def rss_kb():
+    with open("/proc/self/status") as fh:
+        for line in fh:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+
+s = Slave({fmu!r}, "m")
+s.fmu.enterInitializationMode(); s.fmu.exitInitializationMode()
+n = {steps}
+marks = []
+t0 = time.perf_counter()
+for k in range(n):
+    s.fmu.doStep(float(k), 1.0)
+    if k % (n // 10) == 0 or k == n - 1:
+        marks.append(rss_kb())
+print(" ".join(map(str, marks)), time.perf_counter() - t0)
+s.free()
+"""
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=1_000_000)
+    args = parser.parse_args()
+    sys.path.insert(0, str(ROOT))
+    from fmus.build import build_fmus
+
+    with tempfile.TemporaryDirectory() as tmp:
+        for fmu in build_fmus(tmp):
+            code = CHILD.format(root=str(ROOT), tests=str(ROOT / "tests"), fmu=str(fmu), steps=args.steps)
+            out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+            *marks, wall = out.stdout.split()
+            kb = [int(m) for m in marks]
+            half = kb[len(kb) // 2:]
+            growth = (half[-1] - half[0]) * 1024 / (args.steps / 2)
+            print(f"{fmu.stem:<13} {args.steps} steps in {float(wall):6.1f} s; RSS MB "
+                  + " ".join(f"{k / 1024:.1f}" for k in kb)
+                  + f"; growth over the second half {growth:+.3f} bytes/step")
+
+
+if __name__ == "__main__":
+    main()
