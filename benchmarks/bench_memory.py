@@ -30,6 +30,7 @@ def rss_kb():
 
 s = Slave({fmu!r}, "m")
 s.fmu.enterInitializationMode(); s.fmu.exitInitializationMode()
+s.set(**{inputs!r})
 n = {steps}
 marks = []
 t0 = time.perf_counter()
@@ -42,6 +43,18 @@ s.free()
 """
 
 
+def static_increments() -> dict:
+    """Increments of a level IMU at rest facing north at 28.222 deg (1 s)."""
+    import math
+
+    from sarins_fmu import earth
+
+    lat = math.radians(28.222)
+    w = earth.earth_rate_n(lat)
+    return {"dtheta_x": 0.0, "dtheta_y": float(w[1]), "dtheta_z": float(w[2]), "dv_x": 0.0, "dv_y": 0.0,
+            "dv_z": float(earth.gravity(lat, 0.0))}
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=1_000_000)
@@ -51,8 +64,11 @@ def main():
 
     with tempfile.TemporaryDirectory() as tmp:
         for fmu in build_fmus(tmp):
-            code = CHILD.format(root=str(ROOT), tests=str(ROOT / "tests"), fmu=str(fmu), steps=args.steps)
-            out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+            code = CHILD.format(root=str(ROOT), tests=str(ROOT / "tests"), fmu=str(fmu), steps=args.steps,
+                                inputs=static_increments() if fmu.stem == "StrapdownINS" else {})
+            out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+            if out.returncode != 0:
+                raise SystemExit(f"{fmu.stem}: {out.stderr.strip().splitlines()[-1]}")
             *marks, wall = out.stdout.split()
             kb = [int(m) for m in marks]
             half = kb[len(kb) // 2:]

@@ -164,7 +164,7 @@ def _plugin_modules():
     import importlib
 
     found = []
-    for name in ("orchestration.cli", "sarins_fmu.identify.cli", "fmus.cli"):
+    for name in ("orchestration.cli", "sarins_fmu.identify.cli", "fmus.cli", "sarins_fmu.experiments.campaign_cli"):
         try:
             found.append(importlib.import_module(name))
         except ModuleNotFoundError as exc:
