@@ -19,8 +19,8 @@ from pathlib import Path
 HELP = "seed 000: RBF axial-drift identification, hot and cold start (Tables 2-5, Figs 1-4)"
 
 PROFILES = {  # (hot train, hot test, cold train, cold test)
-    "quick": (8, 3, 8, 2),
-    "paper": (16, 6, 12, 4),
+    "quick": (8, 3, 16, 2),
+    "paper": (16, 6, 24, 4),
 }
 DEFAULT_ENGINE = {"quick": "inprocess", "paper": "cosim"}
 
@@ -43,8 +43,12 @@ def _digest(path: Path) -> str:
 
 def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0, out, workers=None,
             scheduler=None, progress: bool = True, truth: str = "simulated", live: bool | None = None,
-            sizes=None) -> dict:
-    """Run the campaign; returns the summary dict the report is written from."""
+            sizes=None, nav_hours: float | None = None) -> dict:
+    """Run the campaign; returns the summary dict the report is written from.
+
+    sizes : (hot train, hot test, cold train, cold test), default the profile's;
+    nav_hours : evaluation window of the held-out runs (default 72 h; shorter
+    only to test the campaign machinery quickly)."""
     from orchestration.campaign import Task, run_campaign
 
     from . import seed000 as s0
@@ -78,8 +82,11 @@ def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0,
             "cold": s0.train_rbf(rows["cold"], s0.COLD_INPUTS, model_dir / "cold.json", target=target)}
     models = {k: str(model_dir / f"{k}.json") for k in nets}
     tag = _digest(model_dir / "hot.json") + _digest(model_dir / "cold.json")
-    test_tasks = [Task(f"s{seed}-{e.name}-{engine}-{'live' if live else 'nolive'}-{tag}", runs.test_task,
-                       {"exp": e.to_dict(), "models": models, "engine": engine, "fmu_dir": fmu_dir, "live": live})
+    nav = s0.NAV_HOURS if nav_hours is None else float(nav_hours)
+    exact = profile == "paper"
+    test_tasks = [Task(f"s{seed}-{e.name}-{engine}-{'live' if live else 'nolive'}-{nav:g}h-{int(exact)}-{tag}",
+                       runs.test_task, {"exp": e.to_dict(), "models": models, "engine": engine, "fmu_dir": fmu_dir,
+                                        "live": live, "rerun_all": exact, "nav_hours": nav})
                   for k in exps for e in exps[k] if e.role == "test"]
     if profile == "quick":
         first = exps["hot"][n_ht]

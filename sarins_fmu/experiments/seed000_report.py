@@ -175,9 +175,12 @@ def write_report(summary: dict, folder) -> Path:
         wins = sum(t["max_cold_nm"] < t["max_hot_nm"] for t in cold)
         lines.append(f"Cold start: the cold model beats the hot model on {wins} of {len(cold)} held-out experiments.")
     nets = summary["nets"]
-    lines += ["", "Networks: " + ", ".join(
-        f"{k}: {n.n_neurons} neurons, training RMS {np.sqrt(n.training_mse_):.5f} deg/h ({n.stop_reason_})"
-        for k, n in nets.items()), ""]
+    lines += ["", "Networks (goal: training RMS 0.0003 deg/h; SPREAD in standardised units chosen by "
+              "leave-one-out RMS on the training rows): " + "; ".join(
+                  f"{k}: SPREAD {n.settings.spread:g}, {n.n_neurons} neurons, training RMS "
+                  f"{np.sqrt(n.training_mse_):.5f} deg/h ({n.stop_reason_}), leave-one-out RMS by SPREAD "
+                  + ", ".join(f"{s}: {v:.5f}" for s, v in n.metadata.get("loo_rms_dph", {}).items())
+                  for k, n in nets.items()), ""]
     check = summary.get("cosim_check")
     if check:
         lines += [f"Co-simulation check (short identified run through the FMUs vs in process): drift "
