@@ -234,3 +234,32 @@ def test_shipped_identified_system_closes_the_loop():
     links = {(c.start, c.end) for c in system.connections}
     assert ("identifier.axial_drift", "ins.axial_drift_correction") in links
     assert ("ins.lat_error", "identifier.lat_error") in links
+
+
+def test_identifier_fmu_reset_and_two_instances(fmu_dir, line_model):
+    def init(slave, **params):
+        slave.set(trigger_time=2.0, **params)
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+
+    def steps(slave, lat_deg):
+        out = []
+        for k in range(4):
+            slave.set(nav_time=float(k + 1), lat_error=lat_deg * DEG_TO_RAD)
+            slave.fmu.doStep(float(k), 1.0)
+            out.append(slave.get("axial_drift")[0])
+        return out
+
+    a, b = Slave(fmu_dir / "RBFIdentifier.fmu", "ident_a"), Slave(fmu_dir / "RBFIdentifier.fmu", "ident_b")
+    try:
+        init(a, model_file=str(line_model))
+        init(b, model_kind="cold", temperature=40.0, temp_change=15.0)
+        first = steps(a, 0.01)
+        other = steps(b, 0.01)
+        assert first[0] == 0.0 and first[1] != 0.0 and other[1] != first[1]
+        a.fmu.reset()
+        init(a, model_file=str(line_model))
+        assert steps(a, 0.01) == first
+    finally:
+        a.free()
+        b.free()
