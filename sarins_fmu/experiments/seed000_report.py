@@ -181,6 +181,16 @@ def write_report(summary: dict, folder) -> Path:
                   f"{np.sqrt(n.training_mse_):.5f} deg/h ({n.stop_reason_}), leave-one-out RMS by SPREAD "
                   + ", ".join(f"{s}: {v:.5f}" for s, v in n.metadata.get("loo_rms_dph", {}).items())
                   for k, n in nets.items()), ""]
+    every = hot + cold
+    if summary["live"] and every:
+        diff = max(abs(t["live_twin_diff_dph"]) for t in every)
+        lines += [f"Live runs ({summary['engine']}): the identified drift equals the in-process prediction from "
+                  f"the uncompensated run's 12 h features within {diff:.2g} deg/h on all {len(every)} held-out "
+                  f"experiments; live largest error over 12-84 h: "
+                  + ", ".join(f"{t['live_max_nm']:.2f}" for t in every) + " nm.", ""]
+    walls = [t["wall_seconds"] for t in summary["train"]["hot"] + summary["train"]["cold"]]
+    lines += [f"Per-experiment wall time: training runs {np.mean(walls):.0f} s mean, held-out "
+              f"{np.mean([t['wall_seconds'] for t in every]):.0f} s mean (machine shared with other jobs).", ""]
     check = summary.get("cosim_check")
     if check:
         lines += [f"Co-simulation check (short identified run through the FMUs vs in process): drift "
