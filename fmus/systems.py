@@ -41,7 +41,33 @@ def standard_static(fmu_dir: Path | str = "resources", *, hours: float = 88.0, t
                   start_time=0.0, stop_time=hours * 3600.0, step_size=1.0)
 
 
-SYSTEMS = {"standard_static": standard_static}
+def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: float = 88.0, turntable=None,
+                               imu=None, ins=None, identifier=None) -> System:
+    """The standard static system with seed 000's RBFIdentifier closing the loop.
+
+    Turntable -> IMUThermal -> StrapdownINS -> RBFIdentifier -> (axial drift
+    correction) StrapdownINS.  The identifier reads the INS latitude error,
+    navigation time and alignment temperature change and the IMU's azimuth
+    gyro temperature; at its trigger time (default 12 h of navigation) it
+    outputs the identified drift, held, which the INS subtracts from the
+    next step on.  Gauss-Seidel order Turntable, IMUThermal, StrapdownINS,
+    RBFIdentifier; the loop INS -> identifier -> INS is broken at the INS
+    input (one step of delay, the same timing as ``run_static``'s
+    ``correction_from_hours``).  Default stop: 4 h alignment + 84 h.
+    """
+    base = standard_static(fmu_dir, hours=hours, turntable=turntable, imu=imu, ins=ins)
+    identifier_fmu = Component("identifier", Path(fmu_dir) / "RBFIdentifier.fmu", dict(identifier or {}))
+    loop = [Connection("ins", "lat_error", "identifier", "lat_error"),
+            Connection("ins", "nav_time", "identifier", "nav_time"),
+            Connection("ins", "temp_change_align", "identifier", "temp_change"),
+            Connection("imu", "temp_gyro_z", "identifier", "temperature"),
+            Connection("identifier", "axial_drift", "ins", "axial_drift_correction")]
+    return System(name="standard_static_identified", components=[*base.components, identifier_fmu],
+                  connections=[*base.connections, *loop], start_time=base.start_time,
+                  stop_time=base.stop_time, step_size=base.step_size)
+
+
+SYSTEMS = {"standard_static": standard_static, "standard_static_identified": standard_static_identified}
 
 
 def write_systems(fmu_dir: Path | str) -> list[Path]:

@@ -43,9 +43,12 @@ def test_readme_starts_with_the_two_setup_commands_and_ci_runs_the_second():
     assert "sed -n 3p README.md" in ci
 
 
-def test_demo_cosimulates_the_standard_system(tmp_path, capsys):
-    assert main(["demo", "--align-hours", "0.2", "--nav-hours", "0.1", "--no-progress",
+def test_demo_cosimulates_the_identified_system(tmp_path, capsys):
+    """align -> navigate -> identify (RBFIdentifier FMU) -> compensate -> navigate, scaled down."""
+    assert main(["demo", "--align-hours", "0.2", "--identify-hours", "0.1", "--nav-hours", "0.1", "--no-progress",
                  "--fmu-dir", str(tmp_path)]) == 0
     out = capsys.readouterr().out
-    assert "gauss-seidel" in out and "position error at end" in out
-    assert (tmp_path / "StrapdownINS.fmu").exists()
+    assert "gauss-seidel" in out and "position error, compensated" in out
+    drift = float(out.split("identified axial drift")[1].split()[0])
+    assert drift != 0.0 and abs(drift) < 0.01
+    assert (tmp_path / "StrapdownINS.fmu").exists() and (tmp_path / "RBFIdentifier.fmu").exists()

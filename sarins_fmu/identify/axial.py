@@ -1,0 +1,83 @@
+"""Axial-drift identifier: a trained RBF model applied to a navigation state.
+
+Seed 000 (sec. 2.1-2.3): after 4 h alignment and 12 h navigation the
+network maps the latitude error (hot start) or the latitude error, the
+azimuth gyro temperature and its change over the alignment (cold start) to
+the axial gyro drift.  A model file names its inputs; this class builds
+them from SI navigation quantities:
+
+* ``lat_error_deg`` latitude error, deg (= ``lat_error`` rad in degrees);
+* ``lat_deg`` latitude *reading*, deg (the paper's Table 2 feeds readings):
+  site latitude (the model's ``local_lat_deg``) + error;
+* ``temp_c`` azimuth gyro temperature at identification, degC;
+* ``temp_change_c`` its change over the alignment, degC.
+
+The target is in deg/h (``drift_dph``); :meth:`DriftIdentifier.drift` returns rad/s.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..units import DPH_TO_RPS, RAD_TO_DEG
+from .modelfile import ModelFileError
+from .rbf import RBFNetwork
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+DEFAULT_MODELS = {"hot": DATA / "seed000_rbf_hot.json", "cold": DATA / "seed000_rbf_cold.json"}
+KNOWN_INPUTS = ("lat_error_deg", "lat_deg", "temp_c", "temp_change_c")
+SITE_LAT_DEG = 28.222  # seed 000's site, deg (used when a model does not state its own)
+
+
+def default_model_path(kind: str) -> Path:
+    """Shipped model file of kind 'hot' or 'cold'."""
+    try:
+        return DEFAULT_MODELS[kind]
+    except KeyError:
+        raise ValueError(f"model kind must be 'hot' or 'cold', got {kind!r}") from None
+
+
+class DriftIdentifier:
+    """An RBF drift model with named inputs (see module docstring).
+
+    Parameters
+    ----------
+    path : model file written by ``RBFNetwork.save`` with ``input_names``
+        among :data:`KNOWN_INPUTS` and a target in deg/h.
+
+    Raises
+    ------
+    ModelFileError
+        If the file is unreadable, or its inputs are unnamed or unknown.
+    """
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        self.network = RBFNetwork.load(self.path)
+        names = self.network.input_names
+        if not names:
+            raise ModelFileError(f"{self.path}: the model does not name its inputs")
+        unknown = [n for n in names if n not in KNOWN_INPUTS]
+        if unknown:
+            raise ModelFileError(f"{self.path}: unsupported model input(s) {unknown}; known: {KNOWN_INPUTS}")
+        self.input_names = tuple(names)
+        self.local_lat_deg = float(self.network.metadata.get("local_lat_deg", SITE_LAT_DEG))
+
+    def inputs(self, lat_error: float, temp_c: float = np.nan, temp_change_c: float = np.nan) -> np.ndarray:
+        """Model input row (1, d) from the latitude error (rad) and temperatures (degC)."""
+        values = {"lat_error_deg": lat_error * RAD_TO_DEG, "lat_deg": self.local_lat_deg + lat_error * RAD_TO_DEG,
+                  "temp_c": temp_c, "temp_change_c": temp_change_c}
+        row = np.array([[values[n] for n in self.input_names]], float)
+        if not np.isfinite(row).all():
+            raise ValueError(f"identifier inputs {self.input_names} are not all finite: {row[0].tolist()}")
+        return row
+
+    def drift_dph(self, lat_error: float, temp_c: float = np.nan, temp_change_c: float = np.nan) -> float:
+        """Identified axial drift, deg/h."""
+        return float(self.network.predict(self.inputs(lat_error, temp_c, temp_change_c))[0])
+
+    def drift(self, lat_error: float, temp_c: float = np.nan, temp_change_c: float = np.nan) -> float:
+        """Identified axial drift, rad/s."""
+        return self.drift_dph(lat_error, temp_c, temp_change_c) * DPH_TO_RPS
