@@ -28,9 +28,11 @@ from .. import turntable
 from ..identify.rls import ForgettingRLS, RLSSettings, fit_quadratic_temperature_model
 from ..imu import IMU, ImuModel, StaticBase
 from ..ins import InsConfig, StrapdownINS
+from ..identify.online import OnlineDriftUpdater
 from ..kalman import StopFilterSettings, StopKalmanFilter
-from ..rotations import quat_to_mat, rotvec_to_mat
+from ..rotations import rotvec_to_mat
 from ..thermal import Ambient
+from ..vehicle import VehicleTrajectory, random_legs
 from ..units import ARCSEC_TO_RAD, DAY, DEG_TO_RAD, DPH_TO_RPS, DPSH_TO_RPSS, RPS_TO_DPH, UG_TO_MPS2
 
 GYRO_Z = 2  # index of the azimuth gyro in the IMU's temperature vector
@@ -279,4 +281,167 @@ def model_update_run(*, seed: int = 0, unit: str = "premise", days: float = SIM_
         "stop_estimate_dph": est * RPS_TO_DPH, "stop_error_dph": err * RPS_TO_DPH,
         "truth_days": grid, "truth_dph": (truth + np.array([0.0, 0.0, bias_z])) * RPS_TO_DPH,
         "rls_history_dph": history[:, 0] * RPS_TO_DPH, "ff_history_dph": history[:, 1] * RPS_TO_DPH,
+    }
+
+
+# --------------------------------------------------------------------------
+# the vehicle test analogue (Table 4, Figs 7-8, Table 5)
+# --------------------------------------------------------------------------
+
+def _state_blocks(moving: np.ndarray):
+    """(k0, k1) row ranges of constant moving/stopped state."""
+    edges = np.flatnonzero(np.diff(moving.astype(np.int8))) + 1
+    return list(zip(np.concatenate([[0], edges]), np.concatenate([edges, [moving.size]])))
+
+
+def _session(updater, model, coef, *, day, temperature, stop_seconds, lat, seed, step=1.0,
+             internal_rate=50.0):
+    """One drive with a stop of ``stop_seconds`` on ``day``: IMU with the aged
+    coefficients ``coef`` -> INS compensated by the updater's current model ->
+    the updater (Fig. 2) on the INS outputs.  Returns the number of rows."""
+    rng = np.random.default_rng([seed, 40])
+    legs = [("drive", 300.0, float(rng.uniform(8, 15))), ("turn", float(rng.choice([-90.0, 90.0]))),
+            ("drive", 300.0, float(rng.uniform(8, 15))), ("stop", float(stop_seconds)),
+            ("drive", 180.0, 10.0)]
+    traj = VehicleTrajectory(legs, lat, 0.0, float(rng.uniform(-math.pi, math.pi)), step=step)
+    unit = replace(model, axial_drift_poly=np.asarray(coef, float), aging_sigma=np.zeros(3))
+    ambient = Ambient(mean=temperature - unit.thermal.self_heating[GYRO_Z])
+    sensor = IMU(unit, traj, traj.schedule.axes, output_interval=step, internal_rate=internal_rate, seed=seed,
+                 thermal_start="hot", ambient=ambient)
+    phi0 = rng.standard_normal(3) * np.array([10 * ARCSEC_TO_RAD, 10 * ARCSEC_TO_RAD, 0.05 * DEG_TO_RAD])
+    ins = StrapdownINS(InsConfig(lat=lat, align_time=0.0, step=step),
+                       initial_attitude=_perturbed_attitude(traj.mat_nb(0), phi0))
+    t0 = day * DAY
+    moving = traj.moving()[1:]
+    for k0, k1 in _state_blocks(moving):
+        angle, rate, accel = traj.schedule.state(traj.time[k0:k1])
+        dtheta, dv, temps = sensor.step(angle, rate, accel)
+        if not moving[k0] or not updater.stopped:
+            comp = updater.compensation(temps[:, GYRO_Z])
+        else:  # first block after a stop: the update happens at its first row
+            comp = None
+        if comp is None:
+            updater._finish_stop(t0 + traj.time[k0 + 1])
+            comp = updater.compensation(temps[:, GYRO_Z])
+        out = ins.step(dtheta, dv, comp)
+        updater.step(t0 + traj.time[k0 + 1:k1 + 1], traj.speed[k0 + 1:k1 + 1], out[:, 3:5], out[:, 6:9],
+                     temps[:, GYRO_Z], out[:, 0])
+    if updater.stopped:
+        updater._finish_stop(t0 + traj.time[-1])
+    return traj.n_steps
+
+
+def _navigate_drive(traj, unit, models, *, temperature, seed, align_time=900.0, step=1.0, internal_rate=50.0):
+    """6 h drive: align, then navigate once per model in ``models`` (azimuth
+    compensation ε(T) with each [a, b, c], rad/s per °C^n, or None) on the
+    same increments; errors against an ideal-sensor INS on the same motion.
+
+    Returns east and north errors, (M, K) m each, and the navigation times (K,) s.
+    """
+    ambient = Ambient(mean=temperature - unit.thermal.self_heating[GYRO_Z])
+    sensor = IMU(unit, traj, traj.schedule.axes, output_interval=step, internal_rate=internal_rate, seed=seed,
+                 thermal_start="hot", ambient=ambient)
+    ideal = IMU(ImuModel(), traj, traj.schedule.axes, output_interval=step, internal_rate=internal_rate, seed=seed)
+    n_align = int(round(align_time / step))
+    lat0, lon0 = traj.lat[0], traj.lon[0]
+    navs = [StrapdownINS(InsConfig(lat=lat0, lon=lon0, align_time=align_time, step=step)) for _ in models]
+    ref = StrapdownINS(InsConfig(lat=lat0, lon=lon0, align_time=0.0, step=step), initial_attitude=traj.mat_nb(n_align))
+    outs = [[] for _ in models]
+    ref_out = []
+    chunk = 3600
+    for k0 in range(0, traj.n_steps, chunk):
+        k1 = min(traj.n_steps, k0 + chunk)
+        angle, rate, accel = traj.schedule.state(traj.time[k0:k1])
+        dtheta, dv, temps = sensor.step(angle, rate, accel)
+        d_ideal, v_ideal, _ = ideal.step(angle, rate, accel)
+        for ins, coef, out in zip(navs, models, outs):
+            comp = np.zeros(k1 - k0) if coef is None else np.polyval(coef, temps[:, GYRO_Z])
+            comp[: max(0, n_align - k0)] = 0.0
+            out.append(ins.step(dtheta, dv, comp))
+        a = max(k0, n_align)
+        if a < k1:
+            ref_out.append(ref.step(d_ideal[a - k0:], v_ideal[a - k0:]))
+    ref_nav = np.concatenate(ref_out)
+    east, north = [], []
+    from .. import earth
+
+    r_m, r_n = earth.radii(lat0)
+    for out in outs:
+        nav = np.concatenate(out)[n_align:]
+        north.append((nav[:, 0] - ref_nav[:, 0]) * r_m)
+        east.append((nav[:, 1] - ref_nav[:, 1]) * r_n * np.cos(ref_nav[:, 0]))
+    time = np.arange(1, ref_nav.shape[0] + 1) * step
+    return np.array(east), np.array(north), time
+
+
+def cep(radial: np.ndarray) -> float:
+    """Circular error probable of radial errors: their median, same unit."""
+    return float(np.median(np.asarray(radial, float)))
+
+
+def vehicle_test(*, seed: int = 0, unit: str = "premise", n_sessions: int = 20, year_days: float = 318.0,
+                 test_day: float = 368.0, drive_hours: float = 6.0, lat_deg: float = 40.0,
+                 stop_minutes=(15.0, 60.0), ageing: str = "markov", forgetting_factor: float = 0.8,
+                 calibration_points: int = 11, internal_rate: float = 50.0) -> dict:
+    """The vehicle test analogue: a year of online updates, then a 6 h drive.
+
+    Day 0: calibration (quadratic fit of stop-filter estimates at
+    ``calibration_points`` temperatures) gives the initial model, which also
+    starts the FF-RLS.  Then ``n_sessions`` drives on random days up to
+    ``year_days``, each with one stop of random length in ``stop_minutes``
+    at a random gyro temperature in 0..50 °C, run through IMU -> INS
+    (compensated by the current model) -> :class:`OnlineDriftUpdater`
+    (stops shorter than 30 min are discarded).  On ``test_day`` a
+    ``drive_hours`` drive with random turns and stops is navigated with the
+    initial and with the updated model (Fig. 8); CEP and maximum radial
+    error (Table 5) against an ideal-sensor INS on the same motion.
+    """
+    model = imu_unit(unit)
+    lat = lat_deg * DEG_TO_RAD
+    rng = np.random.default_rng([seed, 50])
+    grid = np.arange(0.0, math.floor(test_day) + 1.0)
+    truth = aged_coefficients(model, grid, seed, ageing)
+    cal_t, cal_z = _calibration(truth[0], unit, seed, lat_deg, np.linspace(*TEMPERATURE_RANGE, calibration_points))
+    fit = fit_quadratic_temperature_model(cal_t, cal_z)
+    rls = ForgettingRLS.from_calibration(cal_t, cal_z, 0.0, RLSSettings(forgetting_factor))
+    updater = OnlineDriftUpdater(rls, lat, 1.0, StopFilterSettings.for_model(model))
+    days = np.sort(rng.choice(np.arange(1, int(year_days) + 1), size=n_sessions, replace=False)).astype(float)
+    temps = rng.uniform(*TEMPERATURE_RANGE, size=n_sessions)
+    stops = rng.uniform(*stop_minutes, size=n_sessions) * 60.0
+    truth_at_stop = np.empty(n_sessions)
+    for i, (day, temp, stop) in enumerate(zip(days, temps, stops)):
+        _session(updater, model, truth[int(day)], day=day, temperature=float(temp), stop_seconds=float(stop),
+                 lat=lat, seed=seed * 1000 + i, internal_rate=internal_rate)
+        truth_at_stop[i] = model_drift(replace(model, axial_drift_poly=truth[int(day)]), temp)
+    events = updater.event_table()
+    legs = random_legs(drive_hours * 3600.0, seed + 777, n_stops=2, stop_range=(300.0, 900.0))
+    traj = VehicleTrajectory(legs, lat, 0.0, float(rng.uniform(-math.pi, math.pi)), lead_time=900.0)
+    test_temp = float(rng.uniform(10.0, 40.0))
+    test_unit = replace(model, axial_drift_poly=truth[-1], aging_sigma=np.zeros(3))
+    east, north, time = _navigate_drive(traj, test_unit, [fit.coefficients, rls.parameters],
+                                        temperature=test_temp, seed=seed * 1000 + 999, internal_rate=internal_rate)
+    radial = np.hypot(east, north)
+    final_c = truth[-1] + np.array([0.0, 0.0, model.gyro.bias[GYRO_Z]])
+    return {
+        "seed": seed, "unit": unit, "ageing": ageing,
+        "session_days": days, "session_temperature": temps, "session_stop_s": stops,
+        "session_truth_dph": truth_at_stop * RPS_TO_DPH,
+        "event_time_days": events["time"] / DAY, "event_update": (events["kind"] == "update").astype(int),
+        "event_duration_s": events["duration"], "event_temperature": events["temperature"],
+        "event_drift_dph": events["drift"] * RPS_TO_DPH,
+        "event_predicted_dph": np.polyval(fit.coefficients, events["temperature"]) * RPS_TO_DPH,
+        "n_updates": int(np.sum(events["kind"] == "update")),
+        "initial_dph": fit.coefficients * RPS_TO_DPH, "updated_dph": rls.parameters * RPS_TO_DPH,
+        "final_truth_dph": final_c * RPS_TO_DPH,
+        "s_initial": s_metric(final_c * RPS_TO_DPH, fit.coefficients * RPS_TO_DPH),
+        "s_updated": s_metric(final_c * RPS_TO_DPH, rls.parameters * RPS_TO_DPH),
+        "test_temperature": test_temp,
+        "test_drift_error_initial_dph": float(model_drift(test_unit, test_temp) - np.polyval(fit.coefficients, test_temp)) * RPS_TO_DPH,
+        "test_drift_error_updated_dph": float(model_drift(test_unit, test_temp) - np.polyval(rls.parameters, test_temp)) * RPS_TO_DPH,
+        "time": time, "east_initial": east[0], "north_initial": north[0],
+        "east_updated": east[1], "north_updated": north[1],
+        "cep_initial": cep(radial[0]), "cep_updated": cep(radial[1]),
+        "max_radial_initial": float(radial[0].max()), "max_radial_updated": float(radial[1].max()),
+        "max_east_initial": float(np.abs(east[0]).max()), "max_east_updated": float(np.abs(east[1]).max()),
+        "max_north_initial": float(np.abs(north[0]).max()), "max_north_updated": float(np.abs(north[1]).max()),
     }

@@ -108,8 +108,8 @@ class OnlineDriftUpdater:
         active : bool or (K,) the INS is navigating (rows in alignment are
             treated as moving).
 
-        The compensation of a row is computed with the model before any
-        update triggered at that row.  Work is done per block of rows of
+        The compensation of a row is computed with the model after an
+        update triggered at that row (the first moving row after a stop).  Work is done per block of rows of
         equal state (one filter call per stop block), not per row.
         """
         t = np.atleast_1d(np.asarray(time, float))
@@ -127,14 +127,14 @@ class OnlineDriftUpdater:
         comp = np.empty(n)
         edges = np.flatnonzero(np.diff(still.astype(np.int8))) + 1
         for k0, k1 in zip(np.concatenate([[0], edges]), np.concatenate([edges, [n]])):
+            if not still[k0] and self.stopped:  # the vehicle moves off at row k0
+                self._finish_stop(float(t[k0]))
             comp[k0:k1] = self.compensation(temp[k0:k1])
             if still[k0]:
                 if not self.stopped:  # a stop begins: reset the filter, start the timer
                     self.filter.reset(None if lats is None else float(lats[k0]))
                     self.stopped = True
                 self.filter.step(vel[k0:k1], att[k0:k1], comp[k0:k1], temp[k0:k1])
-            elif self.stopped:  # the vehicle moves off at row k0
-                self._finish_stop(float(t[k0]))
         return comp
 
     def _finish_stop(self, time: float) -> None:
