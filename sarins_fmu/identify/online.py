@@ -27,10 +27,21 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..kalman import STOP_TIME_THRESHOLD, StopFilterSettings, StopKalmanFilter
-from .rls import ForgettingRLS
+from .rls import ForgettingRLS, quadratic_regressors
 
 EVENT_DTYPE = np.dtype([("time", float), ("kind", "U6"), ("duration", float), ("temperature", float),
                         ("drift", float), ("drift_std", float)])
+
+
+def prior_covariance(points: float = 11.0, t_min: float = 0.0, t_max: float = 50.0) -> np.ndarray:
+    """P0 of an initial model worth ``points`` calibration points spread evenly
+    over ``t_min``..``t_max`` °C: (Σ w h h')^-1 with 11 nodes of weight points/11."""
+    if not (math.isfinite(points) and points > 0 and math.isfinite(t_min) and math.isfinite(t_max)
+            and t_max > t_min):
+        raise ValueError("prior points must be positive and t_max > t_min")
+    h = quadratic_regressors(np.linspace(t_min, t_max, 11))
+    p0 = np.linalg.inv(h.T @ h * (points / 11.0))
+    return 0.5 * (p0 + p0.T)
 
 
 @dataclass(frozen=True)
