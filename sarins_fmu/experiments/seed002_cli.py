@@ -32,7 +32,7 @@ PROFILES = {
         "mc": [("markov", "premise", "filter", 100), ("integrated", "premise", "filter", 100),
                ("markov", "premise", "truth", 100), ("integrated", "premise", "truth", 100),
                ("markov", "nav-rlg", "filter", 50)],
-        "vehicle": [("markov", "premise", 10), ("integrated", "premise", 10)],
+        "vehicle": [("markov", "premise", 30), ("integrated", "premise", 30), ("markov", "nav-rlg", 10)],
         "vehicle_kwargs": {},
     },
 }
