@@ -177,6 +177,13 @@ def aged_coefficients(model: ImuModel, days: np.ndarray, seed: int, kind: str = 
     return model.axial_drift_poly + np.concatenate([np.zeros((1, 3)), np.cumsum(m[:-1], axis=0)])
 
 
+def _scaled_ageing(model: ImuModel, scale: float) -> ImuModel:
+    """``model`` with its ageing standard deviations multiplied by ``scale``."""
+    if not (math.isfinite(scale) and scale >= 0):
+        raise ValueError(f"ageing_scale must be >= 0, got {scale!r}")
+    return replace(model, aging_sigma=model.aging_sigma * scale)
+
+
 def s_metric(coef_true, coef_model, t_range=TEMPERATURE_RANGE) -> float:
     """Area between two quadratic drift curves over ``t_range`` (seed 002 eq. 21).
 
@@ -206,7 +213,7 @@ def _calibration(model_coef, unit: str, seed: int, lat_deg: float, temperatures)
 def model_update_run(*, seed: int = 0, unit: str = "premise", days: float = SIM_DAYS, n_stops: int = N_STOPS,
                      lat_deg: float = 40.0, forgetting_factor: float = 0.8,
                      sensitivity=SENSITIVITY_LAMBDAS, calibration_points: int = 11,
-                     estimate: str = "filter", ageing: str = "markov") -> dict:
+                     estimate: str = "filter", ageing: str = "markov", ageing_scale: float = 1.0) -> dict:
     """One run of the paper's simulation study (eqs 19-21, Figs 4-5, Table 1).
 
     The azimuth-drift coefficients age as first-order Markov processes with
@@ -219,7 +226,8 @@ def model_update_run(*, seed: int = 0, unit: str = "premise", days: float = SIM_
     m = one month).  ``estimate='filter'`` simulates every stop (IMU + INS +
     stop Kalman filter, 30 min); ``'truth'`` uses the true drift (no
     estimation error, to isolate the update method).  ``ageing`` selects
-    the reading of eq. 20 (:func:`aged_coefficients`).
+    the reading of eq. 20 (:func:`aged_coefficients`); ``ageing_scale``
+    multiplies the unit's ageing standard deviations (sensitivity study).
 
     Returns
     -------
@@ -232,7 +240,7 @@ def model_update_run(*, seed: int = 0, unit: str = "premise", days: float = SIM_
         raise ValueError("estimate must be 'filter' or 'truth'")
     if n_stops < 1 or days < n_stops:
         raise ValueError("need at least one stop and no more stops than days")
-    model = imu_unit(unit)
+    model = _scaled_ageing(imu_unit(unit), ageing_scale)
     rng = np.random.default_rng([seed, 20])
     grid = np.arange(0.0, math.floor(days) + 1.0)
     truth = aged_coefficients(model, grid, seed, ageing)  # (D, 3) rad/s per degC^n
@@ -267,7 +275,7 @@ def model_update_run(*, seed: int = 0, unit: str = "premise", days: float = SIM_
     final_c = final + np.array([0.0, 0.0, bias_z])
     s_of = lambda coef: s_metric(final_c * RPS_TO_DPH, coef * RPS_TO_DPH)  # noqa: E731
     return {
-        "seed": seed, "unit": unit, "estimate": estimate, "ageing": ageing,
+        "seed": seed, "unit": unit, "estimate": estimate, "ageing": ageing, "ageing_scale": ageing_scale,
         "s_none": s_of(fit.coefficients), "s_rls": s_of(models[0].parameters), "s_ff": s_of(models[1].parameters),
         "sensitivity_lambdas": np.asarray(sensitivity, float),
         "s_lambda": np.array([s_of(m.parameters) for m in models[2:]]),
@@ -382,7 +390,7 @@ def cep(radial: np.ndarray) -> float:
 def vehicle_test(*, seed: int = 0, unit: str = "premise", n_sessions: int = 20, year_days: float = 318.0,
                  test_day: float = 368.0, drive_hours: float = 6.0, lat_deg: float = 40.0,
                  stop_minutes=(15.0, 60.0), ageing: str = "markov", forgetting_factor: float = 0.8,
-                 calibration_points: int = 11, internal_rate: float = 50.0) -> dict:
+                 calibration_points: int = 11, internal_rate: float = 50.0, ageing_scale: float = 1.0) -> dict:
     """The vehicle test analogue: a year of online updates, then a 6 h drive.
 
     Day 0: calibration (quadratic fit of stop-filter estimates at
@@ -395,8 +403,9 @@ def vehicle_test(*, seed: int = 0, unit: str = "premise", n_sessions: int = 20, 
     ``drive_hours`` drive with random turns and stops is navigated with the
     initial and with the updated model (Fig. 8); CEP and maximum radial
     error (Table 5) against an ideal-sensor INS on the same motion.
+    ``ageing_scale`` multiplies the unit's ageing standard deviations.
     """
-    model = imu_unit(unit)
+    model = _scaled_ageing(imu_unit(unit), ageing_scale)
     lat = lat_deg * DEG_TO_RAD
     rng = np.random.default_rng([seed, 50])
     grid = np.arange(0.0, math.floor(test_day) + 1.0)
@@ -423,7 +432,7 @@ def vehicle_test(*, seed: int = 0, unit: str = "premise", n_sessions: int = 20, 
     radial = np.hypot(east, north)
     final_c = truth[-1] + np.array([0.0, 0.0, model.gyro.bias[GYRO_Z]])
     return {
-        "seed": seed, "unit": unit, "ageing": ageing,
+        "seed": seed, "unit": unit, "ageing": ageing, "ageing_scale": ageing_scale,
         "session_days": days, "session_temperature": temps, "session_stop_s": stops,
         "session_truth_dph": truth_at_stop * RPS_TO_DPH,
         "event_time_days": events["time"] / DAY, "event_update": (events["kind"] == "update").astype(int),
