@@ -11,4 +11,5 @@ SLAVES = {
     "IMUThermal": "imu_thermal_slave.py",
     "StrapdownINS": "strapdown_ins_slave.py",
     "RBFIdentifier": "rbf_identifier_slave.py",
+    "DriftModelUpdater": "drift_model_updater_slave.py",
 }

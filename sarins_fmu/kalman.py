@@ -1,0 +1,321 @@
+r"""Static-base (stop) Kalman filter estimating the azimuth gyro drift (seed 002).
+
+At a vehicle stop the true velocity is zero, so the INS's computed east and
+north velocity is its velocity error; seed 002 (eqs 4-6) feeds it to a
+Kalman filter whose states include the azimuth gyro drift :math:`\varepsilon_U`
+and reads the drift after 30 minutes.  The equations are missing from the
+seed's text; this module uses the standard static-base error model (Titterton
+& Weston 2004, eqs 12.6-12.7, ENU, position errors neglected over a stop):
+
+State (10 of the paper + the north position error), with the attitude error :math:`\phi` defined by
+:math:`C^n_{b,\text{computed}} = (I - [\phi\times]) C^n_b`:
+
+.. math:: x = [\phi_E, \phi_N, \phi_U, \delta v_E, \delta v_N,
+              \varepsilon_x, \varepsilon_y, \varepsilon_z, \nabla_x, \nabla_y]^\mathsf{T}
+
+(gyro drifts and accelerometer biases in the IMU frame b, where
+:math:`\varepsilon_z` is the azimuth gyro, :math:`\varepsilon_U` of the paper;
+all constants).  Dynamics
+
+.. math::
+
+    \dot\phi &= \phi \times \omega^n_{ie} + \delta\omega^n_{en}(\delta v)
+               + \delta\omega^n_{ie}(\delta L) - C^n_b \varepsilon \\
+    \delta\dot v &= f^n \times \phi - 2\omega^n_{ie} \times \delta v + C^n_b \nabla \\
+    \delta\dot L &= \delta v_N / R_M
+
+with :math:`f^n = (0, 0, g)`, :math:`\delta\omega^n_{ie} = \Omega(0, -\sin L, \cos L)\,\delta L`
+(the INS evaluates the Earth rate at its own latitude: a position error acts
+on :math:`\phi_U` exactly like an azimuth drift, 0.0024 °/h per km at 45°,
+so the paper's 10 states are completed by :math:`\delta L`), and measurement :math:`z = [v_E, v_N]` (eq. 6).
+The filter is **open loop** on the INS outputs (velocity, attitude,
+latitude): the navigation is not corrected, so the same code runs in process
+and inside the DriftModelUpdater FMU, which sees only INS outputs.  When the
+INS compensated the azimuth gyro with a model value during the stop, the
+filter estimates the residual and the stop's drift measurement is the model
+value plus the residual (:meth:`StopKalmanFilter.drift_estimate`).
+
+Observability of :math:`\varepsilon_z` on a static base is weak: it enters the
+velocity only through :math:`\dot\phi_E = -\omega_{ie}\cos L\,\phi_U` and
+:math:`\delta\dot v_N = g\phi_E`, i.e. as a cubic in time, whereas an initial
+heading error gives a quadratic.  Over 30 minutes the white gyro noise (ARW)
+therefore limits the estimate: see ``docs/seed2.md`` for the numbers.  The
+rotation of the IMU about the azimuth axis modulates the horizontal drifts so
+that they are separable from the heading error; it does not modulate
+:math:`\varepsilon_z`.
+
+Units: rad, rad/s, m/s, m/s², s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import earth
+from ._jit import jit
+from .imu import ImuModel
+from .units import ARCSEC_TO_RAD, DEG_TO_RAD, DPH_TO_RPS, UG_TO_MPS2
+
+N_STATES = 11
+STATE_NAMES = ("phi_e", "phi_n", "phi_u", "dv_e", "dv_n", "eps_x", "eps_y", "eps_z", "nabla_x", "nabla_y",
+               "d_lat")
+EPS_Z = 7  # index of the azimuth drift state
+STOP_TIME_THRESHOLD = 1800.0  # s, seed 002's 30-minute stop threshold
+
+
+@dataclass(frozen=True)
+class StopFilterSettings:
+    """Noise and initial uncertainty of the stop filter (SI units).
+
+    Attributes
+    ----------
+    arw : float
+        Gyro angle random walk, rad/√s.
+    vrw : float
+        Accelerometer velocity random walk, m/s/√s.
+    drift_rw : float
+        Random walk of the drift states, rad/s/√s.
+    bias_rw : float
+        Random walk of the accelerometer-bias states, m/s²/√s.
+    velocity_meas_std : float
+        Velocity measurement noise, m/s.
+    tilt0_std, heading0_std : float
+        Initial attitude error, rad.
+    velocity0_std : float
+        Initial velocity error, m/s.
+    drift0_std, azimuth_drift0_std : float
+        Initial horizontal / azimuth drift uncertainty, rad/s.
+    bias0_std : float
+        Initial accelerometer-bias uncertainty, m/s².
+    position0_std : float
+        Initial north position error, m (the stop's position is known to this).
+    """
+
+    arw: float = 0.0005 * DEG_TO_RAD / 60.0
+    vrw: float = 5.0 * UG_TO_MPS2
+    drift_rw: float = 1e-7 * DPH_TO_RPS
+    bias_rw: float = 1e-3 * UG_TO_MPS2
+    velocity_meas_std: float = 1e-3
+    tilt0_std: float = 30.0 * ARCSEC_TO_RAD
+    heading0_std: float = 0.1 * DEG_TO_RAD
+    velocity0_std: float = 1.0
+    drift0_std: float = 0.01 * DPH_TO_RPS
+    azimuth_drift0_std: float = 0.02 * DPH_TO_RPS
+    bias0_std: float = 100.0 * UG_TO_MPS2
+    position0_std: float = 10.0
+
+    def __post_init__(self):
+        for name, value in self.__dict__.items():
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"stop filter {name} must be positive and finite, got {value!r}")
+
+    @classmethod
+    def for_model(cls, model: ImuModel, **overrides) -> "StopFilterSettings":
+        """Settings whose white-noise densities are those of ``model`` (floored
+        at tiny positive values so an ideal IMU still gives a valid filter)."""
+        arw = max(float(np.max(model.gyro.random_walk)), 1e-12)
+        vrw = max(float(np.max(model.accel.random_walk)), 1e-12)
+        return cls(**{"arw": arw, "vrw": vrw, **overrides})
+
+    def initial_covariance(self) -> np.ndarray:
+        """P0, (11, 11)."""
+        std = np.array([self.tilt0_std, self.tilt0_std, self.heading0_std, self.velocity0_std,
+                        self.velocity0_std, self.drift0_std, self.drift0_std, self.azimuth_drift0_std,
+                        self.bias0_std, self.bias0_std, self.position0_std / earth.A])
+        return np.diag(std**2)
+
+    def process_noise(self) -> np.ndarray:
+        """Diagonal of the continuous process-noise density Q, (11,)."""
+        return np.array([self.arw, self.arw, self.arw, self.vrw, self.vrw, self.drift_rw, self.drift_rw,
+                         self.drift_rw, self.bias_rw, self.bias_rw, 0.0]) ** 2
+
+
+@jit
+def _euler_to_mat(yaw, pitch, roll):
+    """mat_nb = Rz(yaw) Rx(pitch) Ry(roll) (same convention as rotations.euler_to_mat)."""
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cr, sr = math.cos(roll), math.sin(roll)
+    c = np.empty((3, 3))
+    c[0, 0] = cy * cr - sy * sp * sr
+    c[0, 1] = -sy * cp
+    c[0, 2] = cy * sr + sy * sp * cr
+    c[1, 0] = sy * cr + cy * sp * sr
+    c[1, 1] = cy * cp
+    c[1, 2] = sy * sr - cy * sp * cr
+    c[2, 0] = -cp * sr
+    c[2, 1] = sp
+    c[2, 2] = cp * cr
+    return c
+
+
+@jit
+def stop_filter_steps(x, p, velocity_en, attitude, lat, dt, q_diag, r_var):
+    """Propagate and update the stop filter over K measurements (in place).
+
+    Parameters
+    ----------
+    x : (11,) state estimate; p : (11, 11) covariance (modified in place).
+    velocity_en : (K, 2) INS east/north velocity at the end of each step, m/s.
+    attitude : (K, 3) INS yaw, pitch, roll at the end of each step, rad.
+    lat : float, latitude, rad.  dt : float, step, s.
+    q_diag : (11,) continuous process-noise density; r_var : velocity noise variance.
+
+    Returns
+    -------
+    (K, 2) : estimate and standard deviation of eps_z after each step, rad/s.
+    """
+    n = velocity_en.shape[0]
+    out = np.empty((n, 2))
+    r_m, r_n = earth.radii(lat)
+    w_c, w_s = earth.RATE * math.cos(lat), earth.RATE * math.sin(lat)
+    g = earth.gravity(lat, 0.0)
+    f = np.zeros((11, 11))
+    f[0, 1], f[0, 2], f[0, 4] = w_s, -w_c, -1.0 / r_m
+    f[1, 0], f[1, 3] = -w_s, 1.0 / r_n
+    f[2, 0], f[2, 3] = w_c, math.tan(lat) / r_n
+    f[3, 1], f[3, 4] = -g, 2.0 * w_s
+    f[4, 0], f[4, 3] = g, -2.0 * w_s
+    # north position error: d_lat' = dv_N / R_M; the computed Earth rate is off by
+    # d_omega_ie^n = W (0, -sin L, cos L) d_lat
+    f[10, 4] = 1.0 / r_m
+    f[1, 10], f[2, 10] = -w_s, w_c
+    eye = np.eye(11)
+    hm = np.zeros((2, 11))
+    hm[0, 3] = 1.0
+    hm[1, 4] = 1.0
+    for k in range(n):
+        c = _euler_to_mat(attitude[k, 0], attitude[k, 1], attitude[k, 2])
+        for i in range(3):
+            f[i, 5], f[i, 6], f[i, 7] = -c[i, 0], -c[i, 1], -c[i, 2]
+        for i in range(2):
+            f[3 + i, 8], f[3 + i, 9] = c[i, 0], c[i, 1]
+        fh = f * dt
+        # Phi = I + F dt + (F dt)^2 / 2 + (F dt)^3 / 6
+        fh2 = fh @ fh
+        phi_m = eye + fh + 0.5 * fh2 + (fh2 @ fh) / 6.0
+        # x = Phi x ; P = Phi P Phi' + Q dt
+        x[:] = phi_m @ x
+        p[:, :] = phi_m @ p @ phi_m.T
+        for i in range(11):
+            p[i, i] += q_diag[i] * dt
+        # K = P H' (H P H' + R)^-1 ; x += K (z - H x) ; P = (I - K H) P (I - K H)' + K R K'
+        s = hm @ p @ hm.T
+        s[0, 0] += r_var
+        s[1, 1] += r_var
+        gain = p @ hm.T @ np.linalg.inv(s)
+        innov = np.array([velocity_en[k, 0] - x[3], velocity_en[k, 1] - x[4]])
+        x += gain @ innov
+        ikh = eye - gain @ hm
+        p[:, :] = ikh @ p @ ikh.T + r_var * (gain @ gain.T)
+        out[k, 0] = x[EPS_Z]
+        out[k, 1] = math.sqrt(p[EPS_Z, EPS_Z])
+    return out
+
+
+class StopKalmanFilter:
+    """The stop filter of seed 002 (eqs 4-6) on the outputs of a free INS.
+
+    Parameters
+    ----------
+    lat : float
+        Latitude of the stop, rad.
+    settings : StopFilterSettings
+    dt : float
+        Measurement interval, s (the INS output step).
+
+    Attributes
+    ----------
+    elapsed : float
+        Time since the last reset, s.
+    history : list of (K, 2) arrays
+        ε_z estimate and its standard deviation after each step, rad/s.
+    """
+
+    def __init__(self, lat: float, settings: StopFilterSettings = StopFilterSettings(), dt: float = 1.0):
+        if not (math.isfinite(lat) and abs(lat) <= 89.9 * DEG_TO_RAD):
+            raise ValueError(f"latitude must be finite and within +-89.9 deg, got {lat!r} rad")
+        if not (math.isfinite(dt) and dt > 0):
+            raise ValueError(f"filter step must be positive, got {dt!r}")
+        self.lat, self.settings, self.dt = float(lat), settings, float(dt)
+        self._q = settings.process_noise()
+        self._r = settings.velocity_meas_std**2
+        self.reset()
+
+    def reset(self, lat: float | None = None) -> None:
+        """Restart the estimation (new stop): state 0, covariance P0, timer 0."""
+        if lat is not None:
+            if not (math.isfinite(lat) and abs(lat) <= 89.9 * DEG_TO_RAD):
+                raise ValueError(f"latitude must be finite and within +-89.9 deg, got {lat!r} rad")
+            self.lat = float(lat)
+        self.x = np.zeros(N_STATES)
+        self.p = self.settings.initial_covariance()
+        self.elapsed = 0.0
+        self._correction_sum = 0.0
+        self._temperature_sum = 0.0
+        self._n = 0
+        self.history: list[np.ndarray] = []
+
+    def step(self, velocity_en, attitude, axial_correction=0.0, temperature=np.nan) -> np.ndarray:
+        """Process K INS output rows taken at the stop.
+
+        Parameters
+        ----------
+        velocity_en : (K, 2) or (2,) east/north velocity, m/s.
+        attitude : (K, 3) or (3,) yaw, pitch, roll, rad.
+        axial_correction : float or (K,) azimuth drift the INS subtracted, rad/s.
+        temperature : float or (K,) azimuth gyro temperature, °C (averaged
+            into :attr:`mean_temperature`, the paper's T_gz).
+
+        Returns
+        -------
+        (K, 2) ε_z residual estimate and its standard deviation, rad/s.
+        """
+        vel = np.ascontiguousarray(np.atleast_2d(velocity_en), dtype=float)
+        att = np.ascontiguousarray(np.atleast_2d(attitude), dtype=float)
+        if vel.shape[1] != 2 or att.shape != (vel.shape[0], 3):
+            raise ValueError("velocity_en must be (K, 2) and attitude (K, 3)")
+        n = vel.shape[0]
+        corr = np.broadcast_to(np.asarray(axial_correction, float), (n,))
+        temp = np.broadcast_to(np.asarray(temperature, float), (n,))
+        if not (np.isfinite(vel).all() and np.isfinite(att).all() and np.isfinite(corr).all()):
+            raise ValueError("INS outputs contain NaN or infinity")
+        out = stop_filter_steps(self.x, self.p, vel, att, self.lat, self.dt, self._q, self._r)
+        self.history.append(out)
+        self.elapsed += n * self.dt
+        self._correction_sum += float(np.sum(corr))
+        self._temperature_sum += float(np.sum(temp))
+        self._n += n
+        return out
+
+    @property
+    def residual_drift(self) -> float:
+        """Estimated azimuth drift left after the INS's compensation, rad/s."""
+        return float(self.x[EPS_Z])
+
+    @property
+    def drift_std(self) -> float:
+        """Filter standard deviation of the azimuth drift, rad/s."""
+        return float(math.sqrt(self.p[EPS_Z, EPS_Z]))
+
+    @property
+    def drift_estimate(self) -> float:
+        """The stop's drift measurement ε_U: mean compensation + residual, rad/s."""
+        mean_corr = self._correction_sum / self._n if self._n else 0.0
+        return mean_corr + self.residual_drift
+
+    @property
+    def mean_temperature(self) -> float:
+        """Mean azimuth gyro temperature over the stop (T_gz), °C; NaN if not given."""
+        return self._temperature_sum / self._n if self._n else float("nan")
+
+    def convergence(self) -> np.ndarray:
+        """(K, 3): time since reset (s), ε_z residual estimate and std (rad/s)."""
+        if not self.history:
+            return np.empty((0, 3))
+        h = np.concatenate(self.history)
+        t = np.arange(1, h.shape[0] + 1) * self.dt
+        return np.column_stack([t, h])
