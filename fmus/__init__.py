@@ -10,4 +10,5 @@ SLAVES = {
     "Turntable": "turntable_slave.py",
     "IMUThermal": "imu_thermal_slave.py",
     "StrapdownINS": "strapdown_ins_slave.py",
+    "IMUCompensator": "imu_compensator_slave.py",
 }
