@@ -60,10 +60,8 @@ def run(args) -> int:
         kinds = [k for k in kinds if k not in skipped]
         print(f"skipping {', '.join(skipped)}: {recurrent.INSTALL_HINT}", file=sys.stderr)
     summary = run_seed3(args.profile, Path(args.out), kinds=kinds, workers=args.workers, scheduler=args.scheduler,
-                        progress=not args.no_progress, seed=args.seed, report_dir=args.report_dir, **options)
-    if skipped:
-        summary["skipped"] = skipped
-        summary["skip_reason"] = recurrent.INSTALL_HINT
+                        progress=not args.no_progress, seed=args.seed, report_dir=args.report_dir, skipped=skipped,
+                        **options)
     for name, red in summary["reductions"].items():
         print(f"{name:12s} mean {red['mean']:6.1f} %  std {red['std']:6.1f} %  mean-abs {red['mae']:6.1f} %")
     print(f"report: {summary['report']}")
@@ -105,7 +103,7 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
 
 
 def run_seed3(profile_name: str, out: Path, *, kinds, workers=None, scheduler=None, progress=True, seed=3,
-              report_dir=None, rnn_steps=60, grnn_patterns=5000, rbf_samples=10000) -> dict:
+              report_dir=None, rnn_steps=60, grnn_patterns=5000, rbf_samples=10000, skipped=()) -> dict:
     """The whole campaign; returns the summary (also written to ``<out>/summary.json``)."""
     import numpy as np
 
@@ -155,6 +153,10 @@ def run_seed3(profile_name: str, out: Path, *, kinds, workers=None, scheduler=No
         reductions=red, table3=rep.table3(stats, red),
         stats={n: {k: v.tolist() for k, v in s.items()} for n, s in stats.items()},
         options=dict(rnn_steps=rnn_steps, grnn_patterns=grnn_patterns, rbf_samples=rbf_samples))
+    if skipped:
+        from ..identify.recurrent import INSTALL_HINT
+
+        summary.update(skipped=list(skipped), skip_reason=INSTALL_HINT)
     text = rep.markdown(summary, rep.calibration_tables(fit, imu.preset("mems")), figures)
     summary["report"] = str((report_dir / "report.md").resolve())
     (report_dir / "report.md").write_text(text, encoding="utf-8")
