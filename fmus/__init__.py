@@ -12,4 +12,5 @@ SLAVES = {
     "StrapdownINS": "strapdown_ins_slave.py",
     "RBFIdentifier": "rbf_identifier_slave.py",
     "DriftModelUpdater": "drift_model_updater_slave.py",
+    "IMUCompensator": "imu_compensator_slave.py",
 }

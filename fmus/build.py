@@ -133,8 +133,12 @@ def _documentation(model_name: str, description: str) -> str:
             "</p></body></html>")
 
 
-def build_fmu(slave_file: str, out_dir: Path) -> Path:
-    """Build one slave into ``out_dir`` and fix its model description."""
+def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
+    """Build one slave into ``out_dir`` and fix its model description.
+
+    ``extra_files``: more files or folders copied into the FMU's ``resources/``
+    (e.g. a trained model the slave loads from ``self.resources``).
+    """
     from pythonfmu.builder import FmuBuilder
 
     out_dir = Path(out_dir)
@@ -147,7 +151,8 @@ def build_fmu(slave_file: str, out_dir: Path) -> Path:
         shutil.copytree(HERE, tmp / "fmus", ignore=ignore)
         script = tmp / slave_file
         shutil.copy2(HERE / slave_file, script)
-        fmu = FmuBuilder.build_FMU(script, dest=tmp / "out", project_files=[tmp / "sarins_fmu", tmp / "fmus"],
+        project_files = [tmp / "sarins_fmu", tmp / "fmus", *(Path(p) for p in extra_files)]
+        fmu = FmuBuilder.build_FMU(script, dest=tmp / "out", project_files=project_files,
                                    needsExecutionTool=False, canHandleVariableCommunicationStepSize=False)
         target = out_dir / fmu.name
         _rewrite(fmu, target)

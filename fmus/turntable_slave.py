@@ -19,7 +19,7 @@ class Turntable(Fmi2Slave):
     author = "sarins-fmu"
     description = (
         "Turntable of a rotating INS or a rate table (truth motion). Gimbal chains: single-axis schemes 'z'; "
-        "dual-axis 'y,z'; rate-table-3axis 'z,x,y' (set the IMU's 'gimbals' to match). Contract: after doStep(t, h) the outputs are the "
+        "dual-axis 'y,z'; rate-table-3axis, tumble-24 and rate-test 'z,x,y' (set the IMU's 'gimbals' to match). Contract: after doStep(t, h) the outputs are the "
         "gimbal angles and rates at t + h and the angular acceleration that holds from t + h until the "
         "next acceleration change; accelerations change only on the 'grid' (a multiple of the "
         "communication step), so a connected IMU rebuilds the motion inside each step exactly from the "
