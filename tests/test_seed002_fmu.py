@@ -25,9 +25,19 @@ INPUTS = ("v_e", "v_n", "yaw", "pitch", "roll", "lat", "temp_gyro_z", "vehicle_s
 OUTPUTS = ("compensation_drift", "drift_a", "drift_b", "drift_c", "stop_timer")
 
 
+CHAIN = ["Turntable", "IMUThermal", "StrapdownINS", "DriftModelUpdater"]
+
+
 @pytest.fixture(scope="module")
-def fmu_path(tmp_path_factory):
-    return build_fmus(tmp_path_factory.mktemp("fmu_seed2"), ["DriftModelUpdater"])[0]
+def fmu_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("fmu_seed2")
+    build_fmus(out, CHAIN)
+    return out
+
+
+@pytest.fixture(scope="module")
+def fmu_path(fmu_dir):
+    return fmu_dir / "DriftModelUpdater.fmu"
 
 
 @pytest.fixture(scope="module")
@@ -138,3 +148,77 @@ def test_nan_input_and_changed_step_are_discarded(fmu_path):
         assert any("NaN" in m for m in errors) and any("step" in m for m in errors)
     finally:
         slave.free()
+
+
+ALIGN = 1200.0  # s
+MOVE_OFF = ALIGN + 1900.0  # s, the vehicle moves off after a 31.7-min stop
+TT_TO_IMU = ["angle_1", "rate_1", "ambient_temp"]
+IMU_TO_INS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z"]
+INS_TO_UPD = ["v_e", "v_n", "yaw", "pitch", "roll", "lat"]
+
+
+def test_closed_loop_chain_updates_the_model_like_the_library(fmu_dir):
+    """Turntable -> IMUThermal -> StrapdownINS <-> DriftModelUpdater (Gauss-Seidel,
+    the INS subtracts the updater's previous output): the stop after the
+    alignment updates the model when the vehicle moves off, and every number
+    equals the library run with the same one-step feedback."""
+    n = int(MOVE_OFF) + 100
+    names = ("tt", "imu", "ins", "upd")
+    slaves = [Slave(fmu_dir / f"{name}.fmu", tag) for name, tag in zip(CHAIN, names)]
+    tt, imu_fmu, ins_fmu, upd = slaves
+    try:
+        tt.set(align_time=ALIGN)
+        imu_fmu.set(seed=7)
+        ins_fmu.set(align_time=ALIGN)
+        upd.set(a0=COEF[0], b0=COEF[1], c0=COEF[2], lat=math.radians(28.222))
+        for s in slaves:
+            s.fmu.enterInitializationMode()
+        for s in slaves:
+            s.fmu.exitInitializationMode()
+        rows = []
+        for k in range(n):
+            t = float(k)
+            tt.fmu.doStep(t, 1.0)
+            imu_fmu.fmu.setReal([imu_fmu.vr[v] for v in TT_TO_IMU], tt.get(*TT_TO_IMU))
+            imu_fmu.fmu.doStep(t, 1.0)
+            ins_fmu.fmu.setReal([ins_fmu.vr[v] for v in IMU_TO_INS], imu_fmu.get(*IMU_TO_INS))
+            ins_fmu.set(axial_drift_correction=upd.get("compensation_drift")[0])
+            ins_fmu.fmu.doStep(t, 1.0)
+            upd.fmu.setReal([upd.vr[v] for v in INS_TO_UPD], ins_fmu.get(*INS_TO_UPD))
+            upd.set(temp_gyro_z=imu_fmu.get("temp_gyro_z")[0], vehicle_speed=1.0 if t + 1 >= MOVE_OFF else 0.0)
+            upd.fmu.setInteger([upd.vr["ins_phase"]], ins_fmu.fmu.getInteger([ins_fmu.vr["phase"]]))
+            upd.fmu.doStep(t, 1.0)
+            rows.append(upd.get("compensation_drift", "drift_c", "stop_timer"))
+        n_updates = upd.fmu.getInteger([upd.vr["n_updates"]])[0]
+    finally:
+        for s in reversed(slaves):
+            s.free()
+    rows = np.array(rows)
+    assert n_updates == 1
+    assert rows[:, 2].max() == pytest.approx(MOVE_OFF - ALIGN - 1.0, abs=1.0)
+    assert rows[-1, 1] != pytest.approx(COEF[2], rel=1e-3)
+    ref = _library_closed_loop(n)
+    np.testing.assert_allclose(rows[:, 0], ref, rtol=1e-9, atol=0)
+
+
+def _library_closed_loop(n):
+    from sarins_fmu import imu as imu_mod
+    from sarins_fmu import turntable
+    from sarins_fmu.imu import StaticBase
+
+    lat = math.radians(28.222)
+    table = turntable.single_axis("forward-reverse", n + 1.0, grid=1.0, align_time=ALIGN, align_dwell=300.0)
+    sensor = IMU(imu_mod.preset("nav-rlg"), StaticBase(lat), table.axes, output_interval=1.0, seed=7)
+    dtheta, dv, temps = sensor.step(*table.state(np.arange(n, dtype=float)))
+    ins = StrapdownINS(InsConfig(lat=lat, align_time=ALIGN))
+    rls = ForgettingRLS(COEF, prior_covariance(11.0, 0.0, 50.0), 0.0, RLSSettings(0.8))
+    up = OnlineDriftUpdater(rls, lat)
+    comp = float(np.polyval(COEF, 20.0))  # the updater's output at initialisation (temp_gyro_z start 20 degC)
+    out = np.empty(n)
+    for k in range(n):
+        row = ins.step(dtheta[k], dv[k], comp)[0]
+        speed = 1.0 if k + 1 >= MOVE_OFF else 0.0
+        comp = float(up.step([k + 1.0], [speed], [row[3:5]], [row[6:9]], [temps[k, GYRO_Z]], [row[0]],
+                             [ins.phase == "navigate"])[0])
+        out[k] = comp
+    return out

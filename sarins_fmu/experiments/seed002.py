@@ -23,6 +23,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from .. import earth
 from .. import imu as imu_mod
 from .. import turntable
 from ..identify.rls import ForgettingRLS, RLSSettings, fit_quadratic_temperature_model
@@ -324,18 +325,12 @@ def _session(updater, model, coef, *, day, temperature, stop_seconds, lat, seed,
     for k0, k1 in _state_blocks(moving):
         angle, rate, accel = traj.schedule.state(traj.time[k0:k1])
         dtheta, dv, temps = sensor.step(angle, rate, accel)
-        if not moving[k0] or not updater.stopped:
-            comp = updater.compensation(temps[:, GYRO_Z])
-        else:  # first block after a stop: the update happens at its first row
-            comp = None
-        if comp is None:
-            updater._finish_stop(t0 + traj.time[k0 + 1])
-            comp = updater.compensation(temps[:, GYRO_Z])
-        out = ins.step(dtheta, dv, comp)
+        if moving[k0]:  # first block after a stop: the update applies from its first row
+            updater.finish_stop(t0 + traj.time[k0 + 1])
+        out = ins.step(dtheta, dv, updater.compensation(temps[:, GYRO_Z]))
         updater.step(t0 + traj.time[k0 + 1:k1 + 1], traj.speed[k0 + 1:k1 + 1], out[:, 3:5], out[:, 6:9],
                      temps[:, GYRO_Z], out[:, 0])
-    if updater.stopped:
-        updater._finish_stop(t0 + traj.time[-1])
+    updater.finish_stop(t0 + traj.time[-1])
     return traj.n_steps
 
 
@@ -371,8 +366,6 @@ def _navigate_drive(traj, unit, models, *, temperature, seed, align_time=900.0, 
             ref_out.append(ref.step(d_ideal[a - k0:], v_ideal[a - k0:]))
     ref_nav = np.concatenate(ref_out)
     east, north = [], []
-    from .. import earth
-
     r_m, r_n = earth.radii(lat0)
     for out in outs:
         nav = np.concatenate(out)[n_align:]

@@ -86,13 +86,16 @@ def run(args) -> int:
 
     from .seed002_report import write_report
 
+    from orchestration.campaign import result_path
+
     tasks = build_tasks(args.profile, args.forgetting_factor)
     out = Path(args.out)
+    computed = sum(not result_path(out / "runs", t.id).exists() for t in tasks)
     start = time.perf_counter()
     results = run_campaign(tasks, out / "runs", workers=args.workers, scheduler=args.scheduler,
                            progress=not args.no_progress, description="seed2")
     wall = time.perf_counter() - start
     report = write_report(results, out, profile=args.profile, wall_time=wall, workers=args.workers,
-                          forgetting_factor=args.forgetting_factor)
-    print(f"seed2: {len(tasks)} runs in {wall:.0f} s; report {report}")
+                          forgetting_factor=args.forgetting_factor, computed=computed)
+    print(f"seed2: {len(tasks)} runs ({computed} computed now) in {wall:.0f} s; report {report}")
     return 0

@@ -139,7 +139,7 @@ class OnlineDriftUpdater:
         edges = np.flatnonzero(np.diff(still.astype(np.int8))) + 1
         for k0, k1 in zip(np.concatenate([[0], edges]), np.concatenate([edges, [n]])):
             if not still[k0] and self.stopped:  # the vehicle moves off at row k0
-                self._finish_stop(float(t[k0]))
+                self.finish_stop(float(t[k0]))
             comp[k0:k1] = self.compensation(temp[k0:k1])
             if still[k0]:
                 if not self.stopped:  # a stop begins: reset the filter, start the timer
@@ -148,7 +148,13 @@ class OnlineDriftUpdater:
                 self.filter.step(vel[k0:k1], att[k0:k1], comp[k0:k1], temp[k0:k1])
         return comp
 
-    def _finish_stop(self, time: float) -> None:
+    def finish_stop(self, time: float) -> None:
+        """The vehicle moves off at ``time`` (s): update the model if the stop
+        lasted the threshold, else discard it; reset the filter and timer.
+        :meth:`step` calls it at the first moving row; call it directly to
+        get the updated compensation before the INS processes that row."""
+        if not self.stopped:
+            return
         kf = self.filter
         duration = kf.elapsed
         record = (time, "", duration, kf.mean_temperature, kf.drift_estimate, kf.drift_std)
