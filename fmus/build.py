@@ -133,13 +133,42 @@ def _documentation(model_name: str, description: str) -> str:
             "</p></body></html>")
 
 
+def _has_binaries(package_dir: Path) -> bool:
+    return any((Path(package_dir) / "resources" / "binaries").rglob("*.so")) or \
+        any((Path(package_dir) / "resources" / "binaries").rglob("*.dll"))
+
+
+def _fmu_builder():
+    """pythonfmu's ``FmuBuilder``, taking the export binaries from the installed package.
+
+    A pythonfmu FMU carries a copy of pythonfmu's Python sources in its
+    resources and puts that folder first on ``sys.path`` when it is loaded.
+    If this process loaded such an FMU before importing pythonfmu itself,
+    ``pythonfmu`` is that copy, which holds no export binaries, and the
+    builder would silently write FMUs without binaries.
+    """
+    from importlib.metadata import PackageNotFoundError, distribution
+
+    from pythonfmu import builder
+
+    if not _has_binaries(builder.HERE):
+        try:
+            installed = Path(distribution("pythonfmu").locate_file("pythonfmu"))
+        except PackageNotFoundError:
+            installed = None
+        if installed is None or not _has_binaries(installed):
+            raise RuntimeError("pythonfmu's export binaries are missing (reinstall pythonfmu)")
+        builder.HERE = installed
+    return builder.FmuBuilder
+
+
 def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
     """Build one slave into ``out_dir`` and fix its model description.
 
     ``extra_files``: more files or folders copied into the FMU's ``resources/``
     (e.g. a trained model the slave loads from ``self.resources``).
     """
-    from pythonfmu.builder import FmuBuilder
+    FmuBuilder = _fmu_builder()
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -154,6 +183,8 @@ def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
         project_files = [tmp / "sarins_fmu", tmp / "fmus", *(Path(p) for p in extra_files)]
         fmu = FmuBuilder.build_FMU(script, dest=tmp / "out", project_files=project_files,
                                    needsExecutionTool=False, canHandleVariableCommunicationStepSize=False)
+        if not any(n.startswith("binaries/") for n in zipfile.ZipFile(fmu).namelist()):
+            raise RuntimeError(f"pythonfmu wrote {fmu.name} without binaries")
         target = out_dir / fmu.name
         _rewrite(fmu, target)
     return target

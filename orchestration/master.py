@@ -13,9 +13,12 @@ Algorithm (per communication step ``[t, t + h]``, ``t = t0 + n h``):
 Initialisation: ``fmi2Instantiate``, ``fmi2SetupExperiment`` (start time, no
 stop time: some FMUs, OpenModelica's among them, refuse a step that passes a
 defined stop time by a rounding error), start values,
-``fmi2EnterInitializationMode``, ``fmi2ExitInitializationMode`` for every
-component, then outputs are copied to inputs once, in stepping order, and the
-first row is recorded at ``t0``.  Rows after that are recorded after
+``fmi2EnterInitializationMode`` for every component; then, in stepping order,
+each component's inputs are set from its sources' outputs and it calls
+``fmi2ExitInitializationMode`` (so an FMU initialises from the values its
+sources start with, e.g. an IMU from the chamber's start temperature; sources
+over broken cycle edges give their start values); outputs are copied to
+inputs once more, and the first row is recorded at ``t0``.  Rows after that are recorded after
 ``fmi2DoStep(t, h)`` with time ``t + h``.
 """
 from __future__ import annotations
@@ -307,13 +310,24 @@ class Master:
                 instance.call(f"set{value_type(var)}", [var.valueReference], [value])
         for instance in self.instances:
             instance.call("enterInitializationMode")
-        for instance in self.instances:
-            instance.call("exitInitializationMode")
-            instance.mark_initialized()
         self._build_plan()
+        # inputs get their sources' initial outputs while still in Initialization Mode (FMI 2.0
+        # allows setting inputs there), each component leaving it after its sources did
+        for transfers, _, _, index in self._initial_plan():
+            self._transfer(transfers, start)
+            self.instances[index].call("exitInitializationMode")
+            self.instances[index].mark_initialized()
         for transfers, _, _, _ in self._plan:
             self._transfer(transfers, start)
         self.time = start
+
+    def _initial_plan(self):
+        """Gauss-Seidel transfers in stepping order, whatever the scheme (initialisation only)."""
+        if self.scheme == "gauss-seidel":
+            return self._plan
+        everything = self._plan[0][0]
+        return [([t for t in everything if t[-1].target == index], *rest, index)
+                for _, *rest, index in self._plan]
 
     def _build_plan(self) -> None:
         """Prepare function pointers and buffers for the inner loop."""

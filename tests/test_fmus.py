@@ -6,6 +6,7 @@ import os
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +19,8 @@ from sarins_fmu.experiments import run_static
 
 DEG = math.pi / 180
 SHORT = dict(align_time=1200.0)  # 20 min alignment keeps the tests short
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="session")
@@ -207,3 +210,25 @@ def test_fmu_runs_in_a_host_without_this_project(fmu_dir, tmp_path):
     assert "ok" in proc.stdout
 
 
+
+
+def test_build_after_loading_a_pythonfmu_fmu_still_ships_binaries(tmp_path):
+    """A loaded pythonfmu FMU puts its own copy of pythonfmu (no binaries) first
+    on sys.path; building afterwards in the same fresh process must still
+    write the export binaries."""
+    code = f"""
+import sys, zipfile
+sys.path[:0] = [{str(ROOT)!r}, {str(ROOT / 'tests')!r}]
+from fmu_fixtures.building import build_fixture_fmus
+from pathlib import Path
+fixtures = build_fixture_fmus(Path({str(tmp_path / 'fx')!r}))
+from fmpy import simulate_fmu
+simulate_fmu(str(fixtures['Gain']), stop_time=1.0, step_size=0.5)
+import pythonfmu
+assert 'resources' in pythonfmu.__file__, pythonfmu.__file__  # the FMU's copy was imported
+from fmus.build import build_fmus
+fmu = build_fmus({str(tmp_path / 'out')!r}, names=['Turntable'])[0]
+assert any(n.startswith('binaries/') for n in zipfile.ZipFile(fmu).namelist())
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]

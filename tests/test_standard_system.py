@@ -100,3 +100,18 @@ def test_system_as_one_container_fmu(fmu_dir, short_ssp, tmp_path):
 def test_build_fmus_system_option_validates(fmu_dir):
     path = build_system_fmu(fmu_dir)
     assert validate_fmu(str(path)) == []
+
+
+@pytest.mark.parametrize("scheme", ["gauss-seidel", "jacobi"])
+def test_imu_initialises_from_the_tables_start_temperature(fmu_dir, scheme):
+    """The master sets connected inputs before each FMU leaves Initialization
+    Mode, so the IMU's thermal state starts at the chamber's temperature
+    (35 degC here), not at its own input's start value (20 degC)."""
+    record = ["turntable.ambient_temp", "imu.temp_gyro_z"]
+    runs = {}
+    for ambient in (20.0, 35.0):
+        system = standard_static(fmu_dir, hours=0.1, turntable=dict(ambient_mean=ambient, **SHORT_TT),
+                                 ins=SHORT_INS, imu=dict(thermal_start="cold"))
+        runs[ambient] = simulate_system(system, 60.0, 1.0, scheme=scheme, record=record, progress=False)
+    assert runs[35.0]["turntable.ambient_temp"][0] == 35.0
+    assert runs[35.0]["imu.temp_gyro_z"][0] - runs[20.0]["imu.temp_gyro_z"][0] == pytest.approx(15.0, abs=1e-6)
