@@ -255,7 +255,7 @@ def train_rbf(rows: list[dict], inputs: tuple, path, *, spread: float | None = N
     """Fit and save the RBF network on training rows (dicts of features + target).
 
     ``spread`` None: the SPREAD of :data:`SPREADS` with the smallest
-    leave-one-out RMS error on the training rows (the paper's SPREAD = 2 is
+    leave-one-out RMS error on the training rows (2 below 4 rows; the paper's SPREAD = 2 is
     in raw input units, where its latitude inputs span only ~0.05 deg; with
     standardised inputs the equivalent width is chosen from the data).
     Returns the fitted :class:`~sarins_fmu.identify.RBFNetwork`; its
@@ -265,6 +265,8 @@ def train_rbf(rows: list[dict], inputs: tuple, path, *, spread: float | None = N
     X = np.array([[r[n] for n in inputs] for r in rows], float)
     y = np.array([r[target] for r in rows], float)
     cv = {}
+    if spread is None and len(y) < 4:  # too few rows to cross-validate: the paper's value
+        spread = 2.0
     if spread is None:
         cv = {str(s): float(np.sqrt(np.mean(loo_errors(X, y, s, goal) ** 2))) for s in SPREADS}
         spread = float(min(SPREADS, key=lambda s: cv[str(s)]))
