@@ -262,6 +262,11 @@ def test_campaign_without_torch_says_how_to_install_and_runs_the_others(tmp_path
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert set(summary["models"]) == {"traditional", "grnn"}
     assert summary["reductions"]["grnn"]["std"] > summary["reductions"]["traditional"]["std"]
+    assert summary["reused_models"] == []
+    assert seed003_cli.run(argparse.Namespace(**prof)) == 0  # recordings and models reused
+    again = json.loads((tmp_path / "summary.json").read_text())
+    assert again["reused_models"] == ["grnn", "traditional"] and again["reductions"] == summary["reductions"]
+    assert "reused" in (tmp_path / "report.md").read_text()
     with pytest.raises(ValueError, match="unknown model"):
         seed003_cli.run(argparse.Namespace(**{**prof, "models": "svm"}))
 

@@ -90,7 +90,8 @@ class Compensator:
 
     def save(self, path: str | Path) -> Path:
         meta, arrays = self._payload()
-        return save_model_file(path, FORMAT_TAG, FORMAT_VERSION, {"kind": self.kind, "model": meta}, arrays)
+        header = {"kind": self.kind, "model": meta, "fit_seconds": self.fit_seconds}
+        return save_model_file(path, FORMAT_TAG, FORMAT_VERSION, header, arrays)
 
     # subclasses: _fit, _predict, _payload, _from_payload
 
@@ -353,7 +354,10 @@ def _build(meta, arrays):
     model = meta["model"]
     if not isinstance(model, dict):
         raise ValueError("'model' is not an object")
-    return _CLASSES[kind]._from_payload(model, arrays)
+    out = _CLASSES[kind]._from_payload(model, arrays)
+    seconds = meta.get("fit_seconds")
+    out.fit_seconds = float(seconds) if isinstance(seconds, (int, float)) else None
+    return out
 
 
 def load(path: str | Path) -> Compensator:
