@@ -226,7 +226,7 @@ def test_quick_campaign_orders_models_as_the_paper(tmp_path):
     RBFNN beat the traditional model on the dynamic test set (std and mean |residual|)."""
     out = tmp_path / "seed3"
     cmd = [sys.executable, "-m", "sarins_fmu.cli", "campaign", "seed3", "--profile", "quick", "--out", str(out),
-           "--workers", "2", "--no-progress"]
+           "--workers", "1", "--no-progress"]
     done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=600,
                           env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})
     assert done.returncode == 0, done.stderr[-3000:]
@@ -303,6 +303,7 @@ def _compensator_run(chain_fmus, fmu, stop=30.0, ins=True):
 
 
 @pytest.mark.integration
+@pytest.mark.filterwarnings("ignore:inputs left unconnected")  # the INS's axial-drift correction input
 @pytest.mark.parametrize("kind", ["traditional", "grnn", "gru"])
 def test_compensator_fmu_between_imu_and_ins(chain_fmus, short_training, tmp_path, kind):
     """Exported model as an FMU in Turntable -> IMUThermal -> IMUCompensator -> StrapdownINS:

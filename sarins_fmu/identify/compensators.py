@@ -258,14 +258,18 @@ class GRNNCompensator(_Residual):
 
 
 class RecurrentCompensator(_Residual):
-    """LSTM or GRU of ``hidden`` units (seed 003: 60, MSE, NAdam, 4000 steps)."""
+    """LSTM or GRU of ``hidden`` units (seed 003: 60, MSE, NAdam, 4000 steps).
+
+    ``threads``: torch intra-op threads while training (default 1: the
+    network is small, and on a shared machine more threads mostly contend).
+    """
 
     def __init__(self, cell: str = "gru", *, hidden: int = 60, steps: int = 4000, seq_len: int = 100,
-                 streams: int = 32, lr: float = 2e-3, seed: int = 0):
+                 streams: int = 32, lr: float = 2e-3, seed: int = 0, threads: int = 1):
         super().__init__()
         self.cell = recurrent._check_cell(cell)
         self.options = dict(hidden=int(hidden), steps=int(steps), seq_len=int(seq_len), streams=int(streams),
-                            lr=float(lr), seed=int(seed))
+                            lr=float(lr), seed=int(seed), threads=int(threads))
         self.weights: recurrent.RecurrentWeights | None = None
         self.losses: np.ndarray | None = None
         self.input_mean: np.ndarray | None = None
