@@ -358,3 +358,46 @@ def test_compensator_fmu_with_a_bad_model_file_reports_an_error(chain_fmus, tmp_
         slave.free()
     with pytest.raises(ModelFileError):
         export_compensator(bad, tmp_path / "never")
+
+
+@pytest.mark.integration
+@needs_torch
+def test_recurrent_compensator_fmu_reset_and_two_instances(short_training, tmp_path):
+    """The recurrent state lives in the instance: reset restarts it, a second instance does not share it."""
+    from fmu_driver import Slave
+
+    from fmus.compensator_export import export_compensator
+
+    train, _ = short_training
+    model = compensators.make("lstm", hidden=8, steps=5, seq_len=20, streams=4).fit(train.X, train.Y)
+    fmu = export_compensator(model.save(tmp_path / "lstm.npz"), tmp_path)
+    h = SHORT.step
+    x = train.X[:15]
+
+    def step(slave, k, row):
+        slave.set(**{f"raw_dtheta_{a}": row[i] * h for i, a in enumerate("xyz")},
+                  **{f"raw_dv_{a}": row[3 + i] * h for i, a in enumerate("xyz")},
+                  **{f"temp_{s}": row[6] for s in ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")})
+        slave.fmu.doStep(k * h, h)
+        return np.array(slave.get(*[f"{q}_{a}" for q in ("dtheta", "dv") for a in "xyz"])) / h
+
+    a, b = Slave(fmu, "a"), Slave(fmu, "b")
+    try:
+        for s in (a, b):
+            s.fmu.enterInitializationMode()
+            s.fmu.exitInitializationMode()
+        first = []
+        for k, (row, other) in enumerate(zip(x, x[::-1])):  # interleaved: b's state must not leak into a
+            first.append(step(a, k, row))
+            step(b, k, other)
+        first = np.array(first)
+        stream = model.stream()
+        np.testing.assert_allclose(first, np.array([stream.step(r) for r in x]), rtol=0,
+                                   atol=1e-12 * np.abs(first).max())
+        a.fmu.reset()
+        a.fmu.enterInitializationMode()
+        a.fmu.exitInitializationMode()
+        np.testing.assert_array_equal(np.array([step(a, k, row) for k, row in enumerate(x)]), first)
+    finally:
+        a.free()
+        b.free()
