@@ -401,3 +401,23 @@ def test_recurrent_compensator_fmu_reset_and_two_instances(short_training, tmp_p
     finally:
         a.free()
         b.free()
+
+
+@pytest.mark.integration
+def test_build_fmus_cli_ships_a_compensator(tmp_path):
+    import zipfile
+
+    X, Y = _toy_series(300)
+    model = compensators.make("grnn", max_patterns=50).fit(X, Y).save(tmp_path / "g.json")
+    env = {**__import__("os").environ, "PYTHONPATH": str(ROOT)}
+    cmd = [sys.executable, "-m", "sarins_fmu.cli", "build-fmus", "--only", "IMUCompensator", "--out",
+           str(tmp_path / "out"), "--compensator"]
+    done = subprocess.run(cmd + [str(model)], cwd=ROOT, capture_output=True, text=True, timeout=300, env=env)
+    assert done.returncode == 0, done.stderr
+    with zipfile.ZipFile(tmp_path / "out" / "IMUCompensator.fmu") as z:
+        assert "resources/compensator.npz" in z.namelist()
+    cmd[cmd.index("--out") + 1] = str(tmp_path / "out_bad")
+    bad = subprocess.run(cmd + [str(tmp_path / "missing.json")], cwd=ROOT, capture_output=True, text=True,
+                         timeout=300, env=env)
+    assert bad.returncode != 0 and "missing.json" in bad.stderr
+    assert not (tmp_path / "out_bad").exists()  # nothing built
