@@ -11,12 +11,18 @@ def register(subparsers) -> None:
     p.add_argument("--only", nargs="+", metavar="NAME", help="build only these FMUs")
     p.add_argument("--system", action="store_true",
                    help="also write the standard static system as one FMU (FMPy container, FMI 2.0)")
+    p.add_argument("--compensator", type=Path, metavar="MODEL_FILE",
+                   help="ship this trained seed 003 compensator (JSON/npz) in IMUCompensator.fmu")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     from .build import build_fmus
 
+    if args.compensator is not None:  # a bad model file fails before anything is built
+        from sarins_fmu.identify.compensators import load
+
+        load(args.compensator)
     for path in build_fmus(args.out, args.only):
         print(path)
     if not args.only:
@@ -26,6 +32,10 @@ def run(args) -> int:
             print(path)
     if args.system:
         print(build_system_fmu(args.out))
+    if args.compensator is not None:
+        from .compensator_export import export_compensator
+
+        print(export_compensator(args.compensator, args.out))
     return 0
 
 

@@ -129,6 +129,9 @@ def markdown(summary: dict, fit_tables: str, figures: list[str]) -> str:
         lines += ["", f"GRU has {100 * (1 - b / a):.1f} % fewer parameters than LSTM (paper: 24 %)."]
     if s.get("skipped"):
         lines += ["", f"Not run: {', '.join(s['skipped'])} ({s.get('skip_reason', '')})."]
+    if s.get("reused_models"):
+        lines += ["", f"Fitted models reused from an earlier run with the same options (their fit times are from "
+                      f"that run): {', '.join(s['reused_models'])}."]
     lines += ["", "Wall times: " + ", ".join(f"{k} {v:.0f} s" for k, v in s["wall_s"].items()) + ".", "",
               "## Figures", ""]
     lines += [f"![{f}]({f})" for f in figures]

@@ -90,7 +90,8 @@ class Compensator:
 
     def save(self, path: str | Path) -> Path:
         meta, arrays = self._payload()
-        return save_model_file(path, FORMAT_TAG, FORMAT_VERSION, {"kind": self.kind, "model": meta}, arrays)
+        header = {"kind": self.kind, "model": meta, "fit_seconds": self.fit_seconds}
+        return save_model_file(path, FORMAT_TAG, FORMAT_VERSION, header, arrays)
 
     # subclasses: _fit, _predict, _payload, _from_payload
 
@@ -257,14 +258,18 @@ class GRNNCompensator(_Residual):
 
 
 class RecurrentCompensator(_Residual):
-    """LSTM or GRU of ``hidden`` units (seed 003: 60, MSE, NAdam, 4000 steps)."""
+    """LSTM or GRU of ``hidden`` units (seed 003: 60, MSE, NAdam, 4000 steps).
+
+    ``threads``: torch intra-op threads while training (default 1: the
+    network is small, and on a shared machine more threads mostly contend).
+    """
 
     def __init__(self, cell: str = "gru", *, hidden: int = 60, steps: int = 4000, seq_len: int = 100,
-                 streams: int = 32, lr: float = 2e-3, seed: int = 0):
+                 streams: int = 32, lr: float = 2e-3, seed: int = 0, threads: int = 1):
         super().__init__()
         self.cell = recurrent._check_cell(cell)
         self.options = dict(hidden=int(hidden), steps=int(steps), seq_len=int(seq_len), streams=int(streams),
-                            lr=float(lr), seed=int(seed))
+                            lr=float(lr), seed=int(seed), threads=int(threads))
         self.weights: recurrent.RecurrentWeights | None = None
         self.losses: np.ndarray | None = None
         self.input_mean: np.ndarray | None = None
@@ -353,7 +358,10 @@ def _build(meta, arrays):
     model = meta["model"]
     if not isinstance(model, dict):
         raise ValueError("'model' is not an object")
-    return _CLASSES[kind]._from_payload(model, arrays)
+    out = _CLASSES[kind]._from_payload(model, arrays)
+    seconds = meta.get("fit_seconds")
+    out.fit_seconds = float(seconds) if isinstance(seconds, (int, float)) else None
+    return out
 
 
 def load(path: str | Path) -> Compensator:

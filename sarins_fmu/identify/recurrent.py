@@ -191,7 +191,9 @@ def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, steps: i
     streams = max(1, min(int(streams), n // int(seq_len)))
     if n < seq_len:
         raise ValueError(f"the training series ({n} samples) is shorter than one window ({seq_len})")
-    if threads:
+    if threads is not None:
+        if int(threads) < 1:
+            raise ValueError(f"threads must be at least 1, got {threads}")
         torch.set_num_threads(int(threads))
     torch.manual_seed(int(seed))
     net = _torch_module(torch, cell, z.shape[1], int(hidden), t.shape[1])
@@ -243,9 +245,4 @@ def load_state_dict(path) -> RecurrentWeights:
     sd = torch.load(path, weights_only=True)
     cell = CELLS[int(sd.pop("cell"))]
     return RecurrentWeights(cell, {k: v.numpy() for k, v in sd.items()})
-
-
-def check_finite_series(z: np.ndarray) -> None:
-    if not np.all(np.isfinite(z)):
-        raise ValueError("recurrent network input holds NaN or infinity")
 
