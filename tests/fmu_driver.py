@@ -44,6 +44,25 @@ TT_TO_IMU = ["angle_1", "rate_1", "ambient_temp"]
 IMU_TO_INS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z"]
 
 
+def check_parameter_error(fmu_path, params: dict, text: str) -> None:
+    """Bad parameters: initialisation logs an fmi2Error naming ``text``, the
+    first step is refused with fmi2Discard, and the host frees the instance."""
+    import pytest
+    from fmpy.fmi1 import FMICallException
+
+    slave = Slave(fmu_path, "bad")
+    try:
+        slave.set(**params)
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+        with pytest.raises(FMICallException, match="discard"):
+            slave.fmu.doStep(0.0, 1.0)
+        errors = [message for status, _, message in slave.log if status == 3]
+        assert any(text in message for message in errors), slave.log
+    finally:
+        slave.free()
+
+
 def run_chain(fmu_dir, n_steps, *, step=1.0, tt_params=None, imu_params=None, ins_params=None,
               record=("lat_error",), correction=None):
     """Turntable -> IMUThermal -> StrapdownINS, Gauss-Seidel, fixed step."""

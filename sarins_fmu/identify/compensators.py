@@ -189,13 +189,43 @@ def _unprefixed(prefix, arrays):
     return {k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix)}
 
 
-class RBFCompensator(_Residual):
+class _NetworkResidual(_Residual):
+    """A residual compensator around one network (``net``: fit/predict/to_payload),
+    trained on at most ``_limit()`` evenly spaced samples."""
+
+    net_class = None
+
+    def _limit(self) -> int | None:
+        raise NotImplementedError
+
+    def _fit(self, x, y):
+        z = self._targets(x, y)
+        idx = _subsample(len(x), self._limit())
+        self.net.fit(x[idx], z[idx])
+
+    def _predict(self, x):
+        return self._output(x, self.net.predict(x))
+
+    def _payload(self):
+        meta, arrays = self.net.to_payload()
+        return {"net": meta}, _prefixed("net.", arrays) | self._scaling_arrays()
+
+    @classmethod
+    def _from_payload(cls, meta, arrays):
+        out = cls()
+        out.net = cls.net_class.from_payload(meta["net"], _unprefixed("net.", arrays))
+        out._load_scaling(arrays)
+        return out
+
+
+class RBFCompensator(_NetworkResidual):
     """RBF network (seed 003: spread 60, 30 neurons, goal 1e-5 on the standardised correction).
 
     ``max_samples``: evenly spaced training samples used (all when None).
     """
 
     kind = "rbf"
+    net_class = RBFNetwork
 
     def __init__(self, spread: float = 60.0, max_neurons: int = 30, goal: float = 1e-5, *,
                  max_samples: int | None = 50000, max_candidates: int = 2000):
@@ -203,27 +233,11 @@ class RBFCompensator(_Residual):
         self.net = RBFNetwork(spread, goal, max_neurons, max_candidates=max_candidates)
         self.max_samples = max_samples
 
-    def _fit(self, x, y):
-        z = self._targets(x, y)
-        idx = _subsample(len(x), self.max_samples)
-        self.net.fit(x[idx], z[idx])
-
-    def _predict(self, x):
-        return self._output(x, self.net.predict(x))
-
-    def _payload(self):
-        meta, arrays = self.net.to_payload()
-        return {"net": meta}, _prefixed("net.", arrays) | self._scaling_arrays()
-
-    @classmethod
-    def _from_payload(cls, meta, arrays):
-        out = cls()
-        out.net = RBFNetwork.from_payload(meta["net"], _unprefixed("net.", arrays))
-        out._load_scaling(arrays)
-        return out
+    def _limit(self):
+        return self.max_samples
 
 
-class GRNNCompensator(_Residual):
+class GRNNCompensator(_NetworkResidual):
     """GRNN (seed 003: smoothing factor 0.07, standardised inputs).
 
     ``max_patterns``: evenly spaced training samples kept as the pattern
@@ -231,30 +245,15 @@ class GRNNCompensator(_Residual):
     """
 
     kind = "grnn"
+    net_class = GRNN
 
     def __init__(self, sigma: float = 0.07, *, max_patterns: int | None = 20000):
         super().__init__()
         self.net = GRNN(sigma)
         self.max_patterns = max_patterns
 
-    def _fit(self, x, y):
-        z = self._targets(x, y)
-        idx = _subsample(len(x), self.max_patterns)
-        self.net.fit(x[idx], z[idx])
-
-    def _predict(self, x):
-        return self._output(x, self.net.predict(x))
-
-    def _payload(self):
-        meta, arrays = self.net.to_payload()
-        return {"net": meta}, _prefixed("net.", arrays) | self._scaling_arrays()
-
-    @classmethod
-    def _from_payload(cls, meta, arrays):
-        out = cls()
-        out.net = GRNN.from_payload(meta["net"], _unprefixed("net.", arrays))
-        out._load_scaling(arrays)
-        return out
+    def _limit(self):
+        return self.max_patterns
 
 
 class RecurrentCompensator(_Residual):
