@@ -10,10 +10,8 @@ from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_
 from sarins_fmu.identify.online import OnlineDriftUpdater, UpdaterSettings, prior_covariance
 from sarins_fmu.identify.rls import ForgettingRLS, RLSSettings
 from sarins_fmu.kalman import StopFilterSettings
+from sarins_fmu.units import DAY, DEG_TO_RAD, DPH_TO_RPS
 
-DEG = math.pi / 180.0
-DAY = 86400.0
-DPH = DEG / 3600.0
 NAVIGATE = 2  # StrapdownINS 'phase' output value in navigation
 
 
@@ -36,9 +34,9 @@ class DriftModelUpdater(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        declare(self, "real", "a0", PARAMETER, "initial model a [rad/s/degC2]", 1.0e-6 * DPH)
-        declare(self, "real", "b0", PARAMETER, "initial model b [rad/s/degC]", -4.0e-5 * DPH)
-        declare(self, "real", "c0", PARAMETER, "initial model c [rad/s; deg/h]", 0.0025 * DPH)
+        declare(self, "real", "a0", PARAMETER, "initial model a [rad/s/degC2]", 1.0e-6 * DPH_TO_RPS)
+        declare(self, "real", "b0", PARAMETER, "initial model b [rad/s/degC]", -4.0e-5 * DPH_TO_RPS)
+        declare(self, "real", "c0", PARAMETER, "initial model c [rad/s; deg/h]", 0.0025 * DPH_TO_RPS)
         declare(self, "real", "prior_points", PARAMETER,
                 "weight of the initial model as a number of calibration points [1]", 11.0)
         declare(self, "real", "prior_t_min", PARAMETER, "lowest calibration temperature [degC]", 0.0)
@@ -61,7 +59,7 @@ class DriftModelUpdater(Fmi2Slave):
         declare(self, "real", "yaw", INPUT, "INS yaw, CCW from north [rad; deg]", 0.0)
         declare(self, "real", "pitch", INPUT, "INS pitch [rad; deg]", 0.0)
         declare(self, "real", "roll", INPUT, "INS roll [rad; deg]", 0.0)
-        declare(self, "real", "lat", INPUT, "INS latitude [rad; deg]", 40.0 * DEG)
+        declare(self, "real", "lat", INPUT, "INS latitude [rad; deg]", 40.0 * DEG_TO_RAD)
         declare(self, "real", "temp_gyro_z", INPUT, "azimuth gyro temperature [degC]", 20.0)
         declare(self, "real", "vehicle_speed", INPUT, "vehicle speed (odometer) [m/s]", 0.0)
         declare(self, "integer", "ins_phase", INPUT, "INS phase; stops count only in navigation (2) [1]", NAVIGATE)

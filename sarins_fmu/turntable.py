@@ -913,11 +913,17 @@ def rate_test(*, rates_dps=None, axis_up=("x", "y", "z"), min_duration: float | 
 SCHEMES = ROTATION_SCHEMES + ("dual-axis", "rate-table-3axis", "tumble-24", "rate-test")
 
 
+_GIMBAL_AXES = {"dual-axis": "y,z", "rate-table-3axis": "z,x,y", "tumble-24": "z,x,y", "rate-test": "z,x,y"}
+
+
 def gimbal_axes_of(scheme: str) -> str:
     """Gimbal chain of a scheme as axis letters, outer first (e.g. 'y,z')."""
     if scheme in ROTATION_SCHEMES:
         return "z"
-    return {"dual-axis": "y,z"}.get(scheme, "z,x,y")
+    try:
+        return _GIMBAL_AXES[scheme]
+    except KeyError:
+        raise ValueError(f"unknown scheme {scheme!r}; known: {', '.join(SCHEMES)}") from None
 
 
 def schedule_for(scheme: str, duration: float, *, rate_dps: float = 6.0, accel_dps2: float = 6.0,

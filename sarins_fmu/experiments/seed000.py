@@ -43,13 +43,12 @@ Table 2 data; see tests/test_ins.py).
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
 from .. import imu as imu_mod
-from ..earth import RATE
+from ..identify.latitude_kf import estimate_drift, measurement_row
 from ..imu_params import apply_overrides
 from ..thermal import Ambient, SENSORS, ThermalModel
 from ..units import DEG_TO_RAD, DPH_TO_RPS, HOUR, NM, RAD_TO_DEG
@@ -203,8 +202,7 @@ def closed_form_drift_dph(lat_error_deg: np.ndarray, hours: float = IDENTIFY_HOU
     """Table 1 inverted: eps = dL W / (cos L (1 - cos W t)), deg/h from deg.
 
     Uses this project's sign (positive drift -> positive latitude error)."""
-    w_t = RATE * hours * HOUR
-    gain_h = math.cos(lat_deg * DEG_TO_RAD) * (1.0 - math.cos(w_t)) / (RATE * HOUR)  # h
+    gain_h = measurement_row(hours * HOUR, lat_deg * DEG_TO_RAD)[0] / HOUR  # deg of latitude per deg/h
     return np.asarray(lat_error_deg, float) / gain_h
 
 
@@ -293,8 +291,6 @@ def linear_regression(rows: list[dict], inputs: tuple, target: str = "drift_dph"
 
 def kalman_drift_dph(time_h: np.ndarray, lat_error_deg: np.ndarray, hours: float = IDENTIFY_HOURS) -> float:
     """Comparison (c): the latitude-error Kalman filter's drift at ``hours``, deg/h."""
-    from ..identify.latitude_kf import estimate_drift
-
     sel = np.asarray(time_h) <= hours + 1e-9
     est = estimate_drift(np.asarray(time_h)[sel] * HOUR, np.asarray(lat_error_deg)[sel] * DEG_TO_RAD,
                          SITE_LAT_DEG * DEG_TO_RAD)

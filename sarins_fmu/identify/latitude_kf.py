@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..earth import A, RATE
+from ..units import DPH_TO_RPS
 
 G_SCHULER = 9.79  # gravity used for the Schuler frequency, m/s^2
 SCHULER = math.sqrt(G_SCHULER / A)  # Schuler angular frequency, rad/s
@@ -66,7 +67,7 @@ class LatitudeKFSettings:
     drift_rw : rad/s/sqrt(s); meas_std : rad.
     """
 
-    drift0_std: float = 0.01 * math.pi / 180 / 3600  # 0.01 deg/h
+    drift0_std: float = 0.01 * DPH_TO_RPS  # 0.01 deg/h
     heading0_std: float = 1e-3
     schuler0_std: float = 1e-5
     drift_rw: float = 1e-11
