@@ -256,7 +256,8 @@ def test_campaign_without_torch_says_how_to_install_and_runs_the_others(tmp_path
 
     monkeypatch.setitem(sys.modules, "torch", None)
     prof = dict(profile="quick", workers=1, scheduler=None, out=str(tmp_path), no_progress=True, seed=3,
-                report_dir=None, models="traditional,grnn,gru", rnn_steps=None, grnn_patterns=300, rbf_samples=None)
+                report_dir=None, models="traditional,grnn,gru", rnn_steps=None, grnn_patterns=300, rbf_samples=None,
+                refit=False)
     assert seed003_cli.run(argparse.Namespace(**prof)) == 0
     assert "pip install 'sarins-fmu[deep]'" in capsys.readouterr().err
     summary = json.loads((tmp_path / "summary.json").read_text())

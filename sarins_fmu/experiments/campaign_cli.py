@@ -25,7 +25,8 @@ CAMPAIGNS = {
 }
 
 
-def _positive_int(text: str) -> int:
+def positive_int(text: str) -> int:
+    """argparse type: an integer >= 1 (campaign modules use it for their own counts)."""
     import argparse
 
     try:
@@ -40,7 +41,7 @@ def _positive_int(text: str) -> int:
 def _add_common(parser, name: str) -> None:
     parser.add_argument("--profile", choices=("quick", "paper"), default="quick",
                         help="quick: minutes, for tests; paper: the paper's protocol (default quick)")
-    parser.add_argument("--workers", type=_positive_int, default=None,
+    parser.add_argument("--workers", type=positive_int, default=None,
                         help="local worker processes (default: all cores; 1 runs in this process)")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="Dask distributed scheduler address, e.g. tcp://host:8786")

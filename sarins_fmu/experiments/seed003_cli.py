@@ -20,6 +20,8 @@ import sys
 import time
 from pathlib import Path
 
+from .campaign_cli import positive_int
+
 HELP = "seed 003: MEMS IMU dynamic calibration on a 3-axis thermal rate table (traditional, RBFNN, GRNN, LSTM, GRU)"
 
 MODEL_DEFAULTS = {  # per profile: recurrent training steps, GRNN patterns, RBF training samples
@@ -31,11 +33,11 @@ MODEL_DEFAULTS = {  # per profile: recurrent training steps, GRNN patterns, RBF 
 def add_arguments(parser) -> None:
     parser.add_argument("--models", default="traditional,rbf,grnn,lstm,gru",
                         help="comma-separated subset of traditional,rbf,grnn,lstm,gru")
-    parser.add_argument("--rnn-steps", type=int, default=None,
+    parser.add_argument("--rnn-steps", type=positive_int, default=None,
                         help="recurrent training steps (default: quick 60, paper 4000 as the paper)")
-    parser.add_argument("--grnn-patterns", type=int, default=None,
+    parser.add_argument("--grnn-patterns", type=positive_int, default=None,
                         help="GRNN pattern-layer size, evenly spaced training samples (quick 5000, paper 20000)")
-    parser.add_argument("--rbf-samples", type=int, default=None,
+    parser.add_argument("--rbf-samples", type=positive_int, default=None,
                         help="RBF training samples, evenly spaced (quick 10000, paper 50000)")
     parser.add_argument("--seed", type=int, default=3, help="IMU noise seed (default 3)")
     parser.add_argument("--report-dir", default=None, help="write report.md and the PNGs here (default: --out)")
@@ -53,8 +55,6 @@ def run(args) -> int:
     options = dict(MODEL_DEFAULTS[args.profile])
     for key in ("rnn_steps", "grnn_patterns", "rbf_samples"):
         if getattr(args, key) is not None:
-            if getattr(args, key) < 1:
-                raise ValueError(f"--{key.replace('_', '-')} must be at least 1")
             options[key] = getattr(args, key)
     skipped = []
     if any(k in ("lstm", "gru") for k in kinds) and not recurrent.torch_available():
@@ -63,7 +63,7 @@ def run(args) -> int:
         print(f"skipping {', '.join(skipped)}: {recurrent.INSTALL_HINT}", file=sys.stderr)
     summary = run_seed3(args.profile, Path(args.out), kinds=kinds, workers=args.workers, scheduler=args.scheduler,
                         progress=not args.no_progress, seed=args.seed, report_dir=args.report_dir, skipped=skipped,
-                        refit=getattr(args, "refit", False), **options)
+                        refit=args.refit, **options)
     for name, red in summary["reductions"].items():
         print(f"{name:12s} mean {red['mean']:6.1f} %  std {red['std']:6.1f} %  mean-abs {red['mae']:6.1f} %")
     print(f"report: {summary['report']}")
