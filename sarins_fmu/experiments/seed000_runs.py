@@ -65,10 +65,10 @@ def cosim_parameters(exp, align_hours: float = s0.ALIGN_HOURS) -> dict:
     return {"turntable": {"scheme": "forward-reverse", "align_time": align, "ambient_mode": "sinusoid",
                           "ambient_mean": exp.ambient_c, "ambient_amplitude": exp.amplitude_c,
                           "ambient_period": 86400.0},
-            # ambient_temp: the master sets inputs only after initialisation, and the IMU takes
-            # its initial (hot-start) temperature from this input at exitInitializationMode
+            # the IMU's initial temperature comes from the turntable's ambient_temp output, which
+            # the master sets before the IMU leaves Initialization Mode
             "imu": {"preset": "nav-rlg", "lat": lat, "thermal_start": exp.start, "seed": int(exp.seed),
-                    "ambient_temp": float(s0.ambient(exp)(0.0)), **s0.imu_overrides(exp)},
+                    **s0.imu_overrides(exp)},
             "ins": {"lat0": lat, "align_time": align}}
 
 
