@@ -108,7 +108,7 @@ def cmd_demo(args) -> int:
 
     from fmus.build import build_fmus
     from fmus.systems import standard_static_identified
-    from orchestration import simulate_system
+    from orchestration import AlgebraicLoopWarning, simulate_system
 
     from .experiments import run_static
     from .identify.axial import default_model_path
@@ -130,7 +130,7 @@ def cmd_demo(args) -> int:
           f"({args.imu} IMU, {args.start} start, {args.rotation} rotation, {args.lat_deg} deg; "
           f"identify at {args.identify_hours:g} h with {model}) in {fmu_dir}")
     with warnings.catch_warnings():  # the INS <-> identifier loop is broken at the INS input on purpose
-        warnings.simplefilter("ignore")
+        warnings.simplefilter("ignore", AlgebraicLoopWarning)
         result = simulate_system(system, stop, 1.0, record=record, progress=not args.no_progress)
     nav = result["ins.nav_time"]
     after = nav > args.identify_hours * 3600.0 + 0.5
