@@ -108,9 +108,12 @@ def readouts(taus, adev, record_length: float) -> Readout:
         fit to tau <= record_length / MIN_CLUSTERS).
     """
     taus, adev = np.asarray(taus, float), np.asarray(adev, float)
-    use = (taus <= record_length / MIN_CLUSTERS) & (adev > 0)
+    use = taus <= record_length / MIN_CLUSTERS
     if use.sum() < 3:
         raise ValueError("the record is too short for an Allan read-out (fewer than 3 usable averaging times)")
+    use &= adev > 0
+    if not use.any():  # a noise-free channel (the ideal IMU)
+        return Readout(0.0, 0.0, 0.0)
     t, var = taus[use], adev[use] ** 2
     # relative error weighted by the square root of the cluster count: the
     # Allan variance at tau has a relative std of about sqrt(tau / record)
@@ -118,6 +121,32 @@ def readouts(taus, adev, record_length: float) -> Readout:
     basis = np.column_stack([1.0 / t, np.ones_like(t), t / 3.0]) * weight[:, None]
     coef, _ = nnls(basis, var * weight)
     return Readout(math.sqrt(coef[0]), math.sqrt(coef[1]) / FLOOR, math.sqrt(coef[2]))
+
+
+def gauss_markov_avar(taus, std, corr_time):
+    """Allan variance of a first-order Gauss-Markov process (std, correlation time T):
+    (std T / tau)^2 (2 tau / T - 3 + 4 exp(-tau / T) - exp(-2 tau / T))
+    (IEEE Std 952-1997 annex C, correlated noise; -> 2 std^2 T / tau for tau >> T and
+    (2/3) std^2 tau / T for tau << T)."""
+    x = np.asarray(taus, float) / corr_time
+    bracket = np.where(x < 1e-3, 2.0 / 3.0 * x**3, 2.0 * x - 3.0 + 4.0 * np.exp(-x) - np.exp(-2.0 * x))
+    return std**2 * bracket / x**2
+
+
+def fit_gauss_markov(taus, adev, corr_time: float, record_length: float) -> tuple[float, float]:
+    """(white-noise density, Gauss-Markov std) fitted to one curve, the correlation time given.
+
+    The read-out of a preset whose bias instability is a Gauss-Markov process
+    (no flat floor): non-negative least squares on the Allan variance with the
+    weights of :func:`readouts`.
+    """
+    taus, adev = np.asarray(taus, float), np.asarray(adev, float)
+    use = (taus <= record_length / MIN_CLUSTERS) & (adev > 0)
+    t, var = taus[use], adev[use] ** 2
+    weight = np.sqrt(record_length / t) / var
+    basis = np.column_stack([1.0 / t, gauss_markov_avar(t, 1.0, corr_time)]) * weight[:, None]
+    coef, _ = nnls(basis, var * weight)
+    return math.sqrt(coef[0]), math.sqrt(coef[1])
 
 
 def spec(model: ImuModel, triad: str) -> dict:
