@@ -112,3 +112,17 @@ def test_allan_command_prints_read_outs_and_writes_the_plot(tmp_path, capsys):
     assert "gyro_z" in capsys.readouterr().out
     assert main(["allan", "--rate-hz", "-1"]) == 2
     assert "sarins allan: error: --rate-hz" in capsys.readouterr().err
+
+
+def test_allan_command_on_a_recorded_log(tmp_path, capsys):
+    import json
+
+    from sarins.cli import main
+    from sarins_fmu.imu_log import write_log
+
+    gyro, accel, _ = allan.static_record(imu.preset("mems"), 20000.0, 1.0, seed=4)
+    log = write_log(tmp_path / "static.npz", np.arange(1, 20001.0), gyro, accel, lat_deg=45.0)
+    assert main(["allan", "--log", str(log), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["source"].startswith("log ") and "random_walk_spec" not in out["channels"][0]
+    assert out["channels"][0]["random_walk"] == pytest.approx(0.3, rel=0.1)  # deg/sqrt(h)

@@ -3,6 +3,7 @@
 ::
 
     sarins allan --imu mems [--hours 28] [--rate-hz 1] [--seed 0] [--plot allan.png] [--json]
+    sarins allan --log static.csv [--plot allan.png] [--json]
 
 Prints, per channel, the random walk N, the bias instability B and the rate
 random walk K read off the curve (IEEE Std 952 lines; 0 where the data do
@@ -24,6 +25,8 @@ def register(sub) -> None:
                        description="Overlapping Allan deviation (allantools) of simulated static data of a "
                                    "preset, with the random-walk, bias-instability and rate-random-walk read-outs.")
     p.add_argument("--imu", choices=sorted(imu_mod.PRESETS), default="mems", help="IMU preset to simulate")
+    p.add_argument("--log", default=None, metavar="PATH",
+                   help="analyse this recorded static log (.csv or .npz, docs/imu-log.md) instead of a preset")
     p.add_argument("--hours", type=finite, default=28.0, help="length of the static record, h (default 28)")
     p.add_argument("--rate-hz", type=finite, default=1.0, help="sample rate, Hz (default 1)")
     p.add_argument("--seed", type=seed_value, default=0, help="random seed of the IMU")
@@ -39,7 +42,13 @@ def run(args) -> int:
         raise UsageError(f"--rate-hz must be positive, got {args.rate_hz:g}")
     if args.hours <= 0:
         raise UsageError(f"--hours must be positive, got {args.hours:g}")
-    result = app.simulate(args.imu, args.hours, args.rate_hz, args.seed)
+    if args.log:
+        from sarins_fmu.imu_log import read_log
+
+        log = read_log(args.log)
+        result = app.analyse(log.dtheta / log.step, log.dv / log.step, 1.0 / log.step, f"log {args.log}")
+    else:
+        result = app.simulate(args.imu, args.hours, args.rate_hz, args.seed)
     if args.plot:
         app.plot(result, args.plot)
     rows = result.rows()

@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 import time
 
+import numpy as np
+
 from sarins_fmu import imu as imu_mod
 from sarins_fmu.site import SITE_LAT_DEG
 from sarins_fmu.turntable import ROTATION_SCHEMES
@@ -61,6 +63,8 @@ def register(sub) -> None:
     p.add_argument("--correction-from-hours", type=finite, default=0.0,
                    help="navigation time at which the correction starts, h")
     p.add_argument("--json", action="store_true", help="print one JSON object (full precision)")
+    p.add_argument("--write-log", metavar="PATH", default=None,
+                   help="also write the IMU output as a log (.csv or .npz, docs/imu-log.md) for sarins replay")
     p.set_defaults(func=run)
 
 
@@ -72,11 +76,21 @@ def run(args) -> int:
         raise UsageError("--correction-from-hours must lie within the navigation time")
     if abs(args.correction_dph) > 1e3:
         raise UsageError(f"--correction-dph {args.correction_dph:g} deg/h is not a drift correction")
+    if args.write_log and not str(args.write_log).endswith((".csv", ".npz")):
+        raise UsageError(f"--write-log {args.write_log}: the file must end in .csv or .npz")
     t0 = time.perf_counter()
+    chunks = []
     result = run_static(lat_deg=args.lat_deg, align_hours=args.align_hours, nav_hours=args.nav_hours,
                         rotation=args.rotation, imu=args.imu, axial_drift_dph=args.axial_drift_dph,
                         start=args.start, seed=args.seed, correction_dph=args.correction_dph,
-                        correction_from_hours=args.correction_from_hours)
+                        correction_from_hours=args.correction_from_hours,
+                        on_increments=(lambda *chunk: chunks.append(chunk)) if args.write_log else None)
+    if args.write_log:
+        from sarins_fmu.imu_log import write_log
+
+        write_log(args.write_log, *(np.concatenate([c[j] for c in chunks]) for j in range(3)),
+                  temps=np.concatenate([c[3] for c in chunks]), lat_deg=args.lat_deg,
+                  meta={"source": f"sarins navigate --imu {args.imu} --seed {args.seed}"})
     summary = result.summary()
     summary.update({"wall_seconds": time.perf_counter() - t0, **{
         k: v for k, v in result.info.items() if k in ("imu", "rotation", "start", "seed")}})

@@ -88,7 +88,7 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
                start: str = "hot", ambient: Ambient | None = None, seed: int = 0, step: float = 1.0,
                internal_rate: float = 200.0, base_yaw_deg: float = 0.0,
                correction_dph: float = 0.0, correction_from_hours: float = 0.0,
-               aligned_start: bool = False) -> StaticRunResult:
+               aligned_start: bool = False, on_increments=None) -> StaticRunResult:
     """Run turntable -> IMU -> INS on a static base.
 
     Parameters
@@ -105,6 +105,9 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
         ``correction_from_hours`` into navigation on, deg/h.
     aligned_start : skip alignment and start navigation from the true
         attitude (closed-form checks); then align_hours is ignored.
+    on_increments : callable(time (K,) s, dtheta (K, 3), dv (K, 3), temps (K, 6)),
+        called with each chunk of IMU output (e.g. to write a log,
+        :mod:`sarins_fmu.imu_log`); time is the end of each interval.
     """
     for name, value in (("lat_deg", lat_deg), ("align_hours", align_hours), ("nav_hours", nav_hours),
                         ("correction_dph", correction_dph), ("correction_from_hours", correction_from_hours)):
@@ -143,6 +146,8 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
         k1 = min(n_total, k0 + CHUNK)
         angle, rate, accel = table.state(np.arange(k0, k1) * step)
         dtheta, dv, temps[k0:k1] = sensor.step(angle, rate, accel)
+        if on_increments is not None:
+            on_increments(np.arange(k0 + 1, k1 + 1) * step, dtheta, dv, temps[k0:k1])
         corr = np.where(np.arange(k0, k1) >= corr_start, correction_dph * DPH_TO_RPS, 0.0)
         if k0 < n_align <= k1:  # attitude error at the end of alignment vs the table truth
             nav_out[k0:n_align] = ins.step(dtheta[:n_align - k0], dv[:n_align - k0], corr[:n_align - k0])

@@ -1,0 +1,275 @@
+"""Recorded IMU data: the log format, its reader (with checks) and writer.
+
+Format (version 1), CSV for readability, NPZ for large logs; the same
+columns in both.  A CSV log is::
+
+    # sarins-imu-log 1
+    # lat_deg: 28.222
+    # lon_deg: 0
+    # height_m: 0
+    time_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps,temp_gyro_x_c,...
+    1,7.2e-06,...
+
+* ``#`` lines come first (no blank lines): the tag line, then ``key: value``
+  metadata.  ``lat_deg`` (the static start of the alignment, deg) is
+  required; ``lon_deg`` and ``height_m`` default to 0.  Any other key is
+  kept as text.
+* ``time_s``: time of each sample, s, strictly increasing on a uniform grid
+  (the sample interval h is the first difference).  A sample covers
+  (time - h, time].
+* IMU outputs, SI and body axes (right-front-up), either the increments
+  over each interval, ``dtheta_{x,y,z}_rad`` and ``dv_{x,y,z}_mps`` (as the
+  IMUThermal FMU outputs them: coning and sculling applied), or the mean
+  rates ``gyro_{x,y,z}_radps`` and ``accel_{x,y,z}_mps2`` (increments =
+  rate * h).
+* Optional: the six sensor temperatures ``temp_{gyro,accel}_{x,y,z}_c``
+  (degC; all six or none) and a reference position ``ref_lat_deg``,
+  ``ref_lon_deg``, ``ref_height_m`` (truth for the errors; without it the
+  static start is the truth).
+
+An NPZ log holds one array per column (same names) and ``meta``, a JSON
+object string of the metadata.  Numbers written by :func:`write_log` read
+back bit for bit (CSV with 17 significant digits).
+
+:func:`read_log` refuses, naming the CSV line (or NPZ row): duplicated or
+non-monotonic timestamps, gaps and rate changes, NaN or infinite values,
+columns in other units (``*_deg`` increments, ``*_dps`` rates, ``*_g``),
+gyro rates beyond 35 rad/s (2000 deg/s: degrees logged as radians), a
+start at rest whose mean rate exceeds 1e-3 rad/s (the Earth rate is
+7.3e-5 rad/s: degrees again) and a mean specific force over the first
+minute that is not gravity (accelerations in g, or rates logged as
+increments).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+TAG = "# sarins-imu-log 1"
+AXES = "xyz"
+INCREMENT_COLUMNS = [f"dtheta_{a}_rad" for a in AXES] + [f"dv_{a}_mps" for a in AXES]
+RATE_COLUMNS = [f"gyro_{a}_radps" for a in AXES] + [f"accel_{a}_mps2" for a in AXES]
+TEMP_COLUMNS = [f"temp_{s}_{a}_c" for s in ("gyro", "accel") for a in AXES]
+REF_COLUMNS = ["ref_lat_deg", "ref_lon_deg", "ref_height_m"]
+MAX_GYRO_RATE = 35.0  # rad/s (2000 deg/s, the largest MEMS full scale)
+STATIC_RATE_LIMIT = 1e-3  # rad/s (206 deg/h): Earth rate plus any plausible bias, at rest
+GRAVITY_RANGE = (9.0, 10.6)  # m/s^2, plausible |f| averaged over a static or turning start
+_WRONG_UNITS = {"_deg": "rad", "_dps": "radps", "_degps": "radps", "_g": "mps2", "_mg": "mps2", "_ug": "mps2",
+                "_f": "c", "_k": "c"}
+
+
+class LogError(ValueError):
+    """A log that cannot be used; the message names the file and the line or row."""
+
+
+@dataclass
+class ImuLog:
+    """A recorded IMU log in SI units.
+
+    time : (K,) s; dtheta (K, 3) rad; dv (K, 3) m/s (increments, whatever was stored);
+    temps : (K, 6) degC or None; ref : (K, 3) lat rad, lon rad, height m, or None;
+    lat, lon (rad), height (m): static start; meta : all metadata as text.
+    """
+
+    time: np.ndarray
+    dtheta: np.ndarray
+    dv: np.ndarray
+    temps: np.ndarray | None
+    ref: np.ndarray | None
+    lat: float
+    lon: float = 0.0
+    height: float = 0.0
+    meta: dict = field(default_factory=dict)
+    quantity: str = "increments"
+
+    @property
+    def step(self) -> float:
+        """Sample interval h, s."""
+        return float(self.time[1] - self.time[0])
+
+
+def write_log(path, time, dtheta, dv, *, lat_deg: float, lon_deg: float = 0.0, height_m: float = 0.0,
+              temps=None, ref=None, meta: dict | None = None) -> Path:
+    """Write increments (and optional temperatures, reference) as a log; .npz or .csv by suffix.
+
+    ref : (K, 3) lat, lon in rad and height in m (written in deg as the format says).
+    """
+    path = Path(path)
+    cols = {"time_s": np.asarray(time, float)}
+    for j, name in enumerate(INCREMENT_COLUMNS):
+        cols[name] = np.asarray(dtheta if j < 3 else dv, float)[:, j % 3]
+    if temps is not None:
+        for j, name in enumerate(TEMP_COLUMNS):
+            cols[name] = np.asarray(temps, float)[:, j]
+    if ref is not None:
+        ref = np.asarray(ref, float)
+        cols.update(ref_lat_deg=np.degrees(ref[:, 0]), ref_lon_deg=np.degrees(ref[:, 1]), ref_height_m=ref[:, 2])
+    info = {"lat_deg": repr(float(lat_deg)), "lon_deg": repr(float(lon_deg)), "height_m": repr(float(height_m)),
+            **{k: str(v) for k, v in (meta or {}).items()}}
+    if path.suffix == ".npz":
+        np.savez_compressed(path, meta=np.array(json.dumps(info)), **cols)
+        return path
+    with open(path, "w") as fh:
+        fh.write(TAG + "\n")
+        for k, v in info.items():
+            fh.write(f"# {k}: {v}\n")
+        np.savetxt(fh, np.column_stack(list(cols.values())), delimiter=",", fmt="%.17g",
+                   header=",".join(cols), comments="")
+    return path
+
+
+def _where(kind: str, first_data_line: int, row: int) -> str:
+    return f"line {first_data_line + row}" if kind == "csv" else f"row {row}"
+
+
+def read_log(path) -> ImuLog:
+    """Read and check a log (see the module docstring); raises LogError naming the line."""
+    path = Path(path)
+    if not path.is_file():
+        raise LogError(f"{path}: no such log file")
+    if path.suffix == ".npz":
+        kind, columns, meta, first = "npz", *_read_npz(path), 0
+    else:
+        kind, (columns, meta, first) = "csv", _read_csv(path)
+    return _check(path, kind, columns, meta, first)
+
+
+def _read_npz(path):
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            columns = {k: np.asarray(z[k], float) for k in z.files if k != "meta"}
+            meta = json.loads(str(z["meta"])) if "meta" in z.files else {}
+    except (OSError, ValueError, KeyError) as exc:
+        raise LogError(f"{path}: not a readable NPZ log ({exc})") from None
+    if not isinstance(meta, dict):
+        raise LogError(f"{path}: meta must be a JSON object")
+    for name, col in columns.items():
+        if col.ndim != 1:
+            raise LogError(f"{path}: column {name} must be one-dimensional")
+    return columns, {k: str(v) for k, v in meta.items()}
+
+
+def _read_csv(path):
+    meta, header, n_lines = {}, None, 0
+    with open(path) as fh:
+        for line in fh:
+            n_lines += 1
+            if n_lines == 1 and line.strip() != TAG:
+                raise LogError(f"{path}: line 1 must be {TAG!r}, got {line.strip()[:60]!r}")
+            if line.startswith("#"):
+                if n_lines > 1:
+                    key, sep, value = line[1:].partition(":")
+                    if not sep:
+                        raise LogError(f"{path}: line {n_lines}: metadata must read '# key: value'")
+                    meta[key.strip()] = value.strip()
+                continue
+            header = [c.strip() for c in line.strip().split(",")]
+            break
+    if header is None:
+        raise LogError(f"{path}: no column header line")
+    first = n_lines + 1
+    try:
+        data = np.loadtxt(path, delimiter=",", skiprows=n_lines, ndmin=2)
+    except ValueError as exc:
+        raise LogError(f"{path}: {_csv_parse_message(str(exc), n_lines)}") from None
+    if data.shape[1] != len(header):
+        raise LogError(f"{path}: {len(header)} columns in the header, {data.shape[1]} in the data")
+    return {name: data[:, j] for j, name in enumerate(header)}, meta, first
+
+
+def _csv_parse_message(text, header_lines):
+    """numpy's parse error with the file's line number."""
+    import re
+
+    m = re.search(r"at row (\d+)", text)
+    if m:  # numpy counts data rows from 0 in conversion errors and from 1 in column-count errors
+        row0 = int(m.group(1)) - (1 if "columns changed" in text else 0)
+        return f"line {header_lines + 1 + row0}: {text}"
+    return text
+
+
+def _check(path, kind, columns, meta, first) -> ImuLog:
+    where = lambda row: _where(kind, first, row)  # noqa: E731
+    for name in columns:
+        for bad, good in _WRONG_UNITS.items():
+            if name.endswith(bad) and not name.startswith("ref_"):
+                raise LogError(f"{path}: column {name!r}: the log takes SI units (…_{good}); convert it")
+    if "time_s" not in columns:
+        raise LogError(f"{path}: no time_s column")
+    if all(c in columns for c in INCREMENT_COLUMNS):
+        quantity, names = "increments", INCREMENT_COLUMNS
+    elif all(c in columns for c in RATE_COLUMNS):
+        quantity, names = "rates", RATE_COLUMNS
+    else:
+        raise LogError(f"{path}: needs the columns {', '.join(INCREMENT_COLUMNS)} or {', '.join(RATE_COLUMNS)}")
+    has_temps = [c in columns for c in TEMP_COLUMNS]
+    if any(has_temps) and not all(has_temps):
+        raise LogError(f"{path}: give all six temperature columns ({', '.join(TEMP_COLUMNS)}) or none")
+    has_ref = [c in columns for c in REF_COLUMNS]
+    if any(has_ref) and not all(has_ref):
+        raise LogError(f"{path}: give all of {', '.join(REF_COLUMNS)} or none")
+    used = ["time_s", *names] + (TEMP_COLUMNS if all(has_temps) else []) + (REF_COLUMNS if all(has_ref) else [])
+    lengths = {len(columns[c]) for c in used}
+    if len(lengths) != 1:
+        raise LogError(f"{path}: columns have different lengths")
+    data = np.column_stack([columns[c] for c in used])
+    if data.shape[0] < 2:
+        raise LogError(f"{path}: a log needs at least two samples")
+    bad = ~np.isfinite(data)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise LogError(f"{path}: {where(row)}: {used[col]} is {data[row, col]} (NaN or infinite)")
+    time = data[:, 0]
+    dt = np.diff(time)
+    if np.any(dt <= 0):
+        row = int(np.argmax(dt <= 0)) + 1
+        what = "duplicated" if dt[row - 1] == 0 else "earlier than the one before (non-monotonic)"
+        raise LogError(f"{path}: {where(row)}: timestamp {float(time[row]):.10g} s is {what}")
+    h = dt[0]
+    off = np.abs(dt - h) > 1e-6 * h
+    if off.any():
+        row = int(np.argmax(off)) + 1
+        kind_of = "a gap" if dt[row - 1] > 1.5 * h else "a rate change"
+        raise LogError(f"{path}: {where(row)}: time step {dt[row - 1]:.9g} s differs from the log's "
+                       f"{h:.9g} s ({kind_of}); logs must be uniformly sampled")
+    outputs = data[:, 1:7]
+    rates = outputs / h if quantity == "increments" else outputs
+    fast = np.linalg.norm(rates[:, :3], axis=1) > MAX_GYRO_RATE
+    if fast.any():
+        row = int(np.argmax(fast))
+        raise LogError(f"{path}: {where(row)}: angular rate {np.linalg.norm(rates[row, :3]):.4g} rad/s is beyond "
+                       f"any IMU ({MAX_GYRO_RATE} rad/s): degrees logged as radians?")
+    n_g = max(1, min(len(time), int(round(60.0 / h))))
+    gyro = rates[:n_g, :3]
+    if np.median(np.linalg.norm(gyro, axis=1)) < 0.05:  # a base at rest at the start: Earth rate + bias + noise
+        mean_rate = float(np.linalg.norm(gyro.mean(axis=0)))
+        if mean_rate > STATIC_RATE_LIMIT:
+            raise LogError(f"{path}: {where(0)}..{where(n_g - 1)}: mean angular rate {mean_rate:.3g} rad/s of a base "
+                           "at rest is far above the Earth rate (7.3e-5 rad/s): degrees logged as radians?")
+    g_mean = float(np.mean(np.linalg.norm(rates[:n_g, 3:], axis=1)))
+    if not GRAVITY_RANGE[0] <= g_mean <= GRAVITY_RANGE[1]:
+        raise LogError(f"{path}: {where(0)}..{where(n_g - 1)}: mean specific force {g_mean:.4g} m/s^2 is not "
+                       f"gravity (accelerations in g, rates logged as {quantity} or the reverse, "
+                       "or a base that is not at rest?)")
+    if "lat_deg" not in meta:
+        raise LogError(f"{path}: metadata lat_deg (static start latitude, deg) is required")
+    try:
+        lat, lon, height = (float(meta.get(k, "0")) for k in ("lat_deg", "lon_deg", "height_m"))
+    except ValueError:
+        raise LogError(f"{path}: lat_deg, lon_deg and height_m must be numbers") from None
+    if not (math.isfinite(lat) and math.isfinite(lon) and math.isfinite(height)) or abs(lat) > 89.9:
+        raise LogError(f"{path}: lat_deg {lat} must be finite and within +-89.9 deg")
+    inc = outputs if quantity == "increments" else outputs * h
+    temps = data[:, 7:13] if all(has_temps) else None
+    ref = None
+    if all(has_ref):
+        r = data[:, -3:]
+        ref = np.column_stack([np.radians(r[:, 0]), np.radians(r[:, 1]), r[:, 2]])
+    return ImuLog(time=time, dtheta=np.ascontiguousarray(inc[:, :3]), dv=np.ascontiguousarray(inc[:, 3:]),
+                  temps=temps, ref=ref, lat=math.radians(lat), lon=math.radians(lon), height=height, meta=meta,
+                  quantity=quantity)
