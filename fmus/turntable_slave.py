@@ -8,7 +8,7 @@ from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
                                 discard_on_error, guarded)
-from sarins_fmu import turntable
+from sarins_fmu import thermal, turntable
 from sarins_fmu.thermal import Ambient
 
 DEG = math.pi / 180.0
@@ -94,7 +94,7 @@ class Turntable(Fmi2Slave):
                 table_accels_dps2=[getattr(self, f"table_{n}_accel") / DEG for n in ("inner", "middle", "outer")],
                 warmup=self.warmup)
             if self.ambient_mode == "chamber":
-                profile = turntable.chamber_profile(
+                profile = thermal.chamber_profile(
                     self.duration, low_c=self.chamber_low, high_c=self.chamber_high,
                     ramp_c_per_min=self.chamber_ramp * 60.0, hold_min=self.chamber_hold / 60.0,
                     start_c=self.ambient_mean)

@@ -177,3 +177,94 @@ def _exact_steps(h, amb, heat, tau, temp0):
             x = decay * x + (amb[k] + heat[j] - slope * tau[j]) * (1.0 - decay) + slope * h[k]
             out[k, j] = x
     return out
+
+
+def _nonneg(name: str, value, *, positive: bool = False) -> float:
+    """``value`` as a finite float, >= 0 (or > 0 if ``positive``), else ValueError."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{name} must be finite, got {v}")
+    if v < 0 or (positive and v == 0):
+        raise ValueError(f"{name} must be {'positive' if positive else 'non-negative'}, got {v}")
+    return v
+
+
+def chamber_profile(duration: float, *, low_c: float = -25.0, high_c: float = 40.0,
+                    ramp_c_per_min: float = 1.0, hold_min: float = 30.0, start_c: float = 20.0,
+                    delay: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Thermal-chamber temperature of seed 003's dynamic calibration.
+
+    Seed 003 states only that the chamber is driven between -25 and 40 degC
+    while the table turns, repeatedly; it gives no ramp rate or hold time, so
+    ``ramp_c_per_min`` = 1 degC/min and ``hold_min`` = 30 min are our choice.
+    The profile is piecewise linear::
+
+        start_c for ``delay`` s, ramp to low_c, hold, ramp to high_c, hold,
+        ramp to low_c, hold, ... (cold end first)
+
+    cut at ``duration`` (the last value interpolated).  With the defaults one
+    cycle low -> high -> low takes 2 * 65 min + 2 * 30 min = 190 min.
+
+    Parameters
+    ----------
+    duration : float
+        Length to cover, s, > 0.
+    low_c, high_c : float
+        Cold and hot set points, degC, low_c < high_c.
+    ramp_c_per_min : float
+        Magnitude of the temperature ramp, degC/min, > 0.
+    hold_min : float
+        Hold at each set point, min, >= 0.
+    start_c : float
+        Temperature at t = 0, degC.
+    delay : float
+        Hold at ``start_c`` before the first ramp, s, >= 0 (e.g. the
+        warm-up of :func:`sarins_fmu.turntable.rate_table_3axis`).
+
+    Returns
+    -------
+    times_s : ndarray (N,)
+        Breakpoints, s, strictly increasing from 0 to ``duration``.
+    temps_c : ndarray (N,)
+        Chamber temperature at each breakpoint, degC; pass
+        ``profile=(times_s, temps_c)`` to :class:`sarins_fmu.thermal.Ambient`
+        (linear interpolation between breakpoints).
+
+    Raises
+    ------
+    ValueError
+        On NaN, a non-positive duration or ramp, a negative hold or delay, or
+        low_c >= high_c.
+    """
+    duration = _nonneg("duration", duration, positive=True)
+    ramp = _nonneg("ramp_c_per_min", ramp_c_per_min, positive=True) / 60.0  # degC/s
+    hold = _nonneg("hold_min", hold_min) * 60.0  # s
+    delay = _nonneg("delay", delay)
+    for name, value in (("low_c", low_c), ("high_c", high_c), ("start_c", start_c)):
+        if not math.isfinite(float(value)):
+            raise ValueError(f"{name} must be finite, got {value}")
+    low_c, high_c, start_c = float(low_c), float(high_c), float(start_c)
+    if not low_c < high_c:
+        raise ValueError(f"low_c must be below high_c, got {low_c} and {high_c}")
+    if low_c <= -273.15:
+        raise ValueError(f"low_c must be above absolute zero, got {low_c}")
+    times, temps = [0.0], [start_c]
+
+    def to(t_next, temp):
+        if t_next > times[-1]:
+            times.append(t_next)
+            temps.append(temp)
+
+    to(delay, start_c)
+    target = low_c
+    while times[-1] < duration:
+        to(times[-1] + abs(target - temps[-1]) / ramp, target)
+        to(times[-1] + hold, target)
+        target = high_c if target == low_c else low_c
+    times, temps = np.array(times), np.array(temps)
+    keep = times < duration
+    t_out = np.append(times[keep], duration)
+    return t_out, np.append(temps[keep], np.interp(duration, times, temps))

@@ -194,7 +194,7 @@ class VehicleTrajectory:
         self.heading = heading + np.concatenate([[0.0], np.cumsum(yaw_rate[:-1] * step + 0.5 * yaw_acc * step**2)])
         rot = turntable.single_axis(rotation, (n + 1) * step, rate_dps=rate_dps, accel_dps2=accel_dps2, grid=step)
         rot_acc = rot.state(self.time[:-1])[2][:, 0]
-        self.schedule = turntable._schedule_from_segments(
+        self.schedule = turntable.schedule_from_segments(
             VEHICLE_AXES, _compress(np.column_stack([yaw_acc, rot_acc]), step), angle0=np.array([heading, 0.0]))
         self._build_motion(lat, lon, acc, yaw_acc, yaw_rate)
 

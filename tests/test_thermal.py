@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from sarins_fmu.thermal import Ambient, ThermalModel, ThermalParams
+from sarins_fmu.thermal import Ambient, ThermalModel, ThermalParams, chamber_profile
 
 
 def test_cold_start_rises_with_the_configured_time_constant():
@@ -42,3 +42,30 @@ def test_bad_thermal_input():
         ThermalParams(time_constant=(0, 1, 1, 1, 1, 1))
     with pytest.raises(ValueError):
         ThermalModel().advance([10.0, 5.0])
+
+
+def test_chamber_profile_ramps_and_holds():
+    times, temps = chamber_profile(8 * 3600.0)
+    assert times[0] == 0 and times[-1] == 8 * 3600.0 and np.all(np.diff(times) > 0)
+    assert temps[0] == 20.0 and temps.min() == -25.0 and temps.max() == 40.0
+    slope = np.diff(temps) / np.diff(times) * 60.0  # degC/min
+    assert set(np.round(np.abs(slope), 12)) == {0.0, 1.0}
+    holds = np.diff(times)[slope == 0]
+    assert_allclose(holds, [1800.0] * 5)
+    assert temps[-1] == pytest.approx(0.0)  # cut 25 min into the last ramp up from -25
+    # first the cold end: 45 min down to -25, 30 min hold, 65 min up to 40
+    assert_allclose(times[1:4], [2700.0, 4500.0, 8400.0])
+    amb = Ambient(profile=(times, temps))
+    assert amb(2700.0 + 900.0) == -25.0 and amb(4500.0 + 600.0) == pytest.approx(-15.0)
+    t2, v2 = chamber_profile(600.0, delay=600.0, start_c=-25.0, hold_min=0.0)
+    assert_allclose(v2, -25.0) and t2[-1] == 600.0
+
+
+@pytest.mark.parametrize("kwargs", [
+    dict(duration=float("nan")), dict(duration=-1.0), dict(ramp_c_per_min=0.0), dict(hold_min=-1.0),
+    dict(low_c=50.0), dict(high_c=float("nan")), dict(delay=-1.0),
+])
+def test_chamber_profile_rejects_bad_input(kwargs):
+    args = dict(duration=3600.0) | kwargs
+    with pytest.raises(ValueError, match="must be"):
+        chamber_profile(args.pop("duration"), **args)

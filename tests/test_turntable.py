@@ -10,7 +10,7 @@ from sarins_fmu import turntable as tt
 @pytest.mark.parametrize("angle", [math.pi, -0.5 * math.pi, 2 * math.pi, 0.01])
 def test_moves_cover_the_angle_exactly_from_rest_to_rest(angle):
     segs = tt.move_segments(angle, math.radians(6), math.radians(6), 1.0)
-    sched = tt._schedule_from_segments([tt.AXIS_Z], segs)
+    sched = tt.schedule_from_segments([tt.AXIS_Z], segs)
     a, r, _ = sched.state(sched.end_time)
     assert_allclose(a[0, 0], angle, rtol=1e-12)
     assert abs(r[0, 0]) < 1e-15

@@ -11,7 +11,7 @@ The paper's protocol (seed ``003_fa91fb144c9aac79``) as reusable functions:
     sweep +-1 deg/s at 0.01 deg/s^2, +-10 deg/s at 0.1 deg/s^2 and +-100
     deg/s at 1 deg/s^2 while the chamber cycles between -25 and 40 degC,
     repeated (:func:`sarins_fmu.turntable.rate_table_3axis`,
-    :func:`~sarins_fmu.turntable.chamber_profile`);
+    :func:`~sarins_fmu.thermal.chamber_profile`);
   - ``tumble``: the 24-position tumble, 3 min per position
     (:func:`~sarins_fmu.turntable.tumble_24`);
   - ``rates``: the rate test, 22 rates per axis within +-200 deg/s over whole
@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import imu, turntable
+from .. import imu, thermal, turntable
 from ..identify.calibration import TriadCalibration, fit_triad
 from ..thermal import Ambient
 from ..units import DEG_TO_RAD
@@ -169,7 +169,7 @@ def ambient_of(kind: str, prof: Profile) -> Ambient:
     """Chamber / laboratory temperature of a recording (as the Turntable FMU makes it)."""
     if kind != "dynamic":
         return Ambient(mean=AMBIENT_C)
-    return Ambient(profile=turntable.chamber_profile(
+    return Ambient(profile=thermal.chamber_profile(
         prof.dynamic_duration, ramp_c_per_min=prof.ramp_c_per_min, hold_min=prof.hold_min, start_c=AMBIENT_C))
 
 

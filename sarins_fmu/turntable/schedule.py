@@ -1,0 +1,155 @@
+"""The gimbal-chain motion truth: :class:`GimbalSchedule` and its rotation matrices.
+
+See the package docstring (:mod:`sarins_fmu.turntable`) for the chain convention.
+Angles rad, rates rad/s, accelerations rad/s^2, times s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._jit import jit
+
+AXIS_X = (1.0, 0.0, 0.0)
+AXIS_Y = (0.0, 1.0, 0.0)
+AXIS_Z = (0.0, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class GimbalSchedule:
+    """Piecewise-constant-acceleration motion of a gimbal chain.
+
+    Attributes
+    ----------
+    axes : ndarray (A, 3)
+        Unit rotation axis of each gimbal in its parent frame, outer first.
+    times : ndarray (M + 1,)
+        Breakpoints, s, strictly increasing; ``times[0]`` is the start.
+    accel : ndarray (M, A)
+        Angular acceleration on [times[m], times[m+1]), rad/s^2.
+    angle0, rate0 : ndarray (A,)
+        Angles (rad) and rates (rad/s) at ``times[0]``.
+    """
+
+    axes: np.ndarray
+    times: np.ndarray
+    accel: np.ndarray
+    angle0: np.ndarray
+    rate0: np.ndarray
+
+    def __post_init__(self):
+        axes = np.atleast_2d(np.asarray(self.axes, dtype=float))
+        times = np.asarray(self.times, dtype=float)
+        accel = np.asarray(self.accel, dtype=float).reshape(len(times) - 1, axes.shape[0])
+        if axes.shape[1] != 3 or not 1 <= axes.shape[0] <= 3:
+            raise ValueError("axes must have shape (A, 3) with 1 <= A <= 3")
+        if not np.allclose(np.linalg.norm(axes, axis=1), 1.0):
+            raise ValueError("gimbal axes must be unit vectors")
+        if times.ndim != 1 or len(times) < 1 or np.any(np.diff(times) <= 0):
+            raise ValueError("breakpoint times must be strictly increasing")
+        for name, value in (("times", times), ("accel", accel)):
+            if not np.isfinite(value).all():
+                raise ValueError(f"schedule {name} contains NaN or infinity")
+        object.__setattr__(self, "axes", axes)
+        object.__setattr__(self, "times", times)
+        object.__setattr__(self, "accel", accel)
+        object.__setattr__(self, "angle0", np.broadcast_to(np.asarray(self.angle0, float), (axes.shape[0],)).copy())
+        object.__setattr__(self, "rate0", np.broadcast_to(np.asarray(self.rate0, float), (axes.shape[0],)).copy())
+        dt = np.diff(times)[:, None]
+        rate_bp = self.rate0 + np.concatenate([np.zeros((1, axes.shape[0])), np.cumsum(accel * dt, axis=0)])
+        d_angle = rate_bp[:-1] * dt + 0.5 * accel * dt**2
+        angle_bp = self.angle0 + np.concatenate([np.zeros((1, axes.shape[0])), np.cumsum(d_angle, axis=0)])
+        object.__setattr__(self, "_rate_bp", rate_bp)
+        object.__setattr__(self, "_angle_bp", angle_bp)
+
+    @property
+    def n_axes(self) -> int:
+        return self.axes.shape[0]
+
+    @property
+    def end_time(self) -> float:
+        return float(self.times[-1])
+
+    def state(self, time):
+        """Angles, rates and accelerations at ``time`` (scalar or (K,)), s.
+
+        The acceleration returned is the one that holds on [time, next
+        breakpoint), so the motion over a step starting at ``time`` is
+        angle + rate*tau + accel*tau^2/2.
+
+        Returns
+        -------
+        angle, rate, accel : ndarray (K, A)
+        """
+        t = np.atleast_1d(np.asarray(time, dtype=float))
+        if not np.isfinite(t).all():
+            raise ValueError("time must be finite")
+        return _state_kernel(t, self.times, self._angle_bp, self._rate_bp, self.accel, self.angle0, self.rate0)
+
+    def check_grid(self, step: float, start: float = 0.0, tol: float = 1e-9) -> None:
+        """Raise ValueError unless every breakpoint lies on start + n*step."""
+        if not (step > 0 and math.isfinite(step)):
+            raise ValueError(f"step must be positive and finite, got {step}")
+        n = (self.times - start) / step
+        bad = np.abs(n - np.round(n)) > tol * np.maximum(1.0, np.abs(n))
+        if np.any(bad):
+            t_bad = self.times[np.argmax(bad)]
+            raise ValueError(
+                f"turntable breakpoint at t={t_bad:.9g} s is not on the output grid of step {step} s: "
+                "the IMU cannot rebuild the motion inside a step exactly")
+
+
+@jit
+def _state_kernel(t, times, angle_bp, rate_bp, accel, angle0, rate0):
+    """Exact gimbal state at times t (see GimbalSchedule.state)."""
+    n, n_axes = t.shape[0], angle_bp.shape[1]
+    last = times.shape[0] - 1
+    angle = np.empty((n, n_axes))
+    rate = np.empty((n, n_axes))
+    acc = np.zeros((n, n_axes))
+    seg = np.searchsorted(times, t, side="right") - 1
+    for k in range(n):
+        if seg[k] < 0:  # before the schedule: hold the initial state
+            for j in range(n_axes):
+                rate[k, j] = rate0[j]
+                angle[k, j] = angle0[j] + rate0[j] * (t[k] - times[0])
+            continue
+        s = seg[k]
+        tau = t[k] - times[s]
+        for j in range(n_axes):
+            a = accel[s, j] if s < last else 0.0
+            acc[k, j] = a
+            rate[k, j] = rate_bp[s, j] + a * tau
+            angle[k, j] = angle_bp[s, j] + rate_bp[s, j] * tau + 0.5 * a * tau * tau
+    return angle, rate, acc
+
+
+def axis_rotation(axis, angle: float) -> np.ndarray:
+    """R(a, theta) = exp(theta [a x]) for a unit vector ``axis`` (3,), rad."""
+    a = np.asarray(axis, float)
+    k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k)
+
+
+def chain_matrix(axes, angles) -> np.ndarray:
+    """mat_tb = R(axes[0], angles[0]) ... R(axes[A-1], angles[A-1]) of a gimbal chain.
+
+    Parameters
+    ----------
+    axes : array_like (A, 3)
+        Unit gimbal axes, outer first (as :attr:`GimbalSchedule.axes`).
+    angles : array_like (A,)
+        Gimbal angles, rad.
+
+    Returns
+    -------
+    ndarray (3, 3)
+        Projects the body frame b onto the base frame t.
+    """
+    mat = np.eye(3)
+    for a, th in zip(np.atleast_2d(np.asarray(axes, float)), np.asarray(angles, float).ravel()):
+        mat = mat @ axis_rotation(a, th)
+    return mat
