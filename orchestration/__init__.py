@@ -16,7 +16,6 @@ Main entry points
 - :func:`build_container_fmu` - the system as one FMI 2.0 container FMU.
 - :mod:`orchestration.interrupt` - clean stops on SIGINT/SIGTERM.
 - :mod:`orchestration.importers` - the same system under Ecos or libcosim.
-- :mod:`orchestration.cli` - the ``cosim`` subcommand.
 """
 from .container import build_container_fmu
 from .errors import (AlgebraicLoopWarning, DefaultStepWarning, FMUCallError, FMUFatalError,

@@ -15,7 +15,7 @@ import pytest
 
 from fmu_fixtures.fixtures import fixture_fmus, ramp_gain  # noqa: F401 (fixtures)
 from orchestration import Master, SystemFileError, read_system, simulate_system, write_ssp
-from orchestration.cli import main
+from sarins.cli import main
 
 pytestmark = pytest.mark.integration
 
@@ -111,7 +111,7 @@ def test_a_signal_stops_cosim_cleanly(ramp_gain, tmp_path, signum, code):
     scratch.mkdir()
     env = {**os.environ, "PYTHONPATH": str(ROOT), "TMPDIR": str(scratch)}
     process = subprocess.Popen(
-        [sys.executable, "-m", "orchestration", "cosim", str(path), "--stop-time", "1000",
+        [sys.executable, "-m", "sarins", "cosim", str(path), "--stop-time", "1000",
          "--step", "0.01", "--realtime", "0.01", "--no-progress"],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -127,7 +127,7 @@ def test_a_signal_stops_cosim_cleanly(ramp_gain, tmp_path, signum, code):
         if process.poll() is None:
             process.kill()
     assert process.returncode == code, err
-    assert f"stopped: stopped by {signal.Signals(signum).name}" in err
+    assert f"sarins cosim: stopped by {signal.Signals(signum).name}" in err
     assert "Traceback" not in err and "FATAL" not in err
     assert list(scratch.iterdir()) == []  # extracted .ssp and FMUs removed
 

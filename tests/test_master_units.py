@@ -12,7 +12,7 @@ from fmu_fixtures.fixtures import fixture_fmus  # noqa: F401 (fixture)
 from orchestration import (Component, Connection, DefaultStepWarning,
                            IncompatibleConnectionError, Master, ScheduleError, StartValueError,
                            System, read_system, simulate_system, write_ssp)
-from orchestration.cli import main
+from sarins.cli import main
 
 pytestmark = pytest.mark.integration
 
@@ -200,12 +200,13 @@ def test_cosim_without_a_step_uses_the_default_experiment_and_says_so(fixture_fm
     assert main(["cosim", str(path), "--stop-time", "0.5", "--no-progress"]) == 0
     captured = capsys.readouterr()
     assert "4 steps" in captured.out
-    assert "warning: no communication step given and none in the system file: using " \
-           "0.125 s" in captured.err
+    assert "sarins: warning: no communication step given and none in the system file: " \
+           "using 0.125 s" in captured.err
     alone = write_ssp(System("r", [Component("ramp", fixture_fmus["Ramp"])]), tmp_path / "r.ssp")
     assert main(["cosim", str(alone), "--stop-time", "1"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("error: no communication step") and "Traceback" not in err
+    assert err.startswith("sarins cosim: error: no communication step")
+    assert "Traceback" not in err
 
 
 def test_units_and_transformations_survive_writing_a_flat_ssp(folder, tmp_path):
