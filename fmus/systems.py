@@ -14,8 +14,9 @@ from pathlib import Path
 
 from orchestration import Component, Connection, System, write_ssd, write_ssp
 
-GIMBAL_LINKS = ["angle_1", "rate_1", "angle_2", "rate_2", "angle_3", "rate_3", "ambient_temp"]
-INCREMENT_LINKS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z"]
+GIMBAL_LINKS = [f"{q}_{j}" for j in (1, 2, 3) for q in ("angle", "rate", "accel")] + [
+    "ambient_temp", "ambient_temp_rate", "motion_time"]
+INCREMENT_LINKS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z", "increment_end_time"]
 SHIPPED = Path(__file__).resolve().parents[1] / "orchestration" / "systems"
 
 
@@ -47,21 +48,23 @@ def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: floa
 
     Turntable -> IMUThermal -> StrapdownINS -> RBFIdentifier -> (axial drift
     correction) StrapdownINS.  The identifier reads the INS latitude error,
-    navigation time and alignment temperature change and the IMU's azimuth
-    gyro temperature; at its trigger time (default 12 h of navigation) it
-    outputs the identified drift, held, which the INS subtracts from the
-    next step on.  Gauss-Seidel order Turntable, IMUThermal, StrapdownINS,
-    RBFIdentifier; the loop INS -> identifier -> INS is broken at the INS
-    input (one step of delay, the same timing as ``run_static``'s
-    ``correction_from_hours``).  Default stop: 4 h alignment + 84 h.
+    navigation time, alignment temperature change and azimuth gyro
+    temperature (all tagged nav_time); at its trigger time (default 12 h of
+    navigation) it outputs the identified drift, held, with the navigation
+    time ``apply_from`` (trigger + the identifier's latency) from which the
+    INS subtracts it: ``run_static``'s ``correction_from_hours``.  Every
+    output is a state output, so the loop INS -> identifier -> INS has no
+    direct feedthrough; the result is the same under Gauss-Seidel and
+    Jacobi.  Default stop: 4 h alignment + 84 h.
     """
     base = standard_static(fmu_dir, hours=hours, turntable=turntable, imu=imu, ins=ins)
     identifier_fmu = Component("identifier", Path(fmu_dir) / "RBFIdentifier.fmu", dict(identifier or {}))
     loop = [Connection("ins", "lat_error", "identifier", "lat_error"),
             Connection("ins", "nav_time", "identifier", "nav_time"),
             Connection("ins", "temp_change_align", "identifier", "temp_change"),
-            Connection("imu", "temp_gyro_z", "identifier", "temperature"),
-            Connection("identifier", "axial_drift", "ins", "axial_drift_correction")]
+            Connection("ins", "temp_azimuth_gyro", "identifier", "temperature"),
+            Connection("identifier", "axial_drift", "ins", "axial_drift_correction"),
+            Connection("identifier", "apply_from", "ins", "axial_drift_apply_from")]
     return System(name="standard_static_identified", components=[*base.components, identifier_fmu],
                   connections=[*base.connections, *loop], start_time=base.start_time,
                   stop_time=base.stop_time, step_size=base.step_size)
