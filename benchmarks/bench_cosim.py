@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 
 from fmu_driver import run_chain  # noqa: E402
 from fmus.build import build_fmus  # noqa: E402
-from fmus.systems import standard_static  # noqa: E402
+from sarins.systems import standard_static  # noqa: E402
 from orchestration import simulate_system  # noqa: E402
 from sarins_fmu.experiments import run_static  # noqa: E402
 

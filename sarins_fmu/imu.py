@@ -450,3 +450,24 @@ def _interval_terms(temp0, temps, h, coef, drift_poly, drift_dtdt, gm, gm_phi, g
         for s in range(6):
             prev[s] = temps[k, s]
     return g_bias, g_sf, a_bias, a_sf
+
+
+def deterministic_axial_drift(model: ImuModel, temperature, dt: float) -> np.ndarray:
+    """Deterministic z-gyro drift (rad/s) along a temperature series.
+
+    eps_z = b + b1 (T - T_REF) + b2 (T - T_REF)^2 + a T^2 + b T + c + d dT/dt
+    (the z-gyro terms of :func:`_interval_terms` without the Gauss-Markov
+    bias instability and the white noise; ageing as in ``model``).
+
+    Parameters
+    ----------
+    temperature : (K,) z-gyro temperature on a uniform grid, degC
+    dt : grid step, s (dT/dt by central differences)
+    """
+    temperature = np.asarray(temperature, dtype=float)
+    d = temperature - T_REF
+    g = model.gyro
+    poly = model.axial_drift_poly
+    rate = np.gradient(temperature, dt) if temperature.size > 1 else np.zeros_like(temperature)
+    return (g.bias[2] + g.bias_tc1[2] * d + g.bias_tc2[2] * d * d
+            + (poly[0] * temperature + poly[1]) * temperature + poly[2] + model.axial_drift_dtdt * rate)

@@ -39,7 +39,7 @@ Observability of :math:`\varepsilon_z` on a static base is weak: it enters the
 velocity only through :math:`\dot\phi_E = -\omega_{ie}\cos L\,\phi_U` and
 :math:`\delta\dot v_N = g\phi_E`, i.e. as a cubic in time, whereas an initial
 heading error gives a quadratic.  Over 30 minutes the white gyro noise (ARW)
-therefore limits the estimate: see ``docs/seed2.md`` for the numbers.  The
+therefore limits the estimate: see ``docs/online-rls.md`` for the numbers.  The
 rotation of the IMU about the azimuth axis modulates the horizontal drifts so
 that they are separable from the heading error; it does not modulate
 :math:`\varepsilon_z`.

@@ -40,7 +40,7 @@ class Slave:
         fmilog.unregister(self.name)
 
 
-# the time-tagged motion set and increments: fmus.systems' GIMBAL_LINKS and INCREMENT_LINKS, written out
+# the time-tagged motion set and increments: sarins.systems' GIMBAL_LINKS and INCREMENT_LINKS, written out
 # (this driver also runs in a host without the project, test_fmu_runs_in_a_host_without_this_project)
 TT_TO_IMU = [f"{q}_{j}" for j in (1, 2, 3) for q in ("angle", "rate", "accel")] + [
     "ambient_temp", "ambient_temp_rate", "motion_time"]

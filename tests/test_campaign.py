@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from campaign_tasks import fail, square
-from orchestration.campaign import Task, load_result, run_campaign, save_result
+from sarins.campaign import Task, load_result, run_campaign, save_result
 
 HERE = Path(__file__).resolve().parent
 
@@ -54,7 +54,7 @@ def test_killed_campaign_resumes_without_losing_or_redoing_work(tmp_path):
         import sys
         sys.path[:0] = [{str(HERE)!r}, {str(HERE.parent)!r}]
         from campaign_tasks import square
-        from orchestration.campaign import Task, run_campaign
+        from sarins.campaign import Task, run_campaign
         tasks = [Task(f"sq{{x}}", square, {{"x": x, "marker_dir": {str(markers)!r}, "delay": 0.4}}) for x in range(12)]
         run_campaign(tasks, {str(out)!r}, workers=2, progress=False)
     """)

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from sarins_fmu.cli import main
+from sarins.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -28,7 +28,7 @@ def test_navigate_json(capsys):
     ["navigate", "--rotation", "sideways"],
 ])
 def test_bad_values_exit_nonzero_with_one_line(argv):
-    proc = subprocess.run([sys.executable, "-m", "sarins_fmu.cli", *argv], capture_output=True, text=True)
+    proc = subprocess.run([sys.executable, "-m", "sarins", *argv], capture_output=True, text=True)
     assert proc.returncode != 0
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "error" in lines[0]
@@ -45,10 +45,40 @@ def test_readme_starts_with_the_two_setup_commands_and_ci_runs_the_second():
 
 def test_demo_cosimulates_the_identified_system(tmp_path, capsys):
     """align -> navigate -> identify (RBFIdentifier FMU) -> compensate -> navigate, scaled down."""
+    from sarins_fmu.identify.axial import default_model_path
+
     assert main(["demo", "--align-hours", "0.2", "--identify-hours", "0.1", "--nav-hours", "0.1", "--no-progress",
-                 "--fmu-dir", str(tmp_path)]) == 0
+                 "--model-file", str(default_model_path("hot")), "--fmu-dir", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "gauss-seidel" in out and "position error, compensated" in out
     drift = float(out.split("identified axial drift")[1].split()[0])
+    true = float(out.split("true axial drift")[1].split()[0])
+    error = float(out.split("identification error")[1].split()[0])
     assert drift != 0.0 and abs(drift) < 0.01
+    assert abs(true) < 0.01 and error == pytest.approx(drift - true, abs=2e-5)
     assert (tmp_path / "StrapdownINS.fmu").exists() and (tmp_path / "RBFIdentifier.fmu").exists()
+
+
+def test_demo_refuses_an_identify_time_the_shipped_model_was_not_trained_for(tmp_path, capsys):
+    assert main(["demo", "--identify-hours", "1", "--fmu-dir", str(tmp_path), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("sarins demo: error:") and "12 h" in err and "--model-file" in err
+    assert not (tmp_path / "StrapdownINS.fmu").exists()
+
+
+def test_demo_has_no_options_it_cannot_honour(capsys):
+    assert main_exit(["demo", "--correction-dph", "0.01"]) == 2
+
+
+def main_exit(argv):
+    try:
+        return main(argv)
+    except SystemExit as exc:
+        return exc.code
+
+
+def test_version_and_help_are_plain(capsys):
+    assert main_exit(["--version"]) == 0
+    assert capsys.readouterr().out.startswith("sarins ")
+    assert main_exit(["--help"]) == 0
+    assert "``" not in capsys.readouterr().out

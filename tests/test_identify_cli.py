@@ -1,4 +1,4 @@
-"""Tests of the `sarins identify` subcommands (sarins_fmu.identify.cli)."""
+"""Tests of the `sarins identify` subcommands (sarins.cli.identify)."""
 
 import argparse
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from sarins_fmu.identify.cli import DEFAULT_GOAL, main, register
+from sarins.cli.identify import DEFAULT_GOAL, main, register
 from sarins_fmu.identify.rbf import RBFNetwork
 from sarins_fmu.identify.tables import (
     TABLE2_HOT,

@@ -9,14 +9,14 @@ from sarins_fmu.identify.tables import (
     TableError,
     numeric_column,
     read_table,
-    seed000_table2_hot,
-    seed000_table4_cold,
+    axial_rbf_table2_hot,
+    axial_rbf_table4_cold,
     write_table,
 )
 
 
 def test_table2_hot_against_the_paper():
-    t = seed000_table2_hot()
+    t = axial_rbf_table2_hot()
     assert len(t["drift_dph"]) == 16
     # (row, latitude reading deg, temperature range degC, drift deg/h) typed from Table 2
     for row, lat, t_min, t_max, drift in [
@@ -38,7 +38,7 @@ def test_table2_hot_against_the_paper():
 
 
 def test_table4_cold_against_the_paper():
-    t = seed000_table4_cold()
+    t = axial_rbf_table4_cold()
     assert len(t["drift_dph"]) == 6
     # (row, align range, align diff, calib range, calib diff, lat, true drift, hot RBF)
     for row, a_min, a_max, a_diff, c_min, c_max, c_diff, lat, drift, hot in [

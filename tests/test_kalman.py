@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from sarins_fmu.experiments.seed002 import simulate_stop
+from sarins_fmu.experiments.online_rls import simulate_stop
 from sarins_fmu.kalman import EPS_Z, N_STATES, StopFilterSettings, StopKalmanFilter
 from sarins_fmu.units import DEG_TO_RAD
 

@@ -8,7 +8,8 @@ import pytest
 
 from fmu_fixtures.fixtures import fixture_fmus, ramp_gain  # noqa: F401 (fixtures)
 from orchestration import Component, System, write_ssp
-from orchestration.cli import main, register
+from sarins.cli import main
+from sarins.cli.cosim import register
 
 pytestmark = pytest.mark.integration
 
@@ -40,7 +41,8 @@ def test_errors_exit_nonzero_with_a_message(fixture_fmus, tmp_path, capsys):
     bad = System("bad", [Component("f", fixture_fmus["Faulty"], {"mode": 2, "fail_at": 0.2})],
                  [])
     path = write_ssp(bad, tmp_path / "bad.ssp")
-    assert main(["cosim", str(path), "--stop-time", "1", "--step", "0.1"]) == 3
-    assert "fmi2DoStep returned DISCARD at t = 0.2 s" in capsys.readouterr().err
+    assert main(["cosim", str(path), "--stop-time", "1", "--step", "0.1"]) == 1
+    err = capsys.readouterr().err
+    assert "\nsarins cosim: failed:" in "\n" + err and "fmi2DoStep returned DISCARD at t = 0.2 s" in err
     assert main(["cosim", str(tmp_path / "none.ssp"), "--stop-time", "1", "--step", "1"]) == 2
     assert "not found" in capsys.readouterr().err

@@ -18,7 +18,7 @@ import pytest
 import sarins_fmu.identify.axial  # noqa: F401 - the FMUs' shared library copy must outlive each run's unpacking
 from fmu_fixtures.thirdparty import ensure_libtbb, has_module
 from fmus.build import build_fmus, fix_fmu_description
-from fmus.systems import standard_static, standard_static_identified
+from sarins.systems import standard_static, standard_static_identified
 from orchestration import simulate_system, write_ssp
 
 SHORT_TT = dict(align_time=600.0)

@@ -11,8 +11,8 @@ from fmpy.validation import validate_fmu
 
 from fmu_fixtures.thirdparty import ensure_libtbb, has_module
 from fmus.build import build_fmus
-from fmus.cli import build_system_fmu
-from fmus.systems import standard_static, write_systems
+from sarins.systems import build_system_fmu
+from sarins.systems import standard_static, write_systems
 from orchestration import simulate_system, write_ssp
 from sarins_fmu.experiments import run_static
 

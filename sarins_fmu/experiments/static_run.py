@@ -19,6 +19,7 @@ from ..imu import IMU, StaticBase
 from ..rotations import small_angle_error
 from ..ins import InsConfig, StrapdownINS
 from ..thermal import Ambient
+from ..site import SITE_LAT_DEG
 from ..units import DEG_TO_RAD, DPH_TO_RPS, HOUR, NM, RAD_TO_DEG
 
 CHUNK = 3600  # major-loop steps per chunk
@@ -80,7 +81,7 @@ def build_imu_model(imu: str = "nav-rlg", axial_drift_dph: float | None = None):
     return model
 
 
-def run_static(*, lat_deg: float = 28.222, lon_deg: float = 0.0, align_hours: float = 4.0,
+def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hours: float = 4.0,
                nav_hours: float = 72.0, rotation: str = "forward-reverse", rate_dps: float = 6.0,
                accel_dps2: float = 6.0, dwell: float = 0.0, align_dwell: float = 300.0, imu: str = "nav-rlg",
                model: imu_mod.ImuModel | None = None, axial_drift_dph: float | None = None,

@@ -49,8 +49,8 @@ from .tables import (
     SEED000_SITE_LAT_DEG,
     TableError,
     read_table,
-    seed000_table2_hot,
-    seed000_table4_cold,
+    axial_rbf_table2_hot,
+    axial_rbf_table4_cold,
     write_table,
 )
 
@@ -77,7 +77,7 @@ __all__ = [
     "SEED000_SITE_LAT_DEG",
     "TableError",
     "read_table",
-    "seed000_table2_hot",
-    "seed000_table4_cold",
+    "axial_rbf_table2_hot",
+    "axial_rbf_table4_cold",
     "write_table",
 ]

@@ -24,15 +24,15 @@ import numpy as np
 from ..units import DPH_TO_RPS, RAD_TO_DEG
 from .modelfile import ModelFileError
 from .rbf import RBFNetwork
+from ..site import SITE_LAT_DEG
 
 DATA = Path(__file__).resolve().parents[1] / "data"
-DEFAULT_MODELS = {"hot": DATA / "seed000_rbf_hot.json", "cold": DATA / "seed000_rbf_cold.json"}
+DEFAULT_MODELS = {"hot": DATA / "axial_rbf_hot.json", "cold": DATA / "axial_rbf_cold.json"}
 KNOWN_INPUTS = ("lat_error_deg", "lat_deg", "temp_c", "temp_change_c")
 # delay from the identification (nav time) to the first navigation interval
 # compensated with its result, s: a few steps, so that the INS receives the
 # drift in time under any co-simulation scheme (Jacobi adds a step per link)
 APPLY_LATENCY = 10.0
-SITE_LAT_DEG = 28.222  # seed 000's site, deg (used when a model does not state its own)
 
 
 def default_model_path(kind: str) -> Path:

@@ -7,7 +7,7 @@ Packaged data (``sarins_fmu/data/``), typed from seed 000 (Yu et al. 2012,
 J. National Univ. Defense Technology 34(3)); the paper's site latitude is
 28.222° (:data:`SEED000_SITE_LAT_DEG`).
 
-``seed000_table2_hot.csv`` (Table 2, hot start, 16 training samples; rows
+``axial_rbf_table2_hot.csv`` (Table 2, hot start, 16 training samples; rows
 1-8 are the table's left half, 9-16 its right half)
     ``sample``; ``lat_deg``, latitude *reading* after 4 h alignment + 12 h
     navigation (the network input in the paper), °; ``lat_error_deg`` =
@@ -17,7 +17,7 @@ J. National Univ. Defense Technology 34(3)); the paper's site latitude is
     the axial gyro drift taken as truth, °/h. Sample 2's range "28 ~ 39" is
     as printed, although hot starts are said to change by less than 3 °C.
 
-``seed000_table4_cold.csv`` (Table 4, cold start, 6 training samples)
+``axial_rbf_table4_cold.csv`` (Table 4, cold start, 6 training samples)
     ``align_temp_min_c``, ``align_temp_max_c``, ``align_temp_diff_c``:
     temperature range and change during the alignment, °C;
     ``calib_temp_min_c``, ``calib_temp_max_c``, ``calib_temp_diff_c``: the
@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import TextIO
 
 import numpy as np
+from ..site import SITE_LAT_DEG as SEED000_SITE_LAT_DEG
 
 __all__ = [
     "TableError",
@@ -45,14 +46,13 @@ __all__ = [
     "numeric_column",
     "write_table",
     "packaged_table_path",
-    "seed000_table2_hot",
-    "seed000_table4_cold",
+    "axial_rbf_table2_hot",
+    "axial_rbf_table4_cold",
 ]
 
-SEED000_SITE_LAT_DEG = 28.222  # deg, latitude of seed 000's test site
 
-TABLE2_HOT = "seed000_table2_hot.csv"
-TABLE4_COLD = "seed000_table4_cold.csv"
+TABLE2_HOT = "axial_rbf_table2_hot.csv"
+TABLE4_COLD = "axial_rbf_table4_cold.csv"
 
 
 class TableError(ValueError):
@@ -196,7 +196,7 @@ def packaged_table_path(name: str) -> Path:
     Parameters
     ----------
     name : str
-        File name, e.g. ``"seed000_table2_hot.csv"``.
+        File name, e.g. ``"axial_rbf_table2_hot.csv"``.
     """
     path = Path(str(resources.files("sarins_fmu") / "data" / name))
     if not path.is_file():
@@ -204,11 +204,11 @@ def packaged_table_path(name: str) -> Path:
     return path
 
 
-def seed000_table2_hot() -> dict[str, np.ndarray]:
+def axial_rbf_table2_hot() -> dict[str, np.ndarray]:
     """Seed 000 Table 2 (hot start, 16 samples); columns in the module docstring."""
     return read_table(packaged_table_path(TABLE2_HOT))
 
 
-def seed000_table4_cold() -> dict[str, np.ndarray]:
+def axial_rbf_table4_cold() -> dict[str, np.ndarray]:
     """Seed 000 Table 4 (cold start, 6 samples); columns in the module docstring."""
     return read_table(packaged_table_path(TABLE4_COLD))

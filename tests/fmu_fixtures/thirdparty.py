@@ -5,11 +5,14 @@ FMUs: the FMI 2.0 co-simulation FMUs built by the OpenModelica compiler
 ``gemseo_fmu/problems/fmu_files/linux``: ``ramp.fmu``, ``add.fmu``,
 ``MassSpringSubSystem1.fmu``, ``MassSpringSubSystem2.fmu`` and the
 monolithic ``MassSpringSystem.fmu``.  They are taken from an installed
-``gemseo_fmu`` if there is one, else from its wheel fetched with
-``pip download --no-deps`` (gemseo itself is not installed).
+``gemseo_fmu`` if there is one, else from its wheel in
+:data:`THIRDPARTY_DIR` (``$SARINS_THIRDPARTY_DIR``, default
+``.cache/thirdparty`` in the repository), which ``.ci/run``'s set-up fills
+with ``pip download --no-deps gemseo-fmu==3.1.1`` (gemseo itself is not
+installed).  Tests never download: without the wheel they skip and say so.
 
-Engines: ecospy needs the Debian library ``libtbb12``; :func:`ensure_libtbb`
-installs it with apt-get when it is missing and we are root.
+Engines: ecospy needs the Debian library ``libtbb12``, which ``.ci/run``'s
+set-up installs; without it the Ecos tests skip and say so.
 """
 from __future__ import annotations
 
@@ -18,12 +21,13 @@ import importlib.util
 import os
 import platform
 import shutil
-import subprocess
 import sys
 import zipfile
 from pathlib import Path
 
 GEMSEO_FMU_WHEEL = "gemseo-fmu==3.1.1"
+THIRDPARTY_DIR = Path(os.environ.get("SARINS_THIRDPARTY_DIR",
+                                     Path(__file__).resolve().parents[2] / ".cache" / "thirdparty"))
 OPENMODELICA_FMUS = ("ramp", "add", "MassSpringSubSystem1", "MassSpringSubSystem2",
                      "MassSpringSystem")
 _INSIDE = "gemseo_fmu/problems/fmu_files/linux/"
@@ -43,42 +47,25 @@ def openmodelica_fmus(cache: Path) -> dict[str, Path] | str:
         for name, target in wanted.items():
             shutil.copyfile(folder / f"{name}.fmu", target)
         return wanted
-    done = subprocess.run([sys.executable, "-m", "pip", "download", "--no-deps",
-                           "--only-binary=:all:", "-d", str(cache), GEMSEO_FMU_WHEEL],
-                          capture_output=True, text=True, timeout=600)
-    wheels = sorted(cache.glob("gemseo_fmu-*.whl"))
-    if done.returncode != 0 or not wheels:
-        return f"could not fetch {GEMSEO_FMU_WHEEL} with pip: {done.stderr.strip()[-300:]}"
+    wheels = sorted(THIRDPARTY_DIR.glob("gemseo_fmu-*.whl"))
+    if not wheels:
+        return (f"no {GEMSEO_FMU_WHEEL} wheel in {THIRDPARTY_DIR} (.ci/run fetches it: "
+                f"pip download --no-deps --only-binary=:all: -d {THIRDPARTY_DIR} {GEMSEO_FMU_WHEEL})")
     with zipfile.ZipFile(wheels[-1]) as wheel:
         for name, target in wanted.items():
             target.write_bytes(wheel.read(f"{_INSIDE}{name}.fmu"))
-    for wheel_file in wheels:
-        wheel_file.unlink()
     return wanted
 
 
 def ensure_libtbb() -> str | None:
-    """Make ``libtbb.so.12`` loadable for ecospy; return why not, or None when it is."""
+    """Return why ecospy's ``libtbb.so.12`` cannot be loaded, or None when it can."""
     if sys.platform != "linux":
         return None
     try:
         ctypes.CDLL("libtbb.so.12")
         return None
     except OSError:
-        pass
-    if os.geteuid() != 0 or shutil.which("apt-get") is None:
-        return "libtbb.so.12 is missing (apt-get install libtbb12 needs root and apt)"
-    for command in (["apt-get", "install", "-y", "-qq", "libtbb12"],
-                    ["apt-get", "update", "-qq"],
-                    ["apt-get", "install", "-y", "-qq", "libtbb12"]):
-        subprocess.run(command, capture_output=True, timeout=600,
-                       env={**os.environ, "DEBIAN_FRONTEND": "noninteractive"})
-        try:
-            ctypes.CDLL("libtbb.so.12")
-            return None
-        except OSError:
-            continue
-    return "apt-get could not install libtbb12"
+        return "libtbb.so.12 is missing (.ci/run installs the Debian package libtbb12)"
 
 
 def has_module(name: str) -> bool:

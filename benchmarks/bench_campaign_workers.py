@@ -1,0 +1,59 @@
+"""Speed-up of the axial-rbf campaign with 2 local workers vs 1.
+
+Runs the same subset of seed 000 experiments (training runs: 4 h alignment +
+12 h navigation, in process or through the FMUs) twice through
+``sarins.campaign.run_campaign`` into fresh folders, once with
+``workers=1`` (in this process, one after another) and once with
+``workers=2`` (spawned process pool), and reports both wall times and their
+ratio.  On a machine shared with other jobs the ratio is what the free cores
+allow, not the code's limit.
+
+Usage: ``python benchmarks/bench_campaign_workers.py [--runs 6] [--engine inprocess|cosim]``
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from sarins.campaign import Task, run_campaign  # noqa: E402
+from sarins_fmu.experiments import axial_rbf as s0  # noqa: E402
+from sarins.axial_rbf.runs import train_task  # noqa: E402
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=6, help="experiments in the subset (default 6)")
+    parser.add_argument("--engine", choices=("inprocess", "cosim"), default="inprocess")
+    args = parser.parse_args()
+    exps = s0.generate("hot", args.runs, 1, 99)[: args.runs]
+    times = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        fmu_dir = None
+        if args.engine == "cosim":
+            from fmus.build import build_fmus
+
+            fmu_dir = str(build_fmus(Path(tmp) / "fmus")[0].parent)
+        tasks = [Task(e.name, train_task, {"exp": e.to_dict(), "engine": args.engine, "fmu_dir": fmu_dir})
+                 for e in exps]
+        train_task(exps[0].to_dict(), args.engine, fmu_dir)  # warm-up (numba cache, imports) in this process
+        for workers in (1, 2):
+            t0 = time.perf_counter()
+            results = run_campaign(tasks, Path(tmp) / f"w{workers}", workers=workers, progress=False)
+            times[workers] = time.perf_counter() - t0
+        assert all(results[t.id]["lat_error_deg"] == run_campaign(tasks, Path(tmp) / "w1", progress=False)[t.id][
+            "lat_error_deg"] for t in tasks)
+    report = {"runs": args.runs, "engine": args.engine, "wall_1_worker_s": round(times[1], 1),
+              "wall_2_workers_s": round(times[2], 1), "speedup": round(times[1] / times[2], 2)}
+    print(json.dumps(report))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

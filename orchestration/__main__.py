@@ -1,6 +1,0 @@
-"""``python -m orchestration cosim SYSTEM ...``."""
-import sys
-
-from .cli import main
-
-sys.exit(main())

@@ -1,0 +1,6 @@
+"""``python -m sarins ...`` = the ``sarins`` command."""
+import sys
+
+from sarins.cli import main
+
+sys.exit(main())

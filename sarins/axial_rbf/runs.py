@@ -1,0 +1,260 @@
+"""Seed 000 runs: one experiment in process or through the FMUs, and the
+campaign's task functions (module level, so spawned workers import them).
+
+Engines
+    ``inprocess``: :func:`run_static` (library, compiled kernels).
+    ``cosim``: the FMUs under the generic master, Gauss-Seidel, 1 s step
+    (``standard_static`` for training runs, ``standard_static_identified``
+    with the RBFIdentifier FMU for the live identified run).  The two are
+    bit-identical for the same experiment (tests/test_axial_rbf.py).
+
+Every series handed back is sampled every ``SAMPLE`` s of navigation.
+"""
+
+from __future__ import annotations
+
+import time as _time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from sarins_fmu.identify.axial import APPLY_LATENCY, DriftIdentifier
+from sarins_fmu.units import DEG_TO_RAD, DPH_TO_RPS, HOUR, NM, RAD_TO_DEG
+from sarins_fmu.experiments import axial_rbf as s0
+from sarins_fmu.experiments.static_run import run_static
+
+SAMPLE = 60  # s between stored samples
+ENGINES = ("inprocess", "cosim")
+RECORD = ["ins.lat_error", "ins.lon_error", "ins.north_error", "ins.east_error", "ins.position_error",
+          "ins.nav_time", "ins.temp_change_align", "imu.temp_gyro_z"]
+
+
+def _exp(exp) -> s0.Experiment:
+    return exp if isinstance(exp, s0.Experiment) else s0.Experiment(**exp)
+
+
+# ------------------------------------------------------------------ in process
+def run_inprocess(exp, nav_hours: float, *, correction_dph: float = 0.0, correction_from_hours: float = 0.0,
+                  align_hours: float = s0.ALIGN_HOURS) -> dict:
+    """One run of the experiment in process; navigation series every SAMPLE s.
+
+    Returns dict: time_h (K,), lat_error, lon_error (rad), north_error,
+    east_error (m), temp_z (K,) degC at the same times, temp_change_align
+    (degC, over the alignment), temp_align (min, max) degC.
+    """
+    exp = _exp(exp)
+    r = run_static(lat_deg=s0.SITE_LAT_DEG, align_hours=align_hours, nav_hours=nav_hours,
+                   model=s0.imu_model(exp), start=exp.start, ambient=s0.ambient(exp), seed=exp.seed,
+                   correction_dph=correction_dph, correction_from_hours=correction_from_hours)
+    n_align = len(r.time_all) - len(r.time)
+    k = np.arange(SAMPLE - 1, len(r.time), SAMPLE)
+    temp_z = r.temperature[:, 2]
+    return {"time_h": r.time[k] / HOUR, "lat_error": r.lat_error[k], "lon_error": r.lon_error[k],
+            "north_error": r.north_error[k], "east_error": r.east_error[k], "temp_z": temp_z[n_align + k],
+            "temp_change_align": float(temp_z[n_align - 1] - temp_z[0]),
+            "temp_align": (float(temp_z[:n_align].min()), float(temp_z[:n_align].max()))}
+
+
+# ------------------------------------------------------------------ co-simulation
+def cosim_parameters(exp, align_hours: float = s0.ALIGN_HOURS) -> dict:
+    """FMU start values (SI) reproducing :func:`run_inprocess` for the experiment."""
+    exp = _exp(exp)
+    lat = s0.SITE_LAT_DEG * DEG_TO_RAD
+    align = align_hours * HOUR
+    return {"turntable": {"scheme": "forward-reverse", "align_time": align, "ambient_mode": "sinusoid",
+                          "ambient_mean": exp.ambient_c, "ambient_amplitude": exp.amplitude_c,
+                          "ambient_period": 86400.0},
+            # the IMU's initial temperature comes from the turntable's ambient_temp output, which
+            # the master sets before the IMU leaves Initialization Mode
+            "imu": {"preset": "nav-rlg", "lat": lat, "thermal_start": exp.start, "seed": int(exp.seed),
+                    **s0.imu_overrides(exp)},
+            "ins": {"lat0": lat, "align_time": align}}
+
+
+def run_cosim(exp, nav_hours: float, fmu_dir, *, model_file: str | None = None,
+              trigger_hours: float = s0.IDENTIFY_HOURS, align_hours: float = s0.ALIGN_HOURS) -> dict:
+    """One run through the FMUs (master, Gauss-Seidel, 1 s); with
+    ``model_file`` the RBFIdentifier closes the loop at ``trigger_hours``.
+
+    Returns the same keys as :func:`run_inprocess` plus, with an
+    identifier, ``identified_drift_dph`` (the FMU's output).
+    """
+    from sarins.systems import standard_static, standard_static_identified
+    from orchestration import simulate_system
+
+    exp = _exp(exp)
+    params = cosim_parameters(exp, align_hours)
+    hours = align_hours + nav_hours
+    record = list(RECORD)
+    if model_file is None:
+        system = standard_static(Path(fmu_dir), hours=hours, **params)
+    else:
+        ident = {"model_file": str(model_file), "trigger_time": trigger_hours * HOUR}
+        system = standard_static_identified(Path(fmu_dir), hours=hours, identifier=ident, **params)
+        record.append("identifier.axial_drift")
+    with warnings.catch_warnings():  # open correction input / the identifier loop are intended
+        warnings.simplefilter("ignore")
+        res = simulate_system(system, hours * HOUR, 1.0, record=record, progress=False, output_every=1)
+    nav = res["ins.nav_time"]
+    n_align = round(align_hours * HOUR)
+    k_all = np.arange(n_align + SAMPLE, len(nav), SAMPLE)  # row 0 is t = 0
+    temp_z = res["imu.temp_gyro_z"]
+    out = {"time_h": nav[k_all] / HOUR, "lat_error": res["ins.lat_error"][k_all],
+           "lon_error": res["ins.lon_error"][k_all], "north_error": res["ins.north_error"][k_all],
+           "east_error": res["ins.east_error"][k_all], "temp_z": temp_z[k_all],
+           "temp_change_align": float(res["ins.temp_change_align"][-1]),
+           "temp_align": (float(temp_z[1:n_align + 1].min()), float(temp_z[1:n_align + 1].max()))}
+    if model_file is not None:
+        out["identified_drift_dph"] = float(res["identifier.axial_drift"][-1] / DPH_TO_RPS)
+    return out
+
+
+# ------------------------------------------------------------------ helpers
+def at_hours(run: dict, key: str, hours: float) -> float:
+    k = int(np.argmin(np.abs(run["time_h"] - hours)))
+    if abs(run["time_h"][k] - hours) > 1e-6:
+        raise ValueError(f"no sample at {hours} h")
+    return float(run[key][k])
+
+
+def run_features(run: dict, hours: float = s0.IDENTIFY_HOURS) -> dict:
+    """The network inputs (paper units) of a run at ``hours`` of navigation."""
+    return s0.features(at_hours(run, "lat_error", hours), at_hours(run, "temp_z", hours),
+                       run["temp_change_align"])
+
+
+def window(run: dict, start_h: float, end_h: float) -> np.ndarray:
+    sel = (run["time_h"] > start_h + 1e-9) & (run["time_h"] <= end_h + 1e-9)
+    return np.column_stack([run["north_error"][sel], run["east_error"][sel]])
+
+
+def max_error_nm(err: np.ndarray) -> float:
+    return float(np.max(np.hypot(err[:, 0], err[:, 1])) / NM)
+
+
+def predict(model_file: str, feats: dict) -> float:
+    """Drift (deg/h) of a model for features in paper units."""
+    ident = DriftIdentifier(model_file)
+    return ident.drift_dph(feats["lat_error_deg"] * DEG_TO_RAD, feats["temp_c"], feats["temp_change_c"])
+
+
+# ------------------------------------------------------------------ tasks
+def train_task(exp: dict, engine: str = "inprocess", fmu_dir: str | None = None,
+               paper_truth: bool = False) -> dict:
+    """4 h alignment + 12 h navigation of a training experiment: the Table 2/4 row.
+
+    ``paper_truth`` also finds the paper's true drift (two 72 h runs in process)."""
+    t0 = _time.perf_counter()
+    e = _exp(exp)
+    if engine == "cosim":
+        run = run_cosim(e, s0.IDENTIFY_HOURS, fmu_dir)
+    elif engine == "inprocess":
+        run = run_inprocess(e, s0.IDENTIFY_HOURS)
+    else:
+        raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
+    feats = run_features(run)
+    truth = float("nan")
+    if paper_truth:
+        probe = 1e-3
+        err0 = window(run_inprocess(e, s0.NAV_HOURS), 0.0, s0.NAV_HOURS)
+        err1 = window(run_inprocess(e, s0.NAV_HOURS, correction_dph=probe), 0.0, s0.NAV_HOURS)
+        truth = s0.paper_true_drift(err0, err1, probe)[0]
+    return {**e.to_dict(), **feats, "engine": engine, "paper_truth_dph": truth,
+            "temp_align_min": run["temp_align"][0], "temp_align_max": run["temp_align"][1],
+            "temp_calib_min": float(run["temp_z"].min()), "temp_calib_max": float(run["temp_z"].max()),
+            "time_h": run["time_h"], "lat_error_series_deg": run["lat_error"] * RAD_TO_DEG,
+            "lon_error_series_deg": run["lon_error"] * RAD_TO_DEG,
+            "wall_seconds": _time.perf_counter() - t0}
+
+
+def test_task(exp: dict, models: dict, engine: str = "inprocess", fmu_dir: str | None = None,
+              live: bool = True, rerun_all: bool = True, nav_hours: float = s0.NAV_HOURS) -> dict:
+    """A held-out experiment: uncompensated run, identification, compensated re-run(s),
+    the paper's true drift and (``live``) the single align -> 12 h -> identify
+    -> compensate -> 72 h run (through the FMUs with the cosim engine).
+
+    models : {'hot': path, 'cold': path (cold-start experiments)}
+    rerun_all : re-run the navigation for the hot model on a cold start too;
+        otherwise its errors come from the affine error map of the two runs
+        (uncompensated, compensated with the cold model).
+    nav_hours : evaluation window (72 h; shorter only for tests of the machinery)
+    """
+    t0 = _time.perf_counter()
+    e = _exp(exp)
+    if engine not in ENGINES:
+        raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
+    nav = float(nav_hours)
+    r0 = run_inprocess(e, nav)
+    feats = run_features(r0, min(s0.IDENTIFY_HOURS, nav))
+    err0 = window(r0, 0.0, nav)
+    sel12 = r0["time_h"] <= s0.IDENTIFY_HOURS + 1e-9
+    out = {**e.to_dict(), **feats, "engine": engine, "time_h": r0["time_h"],
+           "lat_error_series_deg": r0["lat_error"] * RAD_TO_DEG, "lon_error_series_deg": r0["lon_error"] * RAD_TO_DEG,
+           "pos_uncomp_nm": np.hypot(err0[:, 0], err0[:, 1]) / NM, "max_uncomp_nm": max_error_nm(err0),
+           "temp_align_min": r0["temp_align"][0], "temp_align_max": r0["temp_align"][1],
+           "temp_calib_min": float(r0["temp_z"][sel12].min()), "temp_calib_max": float(r0["temp_z"][sel12].max())}
+    own = "cold" if e.start == "cold" else "hot"
+    drifts = {kind: predict(models[kind], feats) for kind in (("cold", "hot") if own == "cold" else ("hot",))}
+    probe = drifts[own]
+    if abs(probe) < 2e-4:  # too small a lever for the affine map: compensate anyway, probe separately
+        err_own = window(run_inprocess(e, nav, correction_dph=probe), 0.0, nav)
+        err_p = window(run_inprocess(e, nav, correction_dph=1e-3), 0.0, nav)
+        probe = 1e-3
+    else:
+        err_own = err_p = window(run_inprocess(e, nav, correction_dph=probe), 0.0, nav)
+    out["slope_ne"] = (err_p - err0) / probe  # position error per deg/h subtracted, (K, 2) m
+    out["err0_ne"] = err0
+    for kind, drift in drifts.items():
+        if kind == own:
+            err1 = err_own
+        elif rerun_all:
+            err1 = window(run_inprocess(e, nav, correction_dph=drift), 0.0, nav)
+        else:
+            err1 = err0 + drift * out["slope_ne"]
+        out[f"ident_{kind}_dph"] = drift
+        out[f"pos_{kind}_nm"] = np.hypot(err1[:, 0], err1[:, 1]) / NM
+        out[f"max_{kind}_nm"] = max_error_nm(err1)
+    out["ident_dph"], out["max_comp_nm"] = drifts[own], out[f"max_{own}_nm"]
+    out["paper_truth_dph"], out["paper_truth_max_nm"] = s0.paper_true_drift(err0, err_p, probe)
+    if live:
+        out.update(_live(e, models[own], feats, engine, fmu_dir))
+    out["wall_seconds"] = _time.perf_counter() - t0
+    return out
+
+
+def _live(e, model_file, feats, engine, fmu_dir) -> dict:
+    """The issue's single run: align -> 12 h -> identify -> compensate -> 72 h."""
+    hours = s0.IDENTIFY_HOURS + s0.NAV_HOURS
+    expected = predict(model_file, feats)
+    if engine == "cosim":
+        run = run_cosim(e, hours, fmu_dir, model_file=model_file)
+        drift = run["identified_drift_dph"]
+    else:
+        drift = expected
+        run = run_inprocess(e, hours, correction_dph=drift,
+                                correction_from_hours=s0.IDENTIFY_HOURS + APPLY_LATENCY / HOUR)
+    err = window(run, s0.IDENTIFY_HOURS, hours)
+    return {"live_ident_dph": drift, "live_twin_diff_dph": drift - expected,
+            "live_max_nm": max_error_nm(err), "live_end_nm": float(np.hypot(*err[-1]) / NM),
+            "live_pos_nm": np.hypot(err[:, 0], err[:, 1]) / NM}
+
+
+def cosim_check_task(exp: dict, model_file: str, fmu_dir: str, align_hours: float = 0.5,
+                     trigger_hours: float = 1.0, nav_hours: float = 2.0) -> dict:
+    """A shortened live identified run through the FMUs and its in-process twin.
+
+    Returns the FMU's identified drift, the in-process prediction from the
+    in-process latitude error at the trigger, and the largest differences of
+    the north/east error series (m).
+    """
+    e = _exp(exp)
+    fmu = run_cosim(e, nav_hours, fmu_dir, model_file=model_file, trigger_hours=trigger_hours,
+                    align_hours=align_hours)
+    ref0 = run_inprocess(e, trigger_hours, align_hours=align_hours)
+    expected = predict(model_file, run_features(ref0, trigger_hours))
+    ref = run_inprocess(e, nav_hours, correction_dph=fmu["identified_drift_dph"],
+                        correction_from_hours=trigger_hours + APPLY_LATENCY / HOUR, align_hours=align_hours)
+    diff = max(float(np.max(np.abs(fmu[k] - ref[k]))) for k in ("north_error", "east_error"))
+    return {"fmu_drift_dph": fmu["identified_drift_dph"], "inprocess_drift_dph": expected,
+            "max_diff_m": diff, "max_error_m": float(np.max(np.abs(ref["north_error"])))}

@@ -1,0 +1,56 @@
+"""``sarins campaign NAME ...``: the papers' experiment campaigns.
+
+Each campaign lives in its own module (``CAMPAIGNS`` maps the command-line
+name to it) exposing
+
+* ``HELP``: one line for ``sarins campaign --help``;
+* ``add_arguments(parser)``: campaign-specific options (may add nothing);
+* ``run(args) -> int``: runs the campaign; bad input raises ``ValueError``
+  (reported by ``sarins`` as one line, exit status 2).
+
+The options every campaign shares (``--profile``, ``--workers``,
+``--scheduler``, ``--out``, ``--no-progress``) are added here.  A campaign
+module that cannot be imported (it is missing or an optional dependency is
+absent at import time) is not offered.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+from . import positive_int
+
+CAMPAIGNS = {
+    "axial-rbf": "sarins.axial_rbf.campaign",  # seed 000: RBF identification of the axial drift
+    "online-rls": "sarins.online_rls.campaign",  # seed 002: temperature model updated online (FF-RLS)
+    "mems-calibration": "sarins.mems_calibration.campaign",  # seed 003: MEMS IMU dynamic calibration
+}
+
+
+def _add_common(parser, name: str) -> None:
+    parser.add_argument("--profile", choices=("quick", "paper"), default="quick",
+                        help="quick: minutes, for tests; paper: the paper's protocol (default quick)")
+    parser.add_argument("--workers", type=positive_int, default=None,
+                        help="local worker processes (default: all cores; 1 runs in this process)")
+    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="Dask distributed scheduler address, e.g. tcp://host:8786")
+    parser.add_argument("--out", default=f"results/{name}", metavar="DIR",
+                        help=f"output directory; finished experiments there are not redone (default results/{name})")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def register(subparsers) -> None:
+    """Add ``campaign`` with one sub-command per importable campaign module."""
+    parser = subparsers.add_parser("campaign", help="run a paper's experiment campaign (parallel, resumable)")
+    sub = parser.add_subparsers(dest="campaign", required=True, parser_class=type(parser))
+    for name, module_name in CAMPAIGNS.items():
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            if exc.name is not None and module_name.startswith(exc.name):
+                continue  # this campaign is not part of this installation
+            raise
+        p = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        _add_common(p, name)
+        module.add_arguments(p)
+        p.set_defaults(func=module.run)

@@ -1,0 +1,90 @@
+"""``sarins cosim SYSTEM ...``: run an SSP system with the generic master (orchestration)."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+import numpy as np
+
+from orchestration.errors import OrchestrationError
+from orchestration.master import SCHEMES, Master
+from orchestration.recorder import write_csv
+
+__all__ = ["register", "run", "summary"]
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``cosim`` subcommand to an ``argparse`` subparsers object.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        From ``parser.add_subparsers()``.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The ``cosim`` parser; its ``func`` default is :func:`run`.
+    """
+    parser = subparsers.add_parser(
+        "cosim", help="co-simulate an SSP system of FMI 2.0 co-simulation FMUs",
+        description="Run an .ssp archive or SystemStructure.ssd (or its folder) with the "
+                    "fixed-step master and print the final values of the recorded outputs.")
+    parser.add_argument("system", help="system file: x.ssp, SystemStructure.ssd or its folder")
+    parser.add_argument("--stop-time", type=float, default=None, metavar="T",
+                        help="stop time, s (default: the system's DefaultExperiment)")
+    parser.add_argument("--start-time", type=float, default=None, metavar="T0",
+                        help="start time, s (default: the system's, else 0)")
+    parser.add_argument("--step", type=float, default=None, metavar="H",
+                        help="communication step, s (default: the system's)")
+    parser.add_argument("--scheme", choices=SCHEMES, default="gauss-seidel",
+                        help="coupling scheme (default: gauss-seidel)")
+    parser.add_argument("--record", action="append", default=None, metavar="NAME",
+                        help="component.variable or pattern to record (repeatable; "
+                             "default: all outputs)")
+    parser.add_argument("--output-every", type=int, default=1, metavar="N",
+                        help="record every Nth step (default: 1)")
+    parser.add_argument("--output", default=None, metavar="CSV", help="write results to CSV")
+    parser.add_argument("--realtime", type=float, default=None, metavar="FACTOR",
+                        help="pace the run: wall-clock seconds per simulated second")
+    parser.add_argument("--no-progress", action="store_true", help="never show a progress bar")
+    parser.set_defaults(func=run)
+    return parser
+
+
+def summary(result) -> str:
+    """Text table of the last recorded value of every field of a result."""
+    names = result.dtype.names
+    width = max(len(n) for n in names)
+    last = result[-1]
+    lines = [f"{result.meta.get('system', 'system')}: {result.meta.get('steps', '?')} steps, "
+             f"scheme {result.meta.get('scheme', '?')}, final values at t = "
+             f"{last['time']:.9g} s"]
+    lines += [f"  {name:<{width}}  {_format(last[name])}" for name in names[1:]]
+    return "\n".join(lines)
+
+
+def _format(value) -> str:
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    return f"{value:.12g}" if isinstance(value, (float, np.floating)) else str(value)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the ``cosim`` subcommand; return the process exit code.
+
+    Exit codes: 0 success, 2 a system-description or schedule error (bad input), 1 an FMU failure.
+    """
+    try:
+        with Master(args.system, scheme=args.scheme, record=args.record) as master:
+            result = master.simulate(args.stop_time, args.step, start_time=args.start_time,
+                                     output_every=args.output_every,
+                                     progress=False if args.no_progress else None,
+                                     realtime=args.realtime)
+    except OrchestrationError as error:
+        print(f"sarins cosim: {'failed' if isinstance(error, RuntimeError) else 'error'}: {error}", file=sys.stderr)
+        return 1 if isinstance(error, RuntimeError) else 2
+    print(summary(result))
+    if args.output:
+        print(f"results written to {write_csv(result, args.output)}")
+    return 0

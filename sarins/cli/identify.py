@@ -1,0 +1,267 @@
+"""``sarins identify``: train and apply the RBF drift identifier from CSV files.
+
+::
+
+    sarins identify train --data records.csv \\
+        --inputs lat_error_deg[,temp_c,temp_change_c] --target drift_dph \\
+        --spread 2 --goal 9e-8 [--max-neurons N] --out model.json
+    sarins identify predict --model model.json --data tests.csv [--out predictions.csv]
+
+The project's ``sarins`` command adds these through :func:`register`;
+``python -m sarins.cli.identify`` runs them alone.
+
+Latitude reading or error
+    Seed 000 feeds the network the latitude *reading* after 4 h alignment and
+    12 h navigation (its Table 2 lists readings such as 28.2274°). The
+    portable input is the latitude *error*, reading minus the site latitude.
+    If ``lat_error_deg`` is asked for and the CSV only has ``lat_deg``, it is
+    computed as ``lat_deg - local_lat_deg`` (``--local-lat-deg``, default
+    28.222°, the paper's site; and the other way round for ``lat_deg``).
+    With the default input standardisation a constant offset does not
+    change the network, so at one site both choices give the same drifts.
+
+Goal
+    ``--goal`` is the mean squared training error in the target's unit
+    squared, as MATLAB's ``newrb``. Seed 000 states a training error of
+    0.0003 °/h; read as an RMS that is a goal of 9e-8 (°/h)², the default.
+
+The model file (JSON) stores the input column names, the target name and the
+site latitude; ``predict`` requires the same inputs. Predictions are written
+as the input table plus a column ``<target>_pred``. A bad CSV or model file
+gives a one-line error on stderr and exit status 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from sarins_fmu.identify.modelfile import ModelFileError
+from sarins_fmu.identify.rbf import RBFNetwork
+from sarins_fmu.identify.tables import SEED000_SITE_LAT_DEG, TableError, numeric_column, read_table, write_table
+
+__all__ = ["register", "run", "main", "DEFAULT_GOAL", "DEFAULT_SPREAD"]
+
+DEFAULT_SPREAD = 2.0  # seed 000's SPREAD (standardised units here)
+DEFAULT_GOAL = 0.0003**2  # (deg/h)^2: seed 000's 0.0003 deg/h training error as an RMS
+
+_PROG = "sarins identify"
+
+
+class _UsageError(Exception):
+    """A problem with the user's files or options (one-line message, exit 1)."""
+
+
+def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add the ``identify`` command (with ``train`` and ``predict``) to a CLI.
+
+    Parameters
+    ----------
+    subparsers : argparse sub-parsers action
+        From ``parser.add_subparsers()`` of the calling program.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The ``identify`` parser; its default ``func`` is :func:`run`.
+    """
+    parser = subparsers.add_parser(
+        "identify",
+        help="train / apply the RBF gyro-drift identifier (seed 000)",
+        description="Train and apply the RBF network that identifies the axial gyro drift "
+        "from the latitude error (and temperatures) after alignment + navigation.",
+    )
+    sub = parser.add_subparsers(dest="identify_command", metavar="{train,predict}")
+    sub.required = True
+
+    train = sub.add_parser(
+        "train",
+        help="train an RBF network on a CSV table",
+        description="Grow an RBF network (newrb-style, orthogonal least squares) on CSV columns. "
+        "Seed 000 feeds the latitude reading after 4 h alignment + 12 h navigation; this command "
+        "takes the latitude error (lat_error_deg) and, if the CSV only has the reading (lat_deg), "
+        "computes it as lat_deg - local_lat_deg. With standardised inputs both give the same network.",
+    )
+    train.add_argument("--data", required=True, type=Path, help="training CSV with a header row")
+    train.add_argument(
+        "--inputs",
+        default="lat_error_deg",
+        help="comma-separated input columns (default: lat_error_deg; "
+        "e.g. lat_error_deg,temp_c,temp_change_c for a cold start)",
+    )
+    train.add_argument("--target", default="drift_dph", help="target column (default: drift_dph)")
+    train.add_argument(
+        "--spread", type=float, default=DEFAULT_SPREAD,
+        help=f"distance (standardised units) where a neuron answers 0.5 (default: {DEFAULT_SPREAD:g})",
+    )
+    train.add_argument(
+        "--goal", type=float, default=DEFAULT_GOAL,
+        help="mean squared training error that stops growth, target unit squared "
+        f"(default: {DEFAULT_GOAL:g} = (0.0003 deg/h)^2)",
+    )
+    train.add_argument("--max-neurons", type=int, default=None, help="most neurons (default: samples)")
+    train.add_argument(
+        "--selection", choices=("ols", "residual"), default="ols",
+        help="centre selection: orthogonal least squares (default) or largest residual",
+    )
+    train.add_argument(
+        "--no-standardize", action="store_true",
+        help="do not standardise inputs (SPREAD then in the inputs' units, as MATLAB)",
+    )
+    train.add_argument(
+        "--local-lat-deg", type=float, default=SEED000_SITE_LAT_DEG,
+        help=f"site latitude, deg, to turn lat_deg into lat_error_deg (default: {SEED000_SITE_LAT_DEG})",
+    )
+    train.add_argument("--curve", type=Path, default=None, help="also write the training curve CSV")
+    train.add_argument("--out", required=True, type=Path, help="model file to write (JSON, or .npz)")
+
+    predict = sub.add_parser(
+        "predict",
+        help="apply a trained network to a CSV table",
+        description="Predict the target for every row of a CSV table with a trained model.",
+    )
+    predict.add_argument("--model", required=True, type=Path, help="model file from 'identify train'")
+    predict.add_argument("--data", required=True, type=Path, help="CSV with the model's input columns")
+    predict.add_argument(
+        "--local-lat-deg", type=float, default=None,
+        help="site latitude, deg, for lat_deg <-> lat_error_deg (default: the model's)",
+    )
+    predict.add_argument("--out", type=Path, default=None, help="predictions CSV (default: stdout)")
+
+    parser.set_defaults(func=run)
+    return parser
+
+
+def _input_matrix(
+    table: dict[str, np.ndarray], names: list[str], local_lat_deg: float, path: Path
+) -> np.ndarray:
+    """Columns ``names`` as an (n, d) array, converting latitude reading/error."""
+    cols = []
+    for name in names:
+        if name in table:
+            cols.append(numeric_column(table, name, path))
+        elif name == "lat_error_deg" and "lat_deg" in table:
+            cols.append(numeric_column(table, "lat_deg", path) - local_lat_deg)
+        elif name == "lat_deg" and "lat_error_deg" in table:
+            cols.append(numeric_column(table, "lat_error_deg", path) + local_lat_deg)
+        else:
+            raise TableError(f"{path}: no column '{name}' (columns: {', '.join(table)})")
+    return np.column_stack(cols)
+
+
+def _train(args: argparse.Namespace) -> None:
+    names = [n.strip() for n in args.inputs.split(",")]
+    if not all(names) or len(set(names)) != len(names):
+        raise _UsageError(f"--inputs must be distinct comma-separated column names, got {args.inputs!r}")
+    if not np.isfinite(args.local_lat_deg) or abs(args.local_lat_deg) > 90.0:
+        raise _UsageError(f"--local-lat-deg must be within [-90, 90], got {args.local_lat_deg}")
+    table = read_table(args.data)
+    x = _input_matrix(table, names, args.local_lat_deg, args.data)
+    y = numeric_column(table, args.target, args.data)
+    if x.shape[0] < 2:
+        raise _UsageError(f"{args.data}: training needs at least 2 rows, got {x.shape[0]}")
+    net = RBFNetwork(
+        spread=args.spread,
+        goal=args.goal,
+        max_neurons=args.max_neurons,
+        standardize=not args.no_standardize,
+        selection=args.selection,
+    )
+    net.fit(x, y, input_names=names, target_name=args.target)
+    net.metadata = {
+        "local_lat_deg": args.local_lat_deg,
+        "training_data": str(args.data),
+        "n_samples": int(x.shape[0]),
+    }
+    net.save(args.out)
+    if args.curve is not None:
+        write_table(args.curve, {
+            "neurons": np.arange(len(net.training_curve_), dtype=float),
+            "mse": net.training_curve_,
+        })
+    reached = "reached" if net.training_mse_ <= args.goal else "NOT reached"
+    print(
+        f"trained RBF on {x.shape[0]} samples, inputs {','.join(names)} -> {args.target}: "
+        f"{net.n_neurons} neurons, training MSE {net.training_mse_:.4g} "
+        f"(RMS {np.sqrt(net.training_mse_):.4g}), goal {args.goal:g} {reached} "
+        f"[stop: {net.stop_reason_}]; model written to {args.out}",
+        file=sys.stdout,
+    )
+
+
+def _predict(args: argparse.Namespace) -> None:
+    net = RBFNetwork.load(args.model)
+    if net.input_names is None:
+        raise _UsageError(
+            f"{args.model}: model file has no input column names; retrain with 'identify train'"
+        )
+    lat = args.local_lat_deg
+    if lat is None:
+        lat = float(net.metadata.get("local_lat_deg", SEED000_SITE_LAT_DEG))
+    table = read_table(args.data)
+    x = _input_matrix(table, list(net.input_names), lat, args.data)
+    pred = net.predict(x)
+    target = net.target_name or "prediction"
+    result = dict(table)
+    result[f"{target}_pred"] = pred
+    summary = f"predicted {target} for {len(pred)} rows with {args.model}"
+    if target in table and table[target].dtype.kind == "f" and np.all(np.isfinite(table[target])):
+        err = pred - table[target]
+        rms, worst = np.sqrt(np.mean(err**2)), np.abs(err).max()
+        summary += f"; error vs '{target}': RMS {rms:.4g}, max |err| {worst:.4g}"
+    if args.out is None:
+        write_table(sys.stdout, result)
+        print(summary, file=sys.stderr)
+    else:
+        write_table(args.out, result)
+        print(summary + f"; written to {args.out}", file=sys.stdout)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``identify train`` or ``identify predict`` from parsed arguments.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        As parsed by the parser :func:`register` built.
+
+    Returns
+    -------
+    int
+        Exit status: 0 on success, 1 on a bad file, column or option (with a
+        one-line message on stderr).
+    """
+    command = getattr(args, "identify_command", None)
+    try:
+        if command == "train":
+            _train(args)
+        elif command == "predict":
+            _predict(args)
+        else:
+            raise _UsageError("choose 'train' or 'predict'")
+    except BrokenPipeError:
+        # the reader of stdout went away (e.g. `| head`): stop quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except (_UsageError, TableError, ModelFileError, ValueError, OSError) as exc:
+        message = " ".join(str(exc).split())
+        where = f"{_PROG} {command}" if command else _PROG
+        print(f"{where}: error: {message}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Stand-alone entry: ``python -m sarins.cli.identify identify train ...``."""
+    parser = argparse.ArgumentParser(prog="sarins")
+    register(parser.add_subparsers(dest="command", required=True))
+    args = parser.parse_args(argv)
+    return args.func(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,89 @@
+"""``sarins navigate``: one static turntable -> IMU -> INS run, in process."""
+
+from __future__ import annotations
+
+import json
+import time
+
+from sarins_fmu import imu as imu_mod
+from sarins_fmu.site import SITE_LAT_DEG
+from sarins_fmu.turntable import ROTATION_SCHEMES
+
+from . import UsageError, finite
+
+
+def add_run_options(p, nav_hours: float) -> None:
+    """Options shared by ``navigate`` and ``demo`` (papers' units at the edge)."""
+    p.add_argument("--lat-deg", type=finite, default=SITE_LAT_DEG,
+                   help=f"latitude of the static base, deg (default {SITE_LAT_DEG}, seed 000's site)")
+    p.add_argument("--align-hours", type=finite, default=4.0, help="alignment duration, h (default 4)")
+    p.add_argument("--nav-hours", type=finite, default=nav_hours, help=f"navigation duration, h (default {nav_hours:g})")
+    p.add_argument("--axial-drift-dph", type=finite, default=None,
+                   help="replace the azimuth gyro drift by this constant, deg/h")
+    p.add_argument("--imu", choices=sorted(imu_mod.PRESETS), default="nav-rlg", help="IMU error preset")
+    p.add_argument("--rotation", choices=ROTATION_SCHEMES, default="forward-reverse", help="rotation scheme")
+    p.add_argument("--start", choices=("hot", "cold"), default="hot", help="thermal start (default hot)")
+    p.add_argument("--seed", type=seed_value, default=0, help="random seed of the IMU noise (0 .. 2**31-1)")
+
+
+def seed_value(text: str) -> int:
+    """argparse type: a random seed the FMUs' 32-bit Integer can carry (0 .. 2**31 - 1)."""
+    import argparse
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if not 0 <= value < 2**31:
+        raise argparse.ArgumentTypeError(f"must be in 0 .. 2**31-1, got {value}")
+    return value
+
+
+def check_run_args(args) -> None:
+    if abs(args.lat_deg) > 89.9:
+        raise UsageError(f"--lat-deg {args.lat_deg} is outside +-89.9 deg")
+    if args.align_hours < 0 or args.nav_hours <= 0:
+        raise UsageError("hours must be positive")
+    if args.align_hours * 3600 < 600:
+        raise UsageError("--align-hours must be at least 1/6 h (coarse + fine alignment)")
+    if args.nav_hours * 3600 < 1:
+        raise UsageError(f"--nav-hours {args.nav_hours:g} is shorter than one 1 s navigation step")
+    if args.align_hours + args.nav_hours > 24 * 3650:
+        raise UsageError("runs longer than 10 years are refused")
+
+
+def register(sub) -> None:
+    p = sub.add_parser("navigate", help="one static turntable -> IMU -> INS run, in process",
+                       description="One static run in process: 4 h alignment, then free navigation.")
+    add_run_options(p, nav_hours=72.0)
+    p.add_argument("--correction-dph", type=finite, default=0.0,
+                   help="axial drift the INS subtracts from --correction-from-hours on, deg/h")
+    p.add_argument("--correction-from-hours", type=finite, default=0.0,
+                   help="navigation time at which the correction starts, h")
+    p.add_argument("--json", action="store_true", help="print one JSON object (full precision)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from sarins_fmu.experiments import run_static
+
+    check_run_args(args)
+    if args.correction_from_hours < 0 or args.correction_from_hours > args.nav_hours:
+        raise UsageError("--correction-from-hours must lie within the navigation time")
+    if abs(args.correction_dph) > 1e3:
+        raise UsageError(f"--correction-dph {args.correction_dph:g} deg/h is not a drift correction")
+    t0 = time.perf_counter()
+    result = run_static(lat_deg=args.lat_deg, align_hours=args.align_hours, nav_hours=args.nav_hours,
+                        rotation=args.rotation, imu=args.imu, axial_drift_dph=args.axial_drift_dph,
+                        start=args.start, seed=args.seed, correction_dph=args.correction_dph,
+                        correction_from_hours=args.correction_from_hours)
+    summary = result.summary()
+    summary.update({"wall_seconds": time.perf_counter() - t0, **{
+        k: v for k, v in result.info.items() if k in ("imu", "rotation", "start", "seed")}})
+    if args.json:
+        print(json.dumps(summary, allow_nan=False))
+    else:
+        for key, value in summary.items():
+            shown = f"{value:.6g}" if isinstance(value, float) else value
+            print(f"{key:>24}: {shown}")
+    return 0

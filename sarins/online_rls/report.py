@@ -1,0 +1,243 @@
+"""Tables, figures (PNG) and the Markdown report of ``sarins campaign online-rls``.
+
+Takes the campaign's ``{task id: result dict}`` (see :mod:`sarins.online_rls.campaign`) and
+writes ``report.md``, ``summary.json`` and the figures into the output
+directory.  Units of the papers: °/h, °/h·°C (S), m, °C.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+
+HEAD_VEHICLE = "veh-markov-premise"  # configuration shown in Figs 7-8 and Table 4
+
+
+def _group(results: dict, prefix: str) -> list:
+    return [results[k] for k in sorted(results) if k.startswith(prefix)]
+
+
+def _configs(results: dict, kind: str) -> list:
+    """Distinct '<kind>-<...>' configuration prefixes (without the seed)."""
+    return sorted({k.rsplit("-", 1)[0] for k in results if k.startswith(kind + "-")})
+
+
+def stop_summary(results: dict) -> dict:
+    """Stop-filter statistics per unit: runs, rms / max error, mean 1σ, within 0.002 °/h."""
+    out = {}
+    for cfg in _configs(results, "stop"):
+        runs = _group(results, cfg + "-")
+        err = np.array([r["error_dph"] for r in runs])
+        out[cfg.split("-", 1)[1]] = {
+            "runs": len(runs), "rms_error_dph": float(np.sqrt(np.mean(err**2))),
+            "mean_error_dph": float(np.mean(err)), "max_abs_error_dph": float(np.max(np.abs(err))),
+            "mean_std_dph": float(np.mean([r["std_dph"] for r in runs])),
+            "within_0.002": int(np.sum(np.abs(err) < 0.002)),
+        }
+    return out
+
+
+def mc_summary(results: dict) -> dict:
+    """Mean S (°/h·°C) per configuration for no update / RLS / FF-RLS and the λ sweep."""
+    out = {}
+    for cfg in _configs(results, "mc"):
+        runs = _group(results, cfg + "-")
+        s = np.array([[r["s_none"], r["s_rls"], r["s_ff"]] for r in runs])
+        lam = np.array([r["s_lambda"] for r in runs])
+        out[cfg[3:]] = {
+            "runs": len(runs), "mean_s_none": float(s[:, 0].mean()), "mean_s_rls": float(s[:, 1].mean()),
+            "mean_s_ff": float(s[:, 2].mean()), "ff_over_none": float(s[:, 2].mean() / s[:, 0].mean()),
+            "ff_better_runs": int(np.sum(s[:, 2] < s[:, 0])),
+            "lambdas": np.asarray(runs[0]["sensitivity_lambdas"]).tolist(),
+            "mean_s_lambda": lam.mean(axis=0).tolist(),
+            "calibration_rms_dph": float(np.mean([r["calibration_rms_dph"] for r in runs])),
+            "stop_rms_error_dph": float(np.sqrt(np.mean(np.concatenate([r["stop_error_dph"] for r in runs]) ** 2))),
+        }
+    return out
+
+
+def vehicle_summary(results: dict) -> dict:
+    """CEP / max radial error (m) initial vs updated model per configuration."""
+    out = {}
+    for cfg in _configs(results, "veh"):
+        runs = _group(results, cfg + "-")
+        get = lambda key: np.array([r[key] for r in runs], float)  # noqa: E731
+        out[cfg[4:]] = {
+            "runs": len(runs), "mean_updates": float(get("n_updates").mean()),
+            "mean_cep_initial": float(get("cep_initial").mean()), "mean_cep_updated": float(get("cep_updated").mean()),
+            "mean_max_initial": float(get("max_radial_initial").mean()),
+            "mean_max_updated": float(get("max_radial_updated").mean()),
+            "median_cep_initial": float(np.median(get("cep_initial"))),
+            "median_cep_updated": float(np.median(get("cep_updated"))),
+            "runs_improved_cep": int(np.sum(get("cep_updated") < get("cep_initial"))),
+            "mean_s_initial": float(get("s_initial").mean()), "mean_s_updated": float(get("s_updated").mean()),
+        }
+    return out
+
+
+def _plots(results: dict, out: Path) -> list:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = []
+
+    def save(fig, name):
+        fig.tight_layout()
+        fig.savefig(out / name, dpi=90)
+        plt.close(fig)
+        names.append(name)
+
+    stops = {cfg.split("-", 1)[1]: _group(results, cfg + "-") for cfg in _configs(results, "stop")}
+    if stops:
+        fig, axes = plt.subplots(1, len(stops), figsize=(5 * len(stops), 3.6), squeeze=False)
+        for ax, (unit, runs) in zip(axes[0], stops.items()):
+            for r in runs[:5]:
+                t = r["time"] / 60.0
+                ax.plot(t, r["estimate_curve_dph"] - r["truth_dph"], lw=1)
+            r = runs[0]
+            ax.plot(t, r["std_curve_dph"], "k--", lw=1, label="filter 1σ")
+            ax.plot(t, -r["std_curve_dph"], "k--", lw=1)
+            ax.axhspan(-0.002, 0.002, color="g", alpha=0.15, label="±0.002 °/h")
+            ax.set_ylim(-0.03, 0.03)
+            ax.set(xlabel="stop time (min)", ylabel="ε_U estimate − truth (°/h)", title=f"stop filter, {unit}")
+            ax.legend(fontsize=7)
+        save(fig, "stop_convergence.png")
+    mc = _configs(results, "mc")
+    head = "mc-markov-premise-filter" if "mc-markov-premise-filter" in mc else (mc[0] if mc else None)
+    if head:
+        r = results[head + "-000"]
+        fig, axes = plt.subplots(3, 1, figsize=(7, 6), sharex=True)
+        for j, (ax, name) in enumerate(zip(axes, ("a (°/h/°C²)", "b (°/h/°C)", "c (°/h)"))):
+            ax.plot(r["truth_days"], r["truth_dph"][:, j], "g", label="truth")
+            ax.plot(r["stop_days"], r["rls_history_dph"][:, j], "bo-", ms=3, label="RLS")
+            ax.plot(r["stop_days"], r["ff_history_dph"][:, j], "ro-", ms=3, label="FF-RLS")
+            ax.set_ylabel(name)
+        axes[0].legend(fontsize=7)
+        axes[-1].set_xlabel("day")
+        axes[0].set_title("Fig. 4: model parameters over time (one run)")
+        save(fig, "fig4_parameters.png")
+        temp = np.linspace(0.0, 50.0, 101)
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for key, label, style in (("initial_dph", "initial (no update)", "r--"), ("rls_dph", "RLS", "b-"),
+                                  ("ff_dph", "FF-RLS λ=0.8", "m-"), ("final_truth_dph", "true final model", "g-")):
+            ax.plot(temp, np.polyval(r[key], temp), style, label=label)
+        ax.plot(r["stop_temperature"], r["stop_estimate_dph"], "k.", label="stop estimates")
+        ax.set(xlabel="gyro temperature (°C)", ylabel="azimuth drift (°/h)", title="Fig. 5: effect of model update")
+        ax.legend(fontsize=7)
+        save(fig, "fig5_curves.png")
+        runs = _group(results, head + "-")
+        fig, ax = plt.subplots(figsize=(7, 3.5))
+        idx = np.arange(1, len(runs) + 1)
+        for key, label, style in (("s_none", "no update", "r."), ("s_rls", "RLS", "b."), ("s_ff", "FF-RLS", "m.")):
+            ax.plot(idx, [x[key] for x in runs], style, label=label)
+        ax.set(xlabel="run", ylabel="S (°/h·°C)", title=f"Fig. 6: S in {len(runs)} simulations ({head[3:]})")
+        ax.legend(fontsize=7)
+        save(fig, "fig6_s_values.png")
+    veh = _configs(results, "veh")
+    if veh:
+        head_veh = HEAD_VEHICLE if HEAD_VEHICLE in veh else veh[0]
+        r = results[head_veh + "-000"]
+        fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+        t = r["time"] / 3600.0
+        for ax, comp in zip(axes, ("east", "north")):
+            ax.plot(t, r[f"{comp}_initial"], "r", label="initial model")
+            ax.plot(t, r[f"{comp}_updated"], "b", label="updated model")
+            ax.set_ylabel(f"{comp} error (m)")
+        axes[0].legend(fontsize=7)
+        axes[0].set_title(f"Fig. 8: position errors ({head_veh[4:]}, run 0)")
+        axes[-1].set_xlabel("navigation time (h)")
+        save(fig, "fig8_position_errors.png")
+        temp = np.linspace(0.0, 50.0, 101)
+        fig, ax = plt.subplots(figsize=(6, 4))
+        ax.plot(temp, np.polyval(r["initial_dph"], temp), "r", label="initial model")
+        ax.plot(temp, np.polyval(r["updated_dph"], temp), "k", label="updated model")
+        ax.plot(temp, np.polyval(r["final_truth_dph"], temp), "g--", label="truth on the test day")
+        upd = r["event_update"] == 1
+        ax.plot(r["event_temperature"][upd], r["event_drift_dph"][upd], "b.", label="stop estimates used")
+        ax.set(xlabel="gyro temperature (°C)", ylabel="azimuth drift (°/h)", title="Fig. 7: drift model")
+        ax.legend(fontsize=7)
+        save(fig, "fig7_vehicle_model.png")
+    return names
+
+
+def _fmt(x, nd=4):
+    return f"{x:.{nd}f}"
+
+
+def write_report(results: dict, out_dir, *, profile: str, wall_time: float, workers=None,
+                 forgetting_factor: float = 0.8, computed: int | None = None) -> Path:
+    """Write report.md, summary.json and the PNG figures; returns the report path."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    stops, mc, veh = stop_summary(results), mc_summary(results), vehicle_summary(results)
+    veh_configs = _configs(results, "veh")
+    summary = {"profile": profile, "runs": len(results), "computed": computed, "wall_time_s": wall_time,
+               "workers": workers,
+               "forgetting_factor": forgetting_factor, "stop_filter": stops, "monte_carlo": mc, "vehicle": veh}
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    figures = _plots(results, out)
+    lines = [f"# Seed 002 campaign ({profile} profile)", "",
+             f"{len(results)} runs ({len(results) if computed is None else computed} computed in this call), "
+             f"wall time {wall_time:.0f} s, workers {workers or 'all cores'}, "
+             f"FF-RLS λ = {forgetting_factor} per month (m = 30 days).", "",
+             "## Stop Kalman filter: 30-minute azimuth-drift estimate", "",
+             "| unit | runs | rms error (°/h) | mean error | max abs error | mean filter 1σ | within 0.002 °/h |",
+             "|---|---|---|---|---|---|---|"]
+    for unit, s in stops.items():
+        lines.append(f"| {unit} | {s['runs']} | {_fmt(s['rms_error_dph'])} | {_fmt(s['mean_error_dph'])} | "
+                     f"{_fmt(s['max_abs_error_dph'])} | {_fmt(s['mean_std_dph'])} | {s['within_0.002']}/{s['runs']} |")
+    lines += ["", "## 300-day simulation: mean S over the runs (Table 2 shape, °/h·°C)", "",
+              "| configuration (ageing-unit-estimate) | runs | no update | RLS | FF-RLS | FF/no update | FF better in | "
+              "calibration residual rms (°/h) | stop error rms (°/h) |", "|---|---|---|---|---|---|---|---|---|"]
+    for cfg, s in mc.items():
+        lines.append(f"| {cfg} | {s['runs']} | {_fmt(s['mean_s_none'])} | {_fmt(s['mean_s_rls'])} | "
+                     f"{_fmt(s['mean_s_ff'])} | {s['ff_over_none']:.2f} | {s['ff_better_runs']}/{s['runs']} | "
+                     f"{_fmt(s['calibration_rms_dph'])} | {_fmt(s['stop_rms_error_dph'])} |")
+    if mc:
+        lams = next(iter(mc.values()))["lambdas"]
+        lines += ["", "### Sensitivity of mean S to λ", "",
+                  "| configuration | " + " | ".join(f"λ={x:g}" for x in lams) + " |",
+                  "|---|" + "---|" * len(lams)]
+        for cfg, s in mc.items():
+            lines.append(f"| {cfg} | " + " | ".join(_fmt(v) for v in s["mean_s_lambda"]) + " |")
+    head = "mc-markov-premise-filter-000"
+    if head in results:
+        r = results[head]
+        lines += ["", "### One run (Table 1 shape, run 0 of markov-premise-filter)", "",
+                  "| model | S (°/h·°C) |", "|---|---|",
+                  f"| no update | {_fmt(r['s_none'])} |", f"| RLS | {_fmt(r['s_rls'])} |",
+                  f"| FF-RLS | {_fmt(r['s_ff'])} |"]
+    lines += ["", "## Vehicle test analogue (Table 5 shape)", "",
+              "| configuration | runs | updates per year | CEP initial (m) | CEP updated (m) | max radial initial (m) | "
+              "max radial updated (m) | CEP improved in | S initial | S updated |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for cfg, s in veh.items():
+        lines.append(f"| {cfg} | {s['runs']} | {s['mean_updates']:.1f} | {s['mean_cep_initial']:.0f} | "
+                     f"{s['mean_cep_updated']:.0f} | {s['mean_max_initial']:.0f} | {s['mean_max_updated']:.0f} | "
+                     f"{s['runs_improved_cep']}/{s['runs']} | {_fmt(s['mean_s_initial'])} | {_fmt(s['mean_s_updated'])} |")
+    head_veh = HEAD_VEHICLE if HEAD_VEHICLE in veh_configs else (veh_configs[0] if veh_configs else "")
+    veh_runs = sorted(k for k in results if k.startswith(head_veh + "-") and k[len(head_veh) + 1:].isdigit())
+    if veh_runs:
+        r = results[veh_runs[0]]
+        upd = r["event_update"] == 1
+        lines += ["", f"### Stops of {veh_runs[0]} used for the update (Table 4 shape)", "",
+                  "| day | stop (min) | T_gz (°C) | predicted by initial model (°/h) | measured (°/h) |",
+                  "|---|---|---|---|---|"]
+        for d, dur, t, p, m in zip(r["event_time_days"][upd], r["event_duration_s"][upd], r["event_temperature"][upd],
+                                   r["event_predicted_dph"][upd], r["event_drift_dph"][upd]):
+            lines.append(f"| {d:.0f} | {dur / 60:.0f} | {t:.1f} | {_fmt(p)} | {_fmt(m)} |")
+        lines += ["", "| run | CEP initial | CEP updated | max radial initial | max radial updated | "
+                  "max east initial / updated | max north initial / updated |", "|---|---|---|---|---|---|---|"]
+        for k in veh_runs:
+            r = results[k]
+            lines.append(f"| {k} | {r['cep_initial']:.0f} | {r['cep_updated']:.0f} | {r['max_radial_initial']:.0f} | "
+                         f"{r['max_radial_updated']:.0f} | {r['max_east_initial']:.0f} / {r['max_east_updated']:.0f} | "
+                         f"{r['max_north_initial']:.0f} / {r['max_north_updated']:.0f} |")
+    lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures] + [""]
+    path = out / "report.md"
+    path.write_text("\n".join(lines))
+    return path

@@ -1,0 +1,110 @@
+"""The project's own co-simulation systems, written as SSP files.
+
+``standard_static(fmu_dir)`` is the standard static single-axis RINS:
+Turntable -> IMUThermal -> StrapdownINS, 1 s communication step, Gauss-Seidel
+order Turntable, IMUThermal, StrapdownINS.  ``write_systems(fmu_dir)`` packs
+each system as ``<name>.ssp`` (FMUs in ``resources/``) beside the FMUs; the
+SSD alone is shipped in ``sarins/systems/<name>/SystemStructure.ssd``
+(sources ``resources/<FMU>.fmu``, the SSP layout).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from orchestration import Component, Connection, System, write_ssd, write_ssp
+
+GIMBAL_LINKS = [f"{q}_{j}" for j in (1, 2, 3) for q in ("angle", "rate", "accel")] + [
+    "ambient_temp", "ambient_temp_rate", "motion_time"]
+INCREMENT_LINKS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z", "increment_end_time"]
+SHIPPED = Path(__file__).resolve().parent
+
+
+def standard_static(fmu_dir: Path | str = "resources", *, hours: float = 88.0, turntable=None, imu=None,
+                    ins=None) -> System:
+    """Turntable -> IMUThermal -> StrapdownINS on a static base (seed 000 set-up).
+
+    Parameters
+    ----------
+    fmu_dir : folder of the FMUs (relative paths stay relative in the SSD)
+    hours : default stop time of the system, h
+    turntable, imu, ins : dict of extra start values per component
+    """
+    fmu_dir = Path(fmu_dir)
+    components = [
+        Component("turntable", fmu_dir / "Turntable.fmu", dict(turntable or {})),
+        Component("imu", fmu_dir / "IMUThermal.fmu", dict(imu or {})),
+        Component("ins", fmu_dir / "StrapdownINS.fmu", dict(ins or {})),
+    ]
+    connections = [Connection("turntable", v, "imu", v) for v in GIMBAL_LINKS]
+    connections += [Connection("imu", v, "ins", v) for v in INCREMENT_LINKS]
+    return System(name="standard_static", components=components, connections=connections,
+                  start_time=0.0, stop_time=hours * 3600.0, step_size=1.0)
+
+
+def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: float = 88.0, turntable=None,
+                               imu=None, ins=None, identifier=None) -> System:
+    """The standard static system with seed 000's RBFIdentifier closing the loop.
+
+    Turntable -> IMUThermal -> StrapdownINS -> RBFIdentifier -> (axial drift
+    correction) StrapdownINS.  The identifier reads the INS latitude error,
+    navigation time, alignment temperature change and azimuth gyro
+    temperature (all tagged nav_time); at its trigger time (default 12 h of
+    navigation) it outputs the identified drift, held, with the navigation
+    time ``apply_from`` (trigger + the identifier's latency) from which the
+    INS subtracts it: ``run_static``'s ``correction_from_hours``.  Every
+    output is a state output, so the loop INS -> identifier -> INS has no
+    direct feedthrough; the result is the same under Gauss-Seidel and
+    Jacobi.  Default stop: 4 h alignment + 84 h.
+    """
+    base = standard_static(fmu_dir, hours=hours, turntable=turntable, imu=imu, ins=ins)
+    identifier_fmu = Component("identifier", Path(fmu_dir) / "RBFIdentifier.fmu", dict(identifier or {}))
+    loop = [Connection("ins", "lat_error", "identifier", "lat_error"),
+            Connection("ins", "nav_time", "identifier", "nav_time"),
+            Connection("ins", "temp_change_align", "identifier", "temp_change"),
+            Connection("ins", "temp_azimuth_gyro", "identifier", "temperature"),
+            Connection("identifier", "axial_drift", "ins", "axial_drift_correction"),
+            Connection("identifier", "apply_from", "ins", "axial_drift_apply_from")]
+    return System(name="standard_static_identified", components=[*base.components, identifier_fmu],
+                  connections=[*base.connections, *loop], start_time=base.start_time,
+                  stop_time=base.stop_time, step_size=base.step_size)
+
+
+SYSTEMS = {"standard_static": standard_static, "standard_static_identified": standard_static_identified}
+
+
+def write_systems(fmu_dir: Path | str) -> list[Path]:
+    """Write ``<fmu_dir>/<name>.ssp`` for every system; returns the paths."""
+    fmu_dir = Path(fmu_dir)
+    return [write_ssp(make(fmu_dir), fmu_dir / f"{name}.ssp") for name, make in SYSTEMS.items()]
+
+
+def write_shipped_ssds(root: Path = SHIPPED) -> list[Path]:
+    """(Re)write the shipped SSD files (sources resources/<FMU>.fmu); the
+    writer reads the FMUs, so they are built into a scratch folder first."""
+    import shutil
+    import tempfile
+
+    from fmus.build import build_fmus
+
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        build_fmus(Path(tmp) / "resources")
+        for name, make in SYSTEMS.items():
+            ssd = write_ssd(make(Path(tmp) / "resources"), Path(tmp) / "SystemStructure.ssd")
+            folder = root / name
+            folder.mkdir(parents=True, exist_ok=True)
+            out.append(Path(shutil.copy2(ssd, folder / "SystemStructure.ssd")))
+    return out
+
+
+def build_system_fmu(fmu_dir: Path | str) -> Path:
+    """The standard static system (FMUs in ``fmu_dir``) packed as one FMU
+    (FMPy container, FMI 2.0) ``<fmu_dir>/StandardStaticSystem.fmu``."""
+    from fmus.build import fix_fmu_description
+    from orchestration.container import build_container_fmu
+
+    system = standard_static(Path(fmu_dir))
+    path = build_container_fmu(system, Path(fmu_dir) / "StandardStaticSystem.fmu", step_size=1.0)
+    fix_fmu_description(path, [(c.name, c.source) for c in system.components])
+    return path
