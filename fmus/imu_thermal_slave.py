@@ -21,7 +21,8 @@ class IMUThermal(Fmi2Slave):
 
     author = "sarins-fmu"
     description = (
-        "Increment-output IMU on a turntable, static base. Contract (standard FMI timing, any master scheme): "
+        "Increment-output IMU on a turntable, on a static base (base = static: lat, height, base_yaw) or riding on "
+        "a vehicle (base = input: the vehicle's motion from an upstream FMU, see below). Contract (standard FMI timing, any master scheme): "
         "the motion inputs are a time-tagged set from the turntable describing the segment that starts at "
         "motion_time: gimbal angles, rates and angular accelerations (constant until the next communication "
         "point), the ambient temperature and its slope. doStep(t, h) needs the set tagged t: under Jacobi it "
@@ -34,6 +35,12 @@ class IMUThermal(Fmi2Slave):
         "before the first step (FMI initialisation; motion_time starts at -1e9 s, no valid tag). So the increments are bit-identical under every scheme. All "
         "outputs are state outputs (no direct feedthrough). Held between steps: thermal state, "
         "bias-instability state, noise generator, the previous motion set. "
+        "Moving base (base = input): the vehicle motion is a second time-tagged start-of-step set, tagged "
+        "base_motion_time and chosen like the turntable's: the vehicle attitude as Euler angles yaw (CCW from "
+        "north), pitch, roll with mat_nv = Rz(yaw) Rx(pitch) Ry(roll) (ENU, body right-front-up), their rates "
+        "and their angular accelerations, constant over the step (the turntable's gimbals ride on the vehicle: "
+        "gimbal chain z, x, y, then the turntable's), and the inertial angular rate of the local-level ENU frame "
+        "at the vehicle (omega_ie + omega_en) and the specific force resolved in it, both held over the step. "
         "IMU parameters: 'preset' chooses the model; any coefficient parameter that is set overrides it.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
 
@@ -41,6 +48,8 @@ class IMUThermal(Fmi2Slave):
         super().__init__(**kwargs)
         self._overridden = set()
         declare(self, "string", "preset", PARAMETER, "IMU model: ideal, nav-rlg or mems", "nav-rlg")
+        declare(self, "string", "base", PARAMETER, "static (lat, height, base_yaw) or input (vehicle motion inputs)",
+                "static")
         declare(self, "real", "lat", PARAMETER, "latitude of the static base [rad; deg]", 28.222 * DEG)
         declare(self, "real", "height", PARAMETER, "height of the static base [m]", 0.0)
         declare(self, "real", "base_yaw", PARAMETER, "yaw of the turntable base, CCW from north [rad; deg]", 0.0)
@@ -64,6 +73,19 @@ class IMUThermal(Fmi2Slave):
         declare(self, "real", "ambient_temp_rate", INPUT, "slope of the ambient from motion_time on [degC/s]", 0.0)
         # start value: no valid tag, so a motion set the master never passed is an error, not a silent zero
         declare(self, "real", "motion_time", INPUT, "time tag of the motion inputs [s]", NO_TAG)
+        for q, unit, text in (("", "rad; deg", "at base_motion_time"), ("_rate", "rad/s; deg/s", "at base_motion_time"),
+                              ("_accel", "rad/s2; deg/s2", "from base_motion_time to the next communication point")):
+            for angle in ("yaw", "pitch", "roll"):
+                declare(self, "real", f"vehicle_{angle}{q}", INPUT, f"base = input: vehicle {angle}{q.replace('_', ' ')} "
+                        f"{text} [{unit}]", 0.0)
+        for ax in "enu":
+            declare(self, "real", f"base_rate_{ax}", INPUT,
+                    f"base = input: inertial rate of the local-level frame, {ax} axis, held over the step [rad/s]", 0.0)
+        for ax in "enu":
+            declare(self, "real", f"base_force_{ax}", INPUT,
+                    f"base = input: specific force, {ax} axis, held over the step [m/s2]", 0.0)
+        declare(self, "real", "base_motion_time", INPUT, "base = input: time tag of the vehicle motion inputs [s]",
+                NO_TAG)
         for ax in "xyz":
             declare(self, "real", f"dtheta_{ax}", OUTPUT, f"angle increment about body {ax} over the step [rad]", 0.0)
         for ax in "xyz":
@@ -75,6 +97,7 @@ class IMUThermal(Fmi2Slave):
                 "time tag: end of the interval of the increments [s]", 0.0)
         self._sensor = None
         self._motion = StartOfStepInputs("turntable motion", "motion_time")
+        self._vehicle = StartOfStepInputs("vehicle motion", "base_motion_time")
         self._start_time = 0.0
         self._model = None
         self._step = None
@@ -106,6 +129,8 @@ class IMUThermal(Fmi2Slave):
             raise ParameterError(f"parameter lat = {math.degrees(self.lat):.6g} deg is outside +-89.9 deg")
         if self.thermal_start not in ("hot", "cold"):
             raise ParameterError(f"thermal_start must be 'hot' or 'cold', got {self.thermal_start!r}")
+        if self.base not in ("static", "input"):
+            raise ParameterError(f"base must be 'static' or 'input', got {self.base!r}")
         names = [g.strip() for g in self.gimbals.split(",")]
         if not 1 <= len(names) <= 3 or any(g not in GIMBAL_AXES for g in names):
             raise ParameterError(f"gimbals must list 1 to 3 of x, y, z, got {self.gimbals!r}")
@@ -113,11 +138,14 @@ class IMUThermal(Fmi2Slave):
             base_model = imu.preset(self.preset)
             overrides = {name: getattr(self, name) for name in self._overridden}
             self._model = imu_params.apply_overrides(base_model, overrides)
-            self._base = imu.StaticBase(self.lat, 0.0, self.height, self.base_yaw)
+            self._base = imu.StaticBase(self.lat, 0.0, self.height, self.base_yaw) if self.base == "static" \
+                else imu.HeldBase()
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
         self._axes = np.array([GIMBAL_AXES[g] for g in names])
         self._motion.prime(self.motion_time, self._read_motion())
+        if self.base == "input":
+            self._vehicle.prime(self.base_motion_time, self._read_vehicle())
         self._ambient0 = float(self.ambient_temp)
         self.increment_end_time = self._start_time
         initial = ThermalModel(self._model.thermal, start=self.thermal_start)
@@ -135,9 +163,20 @@ class IMUThermal(Fmi2Slave):
             raise ValueError("motion or ambient inputs contain NaN or infinity")
         return angle, rate, accel, ambient
 
+    def _read_vehicle(self):
+        """The vehicle inputs: attitude angle, rate, accel (1, 3) each, base rate and force (3,) each."""
+        angle, rate, accel = (np.array([[getattr(self, f"vehicle_{a}{q}") for a in ("yaw", "pitch", "roll")]])
+                              for q in ("", "_rate", "_accel"))
+        w_t = np.array([getattr(self, f"base_rate_{ax}") for ax in "enu"])
+        f_t = np.array([getattr(self, f"base_force_{ax}") for ax in "enu"])
+        if not all(np.isfinite(x).all() for x in (angle, rate, accel, w_t, f_t)):
+            raise ValueError("vehicle motion inputs contain NaN or infinity")
+        return angle, rate, accel, w_t, f_t
+
     def _start(self, step_size):
+        axes = self._axes if self.base == "static" else np.vstack([imu.VEHICLE_ATTITUDE_AXES, self._axes])
         try:
-            self._sensor = imu.IMU(self._model, self._base, self._axes, output_interval=step_size,
+            self._sensor = imu.IMU(self._model, self._base, axes, output_interval=step_size,
                                    internal_rate=self.internal_rate, seed=int(self.seed),
                                    thermal_start=self.thermal_start, aging_days=self.aging_days)
         except ValueError as exc:
@@ -155,6 +194,12 @@ class IMUThermal(Fmi2Slave):
                                  f"{self._sensor.time + self._start_time:.9g} s (steps must follow each other)")
             angle0, rate0, accel, (amb0, amb_rate) = self._motion.select(
                 current_time, step_size, self.motion_time, self._read_motion())
+            if self.base == "input":
+                v_angle, v_rate, v_accel, w_t, f_t = self._vehicle.select(
+                    current_time, step_size, self.base_motion_time, self._read_vehicle())
+                self._base.hold(w_t, f_t)
+                angle0, rate0, accel = (np.hstack(pair) for pair in ((v_angle, angle0), (v_rate, rate0),
+                                                                       (v_accel, accel)))
             dtheta, dv, temps = self._sensor.step(angle0, rate0, accel, ambient=[amb0 + amb_rate * step_size])
         except ValueError as exc:
             return discard_on_error(self, exc)

@@ -24,8 +24,9 @@ class Turntable(Fmi2Slave):
         "STARTS at motion_time: gimbal angles and rates at motion_time and the angular acceleration that holds "
         "from there to the next communication point (accelerations change only on the 'grid', a multiple of "
         "the communication step), plus the ambient (chamber) temperature at motion_time and its slope "
-        "ambient_temp_rate over [motion_time, motion_time + grid] (the ambient is taken linear between grid "
-        "points). At initialisation motion_time is the start time; after doStep(t, h) it is t + h. All outputs "
+        "ambient_temp_rate over [motion_time, motion_time + h], h the communication step (the IMU takes the "
+        "ambient linear over each step; at initialisation, before h is known, the slope is over [start, start + "
+        "grid]: start a chamber profile with a hold, as its warm-up does). At initialisation motion_time is the start time; after doStep(t, h) it is t + h. All outputs "
         "are state outputs (no direct feedthrough). A connected IMU rebuilds the motion over its step [t, t+h] "
         "exactly from the set tagged t: under Jacobi it receives that set, under Gauss-Seidel (turntable "
         "stepped first) it receives the set tagged t + h and uses the one it kept from its previous step. "
@@ -72,7 +73,7 @@ class Turntable(Fmi2Slave):
                     f"angular acceleration of gimbal {j} from motion_time on [rad/s2; deg/s2]", 0.0)
         declare(self, "real", "ambient_temp", OUTPUT, "ambient / chamber temperature at motion_time [degC]", 20.0)
         declare(self, "real", "ambient_temp_rate", OUTPUT,
-                "slope of the ambient over [motion_time, motion_time + grid] [degC/s]", 0.0)
+                "slope of the ambient over the step from motion_time [degC/s]", 0.0)
         declare(self, "real", "motion_time", OUTPUT, "time tag: start of the segment the outputs describe [s]", 0.0)
         declare(self, "integer", "n_gimbals", OUTPUT, "number of gimbals in use [1]", 1)
         self._schedule = None
@@ -130,7 +131,8 @@ class Turntable(Fmi2Slave):
             setattr(self, f"angle_{j + 1}", float(angle[j]) if inside else 0.0)
             setattr(self, f"rate_{j + 1}", float(rate[j]) if inside else 0.0)
             setattr(self, f"accel_{j + 1}", float(acc[j]) if inside else 0.0)
-        self.ambient_temp, self.ambient_temp_rate = thermal.ambient_segment(self._ambient, time, self.grid)
+        span = self.grid if self._step is None else self._step
+        self.ambient_temp, self.ambient_temp_rate = thermal.ambient_segment(self._ambient, time, span)
         self.motion_time = float(time)
 
     @guarded

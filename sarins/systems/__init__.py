@@ -70,7 +70,38 @@ def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: floa
                   stop_time=base.stop_time, step_size=base.step_size)
 
 
-SYSTEMS = {"standard_static": standard_static, "standard_static_identified": standard_static_identified}
+VEHICLE_LINKS = [f"vehicle_{a}{q}" for q in ("", "_rate", "_accel") for a in ("yaw", "pitch", "roll")] + [
+    f"base_{kind}_{ax}" for kind in ("rate", "force") for ax in "enu"] + ["base_motion_time"]
+
+
+def vehicle_rins(fmu_dir: Path | str = "resources", *, hours: float = 2.0, vehicle=None, turntable=None, imu=None,
+                 ins=None) -> System:
+    """VehicleMotion -> IMUThermal (base = input) <- Turntable, IMUThermal -> StrapdownINS.
+
+    The RINS's turntable rides on a land vehicle (seed 002): the vehicle's
+    attitude, base rate and specific force reach the IMU as a time-tagged
+    start-of-step set like the turntable's.  The vehicle stands still for its
+    ``lead_time`` (default 900 s), the INS aligns over the same time.
+    """
+    fmu_dir = Path(fmu_dir)
+    vehicle = dict(vehicle or {})
+    lead = float(vehicle.get("lead_time", 900.0))
+    start = {k: vehicle[v] for k, v in (("lat0", "lat0"), ("lon0", "lon0")) if v in vehicle}
+    components = [
+        Component("vehicle", fmu_dir / "VehicleMotion.fmu", vehicle),
+        Component("turntable", fmu_dir / "Turntable.fmu", {"align_time": 0.0, **dict(turntable or {})}),
+        Component("imu", fmu_dir / "IMUThermal.fmu", {"base": "input", **dict(imu or {})}),
+        Component("ins", fmu_dir / "StrapdownINS.fmu", {"align_time": lead, **start, **dict(ins or {})}),
+    ]
+    connections = [Connection("vehicle", v, "imu", v) for v in VEHICLE_LINKS]
+    connections += [Connection("turntable", v, "imu", v) for v in GIMBAL_LINKS]
+    connections += [Connection("imu", v, "ins", v) for v in INCREMENT_LINKS]
+    return System(name="vehicle_rins", components=components, connections=connections,
+                  start_time=0.0, stop_time=hours * 3600.0, step_size=1.0)
+
+
+SYSTEMS = {"standard_static": standard_static, "standard_static_identified": standard_static_identified,
+           "vehicle_rins": vehicle_rins}
 
 
 def write_systems(fmu_dir: Path | str) -> list[Path]:
