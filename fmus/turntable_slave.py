@@ -84,9 +84,11 @@ class Turntable(Fmi2Slave):
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._start_time = float(start_time)
 
-    @guarded
     def enter_initialization_mode(self):
-        self._build()
+        try:  # outputs during initialisation; a bad parameter is reported at exit_initialization_mode
+            self._build()
+        except ParameterError:
+            self._schedule = None
 
     @guarded
     def exit_initialization_mode(self):
