@@ -32,7 +32,8 @@ class IMUThermal(Fmi2Slave):
         "angle and velocity increments of [t, t + h] (coning and sculling applied, body axes at t), the six "
         "sensor temperatures at t + h and the tag increment_end_time = t + h (the start time at "
         "initialisation: no increments yet). Under Gauss-Seidel the master must pass the turntable's initial outputs "
-        "before the first step (FMI initialisation; motion_time starts at -1e9 s, no valid tag). So the increments are bit-identical under every scheme. All "
+        "before the first step (FMI initialisation; motion_time starts at -1e9 s, no valid tag). If motion_time is "
+        "never set (no turntable connected), the motion inputs are constants: a fixed table. So the increments are bit-identical under every scheme. All "
         "outputs are state outputs (no direct feedthrough). Held between steps: thermal state, "
         "bias-instability state, noise generator, the previous motion set. "
         "Moving base (base = input): the vehicle motion is a second time-tagged start-of-step set, tagged "
@@ -192,8 +193,11 @@ class IMUThermal(Fmi2Slave):
             if not same_time(self._sensor.time + self._start_time, current_time, step_size):
                 raise ValueError(f"doStep at t={current_time:.9g} s but the IMU stands at "
                                  f"{self._sensor.time + self._start_time:.9g} s (steps must follow each other)")
-            angle0, rate0, accel, (amb0, amb_rate) = self._motion.select(
-                current_time, step_size, self.motion_time, self._read_motion())
+            if self.motion_time == NO_TAG and self._motion.held_tag == NO_TAG:  # never set: fixed table
+                angle0, rate0, accel, (amb0, amb_rate) = self._read_motion()
+            else:
+                angle0, rate0, accel, (amb0, amb_rate) = self._motion.select(
+                    current_time, step_size, self.motion_time, self._read_motion())
             if self.base == "input":
                 v_angle, v_rate, v_accel, w_t, f_t = self._vehicle.select(
                     current_time, step_size, self.base_motion_time, self._read_vehicle())

@@ -184,6 +184,11 @@ class StartOfStepInputs:
         self.what, self.tag_name = what, tag_name
         self._held = None
 
+    @property
+    def held_tag(self):
+        """Tag of the set kept from the previous step (None before initialisation)."""
+        return None if self._held is None else self._held[0]
+
     def prime(self, tag: float, values) -> None:
         """Keep the set read at initialisation."""
         self._held = (float(tag), values)
