@@ -14,4 +14,5 @@ SLAVES = {
     "DriftModelUpdater": "drift_model_updater_slave.py",
     "IMUCompensator": "imu_compensator_slave.py",
     "VehicleMotion": "vehicle_motion_slave.py",
+    "IMULog": "imu_log_slave.py",
 }
