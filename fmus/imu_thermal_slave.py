@@ -7,7 +7,7 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
-                                discard_on_error, guarded)
+                                discard_on_error, guarded, real_slots)
 from sarins_fmu import imu, imu_params
 from sarins_fmu.thermal import SENSORS, ThermalModel
 
@@ -62,6 +62,11 @@ class IMUThermal(Fmi2Slave):
         self._model = None
         self._step = None
         self._state = None
+        # buffer slots for vectorised I/O (see fmus.slave_support)
+        self._angle_slots = real_slots(self, ["angle_1", "angle_2", "angle_3"])
+        self._rate_slots = real_slots(self, ["rate_1", "rate_2", "rate_3"])
+        self._out_slots = real_slots(self, [f"dtheta_{ax}" for ax in "xyz"] + [f"dv_{ax}" for ax in "xyz"]
+                                     + [f"temp_{sensor}" for sensor in SENSORS])
 
     def _declare_coefficient(self, name, start, unit):
         """A model coefficient: setting it marks it as overriding the preset."""
@@ -106,8 +111,8 @@ class IMUThermal(Fmi2Slave):
 
     def _read_gimbals(self):
         n = len(self._axes)
-        angle = np.array([[getattr(self, f"angle_{j + 1}") for j in range(n)]])
-        rate = np.array([[getattr(self, f"rate_{j + 1}") for j in range(n)]])
+        angle = self._fmi_buffer[self._angle_slots[:n]][None, :]
+        rate = self._fmi_buffer[self._rate_slots[:n]][None, :]
         if not (np.isfinite(angle).all() and np.isfinite(rate).all()):
             raise ValueError("gimbal inputs contain NaN or infinity")
         return angle, rate
@@ -138,9 +143,5 @@ class IMUThermal(Fmi2Slave):
         except ValueError as exc:
             return discard_on_error(self, exc)
         self._state = (angle1, rate1)
-        for i, ax in enumerate("xyz"):
-            setattr(self, f"dtheta_{ax}", float(dtheta[0, i]))
-            setattr(self, f"dv_{ax}", float(dv[0, i]))
-        for j, sensor in enumerate(SENSORS):
-            setattr(self, f"temp_{sensor}", float(temps[0, j]))
+        self._fmi_buffer[self._out_slots] = np.concatenate((dtheta[0], dv[0], temps[0]))
         return True
