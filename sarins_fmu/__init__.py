@@ -21,7 +21,7 @@ Units
 SI inside: rad, rad/s, m, m/s, m/s^2, s; temperatures in degree Celsius.
 Papers' units (deg/h, nautical miles, degrees) appear only at the edges (CLI,
 FMU display units, reports) and the variable says so: ``drift_dph``,
-``lat_deg``, ``error_nm``.  Conversion constants live in
+``lat_deg``, ``error_nmi``.  Conversion constants live in
 :mod:`sarins_fmu.units`.
 
 Modules

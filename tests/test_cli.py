@@ -14,7 +14,7 @@ def test_navigate_json(capsys):
     assert main(["navigate", "--json", "--nav-hours", "12", "--align-hours", "0.5", "--imu", "ideal",
                  "--axial-drift-dph", "0.003"]) == 0
     out = json.loads(capsys.readouterr().out)
-    for key in ("lat_error_deg", "lon_error_deg", "position_error_nm", "lat_error_deg_12h"):
+    for key in ("lat_error_deg", "lon_error_deg", "position_error_nmi", "lat_error_deg_12h"):
         assert key in out
     # 12 h latitude error of 0.003 deg/h: 2 cos L eps / w_ie = 0.0201 deg (Table 1)
     assert out["lat_error_deg_12h"] == pytest.approx(0.0201, rel=0.05)

@@ -14,20 +14,13 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from fmu_driver import Slave, check_parameter_error, run_chain
-from fmus.build import build_fmus, parse_unit
+from fmus.build import parse_unit
 from sarins_fmu.experiments import run_static
 
 DEG = math.pi / 180
 SHORT = dict(align_time=1200.0)  # 20 min alignment keeps the tests short
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-@pytest.fixture(scope="session")
-def fmu_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("fmus")
-    build_fmus(out)
-    return out
 
 
 @pytest.mark.parametrize("name", ["Turntable", "IMUThermal", "StrapdownINS"])

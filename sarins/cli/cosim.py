@@ -2,7 +2,9 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -81,10 +83,26 @@ def run(args: argparse.Namespace) -> int:
                                      output_every=args.output_every,
                                      progress=False if args.no_progress else None,
                                      realtime=args.realtime)
+            units = column_units(master, result.dtype.names)
     except OrchestrationError as error:
         print(f"sarins cosim: {'failed' if isinstance(error, RuntimeError) else 'error'}: {error}", file=sys.stderr)
         return 1 if isinstance(error, RuntimeError) else 2
     print(summary(result))
     if args.output:
-        print(f"results written to {write_csv(result, args.output)}")
+        path = write_csv(result, args.output)
+        sidecar = Path(str(path) + ".units.json")
+        sidecar.write_text(json.dumps(units, indent=1) + "\n")
+        print(f"results written to {path} (units in {sidecar.name})")
     return 0
+
+
+def column_units(master, columns) -> dict:
+    """{column: unit} of a result's columns from the FMUs' model descriptions
+    ("s" for time, "1" where a variable declares no unit)."""
+    units = {"time": "s"}
+    index = {name: i for i, name in enumerate(master.names)}
+    for column in columns[1:]:
+        component, _, variable = column.partition(".")
+        found = master.variables[index[component]].get(variable) if component in index else None
+        units[column] = (getattr(found, "unit", None) or "1") if found is not None else "1"
+    return units

@@ -15,6 +15,8 @@ from pathlib import Path
 from orchestration import Component, Connection, System, write_ssd, write_ssp
 
 GIMBAL_LINKS = ["angle_1", "rate_1", "angle_2", "rate_2", "angle_3", "rate_3", "ambient_temp"]
+RAW_LINKS = [(f"dtheta_{a}", f"raw_dtheta_{a}") for a in "xyz"] + [(f"dv_{a}", f"raw_dv_{a}") for a in "xyz"]  # IMU -> IMUCompensator
+TEMPS = ["temp_gyro_x", "temp_gyro_y", "temp_gyro_z", "temp_accel_x", "temp_accel_y", "temp_accel_z"]
 INCREMENT_LINKS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z"]
 SHIPPED = Path(__file__).resolve().parent
 
@@ -105,3 +107,24 @@ def build_system_fmu(fmu_dir: Path | str) -> Path:
     path = build_container_fmu(system, Path(fmu_dir) / "StandardStaticSystem.fmu", step_size=1.0)
     fix_fmu_description(path, [(c.name, c.source) for c in system.components])
     return path
+
+
+def compensated_chain(fmu_dir: str | Path, compensator_fmu: str | Path, *, turntable=None, imu=None, ins=None,
+                      step: float = 0.05, stop: float = 3600.0):
+    """System Turntable -> IMUThermal -> IMUCompensator -> StrapdownINS (Gauss-Seidel order).
+
+    ``fmu_dir`` holds Turntable.fmu, IMUThermal.fmu and StrapdownINS.fmu;
+    the INS reads the compensated increments and the IMU's z-gyro temperature.
+    """
+    fmu_dir = Path(fmu_dir)
+    components = [Component("turntable", fmu_dir / "Turntable.fmu", dict(turntable or {})),
+                  Component("imu", fmu_dir / "IMUThermal.fmu", dict(imu or {})),
+                  Component("comp", Path(compensator_fmu), {}),
+                  Component("ins", fmu_dir / "StrapdownINS.fmu", dict(ins or {}))]
+    connections = [Connection("turntable", v, "imu", v) for v in GIMBAL_LINKS]
+    connections += [Connection("imu", a, "comp", b) for a, b in RAW_LINKS]
+    connections += [Connection("imu", t, "comp", t) for t in TEMPS]
+    connections += [Connection("comp", v, "ins", v) for v, _ in RAW_LINKS]
+    connections += [Connection("imu", "temp_gyro_z", "ins", "temp_gyro_z")]
+    return System(name="compensated_chain", components=components, connections=connections, start_time=0.0,
+                  stop_time=stop, step_size=step)

@@ -59,12 +59,12 @@ class StaticRunResult:
         return getattr(self, name)[k]
 
     def summary(self) -> dict:
-        """Scalars in the papers' units (deg, nm)."""
+        """Scalars in the papers' units (deg, nmi)."""
         out = {
             "lat_error_deg": float(self.lat_error[-1] * RAD_TO_DEG),
             "lon_error_deg": float(self.lon_error[-1] * RAD_TO_DEG),
-            "position_error_nm": float(self.position_error[-1] / NM),
-            "max_position_error_nm": float(np.max(self.position_error) / NM),
+            "position_error_nmi": float(self.position_error[-1] / NM),
+            "max_position_error_nmi": float(np.max(self.position_error) / NM),
         }
         if self.time[-1] >= 12 * HOUR - 1e-9:
             out["lat_error_deg_12h"] = float(self.at_hours("lat_error", 12.0) * RAD_TO_DEG)
