@@ -22,8 +22,6 @@ from . import SLAVES
 from .build import build_fmu
 from .imu_compensator_slave import MODEL_IN_RESOURCES
 
-
-
 def export_compensator(model_file: str | Path, out_dir: str | Path, name: str | None = None) -> Path:
     """Build an IMUCompensator FMU carrying ``model_file``.
 
