@@ -31,6 +31,8 @@ import sarins_fmu
 from . import SLAVES, native
 
 HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent  # the folder holding the packages sarins_fmu and fmus
+SHIPPED_PACKAGES = ("sarins_fmu", "fmus")
 DEFAULT_OUT = Path("build") / "fmus"
 
 # unit -> SI base-unit exponents (FMI 2.0 BaseUnit attributes) and factor/offset
@@ -150,6 +152,57 @@ def _fmu_builder():
     return builder.FmuBuilder
 
 
+def shipped_modules(slave_path: Path) -> list[str]:
+    """The modules an FMU runs: the import closure of its slave within
+    :data:`SHIPPED_PACKAGES`, with every package ``__init__.py`` on the way,
+    as paths relative to :data:`ROOT` (imports inside functions count too).
+    The library's CLI, campaigns and reports live in other packages and are
+    never shipped."""
+    import ast
+
+    def module_file(name: str) -> Path | None:
+        base = ROOT.joinpath(*name.split("."))
+        for candidate in (base.with_suffix(".py"), base / "__init__.py"):
+            if candidate.is_file():
+                return candidate
+        return None
+
+    def package_of(path: Path) -> str:
+        rel = path.relative_to(ROOT).with_suffix("")
+        parts = list(rel.parts)
+        return ".".join(parts[:-1]) if parts[-1] != "__init__" else ".".join(parts[:-1])
+
+    seen: set[Path] = set()
+    todo = [Path(slave_path).resolve()]
+    while todo:
+        path = todo.pop()
+        if path in seen:
+            continue
+        seen.add(path)
+        in_tree = ROOT in path.parents
+        package = package_of(path) if in_tree else ""
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = package.split(".")[:len(package.split(".")) - node.level + 1]
+                    module = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    module = node.module or ""
+                names = [module] + [f"{module}.{a.name}" for a in node.names]
+            for name in names:
+                if name.split(".")[0] not in SHIPPED_PACKAGES:
+                    continue
+                parts = name.split(".")
+                for k in range(1, len(parts) + 1):  # the packages on the way and the module itself
+                    found = module_file(".".join(parts[:k]))
+                    if found is not None and found not in seen:
+                        todo.append(found)
+    return sorted(str(p.relative_to(ROOT)) for p in seen if ROOT in p.parents)
+
+
 def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
     """Build one slave into ``out_dir`` and fix its model description.
 
@@ -164,9 +217,11 @@ def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
     with tempfile.TemporaryDirectory(prefix="sarins_fmu_build_") as tmp:
         tmp = Path(tmp)
         # clean copies of the packages (no caches, no build products)
-        ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "*.fmu")
-        shutil.copytree(Path(sarins_fmu.__file__).parent, tmp / "sarins_fmu", ignore=ignore)
-        shutil.copytree(HERE, tmp / "fmus", ignore=ignore)
+        for rel in shipped_modules(HERE / slave_file):
+            target = tmp / rel
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / rel, target)
+        shutil.copytree(Path(sarins_fmu.__file__).parent / "data", tmp / "sarins_fmu" / "data")
         script = tmp / slave_file
         shutil.copy2(HERE / slave_file, script)
         project_files = [tmp / "sarins_fmu", tmp / "fmus", *(Path(p) for p in extra_files)]
