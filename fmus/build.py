@@ -146,9 +146,25 @@ def _documentation(model_name: str, description: str) -> str:
 
 def _fmu_builder():
     """pythonfmu's ``FmuBuilder`` (only its model-description writing and resource copying are used:
-    the binaries come from :mod:`fmus.native`, so a pythonfmu copy without binaries is fine)."""
+    the binaries come from :mod:`fmus.native`).
+
+    The builder embeds the Python sources of the ``pythonfmu`` it was imported
+    from.  After a plain pythonfmu FMU was loaded in this process, ``pythonfmu``
+    may be that FMU's copy in an extracted folder that is gone by now, and the
+    builder would silently embed nothing; so the sources are always taken from
+    the installed distribution.
+    """
+    from importlib.metadata import PackageNotFoundError, distribution
+
     from pythonfmu import builder
 
+    try:
+        installed = Path(distribution("pythonfmu").locate_file("pythonfmu"))
+    except PackageNotFoundError:
+        installed = builder.HERE
+    if not (installed / "fmi2slave.py").is_file():
+        raise RuntimeError(f"pythonfmu's sources are missing in {installed} (reinstall pythonfmu)")
+    builder.HERE = installed
     return builder.FmuBuilder
 
 
@@ -227,6 +243,8 @@ def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
         project_files = [tmp / "sarins_fmu", tmp / "fmus", *(Path(p) for p in extra_files)]
         fmu = FmuBuilder.build_FMU(script, dest=tmp / "out", project_files=project_files,
                                    needsExecutionTool=False, canHandleVariableCommunicationStepSize=False)
+        if "resources/pythonfmu/fmi2slave.py" not in zipfile.ZipFile(fmu).namelist():
+            raise RuntimeError(f"pythonfmu wrote {fmu.name} without its slave base class in resources/")
         target = out_dir / fmu.name
         _rewrite(fmu, target)
     return target

@@ -203,8 +203,9 @@ def test_fmu_runs_in_a_host_without_this_project(fmu_dir, tmp_path):
 
 def test_build_after_loading_a_pythonfmu_fmu_still_ships_binaries(tmp_path):
     """A loaded pythonfmu FMU puts its own copy of pythonfmu (no binaries) first
-    on sys.path; building afterwards in the same fresh process must still
-    write the export binaries."""
+    on sys.path, in an extracted folder that is deleted when the FMU is freed;
+    building afterwards in the same fresh process must still write the
+    binaries and embed pythonfmu's sources (it silently embedded none)."""
     code = f"""
 import sys, zipfile
 sys.path[:0] = [{str(ROOT)!r}, {str(ROOT / 'tests')!r}]
@@ -217,7 +218,9 @@ import pythonfmu
 assert 'resources' in pythonfmu.__file__, pythonfmu.__file__  # the FMU's copy was imported
 from fmus.build import build_fmus
 fmu = build_fmus({str(tmp_path / 'out')!r}, names=['Turntable'])[0]
-assert any(n.startswith('binaries/') for n in zipfile.ZipFile(fmu).namelist())
+names = zipfile.ZipFile(fmu).namelist()
+assert any(n.startswith('binaries/') for n in names)
+assert any(n.endswith('/pythonfmu/fmi2slave.py') for n in names), names
 """
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]
