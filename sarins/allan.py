@@ -38,6 +38,7 @@ class AllanResult:
     adev: np.ndarray  # (T, 6) rad/s, m/s^2
     readouts: dict  # channel -> {term: value in display units}
     spec: dict | None  # channel -> {term: value in display units}, simulated data only
+    gauss_markov: dict | None = None  # channel -> (fitted std, spec std, corr. time s), display units
 
     def rows(self) -> list[dict]:
         """One row per channel: read-outs, spec and units, for printing or JSON."""
@@ -50,6 +51,9 @@ class AllanResult:
                 if self.spec is not None:
                     row[f"{term}_spec"] = self.spec[ch][term]
                 row[f"{term}_unit"] = unit
+            if self.gauss_markov and ch in self.gauss_markov:
+                row["gauss_markov"], row["gauss_markov_spec"], row["gauss_markov_time_s"] = self.gauss_markov[ch]
+                row["gauss_markov_unit"] = DISPLAY[triad][1][1]
             out.append(row)
         return out
 
@@ -63,7 +67,7 @@ def analyse(gyro, accel, rate_hz: float, source: str, model: imu.ImuModel | None
     data = np.hstack([np.asarray(gyro, float), np.asarray(accel, float)])
     record = data.shape[0] / rate_hz
     taus, adev = allan.allan_deviation(data, rate_hz)
-    reads, spec = {}, None if model is None else {}
+    reads, spec, gm = {}, None if model is None else {}, {}
     for j, ch in enumerate(CHANNELS):
         triad = ch.split("_")[0]
         r = allan.readouts(taus, adev[:, j], record)
@@ -71,7 +75,12 @@ def analyse(gyro, accel, rate_hz: float, source: str, model: imu.ImuModel | None
         if model is not None:
             s = allan.spec(model, triad)
             spec[ch] = _display(triad, [s[t][j % 3] for t in TERMS])
-    return AllanResult(source, float(rate_hz), record, taus, adev, reads, spec)
+            if s["gauss_markov"][j % 3] > 0:  # a Gauss-Markov bias (nav-rlg): read with its correlation time
+                tc = float(s["gauss_markov_time"][j % 3])
+                _, std = allan.fit_gauss_markov(taus, adev[:, j], tc, record)
+                factor = DISPLAY[triad][1][0]
+                gm[ch] = (std * factor, float(s["gauss_markov"][j % 3]) * factor, tc)
+    return AllanResult(source, float(rate_hz), record, taus, adev, reads, spec, gm or None)
 
 
 def simulate(preset: str, hours: float, rate_hz: float, seed: int) -> AllanResult:

@@ -108,6 +108,9 @@ def test_allan_command_prints_read_outs_and_writes_the_plot(tmp_path, capsys):
     assert gx["channel"] == "gyro_x" and gx["random_walk_unit"] == "deg/sqrt(h)"
     assert gx["random_walk"] == pytest.approx(gx["random_walk_spec"], rel=0.1)
     assert png.stat().st_size > 10000
+    assert main(["allan", "--imu", "nav-rlg", "--hours", "111", "--json"]) == 0
+    ax = json.loads(capsys.readouterr().out)["channels"][3]  # accel_x: a Gauss-Markov bias, read with its T
+    assert ax["gauss_markov_unit"] == "ug" and ax["gauss_markov"] == pytest.approx(ax["gauss_markov_spec"], rel=0.1)
     assert main(["allan", "--imu", "ideal", "--hours", "0.5"]) == 0
     assert "gyro_z" in capsys.readouterr().out
     assert main(["allan", "--rate-hz", "-1"]) == 2

@@ -63,6 +63,9 @@ def run(args) -> int:
         for term, label in (("random_walk", "N"), ("bias_instability", "B"), ("rate_random_walk", "K")):
             spec = f" (spec {r[term + '_spec']:.3g})" if term + "_spec" in r else ""
             cells.append(f"{label} {r[term]:.3g}{spec} {r[term + '_unit']}")
+        if "gauss_markov" in r:
+            cells.append(f"Gauss-Markov std {r['gauss_markov']:.3g} (spec {r['gauss_markov_spec']:.3g}, "
+                         f"T {r['gauss_markov_time_s']:g} s) {r['gauss_markov_unit']}")
         print(f"  {r['channel']:8s} " + ";  ".join(cells))
     if args.plot:
         print(f"plot: {args.plot}")
