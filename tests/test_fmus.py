@@ -232,3 +232,28 @@ assert any(n.endswith('/pythonfmu/fmi2slave.py') for n in names), names
 """
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]
+
+
+def test_build_fmus_never_writes_an_fmu_that_cannot_run(tmp_path):
+    """IMUCompensator needs a trained model: without one it is refused, not built empty."""
+    with pytest.raises(ValueError, match="needs a trained model"):
+        build_fmus(tmp_path, ["IMUCompensator"])
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    done = subprocess.run([sys.executable, "-m", "sarins", "build-fmus", "--only", "IMUCompensator", "--out",
+                           str(tmp_path / "out")], capture_output=True, text=True, timeout=300, env=env)
+    assert done.returncode == 2 and "needs a trained model" in done.stderr, done.stderr
+    assert not (tmp_path / "out" / "IMUCompensator.fmu").exists()
+
+
+def test_model_description_states_the_requirements(fmu_dir):
+    import zipfile
+
+    from fmpy import read_model_description
+
+    md = read_model_description(str(fmu_dir / "IMUThermal.fmu"))
+    assert md.coSimulation.needsExecutionTool is True
+    assert "sarins-fmi" in md.generationTool and "PythonFMU" in md.generationTool
+    with zipfile.ZipFile(fmu_dir / "IMUThermal.fmu") as z:
+        doc = z.read("documentation/index.html").decode()
+        assert not any(n.startswith("binaries/win64") for n in z.namelist())
+    assert "CPython 3." in doc and "SARINS_FMU_PYTHON" in doc and "Linux x86-64" in doc
