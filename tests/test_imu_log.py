@@ -138,7 +138,7 @@ def test_replay_command_round_trip_and_errors(tmp_path, capsys):
     direct = json.loads(capsys.readouterr().out)
     assert main(["replay", str(log), "--align-hours", "0.25", "--json"]) == 0
     replayed = json.loads(capsys.readouterr().out)
-    for key in ("lat_error_deg", "lon_error_deg", "position_error_nm"):
+    for key in ("lat_error_deg", "lon_error_deg", "position_error_nmi"):
         assert replayed[key] == direct[key]
     bad = _static_csv(tmp_path)
     _edit(bad, 10, lambda s: "4" + s[s.index(","):])
