@@ -7,8 +7,7 @@
         --spread 2 --goal 9e-8 [--max-neurons N] --out model.json
     sarins identify predict --model model.json --data tests.csv [--out predictions.csv]
 
-The project's ``sarins`` command adds these through :func:`register`;
-``python -m sarins.cli.identify`` runs them alone.
+The ``sarins`` command adds these through :func:`register`.
 
 Latitude reading or error
     Seed 000 feeds the network the latitude *reading* after 4 h alignment and
@@ -28,7 +27,7 @@ Goal
 The model file (JSON) stores the input column names, the target name and the
 site latitude; ``predict`` requires the same inputs. Predictions are written
 as the input table plus a column ``<target>_pred``. A bad CSV or model file
-gives a one-line error on stderr and exit status 1.
+gives a one-line error on stderr and exit status 2.
 """
 
 from __future__ import annotations
@@ -44,7 +43,7 @@ from sarins_fmu.identify.modelfile import ModelFileError
 from sarins_fmu.identify.rbf import RBFNetwork
 from sarins_fmu.identify.tables import SEED000_SITE_LAT_DEG, TableError, numeric_column, read_table, write_table
 
-__all__ = ["register", "run", "main", "DEFAULT_GOAL", "DEFAULT_SPREAD"]
+__all__ = ["register", "run", "DEFAULT_GOAL", "DEFAULT_SPREAD"]
 
 DEFAULT_SPREAD = 2.0  # seed 000's SPREAD (standardised units here)
 DEFAULT_GOAL = 0.0003**2  # (deg/h)^2: seed 000's 0.0003 deg/h training error as an RMS
@@ -53,7 +52,7 @@ _PROG = "sarins identify"
 
 
 class _UsageError(Exception):
-    """A problem with the user's files or options (one-line message, exit 1)."""
+    """A problem with the user's files or options (one-line message, exit 2)."""
 
 
 def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -232,7 +231,7 @@ def run(args: argparse.Namespace) -> int:
     Returns
     -------
     int
-        Exit status: 0 on success, 1 on a bad file, column or option (with a
+        Exit status: 0 on success, 2 on a bad file, column or option (with a
         one-line message on stderr).
     """
     command = getattr(args, "identify_command", None)
@@ -251,17 +250,5 @@ def run(args: argparse.Namespace) -> int:
         message = " ".join(str(exc).split())
         where = f"{_PROG} {command}" if command else _PROG
         print(f"{where}: error: {message}", file=sys.stderr)
-        return 1
+        return 2
     return 0
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Stand-alone entry: ``python -m sarins.cli.identify identify train ...``."""
-    parser = argparse.ArgumentParser(prog="sarins")
-    register(parser.add_subparsers(dest="command", required=True))
-    args = parser.parse_args(argv)
-    return args.func(args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())
