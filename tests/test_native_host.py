@@ -16,7 +16,6 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
-from fmus.build import build_fmus
 
 HERE = Path(__file__).resolve().parent
 NAMES = ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "DriftModelUpdater"]
@@ -40,11 +39,11 @@ def host(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
-def unzipped(tmp_path_factory):
-    """{name: (unzipped folder, model description)} of freshly built FMUs."""
+def unzipped(fmu_dir, tmp_path_factory):
+    """{name: (unzipped folder, model description)} of the session's FMUs."""
     out = tmp_path_factory.mktemp("native_fmus")
     result = {}
-    for fmu in build_fmus(out / "fmus", NAMES):
+    for fmu in (fmu_dir / f"{name}.fmu" for name in NAMES):
         folder = out / fmu.stem
         with zipfile.ZipFile(fmu) as z:
             z.extractall(folder)
