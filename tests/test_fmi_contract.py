@@ -279,7 +279,8 @@ print("OK")
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "DriftModelUpdater"])
+@pytest.mark.parametrize("name", ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "DriftModelUpdater",
+                                  "VehicleMotion"])
 def test_fault_suite_never_crashes_the_host(fmu_dir, name):
     """Every scenario of issue 14 on every FMU in one fresh FMPy process: no crash, clean exit."""
     fmu = fmu_dir / f"{name}.fmu"
