@@ -14,7 +14,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from fmu_driver import Slave, check_parameter_error, run_chain
-from fmus.build import parse_unit
+from fmus.build import build_fmus, parse_unit
 from sarins_fmu.experiments import run_static
 
 DEG = math.pi / 180
