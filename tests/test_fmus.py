@@ -236,8 +236,6 @@ assert any(n.endswith('/pythonfmu/fmi2slave.py') for n in names), names
 
 def test_build_fmus_never_writes_an_fmu_that_cannot_run(tmp_path):
     """IMUCompensator needs a trained model: without one it is refused, not built empty."""
-    from fmus.build import build_fmus
-
     with pytest.raises(ValueError, match="needs a trained model"):
         build_fmus(tmp_path, ["IMUCompensator"])
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
