@@ -92,7 +92,7 @@ def test_cold_start_inputs_and_name_check(tmp_path, capsys):
     write_table(no_change, {"lat_deg": t["lat_deg"], "temp_c": t["temp_c"]})
     rc = main(["identify", "predict", "--model", str(cold), "--data", str(no_change)])
     err = capsys.readouterr().err
-    assert rc == 1
+    assert rc == 2
     assert err.count("\n") == 1
     assert "no column 'temp_change_c'" in err
 
@@ -137,7 +137,7 @@ def test_bad_training_csv_one_line_error(tmp_path, capsys, content, message):
         path.write_text(content, encoding="latin-1")
     rc, model = _train(tmp_path, data=str(path))
     err = capsys.readouterr().err
-    assert rc == 1
+    assert rc == 2
     assert err.startswith("sarins identify train: error:")
     assert err.count("\n") == 1
     assert message in err
@@ -149,13 +149,13 @@ def test_bad_model_file_one_line_error(tmp_path, capsys):
     bad.write_text('{"format": "sarins_fmu.identify.rbf", "version": 1}')
     rc = main(["identify", "predict", "--model", str(bad), "--data", HOT])
     err = capsys.readouterr().err
-    assert rc == 1
+    assert rc == 2
     assert err.startswith("sarins identify predict: error: model file")
     assert "model.json" in err and err.count("\n") == 1
 
 
 def test_bad_options(tmp_path, capsys):
     rc, _ = _train(tmp_path, "--spread", "-1")
-    assert rc == 1 and "spread" in capsys.readouterr().err
+    assert rc == 2 and "spread" in capsys.readouterr().err
     rc, _ = _train(tmp_path, "--inputs", "lat_error_deg,,temp_c")
-    assert rc == 1 and "--inputs" in capsys.readouterr().err
+    assert rc == 2 and "--inputs" in capsys.readouterr().err
