@@ -59,22 +59,6 @@ def finite(text: str) -> float:
     return value
 
 
-def positive_finite(text: str) -> float:
-    """argparse type: a finite float > 0."""
-    value = finite(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text!r}")
-    return value
-
-
-def unit_interval(text: str) -> float:
-    """argparse type: a float in (0, 1]."""
-    value = finite(text)
-    if not 0.0 < value <= 1.0:
-        raise argparse.ArgumentTypeError(f"must be in (0, 1], got {text!r}")
-    return value
-
-
 def seed_value(text: str) -> int:
     """argparse type: a random seed the FMUs' 32-bit Integer can carry (0 .. 2**31 - 1)."""
     try:
@@ -185,6 +169,11 @@ def main(argv=None) -> int:
         if os.environ.get("SARINS_DEBUG"):
             raise
         print(f"{name}: error: input nested too deeply ({_one_line(exc)})", file=sys.stderr)
+        return EXIT_USAGE
+    except ImportError as exc:  # an optional dependency the chosen options need
+        missing = getattr(exc, "name", None) or _one_line(exc)
+        print(f"{name}: error: this needs the package {missing!r}, which is not installed or cannot be "
+              "imported", file=sys.stderr)
         return EXIT_USAGE
     except (UsageError, ValueError, OSError) as exc:
         print(f"{name}: error: {_one_line(exc)}", file=sys.stderr)

@@ -175,7 +175,7 @@ def _train(args: argparse.Namespace) -> None:
     if not np.isfinite(args.local_lat_deg) or abs(args.local_lat_deg) > 90.0:
         raise _UsageError(f"--local-lat-deg must be within [-90, 90], got {args.local_lat_deg}")
     # spread: standardised units; beyond 1e6 every basis function is flat to double precision
-    _check_number("--spread", args.spread, positive=True, high=1e6)
+    _check_number("--spread", args.spread, low=1e-6, high=1e6)
     _check_number("--goal", args.goal, low=0.0, high=1e300)
     if args.max_neurons is not None and not 1 <= args.max_neurons <= 100_000:
         raise _UsageError(f"--max-neurons must be in 1 .. 100000, got {args.max_neurons}")

@@ -39,12 +39,14 @@ def check_run_args(args) -> None:
         raise UsageError("--align-hours must be at least 1/6 h (coarse + fine alignment)")
     if args.nav_hours * 3600 < 1:
         raise UsageError(f"--nav-hours {args.nav_hours:g} is shorter than one 1 s navigation step")
-    if args.align_hours + args.nav_hours > 24 * 3650:
-        raise UsageError("runs longer than 10 years are refused")
     if args.axial_drift_dph is not None and abs(args.axial_drift_dph) > 1e3:
         raise UsageError(f"--axial-drift-dph {args.axial_drift_dph:g} deg/h is not a gyro drift (|drift| <= 1000)")
-    hours = args.align_hours + args.nav_hours + getattr(args, "identify_hours", 0.0)
-    check_size(hours * 3600.0, BYTES_PER_STEP, f"a run of {hours:g} h (1 s steps)")
+    parts = ["--align-hours", "--nav-hours"] + (["--identify-hours"] if hasattr(args, "identify_hours") else [])
+    hours = sum(getattr(args, p[2:].replace("-", "_")) for p in parts)
+    named = " + ".join(parts)
+    if hours > 24 * 3650:
+        raise UsageError(f"{named} = {hours:g} h: runs longer than 10 years are refused")
+    check_size(hours * 3600.0, BYTES_PER_STEP, f"{named} = {hours:g} h (1 s steps)")
 
 
 BYTES_PER_STEP = 400  # stored per 1 s step by a run (INS outputs, temperatures, errors, recorder)

@@ -45,16 +45,28 @@ PROFILES = {
 }
 
 
+MIN_LAMBDA = 0.01  # per month; below it the information matrix under-/overflows between stops
+
+
 def _scale_tag(scale: float) -> str:
     return "" if scale == 1.0 else f"_x{scale:g}"
 
 
 def add_arguments(parser) -> None:
-    from sarins.cli import unit_interval
+    from sarins.cli import finite
     from sarins.cli.navigate import seed_value
 
-    parser.add_argument("--lambda", dest="forgetting_factor", type=unit_interval, default=0.8,
-                        help="forgetting factor of FF-RLS per month, in (0, 1] (default 0.8, the paper's)")
+    def forgetting(text: str) -> float:
+        import argparse
+
+        value = finite(text)
+        if not MIN_LAMBDA <= value <= 1.0:
+            raise argparse.ArgumentTypeError(f"must be in [{MIN_LAMBDA}, 1], got {text!r}")
+        return value
+
+    parser.add_argument("--lambda", dest="forgetting_factor", type=forgetting, default=0.8,
+                        help=f"forgetting factor of FF-RLS per month, {MIN_LAMBDA} .. 1 (default 0.8, the paper's; "
+                             "a smaller one forgets a month's data within a day)")
     parser.add_argument("--seed", type=seed_value, default=0,
                         help="base random seed of the campaign: run k of each study uses seed + k "
                              "(0 .. 2**31-1 minus the runs; default 0)")
@@ -68,8 +80,8 @@ def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0):
 
     if profile not in PROFILES:
         raise ValueError(f"unknown profile {profile!r}")
-    if not (0.0 < forgetting_factor <= 1.0):
-        raise ValueError(f"--lambda must be in (0, 1], got {forgetting_factor}")
+    if not (MIN_LAMBDA <= forgetting_factor <= 1.0):
+        raise ValueError(f"--lambda must be in [{MIN_LAMBDA}, 1], got {forgetting_factor}")
     p = PROFILES[profile]
     most = max(n for _, n in p["stops"].items()) if p["stops"] else 0
     most = max([most] + [row[3] for row in p["mc"]] + [row[2] for row in p["vehicle"]])
