@@ -16,6 +16,8 @@ when the host has it), then rewrites each modelDescription.xml:
 
 from __future__ import annotations
 
+import html
+import json
 import math
 import re
 import shutil
@@ -26,7 +28,7 @@ from xml.etree import ElementTree as ET
 
 import sarins_fmu
 
-from . import SLAVES
+from . import SLAVES, native
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUT = Path("build") / "fmus"
@@ -128,37 +130,23 @@ def fix_model_description(xml_bytes: bytes, descriptions: dict | None = None) ->
 
 
 def _documentation(model_name: str, description: str) -> str:
-    return (f"<html><head><title>{model_name}</title></head><body><h1>{model_name}</h1>"
-            f"<p>{description}</p><p>Units: each variable's description ends in [unit; display unit]."
-            "</p></body></html>")
-
-
-def _has_binaries(package_dir: Path) -> bool:
-    return any((Path(package_dir) / "resources" / "binaries").rglob("*.so")) or \
-        any((Path(package_dir) / "resources" / "binaries").rglob("*.dll"))
+    name, text = html.escape(model_name), html.escape(description)
+    return (f"<html><head><title>{name}</title></head><body><h1>{name}</h1>"
+            f"<p>{text}</p><p>Units: each variable's description ends in [unit; display unit].</p>"
+            f"<h2>Requirements</h2><p>{html.escape(native.HOST_REQUIREMENTS)}</p>"
+            "<h2>FMI 2.0 contract</h2><p>Calls out of the order of FMI 2.0 section 4.2.4, unknown value references, "
+            "type mismatches and Python exceptions return fmi2Error with a logged message (never fmi2Fatal); "
+            "parameters are checked at fmi2ExitInitializationMode; non-finite Real outputs are never returned "
+            "with fmi2OK; messages with status Discard or worse always reach the logger, others when debug "
+            "logging is on for their category (loggingOn at instantiation, or fmi2SetDebugLogging). "
+            "Co-simulation only, no FMU state, no derivatives.</p></body></html>")
 
 
 def _fmu_builder():
-    """pythonfmu's ``FmuBuilder``, taking the export binaries from the installed package.
-
-    A pythonfmu FMU carries a copy of pythonfmu's Python sources in its
-    resources and puts that folder first on ``sys.path`` when it is loaded.
-    If this process loaded such an FMU before importing pythonfmu itself,
-    ``pythonfmu`` is that copy, which holds no export binaries, and the
-    builder would silently write FMUs without binaries.
-    """
-    from importlib.metadata import PackageNotFoundError, distribution
-
+    """pythonfmu's ``FmuBuilder`` (only its model-description writing and resource copying are used:
+    the binaries come from :mod:`fmus.native`, so a pythonfmu copy without binaries is fine)."""
     from pythonfmu import builder
 
-    if not _has_binaries(builder.HERE):
-        try:
-            installed = Path(distribution("pythonfmu").locate_file("pythonfmu"))
-        except PackageNotFoundError:
-            installed = None
-        if installed is None or not _has_binaries(installed):
-            raise RuntimeError("pythonfmu's export binaries are missing (reinstall pythonfmu)")
-        builder.HERE = installed
     return builder.FmuBuilder
 
 
@@ -168,6 +156,7 @@ def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
     ``extra_files``: more files or folders copied into the FMU's ``resources/``
     (e.g. a trained model the slave loads from ``self.resources``).
     """
+    native.compiler()  # fail early, before pythonfmu's builder runs, without a C compiler
     FmuBuilder = _fmu_builder()
 
     out_dir = Path(out_dir)
@@ -183,32 +172,84 @@ def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
         project_files = [tmp / "sarins_fmu", tmp / "fmus", *(Path(p) for p in extra_files)]
         fmu = FmuBuilder.build_FMU(script, dest=tmp / "out", project_files=project_files,
                                    needsExecutionTool=False, canHandleVariableCommunicationStepSize=False)
-        if not any(n.startswith("binaries/") for n in zipfile.ZipFile(fmu).namelist()):
-            raise RuntimeError(f"pythonfmu wrote {fmu.name} without binaries")
         target = out_dir / fmu.name
         _rewrite(fmu, target)
     return target
 
 
+def _native_model_description(xml_bytes: bytes) -> bytes:
+    """State what the FMU needs: ``needsExecutionTool`` (a CPython runtime), the generation tool."""
+    from pythonfmu import __version__ as pythonfmu_version
+
+    root = ET.fromstring(xml_bytes)
+    root.set("generationTool", f"{native.LAYER} native FMI 2.0 layer (sarins-fmu) over PythonFMU {pythonfmu_version} "
+                               "slave classes")
+    root.find("CoSimulation").set("needsExecutionTool", "true")
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
 def _rewrite(src: Path, dst: Path) -> None:
-    with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w", zipfile.ZIP_DEFLATED) as zout:
+    """pythonfmu's FMU -> ours: native binaries, aliased library, bridge, records, documentation."""
+    with zipfile.ZipFile(src) as zin:
         md = zin.read("modelDescription.xml")
         root = ET.fromstring(md)
+        model_id = root.find("CoSimulation").get("modelIdentifier")
+        slave_module = zin.read("resources/slavemodule.txt").decode().strip()
+        library, kept = {}, []
         for item in zin.infolist():
-            data = zin.read(item.filename)
-            if item.filename == "modelDescription.xml":
-                data = fix_model_description(data)
-            zout.writestr(item, data)
+            name = item.filename
+            if name.endswith("/") or name.startswith("binaries/") or name == "modelDescription.xml":
+                continue  # pythonfmu's binaries are replaced by ours (Linux x86-64 only)
+            parts = name.split("/")
+            data = zin.read(name)
+            if parts[0] == "resources" and len(parts) > 2 and parts[1] in native._ALIASED:
+                library["/".join(parts[1:])] = data
+            else:
+                kept.append((name, data))
+    alias = native.library_alias(library)
+    package = {"__init__.py": (f'"""The library shipped in this FMU, under its own name ({alias})."""\n').encode()}
+    for rel, data in library.items():
+        package[rel] = native.rewrite_imports(data.decode(), alias).encode() if rel.endswith(".py") else data
+    config = {"guid": root.get("guid"), "alias": alias, "slave_module": slave_module,
+              "slave_class": root.get("modelName"), "layer": native.LAYER,
+              "manifest": {rel: len(data) for rel, data in package.items()}}
+    with zipfile.ZipFile(dst, "w", zipfile.ZIP_DEFLATED) as zout:
+        zout.writestr("modelDescription.xml", _native_model_description(fix_model_description(md)))
+        for name, data in kept:
+            if name == f"resources/{slave_module}.py":
+                data = native.rewrite_imports(data.decode(), alias).encode()
+            zout.writestr(name, data)
+        for rel, data in package.items():
+            zout.writestr(f"resources/{alias}/{rel}", data)
+        zout.writestr("resources/_fmi_bridge.py", native.BRIDGE.read_bytes())
+        zout.writestr("resources/sarins_fmi.json", json.dumps(config, indent=1))
+        zout.writestr("resources/sarins_fmi_runtime.txt", native.runtime_record())
+        for name, data in native.binaries(model_id).items():
+            info = zipfile.ZipInfo(name)
+            info.external_attr = 0o755 << 16
+            info.compress_type = zipfile.ZIP_DEFLATED
+            zout.writestr(info, data)
         zout.writestr("documentation/index.html",
                       _documentation(root.get("modelName"), root.get("description", "")))
 
 
+# IMUCompensator runs only with a trained model inside: it is built by
+# fmus.compensator_export.export_compensator (``sarins build-fmus --compensator MODEL``), never empty.
+NEEDS_MODEL = {"IMUCompensator": "sarins build-fmus --compensator MODEL_FILE (or fmus.compensator_export)"}
+DEFAULT_NAMES = [n for n in SLAVES if n not in NEEDS_MODEL]
+
+
 def build_fmus(out_dir: Path | str = DEFAULT_OUT, names=None) -> list[Path]:
-    """Build all (or the named) FMUs into ``out_dir``; returns their paths."""
-    names = list(SLAVES) if names is None else list(names)
+    """Build the named FMUs (default: every FMU that runs without a trained model) into
+    ``out_dir``; returns their paths."""
+    names = list(DEFAULT_NAMES) if names is None else list(names)
     unknown = [n for n in names if n not in SLAVES]
     if unknown:
         raise ValueError(f"unknown FMU(s) {unknown}; known: {', '.join(SLAVES)}")
+    for name in names:
+        if name in NEEDS_MODEL:
+            raise ValueError(f"{name} needs a trained model to run; build it with {NEEDS_MODEL[name]}")
     return [build_fmu(SLAVES[n], Path(out_dir)) for n in names]
 
 

@@ -60,7 +60,7 @@ def compensated_chain(fmu_dir: str | Path, compensator_fmu: str | Path, *, turnt
     """
     from orchestration import Component, Connection, System
 
-    from .systems import GIMBAL_LINKS
+    from sarins.systems import GIMBAL_LINKS  # moved with the systems (issue 13)
 
     fmu_dir = Path(fmu_dir)
     components = [Component("turntable", fmu_dir / "Turntable.fmu", dict(turntable or {})),

@@ -5,22 +5,28 @@ square brackets, optionally followed by a display unit after a semicolon,
 e.g. ``"angular rate of gimbal 1 [rad/s; deg/s]"``.  The build step turns
 that into FMI ``unit``/``displayUnit`` attributes and ``<UnitDefinitions>``.
 
-Error handling (pythonfmu 0.7).  A Python exception escaping a slave method
-becomes ``fmi2Fatal``, but pythonfmu's wrapper then releases the Python
-objects twice (once in its exception handler, again in ``fmi2FreeInstance``),
-which corrupts the host's heap: the host crashes later, at some garbage
-collection.  So no exception may leave a slave method.  :func:`guarded`
-catches them: the message is logged with status ``fmi2Error`` (category
-``logStatusError``), a failed initialisation is remembered, and every
-``doStep`` after it, or any step that fails itself, returns ``False``, which
-pythonfmu reports as ``fmi2Discard`` (the outputs keep their last values).
-pythonfmu has no way to return ``fmi2Error`` itself.
+Real variables declared with :func:`declare` live in one float64 buffer per
+slave instance (``slave._fmi_buffer``; ``slave._fmi_slots`` maps value
+reference -> slot).  The attribute ``slave.<name>`` reads and writes that
+slot (a class-level descriptor), so slave code and pythonfmu's own
+``get_real``/``set_real``/``to_xml`` work unchanged, and the native FMI layer
+(``fmus.native``) copies values in and out of the buffer without calling
+Python.  ``slave._fmi_real(names)`` gives the slots of named Reals for
+vectorised access.
+
+Error handling.  The native FMI layer reports a Python exception escaping a
+slave method as fmi2Error with the exception logged, at the call that raised
+it; parameter checks therefore simply raise (:class:`ParameterError`) in
+``exit_initialization_mode``.  A message the slave logs with status fmi2Error
+also makes the call return fmi2Error.
 """
 
 from __future__ import annotations
 
 import functools
 import math
+
+import numpy as np
 
 from pythonfmu import Fmi2Causality, Fmi2Variability, Integer, Real, String
 from pythonfmu.enums import Fmi2Status
@@ -38,13 +44,72 @@ class ParameterError(ValueError):
     """A parameter value the FMU cannot run with."""
 
 
+class _RealSlot:
+    """Class-level descriptor: the Real ``name`` is slot ``index`` of the instance's buffer."""
+
+    __slots__ = ("name", "index")
+
+    def __init__(self, name: str, index: int):
+        self.name, self.index = name, index
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self
+        return obj._fmi_view[self.index]
+
+    def __set__(self, obj, value):
+        obj._fmi_view[self.index] = float(value)
+
+
+def _bind_real(slave, name: str, start) -> int:
+    """Give the Real ``name`` the next slot of the slave's buffer; returns the slot."""
+    buffer = slave.__dict__.get("_fmi_buffer")
+    if buffer is None:
+        buffer = np.zeros(32)
+        slave._fmi_slots = {}
+        slave._fmi_count = 0
+    index = slave._fmi_count
+    if index >= buffer.shape[0]:  # grow (only while declaring, before the FMI layer holds the buffer)
+        grown = np.zeros(2 * buffer.shape[0])
+        grown[:index] = buffer[:index]
+        buffer = grown
+    slave._fmi_buffer = buffer
+    slave._fmi_view = memoryview(buffer)
+    slave._fmi_count = index + 1
+    cls = type(slave)
+    existing = cls.__dict__.get(name)
+    if existing is None and not hasattr(cls, name):
+        setattr(cls, name, _RealSlot(name, index))
+    elif not (isinstance(existing, _RealSlot) and existing.index == index):
+        raise RuntimeError(f"{cls.__name__}.{name}: a class attribute has this name, or Reals are declared in a "
+                           "different order than in the first instance")
+    slave.__dict__.pop(name, None)
+    slave._fmi_view[index] = float(start)
+    return index
+
+
 def declare(slave, kind: str, name: str, causality, description: str, start, *, variability=None):
-    """Set ``slave.<name> = start`` and register it (kind: 'real', 'integer', 'string')."""
-    setattr(slave, name, start)
+    """Register a variable with start value ``start`` (kind: 'real', 'integer', 'string').
+
+    A Real lives in the slave's float64 buffer (see the module docstring);
+    other kinds are plain attributes.
+    """
     if variability is None:
         variability = FIXED if causality == PARAMETER else (CONTINUOUS if kind == "real" else DISCRETE)
     cls = {"real": Real, "integer": Integer, "string": String}[kind]
-    slave.register_variable(cls(name, causality=causality, variability=variability, description=description))
+    if kind == "real":
+        index = _bind_real(slave, name, start)
+    else:
+        setattr(slave, name, start)
+    var = cls(name, causality=causality, variability=variability, description=description)
+    slave.register_variable(var)
+    if kind == "real":
+        slave._fmi_slots[var.value_reference] = index
+
+
+def real_slots(slave, names) -> np.ndarray:
+    """Buffer slots of the named Reals (for ``slave._fmi_buffer[slots]``)."""
+    return np.array([type(slave).__dict__[n].index for n in names], dtype=np.intp)
 
 
 def check_finite(slave, names, *, positive=(), non_negative=()):
@@ -72,31 +137,18 @@ def check_step(slave, step_size: float, expected: float | None) -> float:
 
 
 def discard_on_error(slave, exc: Exception) -> bool:
-    """Log ``exc`` as an error and tell the host the step was discarded."""
+    """Log ``exc`` with status fmi2Error; the step returns False (the layer reports fmi2Error)."""
     slave.log(f"{type(exc).__name__}: {exc}", Fmi2Status.error)
     return False
 
 
 def guarded(method):
-    """Wrap a slave method so that no exception reaches pythonfmu (see module
-    docstring).  ``do_step`` returns False on any failure, including a failed
-    initialisation; other methods log and record the failure."""
-    name = method.__name__
+    """``do_step`` may return None for success (pythonfmu expects a bool); exceptions propagate
+    to the native FMI layer, which logs them and returns fmi2Error at that call."""
 
     @functools.wraps(method)
     def wrapper(self, *args):
-        failure = getattr(self, "_failure", None)
-        if name == "do_step" and failure is not None:
-            self.log(f"cannot step: {failure}", Fmi2Status.error)
-            return False
-        try:
-            result = method(self, *args)
-        except Exception as exc:  # noqa: BLE001 - nothing may escape to the C++ wrapper
-            message = f"{name}: {type(exc).__name__}: {exc}"
-            self.log(message, Fmi2Status.error)
-            if name != "do_step":
-                self._failure = message
-            return False if name == "do_step" else None
-        return True if name == "do_step" and result is None else result
+        result = method(self, *args)
+        return True if result is None and method.__name__ == "do_step" else result
 
     return wrapper

@@ -69,9 +69,11 @@ class Turntable(Fmi2Slave):
         self._ambient = None
         self._step = None
 
-    @guarded
     def enter_initialization_mode(self):
-        self._build()
+        try:  # outputs during initialisation; a bad parameter is reported at exit_initialization_mode
+            self._build()
+        except ParameterError:
+            self._schedule = None
 
     @guarded
     def exit_initialization_mode(self):

@@ -15,6 +15,13 @@ every minor-step increment at the internal rate (see :mod:`imu_kernel`):
 * azimuth (z) gyro only: ``eps_z(T) = a T^2 + b T + c`` (seed 002 eq. (7))
   plus ``d * dT/dt`` (seed 000's cold-start effect); a, b, c may age as
   first-order Markov processes with a 360-day correlation time (seed 002).
+* time-correlated terms (:mod:`sarins_fmu.imu_correlated`; all zero for
+  ``ideal`` and ``nav-rlg``): the errors above follow the *die* temperature,
+  which lags the reported one (:mod:`sarins_fmu.thermal`); bias and scale
+  factor respond to the die temperature rate (thermal gradient); a
+  play-operator thermal hysteresis; a flicker bias instability (sum of
+  Gauss-Markov terms, flat Allan floor); a rate random walk; a turn-on bias
+  drawn once per seed.
 * white noise n: angle / velocity random walk.  It is added to each output
   increment with its exact integrated variance (N(0, rw^2 h)); this is the
   same distribution as summing minor-step noise, at a fraction of the cost.
@@ -34,6 +41,7 @@ import numpy as np
 
 from . import earth
 from ._jit import jit
+from .imu_correlated import CorrelatedErrors
 from .imu_kernel import increments as _increments_kernel
 from .thermal import Ambient, ThermalModel, ThermalParams
 from .units import ARCSEC_TO_RAD, DAY, DEG_TO_RAD, DPH_TO_RPS, DPSH_TO_RPSS, PPM, UG_TO_MPS2
@@ -46,6 +54,10 @@ def _vec3(value, name):
     if not np.isfinite(arr).all():
         raise ValueError(f"IMU parameter {name} must be finite")
     return arr
+
+
+CORRELATED_FIELDS = ("bias_dtdt", "scale_factor_dtdt", "hysteresis", "hysteresis_width", "flicker",
+                     "rate_random_walk", "turn_on_bias")
 
 
 @dataclass(frozen=True)
@@ -62,6 +74,12 @@ class TriadErrors:
     bias_tc1 : (3,) per degC; bias_tc2 : (3,) per degC^2
     scale_factor_tc : (3,) per degC
     quadratic : (3,) coefficient of x|x|
+    bias_dtdt, scale_factor_dtdt : (3,) per degC/s of die temperature rate
+    hysteresis : (3,) half-loop bias amplitude; hysteresis_width : (3,) degC
+    flicker : (3,) bias-instability coefficient B (Allan floor 0.664 B)
+    rate_random_walk : (3,) per sqrt(s) (rad/s/sqrt(s) or m/s^2/sqrt(s))
+    turn_on_bias : (3,) std of the per-seed constant bias
+    (time-correlated terms: see :mod:`sarins_fmu.imu_correlated`)
     """
 
     bias: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -74,11 +92,23 @@ class TriadErrors:
     bias_tc2: np.ndarray = field(default_factory=lambda: np.zeros(3))
     scale_factor_tc: np.ndarray = field(default_factory=lambda: np.zeros(3))
     quadratic: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    bias_dtdt: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    scale_factor_dtdt: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    hysteresis: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    hysteresis_width: np.ndarray = field(default_factory=lambda: np.ones(3))
+    flicker: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rate_random_walk: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    turn_on_bias: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self):
         for name in ("bias", "scale_factor", "random_walk", "bias_instability", "bias_corr_time",
-                     "bias_tc1", "bias_tc2", "scale_factor_tc", "quadratic"):
+                     "bias_tc1", "bias_tc2", "scale_factor_tc", "quadratic", *CORRELATED_FIELDS):
             object.__setattr__(self, name, _vec3(getattr(self, name), name))
+        for name in ("flicker", "rate_random_walk", "turn_on_bias"):
+            if np.any(getattr(self, name) < 0):
+                raise ValueError(f"{name} must be non-negative")
+        if np.any(self.hysteresis_width <= 0):
+            raise ValueError("hysteresis_width must be positive")
         mis = np.asarray(self.misalignment, dtype=float)
         if mis.shape != (3, 3) or not np.isfinite(mis).all():
             raise ValueError("misalignment must be a finite (3, 3) matrix")
@@ -105,6 +135,8 @@ class ImuModel:
         rad/s per degC/s (= rad/degC)
     aging_sigma : (3,) stationary std of the Markov ageing of (a, b, c)
     aging_corr_time : float, s (seed 002: 360 days)
+    flicker_tau_min, flicker_tau_max : float, s, band of correlation times
+        of the flicker bias instability (see :mod:`imu_correlated`)
     thermal : ThermalParams
     """
 
@@ -117,6 +149,8 @@ class ImuModel:
     axial_drift_dtdt: float = 0.0
     aging_sigma: np.ndarray = field(default_factory=lambda: np.zeros(3))
     aging_corr_time: float = 360 * DAY
+    flicker_tau_min: float = 1.0
+    flicker_tau_max: float = 10000.0
     thermal: ThermalParams = field(default_factory=ThermalParams)
 
     def __post_init__(self):
@@ -130,6 +164,8 @@ class ImuModel:
             raise ValueError("lowrate_width must be positive")
         if not (math.isfinite(self.axial_drift_dtdt) and self.aging_corr_time > 0):
             raise ValueError("axial_drift_dtdt must be finite and aging_corr_time positive")
+        if not (0 < self.flicker_tau_min < self.flicker_tau_max < math.inf):
+            raise ValueError("flicker correlation times need 0 < flicker_tau_min < flicker_tau_max (finite)")
 
     def with_axial_drift(self, drift: float) -> "ImuModel":
         """Copy whose z-gyro drift is the constant ``drift`` (rad/s), no thermal terms."""
@@ -151,6 +187,10 @@ def _mis(arcsec):
 # of 0.002 deg/h, our (a, b, c) give 0.0021..0.0037 deg/h over 20..60 degC.
 # Accelerometer figures (30-50 ug bias, 5 ug/sqrt(Hz)) are those of quartz
 # pendulous accelerometers in such units (Titterton & Weston table 4.3).
+# The papers imply no die lag, gradient, hysteresis, flicker floor, rate
+# random walk or turn-on bias for this unit (seed 000 models the axial drift
+# by T and dT/dt; seed 002 by a quadratic in T), so those terms are zero
+# here and the seeds' results stay what they were.
 NAV_RLG = ImuModel(
     gyro=TriadErrors(
         bias=np.array([0.003, -0.003, 0.0]) * DPH_TO_RPS,
@@ -177,36 +217,59 @@ NAV_RLG = ImuModel(
 # Consumer/tactical MEMS unit like seed 003's MIMU: bias ~10 deg/h with strong
 # temperature dependence, 0.3 deg/sqrt(h), percent-level low-rate
 # nonlinearity, g-sensitivity 0.01 deg/s/g, accelerometer bias 2 mg.
+# Time-correlated terms (seed 003 gives no figures; values of the class of
+# tactical MEMS data sheets and of the thermal-calibration literature):
+# flicker bias instability B = 5 deg/h and 50 ug (Allan floors 3.3 deg/h,
+# 33 ug from ~20 s on), rate random walk 3 deg/h/sqrt(h) and
+# 0.5 ug/sqrt(s) (the +1/2 slope takes over past ~1e4 s), turn-on
+# repeatability 8 deg/h and 0.5 mg, die lagging the reported temperature by
+# 3 and 2 min, thermal-gradient sensitivity 5 deg/h and 100 ug at 1 degC/min
+# (scale factor 200 and 100 ppm at 1 degC/min), hysteresis loops +-3 deg/h
+# and +-100 ug taken up over 2 degC.
+_PER_DEGC_PER_MIN = 60.0  # (x per degC/min) * this = x per degC/s
 MEMS = ImuModel(
     gyro=TriadErrors(
         bias=np.array([10.0, -8.0, 12.0]) * DPH_TO_RPS,
         scale_factor=np.array([500.0, -400.0, 600.0]) * PPM,
         misalignment=_mis(300.0),
         random_walk=np.full(3, 0.3 * DPSH_TO_RPSS),
-        bias_instability=np.full(3, 5.0 * DPH_TO_RPS),
-        bias_corr_time=np.full(3, 100.0),
         bias_tc1=np.array([0.004, -0.003, 0.005]) * DEG_TO_RAD,
         bias_tc2=np.array([6e-5, 5e-5, -7e-5]) * DEG_TO_RAD,
         scale_factor_tc=np.full(3, 100 * PPM),
         quadratic=np.full(3, 1.5e-4),
+        bias_dtdt=np.array([5.0, -4.0, 6.0]) * DPH_TO_RPS * _PER_DEGC_PER_MIN,
+        scale_factor_dtdt=np.full(3, 200 * PPM * _PER_DEGC_PER_MIN),
+        hysteresis=np.array([3.0, -2.5, 3.5]) * DPH_TO_RPS,
+        hysteresis_width=np.full(3, 2.0),
+        flicker=np.full(3, 5.0 * DPH_TO_RPS),
+        rate_random_walk=np.full(3, 3.0 * DPH_TO_RPS / 60.0),
+        turn_on_bias=np.full(3, 8.0 * DPH_TO_RPS),
     ),
     accel=TriadErrors(
         bias=np.array([2.0, -1.5, 2.5]) * 1e3 * UG_TO_MPS2,
         scale_factor=np.array([1000.0, -800.0, 1200.0]) * PPM,
         misalignment=_mis(200.0),
         random_walk=np.full(3, 0.05 / 60.0),
-        bias_instability=np.full(3, 50.0 * UG_TO_MPS2),
-        bias_corr_time=np.full(3, 100.0),
         bias_tc1=np.full(3, 100.0 * UG_TO_MPS2),
         bias_tc2=np.full(3, 2.0 * UG_TO_MPS2),
         scale_factor_tc=np.full(3, 50 * PPM),
         quadratic=np.full(3, 1e-4),
+        bias_dtdt=np.array([100.0, -80.0, 120.0]) * UG_TO_MPS2 * _PER_DEGC_PER_MIN,
+        scale_factor_dtdt=np.full(3, 100 * PPM * _PER_DEGC_PER_MIN),
+        hysteresis=np.array([100.0, -80.0, 120.0]) * UG_TO_MPS2,
+        hysteresis_width=np.full(3, 2.0),
+        flicker=np.full(3, 50.0 * UG_TO_MPS2),
+        rate_random_walk=np.full(3, 0.5 * UG_TO_MPS2),
+        turn_on_bias=np.full(3, 500.0 * UG_TO_MPS2),
     ),
     g_sensitivity=np.array([[1.0, 0.3, -0.2], [-0.2, 1.0, 0.3], [0.3, -0.2, 1.0]]) * 0.01 * DEG_TO_RAD / earth.GAMMA_E,
     lowrate_gain=np.full(3, 0.02),
     lowrate_width=np.full(3, 2.0 * DEG_TO_RAD),
+    flicker_tau_min=1.0,
+    flicker_tau_max=1.0e5,
     thermal=ThermalParams(self_heating=(6.0, 6.2, 6.4, 5.5, 5.6, 5.7),
-                          time_constant=(600.0, 620.0, 640.0, 560.0, 580.0, 600.0)),
+                          time_constant=(600.0, 620.0, 640.0, 560.0, 580.0, 600.0),
+                          die_time_constant=(180.0, 190.0, 200.0, 120.0, 130.0, 140.0)),
 )
 
 PRESETS = {"ideal": ImuModel(), "nav-rlg": NAV_RLG, "mems": MEMS}
@@ -340,6 +403,7 @@ class IMU:
         if aging_days > 0 and np.any(model.aging_sigma > 0):
             poly = aged_drift_poly(model, [aging_days], seed=self.seed + 7919)[0]
         self.drift_poly = poly
+        self._correlated = CorrelatedErrors(model, self.h, self.seed)
         self.reset()
 
     def reset(self, ambient0: float | None = None) -> None:
@@ -356,6 +420,7 @@ class IMU:
         self._gm = self._rng_gm.standard_normal(6) * self._gm_std  # stationary start
         self._coef = self._coefficients()
         self.temperature = self.thermal.temperature.copy()
+        self._correlated.reset(self.temperature)
 
     def _coefficients(self):
         """Per-triad coefficient table (2, 5, 3): bias, tc1, tc2, sf, sf_tc."""
@@ -390,9 +455,11 @@ class IMU:
         temps = self.thermal.advance(t_end, ambient)
         m = self.model
         gm_noise = self._rng_gm.standard_normal((n, 6))
+        die0, die = self._correlated.die_temperatures(t_prev, temps)  # the errors follow the die
         g_bias, g_sf, a_bias, a_sf = _interval_terms(
-            t_prev, temps, self.h, self._coef, self.drift_poly, m.axial_drift_dtdt,
+            die0, die, self.h, self._coef, self.drift_poly, m.axial_drift_dtdt,
             self._gm, self._gm_phi, self._gm_std, gm_noise)
+        self._correlated.add_terms(die0, die, g_bias, g_sf, a_bias, a_sf)
         w_t, f_t = self.base.base_motion(t_end - self.h, self.h)
         dtheta, dv = _increments_kernel(
             self.axes, angle0, rate0, accel, w_t, f_t, self.h, self.n_sub,

@@ -27,6 +27,13 @@ _TRIAD_UNITS = {  # field -> (gyro unit, accelerometer unit)
     "bias_tc2": ("rad/s/degC2", "m/s2/degC2"),
     "scale_factor_tc": ("1/degC", "1/degC"),
     "quadratic": ("s/rad", "s2/m"),
+    "bias_dtdt": ("rad/degC", "m/s/degC"),  # per degC/s of die temperature rate
+    "scale_factor_dtdt": ("s/degC", "s/degC"),
+    "hysteresis": ("rad/s", "m/s2"),
+    "hysteresis_width": ("degC", "degC"),
+    "flicker": ("rad/s", "m/s2"),
+    "rate_random_walk": ("rad/s/sqrt(s)", "m/s2/sqrt(s)"),
+    "turn_on_bias": ("rad/s", "m/s2"),
 }
 _OFF_DIAGONAL = [(i, j) for i in range(3) for j in range(3) if i != j]
 
@@ -51,9 +58,12 @@ def _names():
         out.append((f"aging_sigma_{coef}", unit, ("aging_sigma", i)))
     out.append(("axial_drift_dtdt", "rad/degC", ("axial_drift_dtdt",)))
     out.append(("aging_corr_time", "s", ("aging_corr_time",)))
+    out.append(("flicker_tau_min", "s", ("flicker_tau_min",)))
+    out.append(("flicker_tau_max", "s", ("flicker_tau_max",)))
     for j, sensor in enumerate(SENSORS):
         out.append((f"self_heating_{sensor}", "degC", ("thermal", "self_heating", j)))
         out.append((f"time_constant_{sensor}", "s", ("thermal", "time_constant", j)))
+        out.append((f"die_time_constant_{sensor}", "s", ("thermal", "die_time_constant", j)))
     return out
 
 
@@ -91,7 +101,7 @@ def apply_overrides(model: ImuModel, overrides: dict) -> ImuModel:
         "thermal": {f.name: list(getattr(model.thermal, f.name)) for f in fields(ThermalParams)},
         "top": {name: np.array(getattr(model, name), float) for name in
                 ("g_sensitivity", "lowrate_gain", "lowrate_width", "axial_drift_poly", "aging_sigma",
-                 "axial_drift_dtdt", "aging_corr_time")},
+                 "axial_drift_dtdt", "aging_corr_time", "flicker_tau_min", "flicker_tau_max")},
     }
     for name, value in overrides.items():
         value = float(value)
@@ -113,4 +123,5 @@ def apply_overrides(model: ImuModel, overrides: dict) -> ImuModel:
         g_sensitivity=top["g_sensitivity"], lowrate_gain=top["lowrate_gain"], lowrate_width=top["lowrate_width"],
         axial_drift_poly=top["axial_drift_poly"], aging_sigma=top["aging_sigma"],
         axial_drift_dtdt=float(top["axial_drift_dtdt"]), aging_corr_time=float(top["aging_corr_time"]),
+        flicker_tau_min=float(top["flicker_tau_min"]), flicker_tau_max=float(top["flicker_tau_max"]),
     )

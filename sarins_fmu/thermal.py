@@ -14,6 +14,19 @@ equilibrium, so only ambient changes move it (seed 000: less than 3 degC).
 The ambient is sampled on the simulation grid and taken piecewise linear in
 between; each step is then integrated exactly, so the solution does not
 depend on the step size.  Temperatures in degC, times in s.
+
+**Die lag.**  The temperature this model gives is what the unit *reports*
+(its temperature sensor).  The sensing element (MEMS die, gyro block) sits
+behind a further thermal resistance, so its temperature lags the reported
+one: a second first-order stage
+    dT_die_j/dt = (T_j - T_die_j) / tau_die_j
+(``ThermalParams.die_time_constant``; 0 means the die is at the reported
+temperature).  This is the two-node lumped network (sensor node, die node)
+of e.g. Groves, *Principles of GNSS, Inertial and Multisensor Integrated
+Navigation*, 2nd ed., sec. 4.4.5 on thermal lag; it is why a bias modelled as
+a function of the reported temperature shows a loop on a chamber ramp.
+:func:`die_temperatures` integrates it exactly for a reported temperature
+taken linear over each output interval.
 """
 
 from __future__ import annotations
@@ -40,13 +53,22 @@ class ThermalParams:
         Equilibrium rise of each sensor above ambient, degC.
     time_constant : tuple of 6 floats
         Warm-up time constant of each sensor, s.
+    die_time_constant : tuple of 6 floats
+        Lag of each sensing die behind the reported temperature, s (0: none).
     """
 
     self_heating: tuple = (16.0, 16.5, 17.0, 15.0, 15.2, 15.4)
     time_constant: tuple = (5400.0, 5600.0, 5800.0, 5000.0, 5100.0, 5200.0)
+    die_time_constant: tuple = (0.0,) * 6
+
+    @property
+    def has_die_lag(self) -> bool:
+        return any(t > 0 for t in self.die_time_constant)
 
     def __post_init__(self):
-        for name in ("self_heating", "time_constant"):
+        if np.any(np.asarray(self.die_time_constant, float) < 0):
+            raise ValueError("thermal die_time_constant must be non-negative")
+        for name in ("self_heating", "time_constant", "die_time_constant"):
             value = np.asarray(getattr(self, name), float)
             if value.shape != (N_SENSORS,) or not np.isfinite(value).all():
                 raise ValueError(f"thermal {name} needs {N_SENSORS} finite values")
@@ -176,6 +198,36 @@ def _exact_steps(h, amb, heat, tau, temp0):
             decay = math.exp(-h[k] / tau[j])
             x = decay * x + (amb[k] + heat[j] - slope * tau[j]) * (1.0 - decay) + slope * h[k]
             out[k, j] = x
+    return out
+
+
+@jit
+def die_temperatures(reported0, reported, h, tau, die):
+    """Die temperatures at the ends of K output intervals, degC.
+
+    Exact step of dT_die/dt = (T_rep - T_die)/tau with T_rep linear over an
+    interval of length h (slope s): T_die <- e T_die + (T_rep0 - s tau)(1 - e)
+    + s h, e = exp(-h/tau); tau = 0 passes the reported temperature through.
+
+    Parameters
+    ----------
+    reported0 : (6,) reported temperatures at the start of the first interval
+    reported : (K, 6) reported temperatures at the interval ends
+    h : interval, s; tau : (6,) die time constants, s
+    die : (6,) die temperatures at the start, updated in place to the last end
+    """
+    out = np.empty_like(reported)
+    prev = reported0.copy()
+    for k in range(reported.shape[0]):
+        for j in range(reported.shape[1]):
+            if tau[j] > 0.0:
+                slope = (reported[k, j] - prev[j]) / h
+                decay = math.exp(-h / tau[j])
+                die[j] = decay * die[j] + (prev[j] - slope * tau[j]) * (1.0 - decay) + slope * h
+            else:
+                die[j] = reported[k, j]
+            out[k, j] = die[j]
+            prev[j] = reported[k, j]
     return out
 
 

@@ -28,7 +28,7 @@ from sarins import __version__
 EXIT_FAILED = 1  # the run itself failed (an FMU error, a failed fit)
 EXIT_USAGE = 2  # bad command-line usage or input
 
-COMMANDS = ("navigate", "demo", "cosim", "build_fmus", "identify", "campaign")
+COMMANDS = ("navigate", "demo", "cosim", "build_fmus", "identify", "campaign", "allan")
 
 
 class UsageError(ValueError):

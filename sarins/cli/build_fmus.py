@@ -17,13 +17,25 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from fmus.build import build_fmus
+    import sys
+
+    from fmus.build import NEEDS_MODEL, build_fmus
+    from fmus.native import HOST_REQUIREMENTS
 
     if args.compensator is not None:  # a bad model file fails before anything is built
         from sarins_fmu.identify.compensators import load
 
         load(args.compensator)
-    for path in build_fmus(args.out, args.only):
+    names = None
+    if args.only:
+        names = [n for n in args.only if not (n == "IMUCompensator" and args.compensator is not None)]
+        for name in names:
+            if name in NEEDS_MODEL:
+                print(f"sarins build-fmus: {name} needs a trained model: {NEEDS_MODEL[name]}", file=sys.stderr)
+                return 2
+    elif args.compensator is None:
+        print("IMUCompensator not built (it needs a trained model: --compensator MODEL_FILE)")
+    for path in build_fmus(args.out, names) if names != [] else []:
         print(path)
     if not args.only:
         from sarins.systems import write_systems
@@ -38,4 +50,5 @@ def run(args) -> int:
         from fmus.compensator_export import export_compensator
 
         print(export_compensator(args.compensator, args.out))
+    print(HOST_REQUIREMENTS)
     return 0

@@ -1,0 +1,166 @@
+"""Time-correlated sensor errors: thermal gradient, hysteresis, flicker, RRW, turn-on bias.
+
+Terms added, per output interval k and sensor j (gyro x, y, z, accel x, y, z),
+to the bias and scale factor of :mod:`sarins_fmu.imu` (all SI; T is the *die*
+temperature of :func:`sarins_fmu.thermal.die_temperatures`, degC, at the
+interval midpoint, Tdot its rate over the interval, degC/s)::
+
+    b += c_g Tdot + c_h (T - P_w[T]) / w + x_flicker + x_rrw + b_on
+    sf += s_g Tdot
+
+* **Thermal gradient** ``c_g Tdot``, ``s_g Tdot`` (``bias_dtdt``,
+  ``scale_factor_dtdt``).  In a lumped body warmed through its surface the
+  temperature difference across the sensor is proportional to the rate of
+  change, dT_across = Tdot L^2 / (2 alpha) for a slab of thickness L and
+  diffusivity alpha (steady ramp solution of the heat equation); a gradient
+  across a vibrating structure or a pendulum shifts its bias and scale
+  factor linearly (IEEE Std 952-1997 annex B lists the "temperature
+  gradient / rate" sensitivity; seed 000 models the axial drift with dT/dt
+  for the same reason).
+* **Thermal hysteresis** ``c_h (T - P_w[T]) / w``: P_w is the play
+  (backlash) operator of half-width w degC,
+      P_k = max(T_k - w, min(T_k + w, P_{k-1})),  P_0 = T_0,
+  the elementary hysteron of the Prandtl-Ishlinskii model (Brokate &
+  Sprekels, *Hysteresis and Phase Transitions*, 1996, ch. 2).  T - P is +w
+  after heating by more than 2w and -w after cooling, so the bias-vs-
+  temperature curve is a loop whose branches are 2 c_h apart; a reversal
+  moves along a flat segment until the play is taken up.
+* **Flicker bias instability** (coefficient B, ``flicker``): a flicker
+  (1/f) bias has the two-sided PSD S(f) = B^2 / (2 pi f) of IEEE Std
+  952-1997 annex C (one-sided B^2 / (pi f)) and the flat Allan deviation
+  sqrt(2 ln 2 / pi) B = 0.664 B.  It is synthesised as a sum of first-order
+  Gauss-Markov terms with correlation times T_i log-spaced by a ratio r
+  over [tau_min, tau_max] (``flicker_tau_min``, ``flicker_tau_max``), all
+  with the same std q.  Derivation of q: a GM term of std q has the
+  one-sided PSD 4 q^2 T_i / (1 + (2 pi f T_i)^2); summed over log-spaced
+  T_i, sum_i ~ (1/ln r) int S dlnT = (4 q^2 / ln r) int_0^inf dT / (1 +
+  (2 pi f T)^2) = q^2 / (f ln r), equal to B^2 / (pi f) for
+  q = B sqrt(ln r / pi).  The spectrum is 1/f for 1/(2 pi tau_max) << f <<
+  1/(2 pi tau_min); the Allan floor spans about 20 tau_min < tau <
+  tau_max / 5 (measured, see tests/test_imu_correlated.py).  Three terms
+  per decade keep the ripple of the floor at about 1 % (Keshner, Proc. IEEE
+  70(3), 1982, builds 1/f noise the same way).  Each term advances one
+  exact step per interval, x <- phi x + q sqrt(1 - phi^2) w,
+  phi = exp(-h / T_i), from a stationary start.
+* **Rate random walk** K (``rate_random_walk``): x <- x + K sqrt(h) w; its
+  Allan deviation is K sqrt(tau / 3) (IEEE Std 952).
+* **Turn-on bias** (``turn_on_bias``, std): a constant drawn once per seed
+  (run-to-run repeatability), from its own stream.
+
+Every random term draws from streams spawned from the IMU seed at indices
+that the older terms do not use, so adding these terms never changes the
+noise of a model that has them all at zero (``ideal``, ``nav-rlg``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._jit import jit
+from .thermal import die_temperatures
+
+TERMS_PER_DECADE = 3
+_STREAM_TURN_ON, _STREAM_PROCESS = 2, 3  # spawn keys beside the IMU's noise (0) and GM (1) streams
+
+
+def flicker_taus(tau_min: float, tau_max: float) -> np.ndarray:
+    """Log-spaced correlation times (s) of the Gauss-Markov sum, endpoints included."""
+    n = max(2, int(math.ceil(TERMS_PER_DECADE * math.log10(tau_max / tau_min))) + 1)
+    return np.geomspace(tau_min, tau_max, n)
+
+
+def flicker_term_std(coefficient: float, taus) -> float:
+    """Std of every Gauss-Markov term for flicker coefficient B: B sqrt(ln r / pi)."""
+    return float(coefficient) * math.sqrt(math.log(taus[1] / taus[0]) / math.pi)
+
+
+def _stack(model, name):
+    return np.concatenate([getattr(model.gyro, name), getattr(model.accel, name)])
+
+
+class CorrelatedErrors:
+    """State of the time-correlated terms of one IMU (see the module docstring).
+
+    Parameters
+    ----------
+    model : ImuModel
+    h : output interval, s
+    seed : int, the IMU seed
+    """
+
+    def __init__(self, model, h: float, seed: int):
+        self.h, self.seed = float(h), int(seed)
+        self.tau_die = np.asarray(model.thermal.die_time_constant, float)
+        self.c_grad, self.s_grad = _stack(model, "bias_dtdt"), _stack(model, "scale_factor_dtdt")
+        self.c_hyst, self.w_hyst = _stack(model, "hysteresis"), _stack(model, "hysteresis_width")
+        self.flicker, self.rrw = _stack(model, "flicker"), _stack(model, "rate_random_walk")
+        self.turn_on_std = _stack(model, "turn_on_bias")
+        taus = flicker_taus(model.flicker_tau_min, model.flicker_tau_max)
+        self.phi = np.exp(-self.h / taus)
+        self.q = np.outer(np.full(len(taus), flicker_term_std(1.0, taus)), self.flicker)  # (n_terms, 6)
+        self.die_lag = bool(np.any(self.tau_die > 0))
+        self.active = self.die_lag or any(np.any(x != 0) for x in (
+            self.c_grad, self.s_grad, self.c_hyst, self.flicker, self.rrw, self.turn_on_std))
+        self._random = bool(np.any(self.flicker > 0) or np.any(self.rrw > 0))
+
+    def reset(self, temperature) -> None:
+        """Initial state: die at ``temperature`` (6,) degC, play relaxed,
+        flicker terms stationary, RRW at 0, a new turn-on bias for the seed."""
+        self.die = np.array(temperature, float)
+        self.play = self.die.copy()
+        self._rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(_STREAM_PROCESS,)))
+        on = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(_STREAM_TURN_ON,)))
+        self.turn_on = on.standard_normal(6) * self.turn_on_std
+        self.x_flicker = self._rng.standard_normal(self.q.shape) * self.q if self._random else np.zeros(self.q.shape)
+        self.x_rrw = np.zeros(6)
+
+    def die_temperatures(self, reported0, reported):
+        """(die at the start, die at each interval end (K, 6)); the reported
+        temperatures themselves when no sensor has a die lag (bit for bit)."""
+        if not self.die_lag:
+            return reported0, reported
+        start = self.die.copy()
+        return start, die_temperatures(np.asarray(reported0, float), np.ascontiguousarray(reported), self.h,
+                                       self.tau_die, self.die)
+
+    def add_terms(self, die0, die, g_bias, g_sf, a_bias, a_sf) -> None:
+        """Add the terms of K intervals to the (K, 3) bias and scale-factor arrays, in place."""
+        if not self.active:
+            return
+        n = die.shape[0]
+        cols = self.q.size + 6
+        noise = self._rng.standard_normal((n, cols)) if self._random else np.zeros((n, cols))
+        bias = np.empty((n, 6))
+        sf = np.empty((n, 6))
+        _terms(np.asarray(die0, float), die, self.h, self.c_grad, self.s_grad, self.c_hyst, self.w_hyst,
+               self.play, self.phi, self.q, self.x_flicker, self.rrw, self.x_rrw, self.turn_on, noise, bias, sf)
+        g_bias += bias[:, :3]
+        a_bias += bias[:, 3:]
+        g_sf += sf[:, :3]
+        a_sf += sf[:, 3:]
+
+
+@jit
+def _terms(die0, die, h, c_grad, s_grad, c_hyst, w_hyst, play, phi, q, x_flicker, rrw, x_rrw, turn_on,
+           noise, bias, sf):
+    """Compiled interval loop; updates play, x_flicker, x_rrw in place."""
+    n_terms = phi.shape[0]
+    sqrt_h = math.sqrt(h)
+    for j in range(6):
+        prev = die0[j]
+        for k in range(die.shape[0]):
+            mid = 0.5 * (prev + die[k, j])
+            rate = (die[k, j] - prev) / h
+            play[j] = max(mid - w_hyst[j], min(mid + w_hyst[j], play[j]))
+            flick = 0.0
+            for i in range(n_terms):
+                x_flicker[i, j] = (phi[i] * x_flicker[i, j]
+                                   + q[i, j] * math.sqrt(1.0 - phi[i] ** 2) * noise[k, i * 6 + j])
+                flick += x_flicker[i, j]
+            x_rrw[j] += rrw[j] * sqrt_h * noise[k, n_terms * 6 + j]
+            bias[k, j] = (c_grad[j] * rate + c_hyst[j] * (mid - play[j]) / w_hyst[j]
+                          + flick + x_rrw[j] + turn_on[j])
+            sf[k, j] = s_grad[j] * rate
+            prev = die[k, j]

@@ -1,0 +1,116 @@
+"""The FMUs in a native host: a small C program (tests/native_host/host.c)
+that dlopens an FMU's binary with no Python in the process and no
+environment prepared (no PYTHONPATH, PYTHONHOME or LD_PRELOAD): the FMU finds
+its Python runtime itself.  The default run uses the plain-Python kernels
+(SARINS_NO_NUMBA=1, quick); the slow tests run with numba and stress
+process exit."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import zipfile
+from pathlib import Path
+
+import pytest
+from fmpy import read_model_description
+
+from fmus.build import build_fmus
+
+HERE = Path(__file__).resolve().parent
+NAMES = ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "DriftModelUpdater"]
+QUICK = {"IMUThermal": {"internal_rate": 10.0},  # plain-Python minor loop: keep the default run short
+         # a static, level, north-pointing IMU at 28.222 deg (Earth rate and gravity per 1 s step)
+         "StrapdownINS": {"dtheta_y": 6.4258e-5, "dtheta_z": 3.4486e-5, "dv_z": 9.7913, "align_time": 600.0}}
+
+
+@pytest.fixture(scope="session")
+def host(tmp_path_factory):
+    """The compiled C host (skipped without a C compiler)."""
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        pytest.skip("no C compiler (gcc/cc) to build the native test host")
+    import fmpy
+
+    out = tmp_path_factory.mktemp("native_host") / "host"
+    subprocess.run([cc, "-O2", "-o", str(out), str(HERE / "native_host" / "host.c"),
+                    f"-I{Path(fmpy.__file__).parent / 'c-code'}", "-ldl"], check=True)
+    return out
+
+
+@pytest.fixture(scope="session")
+def unzipped(tmp_path_factory):
+    """{name: (unzipped folder, model description)} of freshly built FMUs."""
+    out = tmp_path_factory.mktemp("native_fmus")
+    result = {}
+    for fmu in build_fmus(out / "fmus", NAMES):
+        folder = out / fmu.stem
+        with zipfile.ZipFile(fmu) as z:
+            z.extractall(folder)
+        result[fmu.stem] = (folder, read_model_description(str(fmu)))
+    return result
+
+
+def clean_env(**extra) -> dict:
+    """The test process's environment without anything that would point the FMU at Python."""
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("PYTHONPATH", "PYTHONHOME", "LD_PRELOAD", "LD_LIBRARY_PATH", "VIRTUAL_ENV")}
+    env.update(extra)
+    return env
+
+
+def run_host(host, folder, md, steps, *ops, env=None, timeout=300):
+    cmd = [str(host), str(folder), md.coSimulation.modelIdentifier, md.guid, str(steps), *ops]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
+                          env=env if env is not None else clean_env(SARINS_NO_NUMBA="1"))
+
+
+def set_ops(md, values: dict) -> list[str]:
+    by_name = {v.name: v for v in md.modelVariables}
+    ops = []
+    for name, value in values.items():
+        var = by_name[name]
+        kind = {"Real": "r", "Integer": "i", "String": "s"}[var.type]
+        ops.append(f"{kind}{var.valueReference}={value}")
+    return ops
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_each_fmu_runs_1000_steps_in_a_c_host(host, unzipped, name):
+    folder, md = unzipped[name]
+    proc = run_host(host, folder, md, 1000, *set_ops(md, QUICK.get(name, {})))
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "STATUS" not in proc.stdout, proc.stdout
+    assert proc.stdout.rstrip().endswith("DONE 1000"), proc.stdout
+
+
+def test_bad_parameter_is_an_error_at_exit_initialization_in_a_c_host(host, unzipped):
+    folder, md = unzipped["IMUThermal"]
+    proc = run_host(host, folder, md, 10, *set_ops(md, {"preset": "bogus"}))
+    assert proc.returncode == 0, proc.stderr
+    assert "STATUS fmi2ExitInitializationMode 3" in proc.stdout, proc.stdout
+    assert "unknown IMU preset 'bogus'" in proc.stdout
+
+
+def test_invalid_value_reference_is_an_error_not_fatal_in_a_c_host(host, unzipped):
+    folder, md = unzipped["StrapdownINS"]
+    integer_vr = next(v.valueReference for v in md.modelVariables if v.type == "Integer")
+    proc = run_host(host, folder, md, 10, "probe-real=99999")
+    assert "STATUS fmi2GetReal 3" in proc.stdout and "unknown value reference 99999" in proc.stdout, proc.stdout
+    proc = run_host(host, folder, md, 10, f"probe-real={integer_vr}")
+    assert "STATUS fmi2GetReal 3" in proc.stdout and "is an Integer, not a Real" in proc.stdout, proc.stdout
+    assert proc.returncode == 0
+
+
+def test_no_python_found_gives_null_with_a_reason(host, unzipped, tmp_path):
+    """With the recorded interpreter gone and nothing on PATH, fmi2Instantiate returns NULL and says why."""
+    folder, md = unzipped["Turntable"]
+    copy = tmp_path / "Turntable"
+    shutil.copytree(folder, copy)
+    record = copy / "resources" / "sarins_fmi_runtime.txt"
+    record.write_text("version=3.99\nexecutable=/nonexistent/python3.99\nlibpython=/nonexistent/libpython3.99.so\n")
+    proc = run_host(host, copy, md, 10, env={"PATH": str(tmp_path)})
+    assert proc.returncode == 0, proc.stderr
+    assert "STATUS fmi2Instantiate NULL" in proc.stdout
+    assert "no CPython 3.99 runtime found" in proc.stdout and "SARINS_FMU_PYTHON" in proc.stdout
