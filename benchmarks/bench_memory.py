@@ -64,7 +64,13 @@ def main():
 
     failed = []
     with tempfile.TemporaryDirectory() as tmp:
-        for fmu in build_fmus(tmp):
+        fmus = build_fmus(tmp)
+        try:
+            fmus.append(_compensator_fmu(Path(tmp)))
+        except Exception as exc:  # noqa: BLE001  (reported, the others still run)
+            print(f"{'IMUCompensator':<13} skipped: no FMU with a model could be built "
+                  f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})")
+        for fmu in fmus:
             code = CHILD.format(root=str(ROOT), tests=str(ROOT / "tests"), fmu=str(fmu), steps=args.steps,
                                 inputs=static_increments() if fmu.stem == "StrapdownINS" else {})
             out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
@@ -85,6 +91,24 @@ def main():
                   + f"; growth over the second half {growth:+.3f} bytes/step")
     if failed:
         raise SystemExit(f"bench_memory: failed: {', '.join(failed)}")
+
+
+def _compensator_fmu(folder: Path) -> Path:
+    """IMUCompensator carrying a small RBF compensator fitted on a synthetic
+    series (the FMU needs a trained model; its size, not its accuracy, matters here)."""
+    import numpy as np
+
+    from fmus.compensator_export import export_compensator
+    from sarins_fmu.identify import compensators
+
+    rng = np.random.default_rng(0)
+    t = np.arange(2000) * 0.1
+    truth = np.column_stack([0.1 * np.sin(0.05 * t), 0.1 * np.cos(0.03 * t), 0.1 * np.sin(0.02 * t),
+                             np.sin(0.01 * t), np.cos(0.013 * t), 9.8 + 0.1 * np.sin(0.02 * t)])
+    temp = 10.0 + 20.0 * np.sin(0.002 * t)
+    meas = truth * 1.001 + 1e-4 + 1e-5 * rng.standard_normal(truth.shape)
+    model = compensators.make("rbf", max_samples=500).fit(np.column_stack([meas, temp]), truth)
+    return export_compensator(model.save(folder / "compensator_model.npz"), folder)
 
 
 def _ships_model(fmu: Path) -> bool:

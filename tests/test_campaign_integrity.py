@@ -271,3 +271,33 @@ def test_artifacts_are_built_in_a_temporary_folder(tmp_path):
     build_artifacts(dest, ["A.fmu", "B.fmu"], good, "k1")
     build_artifacts(dest, ["A.fmu", "B.fmu"], good, "k2")
     assert len(calls) == 3 and (dest / "B.fmu").read_text() == "B.fmu v3"
+
+
+@pytest.mark.parametrize("signum,status", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
+def test_a_signalled_campaign_stops_cleanly(tmp_path, signum, status):
+    """SIGTERM / Ctrl-C to ``sarins campaign``: one line, exit 143 / 130, its
+    workers gone at once (not after their tasks), finished results kept."""
+    proc = _python(f"""
+        import sys
+        import sarins.online_rls.campaign as camp
+        from campaign_tasks import sleeper, square
+        from sarins.campaign import Task
+        from sarins.cli import main
+        camp.build_tasks = lambda *a, **k: [Task("quick", square, {{"x": 1}})] + [
+            Task(f"s{{i}}", sleeper, {{"x": i}}) for i in range(4)]
+        sys.exit(main(["campaign", "online-rls", "--out", {str(tmp_path)!r}, "--workers", "2", "--no-progress"]))
+    """, stderr=subprocess.PIPE, text=True)
+    try:
+        assert _wait(lambda: (tmp_path / "runs" / "quick.npz").exists() and len(_children(proc.pid)) >= 3)
+        kids = _children(proc.pid)
+        time.sleep(0.5)
+        t0 = time.monotonic()
+        os.kill(proc.pid, signum)
+        _, err = proc.communicate(timeout=30)
+        assert time.monotonic() - t0 < 20
+    finally:
+        proc.kill()
+    assert proc.returncode == status, err
+    assert err.strip().splitlines() == [f"sarins campaign online-rls: {'terminated' if status == 143 else 'interrupted'}"]
+    assert _wait(lambda: not any(_alive(k) for k in kids), timeout=10)
+    assert load_result(tmp_path / "runs" / "quick.npz")["y"] == 1

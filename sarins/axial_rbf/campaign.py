@@ -68,10 +68,11 @@ def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0,
     t_start = time.perf_counter()
     fmu_dir = None
     if engine == "cosim" or profile == "quick":
-        from fmus.build import SLAVES, build_fmus
+        from fmus.build import DEFAULT_NAMES, build_fmus
 
         # built in a temporary folder and moved into place; rebuilt when the code changes
-        fmu_dir = str(build_artifacts(out / "fmus", [f"{n}.fmu" for n in SLAVES], build_fmus, code_hash())[0].parent)
+        fmu_dir = str(build_artifacts(out / "fmus", [f"{n}.fmu" for n in DEFAULT_NAMES], build_fmus,
+                                      code_hash())[0].parent)
     exps = {"hot": s0.generate("hot", n_ht, n_hv, seed), "cold": s0.generate("cold", n_ct, n_cv, seed)}
     common = dict(workers=workers, scheduler=scheduler, progress=progress)
     tr = "" if truth == "simulated" else "-ptruth"
