@@ -14,11 +14,11 @@ Main entry points
 - :class:`Master`, :func:`simulate_system` - the fixed-step master.
 - :func:`write_csv` - results to CSV.
 - :func:`build_container_fmu` - the system as one FMI 2.0 container FMU.
+- :mod:`orchestration.interrupt` - clean stops on SIGINT/SIGTERM.
 - :mod:`orchestration.importers` - the same system under Ecos or libcosim.
-- :mod:`orchestration.cli` - the ``cosim`` subcommand.
 """
 from .container import build_container_fmu
-from .errors import (AlgebraicLoopWarning, FMUCallError, FMUFatalError,
+from .errors import (AlgebraicLoopWarning, DefaultStepWarning, FMUCallError, FMUFatalError,
                      ImporterUnavailableError, IncompatibleConnectionError,
                      OrchestrationError, OrchestrationWarning, RealTimeLagWarning,
                      ScheduleError, StartValueError, SystemDescriptionError, SystemFileError,
@@ -27,10 +27,12 @@ from .master import SCHEMES, Master, simulate_system
 from .recorder import ResultArray, write_csv
 from .ssp_reader import read_system
 from .ssp_writer import write_ssd, write_ssp
-from .system import Component, Connection, System
+from .interrupt import Interrupted
+from .system import Component, Connection, Hop, System
 
 __all__ = [
-    "AlgebraicLoopWarning", "Component", "Connection", "FMUCallError", "FMUFatalError",
+    "AlgebraicLoopWarning", "Component", "Connection", "DefaultStepWarning", "FMUCallError",
+    "FMUFatalError", "Hop", "Interrupted",
     "ImporterUnavailableError", "IncompatibleConnectionError", "Master",
     "OrchestrationError", "OrchestrationWarning", "RealTimeLagWarning", "ResultArray",
     "SCHEMES", "ScheduleError", "StartValueError", "System", "SystemDescriptionError",

@@ -26,6 +26,7 @@ from .errors import ImporterUnavailableError, SystemDescriptionError
 from .master import coerce_value
 from .ssp_reader import parse_literal, read_system
 from .system import System
+from .unit_links import refuse_conversions
 
 __all__ = ["build_container_fmu", "CONTAINER_FMI_VERSION"]
 
@@ -85,6 +86,8 @@ def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
             files.append(str(path))
         names = [c.name for c in system.components]
         checked = check_connections(system.connections, names, variables, files)
+        refuse_conversions(system, checked, [c.modelDescription for c in components], files,
+                           "the container FMU")
         connections = [cfg.Connection(startElement=components[i],
                                       startConnectors=[_json_typed(start)],
                                       endElement=components[j], endConnectors=[end])

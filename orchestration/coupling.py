@@ -17,7 +17,8 @@ from .errors import (AlgebraicLoopWarning, IncompatibleConnectionError,
 from .system import Connection
 
 __all__ = ["Link", "VALUE_TYPES", "value_type", "find_variable", "check_connections",
-           "group_links", "gauss_seidel_order", "warn_unconnected"]
+           "group_links", "gauss_seidel_order", "warn_unconnected", "output_dependencies",
+           "algebraic_loops"]
 
 # FMI 2.0 type -> the getter/setter family used for it
 VALUE_TYPES = {"Real": "Real", "Integer": "Integer", "Enumeration": "Integer",
@@ -43,6 +44,10 @@ class Link:
         Value references, element ``i`` of one feeds element ``i`` of the other.
     connections : tuple of Connection
         The connections grouped here.
+    maps : tuple of (float, float), optional
+        ``(factor, offset)`` per connection (unit conversion and linear
+        transformation: ``target = factor * source + offset``); ``None`` when
+        every value is passed unchanged.
     """
 
     source: int
@@ -51,6 +56,7 @@ class Link:
     source_vrs: tuple[int, ...]
     target_vrs: tuple[int, ...]
     connections: tuple[Connection, ...]
+    maps: tuple[tuple[float, float], ...] | None = None
 
 
 def find_variable(variables: Mapping, name: str, *, component: str, file: str | None,
@@ -125,28 +131,126 @@ def _check_pair(c: Connection, start, end, end_file: str) -> None:
         fail("String connections are not supported")
 
 
-def group_links(checked) -> list[Link]:
-    """Group checked connections by (source, target, type), in first-seen order."""
+def group_links(checked, maps: Sequence[tuple[float, float]] | None = None) -> list[Link]:
+    """Group checked connections by (source, target, type), in first-seen order.
+
+    ``maps`` gives ``(factor, offset)`` per checked connection (see
+    :mod:`orchestration.unit_links`); a link keeps them only if one differs
+    from the identity.
+    """
     groups: dict[tuple[int, int, str], list] = {}
-    for i, start, j, end, c in checked:
-        groups.setdefault((i, j, value_type(start)), []).append((start, end, c))
+    for k, (i, start, j, end, c) in enumerate(checked):
+        mapping = (1.0, 0.0) if maps is None else maps[k]
+        groups.setdefault((i, j, value_type(start)), []).append((start, end, c, mapping))
     links = []
-    for (i, j, kind), triples in groups.items():
-        links.append(Link(i, j, kind, tuple(s.valueReference for s, _, _ in triples),
-                          tuple(e.valueReference for _, e, _ in triples),
-                          tuple(c for _, _, c in triples)))
+    for (i, j, kind), members in groups.items():
+        mapped = tuple(m for *_, m in members)
+        links.append(Link(i, j, kind, tuple(s.valueReference for s, *_ in members),
+                          tuple(e.valueReference for _, e, *_ in members),
+                          tuple(c for _, _, c, _ in members),
+                          None if all(m == (1.0, 0.0) for m in mapped) else mapped))
     return links
 
 
-def gauss_seidel_order(names: Sequence[str], links: Sequence[Link]
+def output_dependencies(description) -> dict[str, frozenset[str] | None]:
+    """Inputs each output depends on, from ``ModelStructure/Outputs``.
+
+    Returns
+    -------
+    dict
+        ``{output name: frozenset of input names}``; an empty set for an
+        output declared with ``dependencies=""`` (a state output, no direct
+        feedthrough); ``None`` where nothing is declared (FMI 2.0: it may
+        depend on every input).
+    """
+    inputs = {v.name for v in description.modelVariables if v.causality == "input"}
+    result: dict[str, frozenset[str] | None] = {}
+    for unknown in description.outputs:
+        if unknown.dependencies is None:
+            result[unknown.variable.name] = None
+        else:
+            result[unknown.variable.name] = frozenset(
+                v.name for v in unknown.dependencies if v.name in inputs)
+    return result
+
+
+def _feeds_through(dependencies, component: int, output: str, input_name: str | None) -> bool:
+    if dependencies is None:
+        return True
+    declared = dependencies[component].get(output)
+    if declared is None:
+        return True
+    return bool(declared) if input_name is None else input_name in declared
+
+
+def algebraic_loops(links: Sequence[Link], dependencies=None) -> list[Connection]:
+    """Connections on (or between) cycles through direct-feedthrough dependencies.
+
+    The graph has a node per connected variable: a connection goes from an
+    output to an input, and inside a component an input leads to every
+    output that depends on it (all outputs when nothing is declared).  A
+    cycle in it is an algebraic loop; a cycle of components that passes
+    through a state output (``dependencies=""``) is not.
+
+    Returns
+    -------
+    list of Connection
+        The connections left after trimming every node without a predecessor
+        or successor; empty when there is no algebraic loop.
+    """
+    edges: dict[tuple, set] = {}
+    by_component_inputs: dict[int, set[str]] = {}
+    by_component_outputs: dict[int, set[str]] = {}
+    owner: dict[tuple, Connection] = {}
+    for link in links:
+        for c in link.connections:
+            a, b = (link.source, "o", c.start_variable), (link.target, "i", c.end_variable)
+            edges.setdefault(a, set()).add(b)
+            edges.setdefault(b, set())
+            owner[(a, b)] = c
+            by_component_inputs.setdefault(link.target, set()).add(c.end_variable)
+            by_component_outputs.setdefault(link.source, set()).add(c.start_variable)
+    for j, inputs in by_component_inputs.items():
+        for u in inputs:
+            for y in by_component_outputs.get(j, ()):
+                if _feeds_through(dependencies, j, y, u):
+                    edges[(j, "i", u)].add((j, "o", y))
+    alive = set(edges)
+    changed = True
+    while changed:
+        changed = False
+        has_pred = {b for a in alive for b in edges[a] if b in alive}
+        for node in list(alive):
+            if node not in has_pred or not (edges[node] & alive):
+                alive.discard(node)
+                changed = True
+    return [c for (a, b), c in owner.items() if a in alive and b in alive]
+
+
+def gauss_seidel_order(names: Sequence[str], links: Sequence[Link], dependencies=None
                        ) -> tuple[list[int], list[tuple[int, int]]]:
     """Order components so each one is stepped after the ones it reads from.
 
     Kahn's topological sort, taking the earliest-declared ready component
-    first.  When only components on cycles remain, the earliest-declared of
-    them is stepped next and its incoming edges from the remaining ones are
+    first.  When only components on cycles remain, the next one stepped is
+    the earliest-declared component whose outputs to the remaining ones are
+    all state outputs (declared ``dependencies=""``; the cycle is then cut
+    where a step does not depend on its inputs at the same instant), else the
+    earliest-declared one; its incoming edges from the remaining ones are
     *broken*: over those edges it reads values from the start of the step.
-    An :class:`AlgebraicLoopWarning` lists the broken connections.
+    An :class:`AlgebraicLoopWarning` lists the broken connections, only when
+    a cycle runs through direct-feedthrough dependencies
+    (:func:`algebraic_loops`).
+
+    Parameters
+    ----------
+    names : sequence of str
+        Component names.
+    links : sequence of Link
+        Checked, grouped connections.
+    dependencies : sequence of dict, optional
+        Per component, :func:`output_dependencies`; ``None``: every output
+        depends on every input.
 
     Returns
     -------
@@ -157,9 +261,13 @@ def gauss_seidel_order(names: Sequence[str], links: Sequence[Link]
     """
     n = len(names)
     preds = [set() for _ in range(n)]
+    state_only = [[True] * n for _ in range(n)]
     for link in links:
         if link.source != link.target:
             preds[link.target].add(link.source)
+            if any(_feeds_through(dependencies, link.source, c.start_variable, None)
+                   for c in link.connections):
+                state_only[link.source][link.target] = False
     remaining = set(range(n))
     order, broken = [], []
     while remaining:
@@ -167,15 +275,19 @@ def gauss_seidel_order(names: Sequence[str], links: Sequence[Link]
         if ready:
             chosen = ready[0]
         else:
-            chosen = min(remaining)
+            cutting = [i for i in sorted(remaining)
+                       if all(state_only[i][j] for j in remaining if i in preds[j])]
+            chosen = cutting[0] if cutting else min(remaining)
             broken += [(p, chosen) for p in sorted(preds[chosen] & remaining)]
         order.append(chosen)
         remaining.remove(chosen)
-    if broken:
+    loops = algebraic_loops(links, dependencies) if broken else []
+    if loops:
         pairs = ", ".join(f"{names[a]} -> {names[b]}" for a, b in broken)
-        warnings.warn(f"algebraic loop in the connections: Gauss-Seidel order "
-                      f"{' -> '.join(names[i] for i in order)} reads {pairs} from the start "
-                      "of each step", AlgebraicLoopWarning, stacklevel=4)
+        warnings.warn(f"algebraic loop in the connections ({', '.join(map(str, loops))}): "
+                      f"Gauss-Seidel order {' -> '.join(names[i] for i in order)} reads "
+                      f"{pairs} from the start of each step", AlgebraicLoopWarning,
+                      stacklevel=4)
     return order, broken
 
 

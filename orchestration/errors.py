@@ -26,6 +26,7 @@ __all__ = [
     "UnconnectedInputWarning",
     "AlgebraicLoopWarning",
     "RealTimeLagWarning",
+    "DefaultStepWarning",
 ]
 
 STATUS_LABELS = ("OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING")
@@ -158,3 +159,7 @@ class AlgebraicLoopWarning(OrchestrationWarning):
 
 class RealTimeLagWarning(OrchestrationWarning):
     """Real-time pacing fell behind the wall clock."""
+
+
+class DefaultStepWarning(OrchestrationWarning):
+    """No step was given: the FMUs' DefaultExperiment stepSize is used (says which)."""

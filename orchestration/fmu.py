@@ -16,6 +16,7 @@ from collections import deque
 from pathlib import Path
 
 from . import fmilog
+from .archive import extract_archive
 from .errors import FMUCallError, FMUFatalError, SystemFileError, status_label
 
 __all__ = ["read_description", "FMUInstance", "UnpackedFMU", "FMI_FATAL"]
@@ -76,18 +77,16 @@ class UnpackedFMU:
         FMU file.
     component : str
         Name of the first component using it (error messages).
+
+    The archive is extracted with the limits of
+    :func:`orchestration.archive.extract_archive` (size, member count, no
+    member outside the folder).
     """
 
     def __init__(self, path: Path, component: str):
-        from fmpy import extract
-
         self.path = Path(path)
         self.description = read_description(self.path, component)
-        try:
-            self.unzipdir = extract(str(self.path))
-        except (zipfile.BadZipFile, OSError) as error:
-            raise SystemFileError(f"cannot extract FMU: {error}", file=str(self.path),
-                                  component=component) from None
+        self.unzipdir = str(extract_archive(self.path, kind="fmu", component=component))
         self.variables = {v.name: v for v in self.description.modelVariables}
         self._finalizer = weakref.finalize(self, shutil.rmtree, self.unzipdir, True)
 

@@ -7,8 +7,13 @@ Algorithm (per communication step ``[t, t + h]``, ``t = t0 + n h``):
   before stepping one, its inputs are set from the current outputs of its
   sources, which were already stepped to ``t + h`` (except over edges broken
   to cut a cycle, which carry the values at ``t``).
-- **Jacobi**: all inputs are set from the outputs at ``t``, then every
-  component is stepped (a one-step delay per connection).
+- **Jacobi** (strict): every connected output is read (values at ``t``)
+  before any input is set, then every component is stepped: a one-step delay
+  per connection, also through FMUs with direct feedthrough (a chain of two
+  links lags two steps).
+
+Values cross a connection through its unit conversion and linear
+transformation (:mod:`orchestration.unit_links`), if it has one.
 
 Initialisation: ``fmi2Instantiate``, ``fmi2SetupExperiment`` (start time, no
 stop time: some FMUs, OpenModelica's among them, refuse a step that passes a
@@ -20,6 +25,12 @@ sources start with, e.g. an IMU from the chamber's start temperature; sources
 over broken cycle edges give their start values); outputs are copied to
 inputs once more, and the first row is recorded at ``t0``.  Rows after that are recorded after
 ``fmi2DoStep(t, h)`` with time ``t + h``.
+
+The communication step is, in this order: the ``step_size`` argument, the
+system file's step annotation, the FMUs' ``DefaultExperiment`` stepSize
+(their common value, else the smallest; a :class:`DefaultStepWarning` says
+which).  Real-time pacing starts after initialisation and the run's worst
+lag is reported in ``result.meta['realtime']``.
 """
 from __future__ import annotations
 
@@ -27,17 +38,24 @@ import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from .coupling import (check_connections, find_variable, gauss_seidel_order, group_links,
-                       value_type, warn_unconnected)
-from .errors import (OrchestrationError, ScheduleError, StartValueError,
+import warnings
+
+import numpy as np
+
+from . import interrupt
+from .coupling import (algebraic_loops, check_connections, find_variable, gauss_seidel_order,
+                       group_links, output_dependencies, value_type, warn_unconnected)
+from .errors import (DefaultStepWarning, OrchestrationError, ScheduleError, StartValueError,
                      UnknownComponentError)
 from .fmu import FMUInstance, UnpackedFMU
 from .pacing import Progress, RealTimePacer
 from .rawcalls import FMI_WARNING, do_step, getter, setter, value_buffer, vr_array
 from .recorder import Recorder, ResultArray, select_variables
 from .schedule import StepSpec, make_schedule
-from .ssp_reader import read_system
-from .system import StartValue, System, split_name
+from .ssp_reader import ANNOTATION_TYPE, read_system
+from .system import StartValue, System
+from .unit_links import connection_maps
+from .units import Unit, conversion, units_of_description, variable_unit
 
 __all__ = ["Master", "simulate_system", "SCHEMES", "StepCallback"]
 
@@ -111,6 +129,7 @@ class Master:
 
     def __init__(self, system: System | str | Path, *, scheme: str = "gauss-seidel",
                  record: Sequence[str] | None = None, logging_on: bool = True):
+        self._owns_system = not isinstance(system, System)
         self.system = system if isinstance(system, System) else read_system(system)
         self.scheme = _check_scheme(scheme)
         self.logging_on = logging_on
@@ -130,6 +149,7 @@ class Master:
         self.names = [c.name for c in system.components]
         self.units = []
         for component in system.components:
+            interrupt.check()
             path = system.fmu_path(component)
             if path not in self._unpacked:
                 self._unpacked[path] = UnpackedFMU(path, component.name)
@@ -139,11 +159,16 @@ class Master:
         self.start_values = [self._check_start_values(i) for i in range(len(self.names))]
         checked = check_connections(system.connections, self.names, self.variables,
                                     self.files, file)
-        self.links = group_links(checked)
+        descriptions = [u.description for u in self.units]
+        maps = connection_maps(checked, descriptions, self.files, system.units, file)
+        self.links = group_links(checked, maps)
+        self.dependencies = [output_dependencies(d) for d in descriptions]
         if self.scheme == "gauss-seidel":
-            self.order, self.broken = gauss_seidel_order(self.names, self.links)
+            self.order, self.broken = gauss_seidel_order(self.names, self.links,
+                                                         self.dependencies)
         else:
             self.order, self.broken = list(range(len(self.names))), []
+        self.loops = [str(c) for c in algebraic_loops(self.links, self.dependencies)]
         self.unconnected = warn_unconnected(self.names, self.variables, checked,
                                             [dict(s) for s in self.start_values])
         self.selection = select_variables(self.names, self.variables, record, self.files)
@@ -162,13 +187,32 @@ class Master:
                     f"cannot set a start value on a variable with causality "
                     f"'{var.causality}' and variability '{var.variability}'",
                     file=self.files[i], component=component.name, variable=name)
-            checked[name] = (var, coerce_value(var, value, component=component.name,
-                                               file=self.files[i]))
+            value = coerce_value(var, value, component=component.name, file=self.files[i])
+            if name in component.parameter_units:
+                value = self._convert_start(i, var, value, component.parameter_units[name])
+            checked[name] = (var, value)
         return checked
+
+    def _convert_start(self, i: int, var, value: float, unit_name: str) -> float:
+        """Convert a start value given in ``unit_name`` to the variable's unit."""
+        target_name = variable_unit(var)
+        if target_name is None or var.type != "Real":
+            return value
+        units = self.system.units
+        source = units.get(unit_name, Unit(unit_name))
+        target = units_of_description(self.units[i].description).get(
+            target_name, units.get(target_name, Unit(target_name)))
+        mapping = conversion(source, target)
+        if mapping is None:
+            raise StartValueError(f"start value in unit '{unit_name}' ({source.describe()}) "
+                                  f"cannot be converted to the variable's unit '{target_name}' "
+                                  f"({target.describe()})", file=self.system._file,
+                                  component=self.names[i], variable=var.name)
+        return mapping[0] * value + mapping[1] if mapping != (1.0, 0.0) else value
 
     # public helpers -----------------------------------------------------------
     def _resolve(self, qualified: str):
-        component, variable = split_name(qualified)
+        component, variable = self.system.split(qualified)
         if component not in self.names:
             raise UnknownComponentError("unknown component", component=component)
         i = self.names.index(component)
@@ -233,7 +277,9 @@ class Master:
         ResultArray
             Structured array, ``time`` first, then ``component.variable``
             fields; ``result.meta`` states the scheme, stepping order, broken
-            loop edges, step and whether the run was stopped early.
+            loop edges, algebraic loops, converted connections, step and its
+            source, whether the run was stopped early and, with
+            ``realtime``, the pacing report (worst lag, late steps).
 
         Raises
         ------
@@ -242,19 +288,21 @@ class Master:
         FMUCallError
             When an FMU returns discard, error or fatal; all instances are
             released before it propagates.
+        orchestration.interrupt.Interrupted
+            Inside :func:`orchestration.interrupt.handle_signals`, on SIGINT
+            or SIGTERM (all instances released first).
         """
         start = self.system.start_time if start_time is None else start_time
         start = 0.0 if start is None else float(start)
         stop = self.system.stop_time if stop_time is None else stop_time
-        step = self.system.step_size if step_size is None else step_size
-        if step is None:
-            raise ScheduleError("no communication step given and none in the system file")
+        step, step_source = self._step(step_size)
         segments = make_schedule(start, stop, step)
         if not (isinstance(output_every, int) and output_every >= 1):
             raise ScheduleError(f"output_every must be a positive integer, got {output_every!r}")
         self._check_variable_steps(segments)
         total = sum(s.count for s in segments)
         meta = self._meta(start, segments, total, output_every, realtime)
+        meta["step_source"] = step_source
         pacer = None if realtime is None else RealTimePacer(realtime, start)
         bar = Progress(total, progress, description=self.system.name)
         try:
@@ -262,6 +310,8 @@ class Master:
             recorder = Recorder([inst.slave for inst in self.instances], self.names,
                                 self.selection, total // output_every + 3)
             self._sample(recorder, start)
+            if pacer is not None:
+                pacer.start()  # the clock starts once every FMU is loaded and initialised
             steps = self._loop(segments, total, recorder, output_every, bar, pacer, callback)
         finally:
             bar.close()
@@ -270,8 +320,39 @@ class Master:
         meta["stopped_early"] = steps < total
         meta["end_time"] = float(recorder.time[recorder.count - 1])
         if pacer is not None:
+            meta["realtime"] = pacer.report()
             meta["max_realtime_lag"] = pacer.max_lag
         return recorder.result(meta)
+
+    def _step(self, step_size: StepSpec | None) -> tuple[StepSpec, str]:
+        """The communication step and where it comes from (argument, system file, FMUs)."""
+        if step_size is not None:
+            return step_size, "argument"
+        if self.system.step_size is not None:
+            return self.system.step_size, "system file"
+        declared = []
+        for name, unit in zip(self.names, self.units):
+            experiment = unit.description.defaultExperiment
+            if experiment is not None and experiment.stepSize is not None:
+                try:
+                    declared.append((float(experiment.stepSize), name))
+                except ValueError:
+                    continue
+        declared = [(h, name) for h, name in declared if math.isfinite(h) and h > 0.0]
+        if not declared:
+            raise ScheduleError("no communication step: none given, none in the system file "
+                                f"(it has no '{ANNOTATION_TYPE}' step annotation) and no FMU "
+                                "declares a DefaultExperiment stepSize; give one (--step)")
+        smallest = min(h for h, _ in declared)
+        listing = ", ".join(f"{name} {h:g} s" for h, name in declared)
+        if all(h == smallest for h, _ in declared):
+            source = (f"the FMUs' common DefaultExperiment stepSize ({listing})"
+                      if len(declared) > 1 else f"the DefaultExperiment stepSize of {listing}")
+        else:
+            source = f"the smallest DefaultExperiment stepSize of the FMUs ({listing})"
+        warnings.warn(f"no communication step given and none in the system file: using "
+                      f"{smallest:g} s, {source}", DefaultStepWarning, stacklevel=4)
+        return smallest, source
 
     def _check_variable_steps(self, segments) -> None:
         """Refuse a varying step for FMUs that declare they cannot handle one."""
@@ -291,14 +372,21 @@ class Master:
                 "broken_connections": [str(c) for link in self.links
                                        if (link.source, link.target) in self.broken
                                        for c in link.connections],
+                "algebraic_loop": list(self.loops),
+                "converted_connections": {str(c): list(m) for link in self.links
+                                          if link.maps is not None
+                                          for c, m in zip(link.connections, link.maps)
+                                          if m != (1.0, 0.0)},
                 "start_time": start, "stop_time": segments[-1].end,
                 "step": segments[0].step if single else "schedule",
                 "planned_steps": total, "output_every": every, "realtime_factor": realtime,
-                "unconnected_inputs": list(self.unconnected)}
+                "unconnected_inputs": list(self.unconnected),
+                "inputs_without_source": list(self.system.inputs_without_source)}
 
     def _initialize(self, start: float) -> None:
         self.time = None
         for name, unit in zip(self.names, self.units):
+            interrupt.check()
             instance = FMUInstance(name, unit, logging_on=self.logging_on)
             self.instances.append(instance)
             instance.instantiate()
@@ -313,45 +401,58 @@ class Master:
         self._build_plan()
         # inputs get their sources' initial outputs while still in Initialization Mode (FMI 2.0
         # allows setting inputs there), each component leaving it after its sources did
-        for transfers, _, _, index in self._initial_plan():
-            self._transfer(transfers, start)
+        for index in self.order:
+            interrupt.check()
+            self._transfer(self._incoming[index], start)
             self.instances[index].call("exitInitializationMode")
             self.instances[index].mark_initialized()
-        for transfers, _, _, _ in self._plan:
+        for transfers, _ in self._plan:
             self._transfer(transfers, start)
         self.time = start
 
-    def _initial_plan(self):
-        """Gauss-Seidel transfers in stepping order, whatever the scheme (initialisation only)."""
-        if self.scheme == "gauss-seidel":
-            return self._plan
-        everything = self._plan[0][0]
-        return [([t for t in everything if t[-1].target == index], *rest, index)
-                for _, *rest, index in self._plan]
-
     def _build_plan(self) -> None:
-        """Prepare function pointers and buffers for the inner loop."""
+        """Prepare function pointers, buffers and conversions for the inner loop.
+
+        ``self._plan`` is a list of stages ``(transfers, steps)``: every
+        transfer of a stage is read (``fmi2Get*``, then converted) before any
+        is written (``fmi2Set*``), then the stage's components are stepped.
+        Gauss-Seidel has one stage per component in stepping order; Jacobi
+        one stage with every transfer and every component.
+        """
         slaves = [inst.slave for inst in self.instances]
-        transfers: dict[int, list] = {i: [] for i in range(len(slaves))}
+        self._incoming = {i: [] for i in range(len(slaves))}
         for link in self.links:
             src, dst = slaves[link.source], slaves[link.target]
-            transfers[link.target].append(
-                (getter(src, link.kind), src.component, vr_array(link.source_vrs),
-                 len(link.source_vrs), value_buffer(link.kind, len(link.source_vrs)),
-                 setter(dst, link.kind), dst.component, vr_array(link.target_vrs), link))
-        steps = [(do_step(s), s.component) for s in slaves]
+            n = len(link.source_vrs)
+            buffer = value_buffer(link.kind, n)
+            convert = None
+            if link.maps is not None:
+                view = np.ctypeslib.as_array(buffer)
+                factors = np.array([m[0] for m in link.maps])
+                offsets = np.array([m[1] for m in link.maps])
+                convert = (view, factors, offsets)
+            self._incoming[link.target].append(
+                (getter(src, link.kind), src.component, vr_array(link.source_vrs), n, buffer,
+                 setter(dst, link.kind), dst.component, vr_array(link.target_vrs), link,
+                 convert))
+        steps = [(do_step(s), s.component, i) for i, s in enumerate(slaves)]
         if self.scheme == "gauss-seidel":
-            self._plan = [(transfers[i], *steps[i], i) for i in self.order]
+            self._plan = [(self._incoming[i], [steps[i]]) for i in self.order]
         else:
-            everything = [t for i in self.order for t in transfers[i]]
-            self._plan = [(everything if k == 0 else [], *steps[i], i)
-                          for k, i in enumerate(self.order)]
+            everything = [t for i in self.order for t in self._incoming[i]]
+            self._plan = [(everything, [steps[i] for i in self.order])]
 
     def _transfer(self, transfers, time: float) -> None:
-        for get, src, src_vrs, n, buffer, set_, dst, dst_vrs, link in transfers:
+        """Read every transfer's source values (and convert them), then set them all."""
+        for get, src, src_vrs, n, buffer, _, _, _, link, convert in transfers:
             status = get(src, src_vrs, n, buffer)
             if status > FMI_WARNING:
                 self._fail(link.source, f"fmi2Get{link.kind}", status, time)
+            if convert is not None:
+                view, factors, offsets = convert
+                np.multiply(view, factors, out=view)
+                np.add(view, offsets, out=view)
+        for _, _, _, n, buffer, set_, dst, dst_vrs, link, _ in transfers:
             status = set_(dst, dst_vrs, n, buffer)
             if status > FMI_WARNING:
                 self._fail(link.target, f"fmi2Set{link.kind}", status, time)
@@ -369,7 +470,8 @@ class Master:
 
     def _loop(self, segments, total: int, recorder: Recorder, every: int, bar: Progress,
               pacer: RealTimePacer | None, callback: StepCallback | None) -> int:
-        plan, fail, sample = self._plan, self._fail, recorder.sample
+        plan, fail, sample, transfer = self._plan, self._fail, recorder.sample, self._transfer
+        pending = interrupt.PENDING
         done = 0
         next_record = min(every, total)
         next_tick = bar.next_tick
@@ -377,14 +479,12 @@ class Master:
             begin, h, count = segment.begin, segment.step, segment.count
             for j in range(count):
                 t = begin + j * h
-                for transfers, step, component, index in plan:
-                    for get, src, src_vrs, n, buffer, set_, dst, dst_vrs, link in transfers:
-                        if (status := get(src, src_vrs, n, buffer)) > FMI_WARNING:
-                            fail(link.source, f"fmi2Get{link.kind}", status, t)
-                        if (status := set_(dst, dst_vrs, n, buffer)) > FMI_WARNING:
-                            fail(link.target, f"fmi2Set{link.kind}", status, t)
-                    if (status := step(component, t, h, 1)) > FMI_WARNING:
-                        fail(index, "fmi2DoStep", status, t)
+                for transfers, steps in plan:
+                    if transfers:
+                        transfer(transfers, t)
+                    for step, component, index in steps:
+                        if (status := step(component, t, h, 1)) > FMI_WARNING:
+                            fail(index, "fmi2DoStep", status, t)
                 done += 1
                 t_end = segment.end if j == count - 1 else begin + (j + 1) * h
                 self.time = t_end
@@ -392,6 +492,8 @@ class Master:
                     if sample(t_end) >= 0:
                         self._sample(recorder, t_end)
                     next_record = min(next_record + every, total)
+                if pending[0]:
+                    interrupt.check()
                 if pacer is not None:
                     pacer.wait(t_end, h)
                 if done == next_tick:
@@ -419,6 +521,9 @@ class Master:
         for unit in self._unpacked.values():
             unit.remove()
         self._unpacked.clear()
+        workdir = getattr(self.system, "_workdir", None) if hasattr(self, "system") else None
+        if getattr(self, "_owns_system", False) and workdir is not None:
+            workdir.cleanup()  # the .ssp this master extracted
 
     def __enter__(self) -> Master:
         return self

@@ -11,6 +11,7 @@ __all__ = ["RealTimePacer", "Progress", "AUTO_PROGRESS_STEPS"]
 
 AUTO_PROGRESS_STEPS = 20_000  # runs with at least this many steps show a bar by default
 LAG_TOLERANCE = 0.010  # s of wall clock behind schedule tolerated before warning
+MAX_FACTOR = 1e6  # wall-clock seconds per simulated second, at most
 
 
 class RealTimePacer:
@@ -20,7 +21,9 @@ class RealTimePacer:
     ``factor * (t - t0)``: ``factor = 1`` is real time, ``0.5`` runs twice as
     fast as real time, ``2`` twice as slow.  When the run falls behind by
     more than one communication step (and at least 10 ms) a
-    :class:`RealTimeLagWarning` giving the lag is issued, once.
+    :class:`RealTimeLagWarning` giving the lag is issued, once; the worst lag
+    and the number of late steps are kept (:meth:`report`).  The clock
+    starts at construction and again at :meth:`start`.
 
     Parameters
     ----------
@@ -34,21 +37,44 @@ class RealTimePacer:
         if not (math.isfinite(factor) and factor > 0.0):
             raise ScheduleError(f"real-time factor must be a finite positive number, got "
                                 f"{factor!r}")
+        if factor > MAX_FACTOR:
+            raise ScheduleError(f"real-time factor {factor!r} is above {MAX_FACTOR:g} wall-clock "
+                                "seconds per simulated second")
         self.factor = float(factor)
         self.start_time = start_time
         self.wall_start = _time.perf_counter()
         self.max_lag = 0.0
+        self.max_lag_time: float | None = None
+        self.late_steps = 0
+        self.steps = 0
         self.warned = False
+
+    def start(self) -> None:
+        """Start the clock now (call it once the FMUs are loaded and initialised)."""
+        self.wall_start = _time.perf_counter()
+
+    def report(self) -> dict:
+        """``{'factor', 'steps', 'late_steps', 'max_lag_s', 'max_lag_time'}`` of the run.
+
+        A step is late when it ended after its wall-clock target; ``max_lag_s``
+        is the largest such delay (s of wall clock), at simulated time
+        ``max_lag_time`` (s, ``None`` if no step was late).
+        """
+        return {"factor": self.factor, "steps": self.steps, "late_steps": self.late_steps,
+                "max_lag_s": self.max_lag, "max_lag_time": self.max_lag_time}
 
     def wait(self, sim_time: float, step: float) -> None:
         """Sleep until the wall clock reaches simulated time ``sim_time``."""
+        self.steps += 1
         target = self.wall_start + self.factor * (sim_time - self.start_time)
         ahead = target - _time.perf_counter()
         if ahead > 0.0:
             _time.sleep(ahead)
             return
         lag = -ahead
-        self.max_lag = max(self.max_lag, lag)
+        self.late_steps += 1
+        if lag > self.max_lag:
+            self.max_lag, self.max_lag_time = lag, sim_time
         if not self.warned and lag > max(LAG_TOLERANCE, self.factor * step):
             self.warned = True
             warnings.warn(f"real-time pacing (factor {self.factor:g}) fell behind by "

@@ -1,38 +1,58 @@
 """Read SSP 1.0 system files (``.ssp`` archives or ``SystemStructure.ssd``).
 
-The XML is parsed with :mod:`fmpy.ssp.ssd`.  Supported: one flat system of
-FMU components; parameter bindings with inline ``ParameterValues`` or an
-``.ssv`` source, at component level (bare variable names) or at system level
-(``component.variable`` names), each with an optional ``prefix`` prepended
-to the names (SSP 1.0 rule); connections between component connectors; the
-``DefaultExperiment`` start/stop time and the step size stored by
-:mod:`orchestration.ssp_writer` in an annotation.
+The SSD is parsed with a hardened lxml parser (no entity expansion, no DTD,
+no network) and validated against the SSP 1.0 schema shipped with FMPy.
+Supported:
 
-Not supported (a :class:`~orchestration.errors.SystemFileError` says so):
-nested systems, system-level connectors, parameter mappings, signal
-dictionaries, transformations on connections, non-FMU components.
+- FMU components, nested ``ssd:System`` elements and system-level connectors
+  (flattened by :mod:`orchestration.ssp_flatten` into direct connections;
+  nested components are named by path, ``"sub.gain"``);
+- units: the SSD's ``ssd:Units`` (``ssc:Unit``/``ssc:BaseUnit``) and the
+  connectors' ``ssc:Real unit``; connections carry them (and any
+  ``ssc:LinearTransformation`` and ``suppressUnitConversion``) to the master,
+  which converts compatible units and refuses incompatible ones;
+- parameter bindings with inline ``ParameterValues`` or an ``.ssv`` file
+  inside the system's folder, at component level (bare variable names) or
+  system level (``component.variable`` names, relative to that system), each
+  with an optional ``prefix`` (SSP 1.0 rule); ``ssv:Real unit`` is kept for
+  the master to convert;
+- the ``DefaultExperiment`` start/stop time and the step size stored by
+  :mod:`orchestration.ssp_writer` in an annotation.
+
+Refused with a :class:`~orchestration.errors.SystemFileError` saying why:
+parameter mappings (``.ssm``), signal dictionaries, non-FMU components,
+Model Exchange implementations, Boolean/Integer/Enumeration mapping
+transformations, Enumeration and Binary parameter values, binding sources
+outside the system's folder.  ``.ssp`` archives are extracted with limits
+(:mod:`orchestration.archive`).
 """
 from __future__ import annotations
 
-import io
-import tempfile
+import shutil
+import weakref
 import zipfile
 from pathlib import Path
 
 from lxml import etree
 
-from .errors import StartValueError, SystemFileError, UnknownComponentError
-from .system import Component, Connection, StartValue, System
+from .archive import MAX_ARCHIVE_BYTES, MAX_ARCHIVE_MEMBERS, extract_archive
+from .errors import StartValueError, SystemFileError
+from .ssp_flatten import FMU_MIME, NS, flatten
+from .system import StartValue, System
+from .units import Unit, unit_from_attributes
 
-__all__ = ["read_system", "ANNOTATION_TYPE", "parse_literal"]
+__all__ = ["read_system", "ANNOTATION_TYPE", "parse_literal", "SSD_NAME", "FMU_MIME",
+           "xml_parser"]
 
 ANNOTATION_TYPE = "org.sarins-fmu.master"
 SSD_NAME = "SystemStructure.ssd"
-FMU_MIME = "application/x-fmu-sharedlibrary"
-_NS = {
-    "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
-    "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
-}
+PARAMETER_SET_MIME = "application/x-ssp-parameter-set"
+
+
+def xml_parser() -> etree.XMLParser:
+    """An lxml parser that expands no entities and loads no DTD or network resource."""
+    return etree.XMLParser(resolve_entities=False, load_dtd=False, no_network=True,
+                           huge_tree=False, remove_comments=True)
 
 
 def parse_literal(type_name: str, literal: str | None, *, file: str | None = None,
@@ -71,7 +91,19 @@ def parse_literal(type_name: str, literal: str | None, *, file: str | None = Non
                           file=file, component=component, variable=variable)
 
 
-def read_system(path: str | Path) -> System:
+class _Workdir:
+    """A folder deleted by :meth:`cleanup` or when the object is garbage collected."""
+
+    def __init__(self, folder: Path):
+        self.name = str(folder)
+        self._finalizer = weakref.finalize(self, shutil.rmtree, self.name, True)
+
+    def cleanup(self) -> None:
+        self._finalizer()
+
+
+def read_system(path: str | Path, *, max_bytes: int = MAX_ARCHIVE_BYTES,
+                max_members: int = MAX_ARCHIVE_MEMBERS) -> System:
     """Read a system from an ``.ssp`` archive, an ``.ssd`` file or a folder.
 
     Parameters
@@ -80,17 +112,21 @@ def read_system(path: str | Path) -> System:
         ``x.ssp`` (zip with ``SystemStructure.ssd`` and the FMUs), an
         ``.ssd`` file whose component sources are relative to its folder, or
         a folder holding ``SystemStructure.ssd``.
+    max_bytes, max_members : int
+        Limits on the uncompressed size and member count of an archive.
 
     Returns
     -------
     System
         For an ``.ssp`` the archive is extracted to a temporary folder owned
-        by the returned object (removed when it is garbage collected).
+        by the returned object (removed by ``system._workdir.cleanup()`` or
+        when the object is garbage collected).
 
     Raises
     ------
     SystemFileError
-        If the file is missing, is not valid SSP or uses an unsupported feature.
+        If the file is missing, is not valid SSP, uses an unsupported feature
+        or is an archive over the limits or with a member escaping its folder.
     """
     path = Path(path)
     if path.is_dir():
@@ -99,150 +135,161 @@ def read_system(path: str | Path) -> System:
         raise SystemFileError("system file not found", file=str(path))
     workdir = None
     if zipfile.is_zipfile(path):
-        workdir = tempfile.TemporaryDirectory(prefix="orchestration_ssp_")
-        try:
-            with zipfile.ZipFile(path) as archive:
-                archive.extractall(workdir.name)
-        except (zipfile.BadZipFile, OSError) as error:
-            raise SystemFileError(f"cannot extract archive: {error}", file=str(path)) from None
+        workdir = _Workdir(extract_archive(path, kind="ssp", max_bytes=max_bytes,
+                                           max_members=max_members))
         base_dir = Path(workdir.name)
-        archive_source: str | io.BytesIO = str(path)
-        if not (base_dir / SSD_NAME).is_file():
+        ssd_path = base_dir / SSD_NAME
+        if not ssd_path.is_file():
+            workdir.cleanup()
             raise SystemFileError(f"archive has no {SSD_NAME}", file=str(path))
-        ssd_text = (base_dir / SSD_NAME).read_bytes()
     else:
-        base_dir = path.parent
-        ssd_text = path.read_bytes()
-        archive_source = _pack_ssd(path, ssd_text)
-    description = _read_with_fmpy(archive_source, path)
-    _refuse_transformations(ssd_text, path)
-    system = _convert(description, path, base_dir)
-    system.start_time, system.stop_time, system.step_size = _read_experiment(ssd_text, path)
+        base_dir, ssd_path = path.parent, path
+    try:
+        system = _read_ssd(ssd_path, path, base_dir)
+    except BaseException:
+        if workdir is not None:
+            workdir.cleanup()
+        raise
     system._workdir = workdir
     return system
 
 
-def _pack_ssd(path: Path, ssd_text: bytes) -> io.BytesIO:
-    """Zip an SSD and the SSV/SSM files it references, as fmpy's reader expects."""
-    buffer = io.BytesIO()
-    try:
-        root = etree.fromstring(ssd_text)
-    except etree.XMLSyntaxError as error:
-        raise SystemFileError(f"not well-formed XML: {error}", file=str(path)) from None
-    with zipfile.ZipFile(buffer, "w") as archive:
-        archive.writestr(SSD_NAME, ssd_text)
-        for tag in ("ParameterBinding", "ParameterMapping", "SignalDictionary"):
-            for element in root.iter(f"{{{_NS['ssd']}}}{tag}"):
-                source = element.get("source")
-                if source:
-                    referenced = path.parent / source
-                    if not referenced.is_file():
-                        raise SystemFileError(f"referenced file '{source}' not found",
-                                              file=str(path))
-                    archive.write(referenced, source)
-    buffer.seek(0)
-    return buffer
-
-
-def _read_with_fmpy(archive_source, path: Path):
-    from fmpy.ssp import ssd as fmpy_ssd
+def _parse(file: Path, shown: Path, schema: str):
+    from fmpy.ssp.ssd import validate_tree
 
     try:
-        return fmpy_ssd.read_ssd(archive_source, validate=True)
+        root = etree.parse(str(file), xml_parser()).getroot()
     except etree.XMLSyntaxError as error:
-        raise SystemFileError(f"not well-formed XML: {error}", file=str(path)) from None
-    except (KeyError, OSError, zipfile.BadZipFile) as error:
-        raise SystemFileError(f"cannot read SSD: {error}", file=str(path)) from None
-    except Exception as error:  # fmpy raises bare Exception on schema errors
-        raise SystemFileError(str(error), file=str(path)) from None
+        raise SystemFileError(f"not well-formed XML: {error}", file=str(shown)) from None
+    except OSError as error:
+        raise SystemFileError(f"cannot read: {error}", file=str(shown)) from None
+    try:
+        validate_tree(root, schema)
+    except Exception as error:  # fmpy raises a bare Exception listing the schema errors
+        raise SystemFileError(str(error), file=str(shown)) from None
+    return root
 
 
-def _convert(description, path: Path, base_dir: Path) -> System:
-    from fmpy.ssp import ssd as fmpy_ssd
-
-    file = str(path)
-    root = description.system
-    if any(c.kind in ("input", "output", "inout") for c in root.connectors):
-        raise SystemFileError("system-level connectors are not supported; connect "
-                              "component connectors directly", file=file)
-    if root.signalDictionaries:
-        raise SystemFileError("signal dictionaries are not supported", file=file)
-    components: list[Component] = []
-    for element in root.elements:
-        if not isinstance(element, fmpy_ssd.Component):
-            kind = "nested systems" if isinstance(element, fmpy_ssd.System) else \
-                "signal dictionary references"
-            raise SystemFileError(f"{kind} are not supported", file=file,
-                                  component=element.name)
-        if element.type not in (None, FMU_MIME):
-            raise SystemFileError(f"component type '{element.type}' is not an FMU",
-                                  file=file, component=element.name)
-        parameters = _bound_values(element.parameterBindings, file, element.name)
-        components.append(Component(element.name, element.source, parameters))
-    names = {c.name for c in components}
-    system_values = _bound_values(root.parameterBindings, file, None)
-    for qualified, value in system_values.items():
-        name, _, variable = qualified.partition(".")
-        if name not in names or not variable:
-            raise UnknownComponentError(
-                f"system-level parameter '{qualified}' does not name a component "
-                "variable", file=file, component=name)
-        target = next(c for c in components if c.name == name)
-        target.parameters[variable] = value
-    connections = [_connection(c, file) for c in root.connections]
-    return System(name=root.name or description.name or path.stem, components=components,
-                  connections=connections, base_dir=base_dir, source_file=path)
+def _read_ssd(ssd_path: Path, shown: Path, base_dir: Path) -> System:
+    file = str(shown)
+    root = _parse(ssd_path, shown, "SystemStructureDescription.xsd")
+    units = _units(root.find("ssd:Units", NS), file)
+    reader = _BindingReader(file, base_dir, units)
+    xsystem = root.find("ssd:System", NS)
+    components, connections, dangling = flatten(xsystem, file=file, units=units,
+                                                read_bindings=reader)
+    system = System(name=xsystem.get("name") or root.get("name") or shown.stem,
+                    components=components, connections=connections, base_dir=base_dir,
+                    source_file=shown, units=units)
+    system.start_time, system.stop_time, system.step_size = _read_experiment(root, file)
+    system.inputs_without_source = dangling
+    return system
 
 
-def _bound_values(bindings, file: str, component: str | None) -> dict[str, StartValue]:
-    values: dict[str, StartValue] = {}
-    for binding in bindings:
-        if any(m.mappingEntries for m in binding.parameterMapping):
-            raise SystemFileError("parameter mappings are not supported", file=file,
+def _units(element, file: str, known: dict | None = None) -> dict[str, Unit]:
+    units = dict(known or {})
+    if element is None:
+        return units
+    for xunit in element.iterfind("ssc:Unit", NS):
+        name = xunit.get("name")
+        base = xunit.find("ssc:BaseUnit", NS)
+        try:
+            unit = unit_from_attributes(name, None if base is None else base.attrib)
+        except ValueError as error:
+            raise SystemFileError(f"bad unit definition: {error}", file=file) from None
+        if name in units and units[name] != unit:
+            raise SystemFileError(f"unit '{name}' is defined twice, differently", file=file)
+        units[name] = unit
+    return units
+
+
+class _BindingReader:
+    """Start values (and their units) of an element's ``ssd:ParameterBindings``."""
+
+    def __init__(self, file: str, base_dir: Path, units: dict):
+        self.file = file
+        self.base_dir = base_dir
+        self.units = units
+
+    def __call__(self, element, component: str | None):
+        values: dict[str, StartValue] = {}
+        value_units: dict[str, str] = {}
+        for binding in element.iterfind("ssd:ParameterBindings/ssd:ParameterBinding", NS):
+            if binding.get("type", PARAMETER_SET_MIME) != PARAMETER_SET_MIME:
+                raise SystemFileError(f"parameter binding type '{binding.get('type')}' is "
+                                      "not supported", file=self.file, component=component)
+            if binding.find("ssd:ParameterMapping", NS) is not None:
+                raise SystemFileError("parameter mappings are not supported", file=self.file,
+                                      component=component)
+            prefix = binding.get("prefix") or ""
+            sets = list(binding.iterfind("ssd:ParameterValues/ssv:ParameterSet", NS))
+            if binding.get("source"):
+                sets.append(self._external(binding.get("source"), component))
+            for parameter_set in sets:
+                for name, value, unit in self._parameters(parameter_set, component, prefix):
+                    values[name] = value
+                    if unit is None:
+                        value_units.pop(name, None)
+                    else:
+                        value_units[name] = unit
+        return values, value_units
+
+    def _external(self, source: str, component: str | None):
+        if ":" in source or source.startswith("/"):
+            raise SystemFileError(f"parameter binding source '{source}' is not a relative "
+                                  "file reference; only files inside the system's folder "
+                                  "are supported", file=self.file, component=component)
+        base = self.base_dir.resolve()
+        target = (base / source).resolve()
+        if base not in target.parents:
+            raise SystemFileError(f"parameter binding source '{source}' is outside the "
+                                  "system's folder; refused", file=self.file,
                                   component=component)
-        prefix = binding.prefix or ""
-        for parameter_set in binding.parameterValues:
-            for parameter in parameter_set.parameters:
-                name = prefix + parameter.name
-                values[name] = parse_literal(parameter.type, parameter.value, file=file,
-                                             component=component, variable=name)
-    return values
+        if not target.is_file():
+            raise SystemFileError(f"referenced file '{source}' not found", file=self.file,
+                                  component=component)
+        return _parse(target, target, "SystemStructureParameterValues.xsd")
+
+    def _parameters(self, parameter_set, component: str | None, prefix: str):
+        file = self.file
+        local_units = _units(parameter_set.find("ssv:Units", NS), file, self.units)
+        for key, unit in local_units.items():
+            self.units.setdefault(key, unit)
+        for parameter in parameter_set.iterfind("ssv:Parameters/ssv:Parameter", NS):
+            name = prefix + parameter.get("name")
+            typed = next((c for c in parameter if isinstance(c.tag, str)), None)
+            kind = etree.QName(typed).localname if typed is not None else None
+            if kind not in ("Real", "Integer", "Boolean", "String"):
+                raise SystemFileError(f"parameter values of type {kind} are not supported",
+                                      file=file, component=component, variable=name)
+            unit = typed.get("unit") if kind == "Real" else None
+            if unit is not None and unit not in self.units:
+                raise SystemFileError(f"parameter unit '{unit}' is not defined in the Units "
+                                      "of the SSD or the parameter set", file=file,
+                                      component=component, variable=name)
+            yield name, parse_literal(kind, typed.get("value"), file=file,
+                                      component=component, variable=name), unit
 
 
-def _connection(connection, file: str) -> Connection:
-    if connection.startElement is None or connection.endElement is None:
-        raise SystemFileError("connections to system-level connectors are not supported "
-                              f"({connection.startConnector} -> {connection.endConnector})",
-                              file=file)
-    return Connection(connection.startElement, connection.startConnector,
-                      connection.endElement, connection.endConnector)
-
-
-def _refuse_transformations(ssd_text: bytes, path: Path) -> None:
-    """Refuse connections with a transformation (fmpy's reader does not see them)."""
-    root = etree.fromstring(ssd_text)
-    for connection in root.iter(f"{{{_NS['ssd']}}}Connection"):
-        for child in connection:
-            if isinstance(child.tag, str) and child.tag.endswith("Transformation"):
-                raise SystemFileError(
-                    f"transformations on connections ({etree.QName(child).localname}) are "
-                    "not supported", file=str(path), component=connection.get("endElement"),
-                    variable=connection.get("endConnector"))
-
-
-def _read_experiment(ssd_text: bytes, path: Path) -> tuple[float | None, ...]:
-    root = etree.fromstring(ssd_text)
-    experiment = root.find("ssd:DefaultExperiment", _NS)
+def _read_experiment(root, file: str) -> tuple[float | None, ...]:
+    experiment = root.find("ssd:DefaultExperiment", NS)
     start = stop = step = None
     if experiment is not None:
-        start = _float_or_none(experiment.get("startTime"))
-        stop = _float_or_none(experiment.get("stopTime"))
-        for annotation in experiment.iterfind("ssd:Annotations/ssc:Annotation", _NS):
+        start = _float_or_none(experiment.get("startTime"), file, "startTime")
+        stop = _float_or_none(experiment.get("stopTime"), file, "stopTime")
+        for annotation in experiment.iterfind("ssd:Annotations/ssc:Annotation", NS):
             if annotation.get("type") == ANNOTATION_TYPE:
                 for child in annotation:
-                    step = _float_or_none(child.get("stepSize")) or step
+                    if isinstance(child.tag, str):
+                        step = _float_or_none(child.get("stepSize"), file, "stepSize") or step
     return start, stop, step
 
 
-def _float_or_none(text: str | None) -> float | None:
-    return None if text is None else float(text)
+def _float_or_none(text: str | None, file: str, what: str) -> float | None:
+    if text is None:
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise SystemFileError(f"DefaultExperiment {what} '{text}' is not a number",
+                              file=file) from None

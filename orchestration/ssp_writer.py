@@ -24,6 +24,7 @@ from .errors import SystemFileError
 from .fmu import read_description
 from .ssp_reader import ANNOTATION_TYPE, SSD_NAME
 from .system import System
+from .units import EXPONENTS
 
 __all__ = ["write_ssd", "write_ssp", "ssd_bytes", "START_VALUES_SET"]
 
@@ -63,19 +64,64 @@ def ssd_bytes(system: System, sources: dict[str, str]) -> bytes:
                          version="1.0", name=system.name)
     xsystem = etree.SubElement(root, _tag(_SSD, "System"), name=system.name)
     elements = etree.SubElement(xsystem, _tag(_SSD, "Elements"))
+    connector_units = _connector_units(system)
     for component in system.components:
-        _component_element(elements, system, component, sources[component.name])
+        _component_element(elements, system, component, sources[component.name],
+                           connector_units)
     if system.connections:
         connections = etree.SubElement(xsystem, _tag(_SSD, "Connections"))
         for c in system.connections:
-            etree.SubElement(connections, _tag(_SSD, "Connection"),
-                             startElement=c.start_component, startConnector=c.start_variable,
-                             endElement=c.end_component, endConnector=c.end_variable)
+            xconnection = etree.SubElement(
+                connections, _tag(_SSD, "Connection"), startElement=c.start_component,
+                startConnector=c.start_variable, endElement=c.end_component,
+                endConnector=c.end_variable)
+            hop = c.hops[0] if c.hops else None
+            if hop is not None and hop.suppress_unit_conversion:
+                xconnection.set("suppressUnitConversion", "true")
+            if hop is not None and (hop.factor, hop.offset) != (1.0, 0.0):
+                etree.SubElement(xconnection, _tag(_SSC, "LinearTransformation"),
+                                 factor=_literal(float(hop.factor)),
+                                 offset=_literal(float(hop.offset)))
+    if system.units:
+        xunits = etree.SubElement(root, _tag(_SSD, "Units"))
+        for unit in system.units.values():
+            xunit = etree.SubElement(xunits, _tag(_SSC, "Unit"), name=unit.name)
+            base = etree.SubElement(xunit, _tag(_SSC, "BaseUnit"))
+            for key, exponent in zip(EXPONENTS, unit.exponents or ()):
+                if exponent:
+                    base.set(key, str(exponent))
+            if unit.factor != 1.0:
+                base.set("factor", _literal(float(unit.factor)))
+            if unit.offset != 0.0:
+                base.set("offset", _literal(float(unit.offset)))
     _experiment_element(root, system)
     return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
 
 
-def _component_element(parent, system: System, component, source: str) -> None:
+def _connector_units(system: System) -> dict[tuple[str, str], str]:
+    """Declared connector units of the connections; refuse what SSD cannot hold flat."""
+    units: dict[tuple[str, str], str] = {}
+    for c in system.connections:
+        if len(c.hops) > 1 and any(h.start_unit or h.end_unit or h.suppress_unit_conversion
+                                   or (h.factor, h.offset) != (1.0, 0.0) for h in c.hops):
+            raise SystemFileError(f"connection {c} runs through system connectors with units "
+                                  "or transformations, which a flat SSD cannot hold",
+                                  file=None if system.source_file is None
+                                  else str(system.source_file))
+        if not c.hops:
+            continue
+        for key, unit in (((c.start_component, c.start_variable), c.hops[0].start_unit),
+                          ((c.end_component, c.end_variable), c.hops[-1].end_unit)):
+            if unit is None:
+                continue
+            if units.setdefault(key, unit) != unit:
+                raise SystemFileError(f"connector {'.'.join(key)} is given two units "
+                                      f"('{units[key]}' and '{unit}')")
+    return units
+
+
+def _component_element(parent, system: System, component, source: str,
+                       connector_units: dict) -> None:
     description = read_description(system.fmu_path(component), component.name)
     variables = {v.name: v for v in description.modelVariables}
     xcomponent = etree.SubElement(parent, _tag(_SSD, "Component"), name=component.name,
@@ -87,7 +133,11 @@ def _component_element(parent, system: System, component, source: str) -> None:
                                           variable.name in component.parameters):
             connector = etree.SubElement(connectors, _tag(_SSD, "Connector"),
                                          name=variable.name, kind=kind)
-            etree.SubElement(connector, _tag(_SSC, _SSP_TYPES.get(variable.type, "Real")))
+            typed = etree.SubElement(connector,
+                                     _tag(_SSC, _SSP_TYPES.get(variable.type, "Real")))
+            unit = connector_units.get((component.name, variable.name))
+            if unit is not None:
+                typed.set("unit", unit)
     if len(connectors) == 0:
         xcomponent.remove(connectors)
     if not component.parameters:

@@ -2,9 +2,13 @@
 
 A :class:`System` lists components (FMU instances with start values) and
 connections between their variables.  It is what the SSP reader returns, what
-the SSP writer takes and what the master runs.  Component names must not
-contain a dot: ``"component.variable"`` is split at the first dot, so variable
-names may contain dots (``"ramp.height"``).
+the SSP writer takes and what the master runs.  Components of nested SSP
+systems are named by their path (``"sub.gain"``); a qualified variable name
+``"component.variable"`` is resolved against the longest matching component
+name, and :meth:`Connection.between` splits at the first dot, so variable
+names may contain dots (``"ramp.height"``).  A connection may carry unit
+information and linear transformations (:class:`Hop`), which the master
+turns into a conversion of the transferred values.
 """
 from __future__ import annotations
 
@@ -14,7 +18,7 @@ from pathlib import Path
 
 from .errors import SystemDescriptionError, UnknownComponentError
 
-__all__ = ["Component", "Connection", "System", "split_name", "StartValue"]
+__all__ = ["Component", "Connection", "Hop", "System", "split_name", "StartValue"]
 
 StartValue = float | int | bool | str
 
@@ -51,11 +55,46 @@ class Component:
         FMU file; a relative path is resolved against ``System.base_dir``.
     parameters : dict
         Start values applied before initialisation, ``{variable: value}``.
+    parameter_units : dict
+        ``{variable: unit name}`` for Real start values given in a unit (SSP
+        ``ssv:Real unit``); the master converts them to the variable's unit.
     """
 
     name: str
     source: str | Path
     parameters: dict[str, StartValue] = field(default_factory=dict)
+    parameter_units: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Hop:
+    """One SSP connection on the way from an output to an input.
+
+    A flattened connection through system-level connectors is a chain of
+    hops; a plain connection is one hop.
+
+    Parameters
+    ----------
+    start_unit, end_unit : str, optional
+        Units declared on the hop's start and end connectors (names in the
+        system's unit definitions); ``None``: not declared (at a component,
+        the FMU variable's unit applies; at a system connector, the unit is
+        passed through).
+    factor, offset : float
+        ``ssc:LinearTransformation``: ``end = factor * start + offset``, applied
+        after the unit conversion.
+    suppress_unit_conversion : bool
+        SSP ``suppressUnitConversion``: no unit conversion on this hop.
+    where : str
+        Where the hop is declared, for error messages.
+    """
+
+    start_unit: str | None = None
+    end_unit: str | None = None
+    factor: float = 1.0
+    offset: float = 0.0
+    suppress_unit_conversion: bool = False
+    where: str = ""
 
 
 @dataclass(frozen=True)
@@ -68,12 +107,16 @@ class Connection:
         Source component and its output variable.
     end_component, end_variable : str
         Destination component and its input variable.
+    hops : tuple of Hop
+        Units and transformations along the connection (SSP); empty for a
+        plain connection (the FMU variables' own units still apply).
     """
 
     start_component: str
     start_variable: str
     end_component: str
     end_variable: str
+    hops: tuple[Hop, ...] = ()
 
     @classmethod
     def between(cls, start: str, end: str) -> Connection:
@@ -111,6 +154,12 @@ class System:
         Default experiment, s; ``None`` when the description has none.
     base_dir : Path, optional
         Directory against which relative component sources are resolved.
+    units : dict, optional
+        ``{name: orchestration.units.Unit}``: the system file's unit
+        definitions, referenced by the connections' hops.
+    inputs_without_source : list of str, optional
+        Component inputs connected only to a system-level input that has no
+        source (they keep their start values).
     source_file : Path, optional
         The SSP/SSD file the system was read from, for error messages.
     """
@@ -123,20 +172,31 @@ class System:
     step_size: float | None = None
     base_dir: Path | None = None
     source_file: Path | None = None
+    units: dict = field(default_factory=dict)
+    inputs_without_source: list[str] = field(default_factory=list)
     _workdir: tempfile.TemporaryDirectory | None = field(default=None, repr=False,
                                                         compare=False)
 
     def __post_init__(self) -> None:
         seen = set()
         for component in self.components:
-            if not component.name or "." in component.name:
+            if not component.name or component.name.startswith(".") \
+                    or component.name.endswith(".") or ".." in component.name:
                 raise SystemDescriptionError(
-                    "component names must be non-empty and contain no dot",
+                    "component names must be non-empty, without empty dot-separated parts",
                     file=self._file, component=component.name)
             if component.name in seen:
                 raise SystemDescriptionError("duplicate component name",
                                              file=self._file, component=component.name)
             seen.add(component.name)
+        for name in seen:
+            parent = name.rpartition(".")[0]
+            while parent:
+                if parent in seen:
+                    raise SystemDescriptionError(
+                        f"component name is ambiguous: component '{parent}' is a prefix of it",
+                        file=self._file, component=name)
+                parent = parent.rpartition(".")[0]
 
     @property
     def _file(self) -> str | None:
@@ -156,6 +216,27 @@ class System:
         known = ", ".join(c.name for c in self.components)
         raise UnknownComponentError(f"no such component (known: {known})",
                                     file=self._file, component=name)
+
+    def split(self, qualified: str) -> tuple[str, str]:
+        """Split ``component.variable`` at the longest component name that prefixes it.
+
+        Raises
+        ------
+        UnknownComponentError
+            If no component name prefixes it.
+        """
+        best = None
+        for component in self.components:
+            name = component.name
+            if qualified.startswith(name + ".") and len(qualified) > len(name) + 1 \
+                    and (best is None or len(name) > len(best)):
+                best = name
+        if best is None:
+            component, _, _ = qualified.partition(".")
+            known = ", ".join(c.name for c in self.components)
+            raise UnknownComponentError(f"no component prefixes '{qualified}' (known: {known})",
+                                        file=self._file, component=component)
+        return best, qualified[len(best) + 1:]
 
     def fmu_path(self, component: Component) -> Path:
         """Absolute path of a component's FMU file."""

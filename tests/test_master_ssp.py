@@ -123,10 +123,14 @@ def test_system_level_parameter_for_an_unknown_component(folder):
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    ({"system_extra": '<ssd:Connectors><ssd:Connector name="x" kind="input"/>'
-                      '</ssd:Connectors>'}, "system-level connectors"),
-    ({"connection_extra": '<ssc:LinearTransformation factor="2"/>'},
-     "LinearTransformation"),
+    ({"ramp_extra": '<ssd:ParameterBindings><ssd:ParameterBinding>'
+                    '<ssd:ParameterMapping source="m.ssm"/></ssd:ParameterBinding>'
+                    '</ssd:ParameterBindings>'}, "parameter mappings are not supported"),
+    ({"connection_extra": '<ssc:BooleanMappingTransformation><ssc:MapEntry source="true" '
+                          'target="false"/></ssc:BooleanMappingTransformation>'},
+     "BooleanMappingTransformation on connections is not supported"),
+    ({"system_extra": '<ssd:ParameterBindings><ssd:ParameterBinding source="../../x.ssv"/>'
+                      '</ssd:ParameterBindings>'}, "outside the system's folder"),
     ({"ramp_extra": "<ssd:Bogus/>"}, "Failed to validate"),
 ])
 def test_unsupported_or_invalid_ssd(folder, kwargs, match):

@@ -96,10 +96,14 @@ def test_openmodelica_subsystems_jacobi_equal_the_monolithic_model(om_fmus):
 
 
 def test_openmodelica_subsystems_gauss_seidel_breaks_the_loop(om_fmus):
-    with pytest.warns(AlgebraicLoopWarning, match="sub2 -> sub1"):
+    """x1 and x2 are state outputs (their declared dependencies hold no input): the cycle
+    of components is cut in the stepping order, but it is no algebraic loop, so no warning."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", AlgebraicLoopWarning)
         result = simulate_system(mass_spring(om_fmus), scheme="gauss-seidel")
     jacobi = quiet(simulate_system, mass_spring(om_fmus), scheme="jacobi")
     assert result.meta["broken_connections"] == ["sub2.x2 -> sub1.x2"]
+    assert result.meta["algebraic_loop"] == []
     # sub1 steps first and reads sub2 at t in both schemes: same first step
     assert_allclose(result["sub1.x1"][:2], jacobi["sub1.x1"][:2], **EXACT)
     for name in ("sub1.x1", "sub2.x2"):

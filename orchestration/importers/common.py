@@ -3,13 +3,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..coupling import VALUE_TYPES
+from ..coupling import VALUE_TYPES, check_connections
 from ..errors import ScheduleError
 from ..fmu import read_description
 from ..recorder import NUMPY_TYPES, ResultArray, select_variables
 from ..schedule import make_schedule
 from ..ssp_reader import read_system
 from ..system import System
+from ..unit_links import refuse_conversions
 
 __all__ = ["resolve", "fixed_step", "Selection", "build_result"]
 
@@ -46,13 +47,15 @@ class Selection:
 
     def __init__(self, system: System, record):
         self.names = [c.name for c in system.components]
-        files, self.variables = [], []
+        files, self.variables, descriptions = [], [], []
         for component in system.components:
             path = system.fmu_path(component)
             files.append(str(path))
-            self.variables.append({v.name: v for v in
-                                   read_description(path, component.name).modelVariables})
+            descriptions.append(read_description(path, component.name))
+            self.variables.append({v.name: v for v in descriptions[-1].modelVariables})
         self.chosen = select_variables(self.names, self.variables, record, files)
+        checked = check_connections(system.connections, self.names, self.variables, files)
+        refuse_conversions(system, checked, descriptions, files, "this third-party importer")
         self.fields = [f"{self.names[i]}.{v.name}" for i, v in self.chosen]
         self.kinds = [VALUE_TYPES[v.type] for _, v in self.chosen]
 

@@ -6,11 +6,12 @@ import sys
 
 import numpy as np
 
+from orchestration import interrupt
 from orchestration.errors import OrchestrationError
 from orchestration.master import SCHEMES, Master
 from orchestration.recorder import write_csv
 
-__all__ = ["register", "run", "summary"]
+__all__ = ["register", "run", "summary", "realtime_summary"]
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -36,7 +37,8 @@ def register(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--start-time", type=float, default=None, metavar="T0",
                         help="start time, s (default: the system's, else 0)")
     parser.add_argument("--step", type=float, default=None, metavar="H",
-                        help="communication step, s (default: the system's)")
+                        help="communication step, s (default: the system's, else the "
+                             "FMUs' DefaultExperiment stepSize)")
     parser.add_argument("--scheme", choices=SCHEMES, default="gauss-seidel",
                         help="coupling scheme (default: gauss-seidel)")
     parser.add_argument("--record", action="append", default=None, metavar="NAME",
@@ -46,7 +48,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                         help="record every Nth step (default: 1)")
     parser.add_argument("--output", default=None, metavar="CSV", help="write results to CSV")
     parser.add_argument("--realtime", type=float, default=None, metavar="FACTOR",
-                        help="pace the run: wall-clock seconds per simulated second")
+                        help="pace the run: wall-clock seconds per simulated second (the "
+                             "clock starts after initialisation; the worst lag is reported)")
     parser.add_argument("--no-progress", action="store_true", help="never show a progress bar")
     parser.set_defaults(func=run)
     return parser
@@ -73,18 +76,39 @@ def _format(value) -> str:
 def run(args: argparse.Namespace) -> int:
     """Run the ``cosim`` subcommand; return the process exit code.
 
-    Exit codes: 0 success, 2 a system-description or schedule error (bad input), 1 an FMU failure.
+    Exit codes: 0 success, 2 a system-description or schedule error (bad input), 1 an FMU
+    failure, 130 / 143 stopped by SIGINT (Ctrl-C) / SIGTERM: the FMUs are terminated and
+    freed and the extracted folders removed before exiting.
     """
     try:
-        with Master(args.system, scheme=args.scheme, record=args.record) as master:
-            result = master.simulate(args.stop_time, args.step, start_time=args.start_time,
-                                     output_every=args.output_every,
-                                     progress=False if args.no_progress else None,
-                                     realtime=args.realtime)
+        with interrupt.handle_signals():
+            with Master(args.system, scheme=args.scheme, record=args.record) as master:
+                result = master.simulate(args.stop_time, args.step,
+                                         start_time=args.start_time,
+                                         output_every=args.output_every,
+                                         progress=False if args.no_progress else None,
+                                         realtime=args.realtime)
+            interrupt.check()
+    except interrupt.Interrupted as stop:
+        print(f"sarins cosim: {stop} (FMUs freed, extracted files removed)", file=sys.stderr)
+        return interrupt.exit_code(stop.signum)
     except OrchestrationError as error:
         print(f"sarins cosim: {'failed' if isinstance(error, RuntimeError) else 'error'}: {error}", file=sys.stderr)
         return 1 if isinstance(error, RuntimeError) else 2
     print(summary(result))
+    realtime = result.meta.get("realtime")
+    if realtime is not None:
+        print(realtime_summary(realtime))
     if args.output:
         print(f"results written to {write_csv(result, args.output)}")
     return 0
+
+
+def realtime_summary(report: dict) -> str:
+    """One line from ``result.meta['realtime']``: worst lag and late steps."""
+    if not report["late_steps"]:
+        return (f"real time (factor {report['factor']:g}): no step late in "
+                f"{report['steps']} steps")
+    return (f"real time (factor {report['factor']:g}): {report['late_steps']} of "
+            f"{report['steps']} steps late, worst lag {report['max_lag_s']:.6f} s at "
+            f"simulated t = {report['max_lag_time']:.9g} s")

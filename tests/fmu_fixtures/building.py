@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).parent
-SLAVES = ("Ramp", "Gain", "Faulty")
+SLAVES = ("Ramp", "Gain", "Faulty", "Feed")
 
 
 def build_fixture_fmus(destination: Path) -> dict[str, Path]:

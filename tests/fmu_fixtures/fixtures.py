@@ -8,7 +8,7 @@ from .building import build_fixture_fmus
 
 @pytest.fixture(scope="session")
 def fixture_fmus(tmp_path_factory) -> dict:
-    """``{'Ramp': path, 'Gain': path, 'Faulty': path}`` built once per session."""
+    """``{'Ramp': path, 'Gain': path, 'Faulty': path, 'Feed': path, ...}`` built once per session."""
     return build_fixture_fmus(tmp_path_factory.getbasetemp() / "fixture_fmus")
 
 
