@@ -273,7 +273,8 @@ def test_artifacts_are_built_in_a_temporary_folder(tmp_path):
     assert len(calls) == 3 and (dest / "B.fmu").read_text() == "B.fmu v3"
 
 
-@pytest.mark.parametrize("signum,status", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
+@pytest.mark.parametrize("signum,status", [(signal.SIGTERM, 143),
+                                           pytest.param(signal.SIGINT, 130, marks=pytest.mark.slow)])
 def test_a_signalled_campaign_stops_cleanly(tmp_path, signum, status):
     """SIGTERM / Ctrl-C to ``sarins campaign``: one line, exit 143 / 130, its
     workers gone at once (not after their tasks), finished results kept."""

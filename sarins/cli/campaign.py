@@ -68,7 +68,7 @@ def register(subparsers) -> None:
 def run(args) -> int:
     """Check the shared options, lock ``--out`` and run the campaign."""
     from orchestration.errors import FMUCallError
-    from sarins.campaign import TaskFailed, exclusive
+    from sarins.campaign import TaskFailed, exclusive, remove_stale_temporaries
 
     out = Path(args.out)
     if out.exists() and not out.is_dir():
@@ -84,6 +84,7 @@ def run(args) -> int:
             raise UsageError("--scheduler needs Dask's distributed scheduler, which is not installed: "
                              "pip install 'sarins-fmu[distributed]'")
     with exclusive(out):
+        remove_stale_temporaries(out)  # what a killed run left half-written (under the lock: nobody writes)
         try:
             return args.campaign_run(args)
         except (TaskFailed, FMUCallError) as exc:
