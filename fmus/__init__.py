@@ -13,4 +13,5 @@ SLAVES = {
     "RBFIdentifier": "rbf_identifier_slave.py",
     "DriftModelUpdater": "drift_model_updater_slave.py",
     "IMUCompensator": "imu_compensator_slave.py",
+    "VehicleMotion": "vehicle_motion_slave.py",
 }

@@ -8,6 +8,9 @@ when the host has it), then rewrites each modelDescription.xml:
 * ``unit`` / ``displayUnit`` attributes from the ``[unit; display]`` suffix
   of each variable's description, with ``<UnitDefinitions>`` (SI base-unit
   exponents, display-unit factors);
+* ``ModelStructure/Outputs`` with each output's ``dependencies`` as the
+  slave declared them (:func:`fmus.slave_support.declare`; empty for a state
+  output, so FMI tools see no direct feedthrough and no algebraic loop);
 * ``<InitialUnknowns>`` (pythonfmu leaves it out; FMI 2.0 requires every
   output with initial = approx/calculated there, which ``fmpy validate``
   checks);
@@ -75,18 +78,24 @@ def _unit_definitions(root, used):
     return defs
 
 
-def fix_model_description(xml_bytes: bytes, descriptions: dict | None = None) -> bytes:
+def fix_model_description(xml_bytes: bytes, descriptions: dict | None = None,
+                          dependencies: dict | None = None) -> bytes:
     """Add units, display units, UnitDefinitions, Outputs and InitialUnknowns.
 
     ``descriptions`` ({variable name: description}) fills in missing
     descriptions first (used for container FMUs, whose variables are the
-    components' ``component.variable``).
+    components' ``component.variable``).  ``dependencies`` ({output name:
+    input names}) is written as each output's ``dependencies`` attribute in
+    ``ModelStructure/Outputs``; an output missing from it gets none (a state
+    output).  Without ``dependencies`` the attribute is left out (FMI: the
+    output may depend on every input).
     """
     root = ET.fromstring(xml_bytes)
     variables = root.find("ModelVariables")
     used: dict[str, set] = {}
     initial_unknowns = []
     outputs = []
+    index_of = {v.get("name"): i for i, v in enumerate(variables.findall("ScalarVariable"), start=1)}
     for index, var in enumerate(variables.findall("ScalarVariable"), start=1):
         if descriptions and not var.get("description") and var.get("name") in descriptions:
             var.set("description", descriptions[var.get("name")])
@@ -117,8 +126,16 @@ def fix_model_description(xml_bytes: bytes, descriptions: dict | None = None) ->
         structure.remove(node)
     if outputs:
         node = ET.SubElement(structure, "Outputs")
+        names = {i: n for n, i in index_of.items()}
         for index in outputs:
-            ET.SubElement(node, "Unknown", index=str(index))
+            attrs = {"index": str(index)}
+            if dependencies is not None:
+                inputs = dependencies.get(names[index], ())
+                unknown = [n for n in inputs if n not in index_of]
+                if unknown:
+                    raise ValueError(f"output {names[index]} depends on unknown variables {unknown}")
+                attrs["dependencies"] = " ".join(str(index_of[n]) for n in inputs)
+            ET.SubElement(node, "Unknown", attrs)
     if derivatives is not None:
         structure.append(derivatives)
     if initial_unknowns:
@@ -173,8 +190,24 @@ def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
         fmu = FmuBuilder.build_FMU(script, dest=tmp / "out", project_files=project_files,
                                    needsExecutionTool=False, canHandleVariableCommunicationStepSize=False)
         target = out_dir / fmu.name
-        _rewrite(fmu, target)
+        _rewrite(fmu, target, declared_dependencies(slave_file, tmp))
     return target
+
+
+def declared_dependencies(slave_file: str, resources) -> dict:
+    """{output name: inputs it depends on} as the slave declares them
+    (:func:`fmus.slave_support.declare`), read from an instance of the slave."""
+    import importlib
+
+    from pythonfmu import Fmi2Slave
+
+    module = importlib.import_module(f"fmus.{Path(slave_file).stem}")
+    classes = [c for c in vars(module).values() if isinstance(c, type) and issubclass(c, Fmi2Slave)
+               and c.__module__ == module.__name__]
+    if len(classes) != 1:
+        raise RuntimeError(f"{slave_file} must define exactly one slave class, found {len(classes)}")
+    slave = classes[0](instance_name="build", resources=str(resources))
+    return dict(getattr(slave, "_output_dependencies", {}))
 
 
 def _native_model_description(xml_bytes: bytes) -> bytes:
@@ -189,7 +222,7 @@ def _native_model_description(xml_bytes: bytes) -> bytes:
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def _rewrite(src: Path, dst: Path) -> None:
+def _rewrite(src: Path, dst: Path, dependencies: dict | None = None) -> None:
     """pythonfmu's FMU -> ours: native binaries, aliased library, bridge, records, documentation."""
     with zipfile.ZipFile(src) as zin:
         md = zin.read("modelDescription.xml")
@@ -215,7 +248,8 @@ def _rewrite(src: Path, dst: Path) -> None:
               "slave_class": root.get("modelName"), "layer": native.LAYER,
               "manifest": {rel: len(data) for rel, data in package.items()}}
     with zipfile.ZipFile(dst, "w", zipfile.ZIP_DEFLATED) as zout:
-        zout.writestr("modelDescription.xml", _native_model_description(fix_model_description(md)))
+        zout.writestr("modelDescription.xml",
+                      _native_model_description(fix_model_description(md, dependencies=dependencies)))
         for name, data in kept:
             if name == f"resources/{slave_module}.py":
                 data = native.rewrite_imports(data.decode(), alias).encode()

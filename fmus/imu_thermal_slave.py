@@ -6,28 +6,42 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
-                                discard_on_error, guarded)
+from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, StartOfStepInputs, check_finite,
+                                check_step, declare, discard_on_error, guarded, same_time)
 from sarins_fmu import imu, imu_params
 from sarins_fmu.thermal import SENSORS, ThermalModel
 
 DEG = math.pi / 180.0
 GIMBAL_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 UNIT_DISPLAY = {"rad/s": "deg/h", "rad": "deg"}
+NO_TAG = -1.0e9  # s, start value of motion_time: names no communication point of a run
 
 
 class IMUThermal(Fmi2Slave):
 
     author = "sarins-fmu"
     description = (
-        "Increment-output IMU on a turntable, static base. Contract: inputs are the turntable's gimbal "
-        "angles and rates at the END of the current communication step (Gauss-Seidel: the turntable is "
-        "stepped first) and the ambient temperature there; the IMU holds the state it received at the "
-        "start of the step, rebuilds the motion over the step with constant angular acceleration "
-        "(rate difference / step; the end angle is checked), integrates true motion and sensor errors at "
-        "internal_rate, and outputs the compensated angle and velocity increments of the step (coning and "
-        "sculling applied, body axes at the start of the step) and the six sensor temperatures at its end. "
-        "Held between steps: thermal state, bias-instability state, noise generator, last gimbal state. "
+        "Increment-output IMU on a turntable, on a static base (base = static: lat, height, base_yaw) or riding on "
+        "a vehicle (base = input: the vehicle's motion from an upstream FMU, see below). Contract (standard FMI timing, any master scheme): "
+        "the motion inputs are a time-tagged set from the turntable describing the segment that starts at "
+        "motion_time: gimbal angles, rates and angular accelerations (constant until the next communication "
+        "point), the ambient temperature and its slope. doStep(t, h) needs the set tagged t: under Jacobi it "
+        "reads it; under Gauss-Seidel (turntable stepped first) it reads the set tagged t + h and uses the one "
+        "kept from its previous step (or initialisation); any other tag is an error (fmi2Error logged, step "
+        "discarded). It integrates true motion and sensor errors at internal_rate and outputs the compensated "
+        "angle and velocity increments of [t, t + h] (coning and sculling applied, body axes at t), the six "
+        "sensor temperatures at t + h and the tag increment_end_time = t + h (the start time at "
+        "initialisation: no increments yet). Under Gauss-Seidel the master must pass the turntable's initial outputs "
+        "before the first step (FMI initialisation; motion_time starts at -1e9 s, no valid tag). If motion_time is "
+        "never set (no turntable connected), the motion inputs are constants: a fixed table. So the increments are bit-identical under every scheme. All "
+        "outputs are state outputs (no direct feedthrough). Held between steps: thermal state, "
+        "bias-instability state, noise generator, the previous motion set. "
+        "Moving base (base = input): the vehicle motion is a second time-tagged start-of-step set, tagged "
+        "base_motion_time and chosen like the turntable's: the vehicle attitude as Euler angles yaw (CCW from "
+        "north), pitch, roll with mat_nv = Rz(yaw) Rx(pitch) Ry(roll) (ENU, body right-front-up), their rates "
+        "and their angular accelerations, constant over the step (the turntable's gimbals ride on the vehicle: "
+        "gimbal chain z, x, y, then the turntable's), and the inertial angular rate of the local-level ENU frame "
+        "at the vehicle (omega_ie + omega_en) and the specific force resolved in it, both held over the step. "
         "IMU parameters: 'preset' chooses the model; any coefficient parameter that is set overrides it.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
 
@@ -35,6 +49,8 @@ class IMUThermal(Fmi2Slave):
         super().__init__(**kwargs)
         self._overridden = set()
         declare(self, "string", "preset", PARAMETER, "IMU model: ideal, nav-rlg or mems", "nav-rlg")
+        declare(self, "string", "base", PARAMETER, "static (lat, height, base_yaw) or input (vehicle motion inputs)",
+                "static")
         declare(self, "real", "lat", PARAMETER, "latitude of the static base [rad; deg]", 28.222 * DEG)
         declare(self, "real", "height", PARAMETER, "height of the static base [m]", 0.0)
         declare(self, "real", "base_yaw", PARAMETER, "yaw of the turntable base, CCW from north [rad; deg]", 0.0)
@@ -49,19 +65,47 @@ class IMUThermal(Fmi2Slave):
             shown = f"{unit}; {UNIT_DISPLAY[unit]}" if unit in UNIT_DISPLAY else unit
             self._declare_coefficient(name, defaults[name], shown)
         for j in (1, 2, 3):
-            declare(self, "real", f"angle_{j}", INPUT, f"gimbal {j} angle at the step end [rad; deg]", 0.0)
-            declare(self, "real", f"rate_{j}", INPUT, f"gimbal {j} rate at the step end [rad/s; deg/s]", 0.0)
-        declare(self, "real", "ambient_temp", INPUT, "ambient temperature at the step end [degC]", 20.0)
+            declare(self, "real", f"angle_{j}", INPUT, f"gimbal {j} angle at motion_time [rad; deg]", 0.0)
+            declare(self, "real", f"rate_{j}", INPUT, f"gimbal {j} rate at motion_time [rad/s; deg/s]", 0.0)
+            declare(self, "real", f"accel_{j}", INPUT,
+                    f"gimbal {j} angular acceleration from motion_time to the next communication point "
+                    "[rad/s2; deg/s2]", 0.0)
+        declare(self, "real", "ambient_temp", INPUT, "ambient temperature at motion_time [degC]", 20.0)
+        declare(self, "real", "ambient_temp_rate", INPUT, "slope of the ambient from motion_time on [degC/s]", 0.0)
+        # start value: no valid tag, so a motion set the master never passed is an error, not a silent zero
+        declare(self, "real", "motion_time", INPUT, "time tag of the motion inputs [s]", NO_TAG)
+        for q, unit, text in (("", "rad; deg", "at base_motion_time"), ("_rate", "rad/s; deg/s", "at base_motion_time"),
+                              ("_accel", "rad/s2; deg/s2", "from base_motion_time to the next communication point")):
+            for angle in ("yaw", "pitch", "roll"):
+                declare(self, "real", f"vehicle_{angle}{q}", INPUT, f"base = input: vehicle {angle}{q.replace('_', ' ')} "
+                        f"{text} [{unit}]", 0.0)
+        for ax in "enu":
+            declare(self, "real", f"base_rate_{ax}", INPUT,
+                    f"base = input: inertial rate of the local-level frame, {ax} axis, held over the step [rad/s]", 0.0)
+        for ax in "enu":
+            declare(self, "real", f"base_force_{ax}", INPUT,
+                    f"base = input: specific force, {ax} axis, held over the step [m/s2]", 0.0)
+        declare(self, "real", "base_motion_time", INPUT, "base = input: time tag of the vehicle motion inputs [s]",
+                NO_TAG)
         for ax in "xyz":
             declare(self, "real", f"dtheta_{ax}", OUTPUT, f"angle increment about body {ax} over the step [rad]", 0.0)
         for ax in "xyz":
             declare(self, "real", f"dv_{ax}", OUTPUT, f"velocity increment along body {ax} over the step [m/s]", 0.0)
         for sensor in SENSORS:
-            declare(self, "real", f"temp_{sensor}", OUTPUT, f"temperature of the {sensor} sensor [degC]", 20.0)
+            declare(self, "real", f"temp_{sensor}", OUTPUT,
+                    f"temperature of the {sensor} sensor at increment_end_time [degC]", 20.0)
+        declare(self, "real", "increment_end_time", OUTPUT,
+                "time tag: end of the interval of the increments [s]", 0.0)
         self._sensor = None
+        self._motion = StartOfStepInputs("turntable motion", "motion_time")
+        self._vehicle = StartOfStepInputs("vehicle motion", "base_motion_time")
+        self._start_time = 0.0
         self._model = None
         self._step = None
         self._state = None
+
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._start_time = float(start_time)
 
     def _declare_coefficient(self, name, start, unit):
         """A model coefficient: setting it marks it as overriding the preset."""
@@ -86,6 +130,8 @@ class IMUThermal(Fmi2Slave):
             raise ParameterError(f"parameter lat = {math.degrees(self.lat):.6g} deg is outside +-89.9 deg")
         if self.thermal_start not in ("hot", "cold"):
             raise ParameterError(f"thermal_start must be 'hot' or 'cold', got {self.thermal_start!r}")
+        if self.base not in ("static", "input"):
+            raise ParameterError(f"base must be 'static' or 'input', got {self.base!r}")
         names = [g.strip() for g in self.gimbals.split(",")]
         if not 1 <= len(names) <= 3 or any(g not in GIMBAL_AXES for g in names):
             raise ParameterError(f"gimbals must list 1 to 3 of x, y, z, got {self.gimbals!r}")
@@ -93,28 +139,45 @@ class IMUThermal(Fmi2Slave):
             base_model = imu.preset(self.preset)
             overrides = {name: getattr(self, name) for name in self._overridden}
             self._model = imu_params.apply_overrides(base_model, overrides)
-            self._base = imu.StaticBase(self.lat, 0.0, self.height, self.base_yaw)
+            self._base = imu.StaticBase(self.lat, 0.0, self.height, self.base_yaw) if self.base == "static" \
+                else imu.HeldBase()
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
         self._axes = np.array([GIMBAL_AXES[g] for g in names])
-        self._state = self._read_gimbals()
+        self._motion.prime(self.motion_time, self._read_motion())
+        if self.base == "input":
+            self._vehicle.prime(self.base_motion_time, self._read_vehicle())
         self._ambient0 = float(self.ambient_temp)
+        self.increment_end_time = self._start_time
         initial = ThermalModel(self._model.thermal, start=self.thermal_start)
         initial.reset(0.0, self._ambient0)
         for j, sensor in enumerate(SENSORS):
             setattr(self, f"temp_{sensor}", float(initial.temperature[j]))
 
-    def _read_gimbals(self):
+    def _read_motion(self):
+        """The motion inputs as arrays (angle, rate, accel (1, A)) and the ambient (value, slope)."""
         n = len(self._axes)
-        angle = np.array([[getattr(self, f"angle_{j + 1}") for j in range(n)]])
-        rate = np.array([[getattr(self, f"rate_{j + 1}") for j in range(n)]])
-        if not (np.isfinite(angle).all() and np.isfinite(rate).all()):
-            raise ValueError("gimbal inputs contain NaN or infinity")
-        return angle, rate
+        angle, rate, accel = (np.array([[getattr(self, f"{q}_{j + 1}") for j in range(n)]])
+                              for q in ("angle", "rate", "accel"))
+        ambient = (float(self.ambient_temp), float(self.ambient_temp_rate))
+        if not all(np.isfinite(x).all() for x in (angle, rate, accel, ambient)):
+            raise ValueError("motion or ambient inputs contain NaN or infinity")
+        return angle, rate, accel, ambient
+
+    def _read_vehicle(self):
+        """The vehicle inputs: attitude angle, rate, accel (1, 3) each, base rate and force (3,) each."""
+        angle, rate, accel = (np.array([[getattr(self, f"vehicle_{a}{q}") for a in ("yaw", "pitch", "roll")]])
+                              for q in ("", "_rate", "_accel"))
+        w_t = np.array([getattr(self, f"base_rate_{ax}") for ax in "enu"])
+        f_t = np.array([getattr(self, f"base_force_{ax}") for ax in "enu"])
+        if not all(np.isfinite(x).all() for x in (angle, rate, accel, w_t, f_t)):
+            raise ValueError("vehicle motion inputs contain NaN or infinity")
+        return angle, rate, accel, w_t, f_t
 
     def _start(self, step_size):
+        axes = self._axes if self.base == "static" else np.vstack([imu.VEHICLE_ATTITUDE_AXES, self._axes])
         try:
-            self._sensor = imu.IMU(self._model, self._base, self._axes, output_interval=step_size,
+            self._sensor = imu.IMU(self._model, self._base, axes, output_interval=step_size,
                                    internal_rate=self.internal_rate, seed=int(self.seed),
                                    thermal_start=self.thermal_start, aging_days=self.aging_days)
         except ValueError as exc:
@@ -127,20 +190,27 @@ class IMUThermal(Fmi2Slave):
             self._step = check_step(self, step_size, self._step)
             if self._sensor is None:
                 self._start(step_size)
-            angle0, rate0 = self._state
-            angle1, rate1 = self._read_gimbals()
-            accel = (rate1 - rate0) / step_size
-            predicted = angle0 + rate0 * step_size + 0.5 * accel * step_size**2
-            if np.any(np.abs(predicted - angle1) > 1e-7 * (1.0 + np.abs(angle1))):
-                raise ValueError(f"turntable motion at t={current_time:.9g} s is not constant-acceleration "
-                                 "within the step (accelerations must change on the communication grid)")
-            dtheta, dv, temps = self._sensor.step(angle0, rate0, accel, ambient=[self.ambient_temp])
+            if not same_time(self._sensor.time + self._start_time, current_time, step_size):
+                raise ValueError(f"doStep at t={current_time:.9g} s but the IMU stands at "
+                                 f"{self._sensor.time + self._start_time:.9g} s (steps must follow each other)")
+            if self.motion_time == NO_TAG and self._motion.held_tag == NO_TAG:  # never set: fixed table
+                angle0, rate0, accel, (amb0, amb_rate) = self._read_motion()
+            else:
+                angle0, rate0, accel, (amb0, amb_rate) = self._motion.select(
+                    current_time, step_size, self.motion_time, self._read_motion())
+            if self.base == "input":
+                v_angle, v_rate, v_accel, w_t, f_t = self._vehicle.select(
+                    current_time, step_size, self.base_motion_time, self._read_vehicle())
+                self._base.hold(w_t, f_t)
+                angle0, rate0, accel = (np.hstack(pair) for pair in ((v_angle, angle0), (v_rate, rate0),
+                                                                       (v_accel, accel)))
+            dtheta, dv, temps = self._sensor.step(angle0, rate0, accel, ambient=[amb0 + amb_rate * step_size])
         except ValueError as exc:
             return discard_on_error(self, exc)
-        self._state = (angle1, rate1)
         for i, ax in enumerate("xyz"):
             setattr(self, f"dtheta_{ax}", float(dtheta[0, i]))
             setattr(self, f"dv_{ax}", float(dv[0, i]))
         for j, sensor in enumerate(SENSORS):
             setattr(self, f"temp_{sensor}", float(temps[0, j]))
+        self.increment_end_time = current_time + step_size
         return True

@@ -88,12 +88,22 @@ def _bind_real(slave, name: str, start) -> int:
     return index
 
 
-def declare(slave, kind: str, name: str, causality, description: str, start, *, variability=None):
+def declare(slave, kind: str, name: str, causality, description: str, start, *, variability=None,
+            depends_on=()):
     """Register a variable with start value ``start`` (kind: 'real', 'integer', 'string').
 
     A Real lives in the slave's float64 buffer (see the module docstring);
-    other kinds are plain attributes.
+    other kinds are plain attributes.  ``depends_on`` (outputs only): the
+    inputs this output depends on directly within a step (direct
+    feedthrough).  The default, none, declares a state output: it changes
+    only in ``doStep`` (every output of a slave that computes in ``do_step``
+    is one).  The build writes it to ``ModelStructure/Outputs`` as the
+    ``dependencies`` attribute.
     """
+    if causality == OUTPUT:
+        slave.__dict__.setdefault("_output_dependencies", {})[name] = tuple(depends_on)
+    elif depends_on:
+        raise ValueError(f"depends_on is for outputs only ({name} is not one)")
     if variability is None:
         variability = FIXED if causality == PARAMETER else (CONTINUOUS if kind == "real" else DISCRETE)
     cls = {"real": Real, "integer": Integer, "string": String}[kind]
@@ -152,3 +162,52 @@ def guarded(method):
         return True if result is None and method.__name__ == "do_step" else result
 
     return wrapper
+
+
+def same_time(a: float, b: float, step: float) -> bool:
+    """True if two time tags name the same communication point (to 1e-6 of a step)."""
+    return abs(a - b) <= 1e-6 * step
+
+
+class StartOfStepInputs:
+    """Chooses, at ``doStep(t, h)``, the input set that describes the step's start.
+
+    A time-tagged upstream output set (tag = the time it describes) arrives
+    with tag t under Jacobi (every FMU reads the others' outputs from the
+    start of the step) and with tag t + h under Gauss-Seidel (the upstream
+    FMU was stepped first).  The slave keeps the set it read at its previous
+    step (or at initialisation) and uses whichever of the two is tagged t;
+    any other tag is an error, never a silent shift of the motion.
+    """
+
+    def __init__(self, what: str, tag_name: str):
+        self.what, self.tag_name = what, tag_name
+        self._held = None
+
+    @property
+    def held_tag(self):
+        """Tag of the set kept from the previous step (None before initialisation)."""
+        return None if self._held is None else self._held[0]
+
+    def prime(self, tag: float, values) -> None:
+        """Keep the set read at initialisation."""
+        self._held = (float(tag), values)
+
+    def select(self, time: float, step: float, tag: float, values):
+        """The set tagged ``time`` among the current one and the held one."""
+        tag = float(tag)
+        held = self._held
+        if not math.isfinite(tag):
+            raise ValueError(f"{self.tag_name} is not finite")
+        if same_time(tag, time, step):
+            chosen = values
+        elif held is not None and same_time(held[0], time, step):
+            chosen = held[1]
+        else:
+            before = "none" if held is None else f"{held[0]:.9g} s"
+            raise ValueError(
+                f"no {self.what} for the step starting at t={time:.9g} s: the input {self.tag_name} is "
+                f"{tag:.9g} s and the previous set was tagged {before}; the inputs must be the values at t "
+                "(Jacobi) or at t + h (Gauss-Seidel, upstream stepped first)")
+        self._held = (tag, values)
+        return chosen

@@ -1,5 +1,6 @@
 """StrapdownINS FMU: alignment and navigation from IMU increments, static start."""
 
+import collections
 import math
 
 import numpy as np
@@ -7,7 +8,7 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
-                                discard_on_error, guarded)
+                                discard_on_error, guarded, same_time)
 from sarins_fmu import ins
 
 DEG = math.pi / 180.0
@@ -21,14 +22,21 @@ class StrapdownINS(Fmi2Slave):
 
     author = "sarins-fmu"
     description = (
-        "Two-speed strapdown INS (ENU) on a known static start. Contract: each doStep(t, h) is one "
-        "major-loop update from the IMU increments of [t, t+h] (inputs; Gauss-Seidel: the IMU is stepped "
-        "first); the step must stay constant. Phases: coarse alignment (coarse_time), Kalman fine "
-        "alignment with a zero-velocity measurement until align_time, then free navigation from the known "
-        "start with the alignment's horizontal drift and accelerometer-bias estimates compensated. "
-        "The input axial_drift_correction (rad/s) is subtracted from the z gyro during navigation. "
-        "Outputs after doStep(t, h) are the navigation state at t + h and its errors with respect to the "
-        "known static start. Held between steps: attitude, velocity, position, filter state, estimates.")
+        "Two-speed strapdown INS (ENU) on a known static start. Contract (standard FMI timing, explicit "
+        "time-tagged latency): the inputs are the IMU's increments of the interval ending at "
+        "increment_end_time with the azimuth gyro temperature there. Each doStep integrates the interval the "
+        "tag names, exactly once and in order: the next interval of the grid (one major-loop update); a tag "
+        "equal to the start time (no increments yet, Jacobi's first step) waits; a repeated or skipped interval "
+        "is an error (fmi2Error logged, step discarded). Under Gauss-Seidel (IMU stepped first) the solution "
+        "after doStep(t, h) is at t + h; under Jacobi it lags one step: compare at the same nav_time, the tag of "
+        "every output (time since navigation started, negative while aligning). Phases: coarse alignment "
+        "(coarse_time), Kalman fine alignment with a zero-velocity measurement until align_time, then free "
+        "navigation from the known start with the alignment's horizontal drift and accelerometer-bias "
+        "estimates compensated. The azimuth drift compensation axial_drift_correction (rad/s) is subtracted "
+        "from the z gyro in every navigation interval starting at nav time >= axial_drift_apply_from (the "
+        "previous value before); a new compensation that arrives after its apply_from was passed is an error. "
+        "The step must stay constant. All outputs are state outputs (no direct feedthrough). Held between "
+        "steps: attitude, velocity, position, filter state, estimates, the compensation in force.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
 
     def __init__(self, **kwargs):
@@ -46,9 +54,12 @@ class StrapdownINS(Fmi2Slave):
             declare(self, "real", f"dtheta_{ax}", INPUT, f"angle increment about body {ax} [rad]", 0.0)
         for ax in "xyz":
             declare(self, "real", f"dv_{ax}", INPUT, f"velocity increment along body {ax} [m/s]", 0.0)
-        declare(self, "real", "temp_gyro_z", INPUT, "azimuth gyro temperature [degC]", 20.0)
+        declare(self, "real", "temp_gyro_z", INPUT, "azimuth gyro temperature at increment_end_time [degC]", 20.0)
+        declare(self, "real", "increment_end_time", INPUT, "time tag: end of the increments' interval [s]", 0.0)
         declare(self, "real", "axial_drift_correction", INPUT,
-                "azimuth drift subtracted during navigation [rad/s; deg/h]", 0.0)
+                "azimuth drift subtracted during navigation from axial_drift_apply_from on [rad/s; deg/h]", 0.0)
+        declare(self, "real", "axial_drift_apply_from", INPUT,
+                "navigation time from which axial_drift_correction applies [s]", 0.0)
         for name, unit, text in (("lat", "rad; deg", "latitude"), ("lon", "rad; deg", "longitude"),
                                  ("height", "m", "height"), ("v_e", "m/s", "east velocity"),
                                  ("v_n", "m/s", "north velocity"), ("v_u", "m/s", "up velocity"),
@@ -67,12 +78,18 @@ class StrapdownINS(Fmi2Slave):
                                  ("accel_bias_est_y", "m/s2", "y accelerometer bias estimated in alignment"),
                                  ("temp_align_start", "degC", "azimuth gyro temperature at the alignment start"),
                                  ("temp_align_end", "degC", "azimuth gyro temperature at the alignment end"),
-                                 ("temp_change_align", "degC", "its change over the alignment")):
+                                 ("temp_change_align", "degC", "its change over the alignment"),
+                                 ("temp_azimuth_gyro", "degC", "azimuth gyro temperature at nav_time")):
             declare(self, "real", name, OUTPUT, f"{text} [{unit}]", 0.0)
         declare(self, "integer", "phase", OUTPUT, "0 coarse alignment, 1 fine alignment, 2 navigation [1]", 0)
         self._ins = None
         self._step = None
         self._config = None
+        self._start_time = 0.0
+        self._compensation = None
+
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._start_time = float(start_time)
 
     def _make_config(self, step):
         names = ["lat0", "lon0", "height0", "align_time", "coarse_time"] + [f"kf_{n}" for n in FILTER_UNITS]
@@ -93,6 +110,8 @@ class StrapdownINS(Fmi2Slave):
         self.lat, self.lon, self.height = self.lat0, self.lon0, self.height0
         self.nav_time = -self.align_time
         self.temp_align_start = self.temp_gyro_z
+        self.temp_azimuth_gyro = self.temp_gyro_z
+        self._compensation = Compensation(float(self.axial_drift_correction), float(self.axial_drift_apply_from))
 
     @guarded
     def do_step(self, current_time, step_size):
@@ -101,11 +120,22 @@ class StrapdownINS(Fmi2Slave):
             if self._ins is None:
                 self._config = self._make_config(step_size)
                 self._ins = ins.StrapdownINS(self._config)
-                self.temp_align_start = float(self.temp_gyro_z)
             increments = np.array([[self.dtheta_x, self.dtheta_y, self.dtheta_z, self.dv_x, self.dv_y, self.dv_z]])
-            correction = float(self.axial_drift_correction)
-            if not math.isfinite(correction):
-                raise ValueError("axial_drift_correction is not finite")
+            tag = float(self.increment_end_time)
+            if not (np.isfinite(increments).all() and math.isfinite(tag)):
+                raise ValueError("increments or increment_end_time contain NaN or infinity")
+            done = self._start_time + self._ins.steps * step_size  # end of the last interval integrated
+            if same_time(tag, done, step_size) and self._ins.steps == 0:
+                return True  # no increments yet (Jacobi's first step): nothing to integrate
+            if not same_time(tag, done + step_size, step_size):
+                what = "were already integrated" if same_time(tag, done, step_size) else "would skip an interval"
+                raise ValueError(f"increments tagged increment_end_time={tag:.9g} s {what}: the INS has integrated "
+                                 f"up to {done:.9g} s and needs the interval ending at {done + step_size:.9g} s")
+            nav_start = self._ins.steps * step_size - self._config.align_time  # nav time of the interval start
+            correction = self._compensation.value_at(nav_start, float(self.axial_drift_correction),
+                                                     float(self.axial_drift_apply_from), step_size)
+            if self._ins.steps == 0:
+                self.temp_align_start = float(self.temp_gyro_z)  # at the end of the first interval
             out = self._ins.step(increments[:, :3], increments[:, 3:], correction)
         except ValueError as exc:
             return discard_on_error(self, exc)
@@ -123,6 +153,45 @@ class StrapdownINS(Fmi2Slave):
         self.nav_time = state.time - self._config.align_time
         self.gyro_drift_est_x, self.gyro_drift_est_y = (float(x) for x in state.gyro_comp[:2])
         self.accel_bias_est_x, self.accel_bias_est_y = (float(x) for x in state.accel_comp[:2])
+        self.temp_azimuth_gyro = float(self.temp_gyro_z)
         if state.phase != "navigate" or abs(self.nav_time) < 0.5 * self._step:
             self.temp_align_end = float(self.temp_gyro_z)
             self.temp_change_align = self.temp_align_end - self.temp_align_start
+
+
+class Compensation:
+    """The azimuth drift compensation in force and the pending ones (value rad/s, apply_from nav time s).
+
+    An input pair that differs from the last one seen is queued; it takes
+    over for the intervals that start at or after its apply_from (a sender
+    whose value changes every step, tagged with increasing apply_from,
+    queues one pair per step; a pair replaces the queued ones that would
+    start at or after its own apply_from).  A pair whose apply_from lies
+    before the interval about to be integrated arrived too late: an error,
+    never a silent shift of the compensation.
+    """
+
+    def __init__(self, value: float, apply_from: float):
+        self.current = 0.0
+        self.pending = collections.deque([(value, apply_from)])
+        self.seen = (value, apply_from)
+        self.started = False
+
+    def value_at(self, nav_start: float, value: float, apply_from: float, step: float) -> float:
+        """Compensation for the interval starting at nav time ``nav_start`` given the current inputs."""
+        if not (math.isfinite(value) and math.isfinite(apply_from)):
+            raise ValueError("axial_drift_correction or axial_drift_apply_from is not finite")
+        tol = 1e-6 * step
+        if (value, apply_from) != self.seen:
+            if self.started and apply_from < nav_start - tol:
+                raise ValueError(f"axial drift compensation {value:.6g} rad/s to apply from nav time "
+                                 f"{apply_from:.9g} s arrived when the INS integrates the interval starting at "
+                                 f"{nav_start:.9g} s (make the sender's latency longer)")
+            while self.pending and self.pending[-1][1] >= apply_from - tol:
+                self.pending.pop()
+            self.seen = (value, apply_from)
+            self.pending.append(self.seen)
+        self.started = True
+        while self.pending and nav_start >= self.pending[0][1] - tol:
+            self.current = self.pending.popleft()[0]
+        return self.current

@@ -19,12 +19,18 @@ class Turntable(Fmi2Slave):
     author = "sarins-fmu"
     description = (
         "Turntable of a rotating INS or a rate table (truth motion). Gimbal chains: single-axis schemes 'z'; "
-        "dual-axis 'y,z'; rate-table-3axis, tumble-24 and rate-test 'z,x,y' (set the IMU's 'gimbals' to match). Contract: after doStep(t, h) the outputs are the "
-        "gimbal angles and rates at t + h and the angular acceleration that holds from t + h until the "
-        "next acceleration change; accelerations change only on the 'grid' (a multiple of the "
-        "communication step), so a connected IMU rebuilds the motion inside each step exactly from the "
-        "states at both ends. Angles are not wrapped. Also outputs the ambient (chamber) temperature. "
-        "Nothing but the schedule and the time is held between steps.")
+        "dual-axis 'y,z'; rate-table-3axis, tumble-24 and rate-test 'z,x,y' (set the IMU's 'gimbals' to match). "
+        "Contract (standard FMI timing, any master scheme): the outputs describe the motion segment that "
+        "STARTS at motion_time: gimbal angles and rates at motion_time and the angular acceleration that holds "
+        "from there to the next communication point (accelerations change only on the 'grid', a multiple of "
+        "the communication step), plus the ambient (chamber) temperature at motion_time and its slope "
+        "ambient_temp_rate over [motion_time, motion_time + h], h the communication step (the IMU takes the "
+        "ambient linear over each step; at initialisation, before h is known, the slope is over [start, start + "
+        "grid]: start a chamber profile with a hold, as its warm-up does). At initialisation motion_time is the start time; after doStep(t, h) it is t + h. All outputs "
+        "are state outputs (no direct feedthrough). A connected IMU rebuilds the motion over its step [t, t+h] "
+        "exactly from the set tagged t: under Jacobi it receives that set, under Gauss-Seidel (turntable "
+        "stepped first) it receives the set tagged t + h and uses the one it kept from its previous step. "
+        "Angles are not wrapped. Nothing but the schedule and the time is held between steps.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
 
     def __init__(self, **kwargs):
@@ -59,15 +65,24 @@ class Turntable(Fmi2Slave):
         declare(self, "real", "ambient_amplitude", PARAMETER, "ambient daily amplitude [degC]", 0.0)
         declare(self, "real", "ambient_period", PARAMETER, "ambient period [s]", 86400.0)
         for j in (1, 2, 3):
-            declare(self, "real", f"angle_{j}", OUTPUT, f"angle of gimbal {j} (outer = 1) [rad; deg]", 0.0)
-            declare(self, "real", f"rate_{j}", OUTPUT, f"angular rate of gimbal {j} [rad/s; deg/s]", 0.0)
+            declare(self, "real", f"angle_{j}", OUTPUT, f"angle of gimbal {j} (outer = 1) at motion_time [rad; deg]",
+                    0.0)
+            declare(self, "real", f"rate_{j}", OUTPUT, f"angular rate of gimbal {j} at motion_time [rad/s; deg/s]",
+                    0.0)
             declare(self, "real", f"accel_{j}", OUTPUT,
-                    f"angular acceleration of gimbal {j} from this time on [rad/s2; deg/s2]", 0.0)
-        declare(self, "real", "ambient_temp", OUTPUT, "ambient / chamber temperature [degC]", 20.0)
+                    f"angular acceleration of gimbal {j} from motion_time on [rad/s2; deg/s2]", 0.0)
+        declare(self, "real", "ambient_temp", OUTPUT, "ambient / chamber temperature at motion_time [degC]", 20.0)
+        declare(self, "real", "ambient_temp_rate", OUTPUT,
+                "slope of the ambient over the step from motion_time [degC/s]", 0.0)
+        declare(self, "real", "motion_time", OUTPUT, "time tag: start of the segment the outputs describe [s]", 0.0)
         declare(self, "integer", "n_gimbals", OUTPUT, "number of gimbals in use [1]", 1)
         self._schedule = None
         self._ambient = None
         self._step = None
+        self._start_time = 0.0
+
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._start_time = float(start_time)
 
     def enter_initialization_mode(self):
         try:  # outputs during initialisation; a bad parameter is reported at exit_initialization_mode
@@ -109,7 +124,7 @@ class Turntable(Fmi2Slave):
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
         self.n_gimbals = self._schedule.n_axes
-        self._publish(0.0)
+        self._publish(self._start_time)
 
     def _publish(self, time):
         angle, rate, acc = (x[0] for x in self._schedule.state(time))
@@ -118,7 +133,9 @@ class Turntable(Fmi2Slave):
             setattr(self, f"angle_{j + 1}", float(angle[j]) if inside else 0.0)
             setattr(self, f"rate_{j + 1}", float(rate[j]) if inside else 0.0)
             setattr(self, f"accel_{j + 1}", float(acc[j]) if inside else 0.0)
-        self.ambient_temp = float(self._ambient(time))
+        span = self.grid if self._step is None else self._step
+        self.ambient_temp, self.ambient_temp_rate = thermal.ambient_segment(self._ambient, time, span)
+        self.motion_time = float(time)
 
     @guarded
     def do_step(self, current_time, step_size):

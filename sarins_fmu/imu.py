@@ -364,6 +364,41 @@ class StaticBase:
         return cache[n]
 
 
+# gimbals that carry a moving base's attitude: mat_nv = Rz(yaw) Rx(pitch) Ry(roll)
+# (:func:`sarins_fmu.rotations.euler_to_mat`), the turntable's gimbals ride on them
+VEHICLE_ATTITUDE_AXES = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+
+
+class HeldBase:
+    """A moving base whose motion arrives interval by interval (e.g. an FMU input).
+
+    The base frame t is the local-level ENU frame at the vehicle; the
+    vehicle's attitude enters the IMU as the gimbals
+    :data:`VEHICLE_ATTITUDE_AXES` (constant angular acceleration over each
+    interval, like a turntable's).  :meth:`hold` sets the inertial rate of t
+    (omega_ie + omega_en, rad/s) and the specific force (m/s^2), both resolved
+    in t and held over the next interval; :meth:`base_motion` is the
+    moving-base interface of :class:`IMU` (one interval at a time).
+    """
+
+    def __init__(self):
+        self._motion = None
+
+    def hold(self, rate_t, force_t) -> None:
+        rate_t = np.asarray(rate_t, float).reshape(1, 3)
+        force_t = np.asarray(force_t, float).reshape(1, 3)
+        if not (np.isfinite(rate_t).all() and np.isfinite(force_t).all()):
+            raise ValueError("base rate or specific force contains NaN or infinity")
+        self._motion = (rate_t, force_t)
+
+    def base_motion(self, t_start, h):
+        if self._motion is None:
+            raise ValueError("no base motion held for this interval")
+        if len(t_start) != 1:
+            raise ValueError("a held base gives one interval at a time")
+        return self._motion
+
+
 class IMU:
     """Increment-output IMU stepped over output intervals.
 

@@ -102,6 +102,20 @@ class Ambient:
         return self.mean + self.amplitude * np.sin(2 * math.pi * t / self.period + self.phase) + self.slope * t
 
 
+def ambient_segment(ambient, time: float, span: float) -> tuple[float, float]:
+    """Ambient at ``time`` and its slope over [time, time + span] (degC, degC/s).
+
+    The ambient as an IMU sees it across a co-simulation boundary: sampled on
+    a grid of ``span`` s and linear in between (the thermal model's own
+    assumption), so value + slope * tau rebuilds it over the step from the
+    start-of-step values alone.
+    """
+    if not (span > 0 and math.isfinite(span)):
+        raise ValueError(f"span must be positive and finite, got {span}")
+    a0 = float(ambient(time))
+    return a0, (float(ambient(time + span)) - a0) / span
+
+
 class ThermalModel:
     """Stateful lumped thermal model stepped on a time grid.
 

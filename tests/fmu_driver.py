@@ -40,8 +40,11 @@ class Slave:
         fmilog.unregister(self.name)
 
 
-TT_TO_IMU = ["angle_1", "rate_1", "ambient_temp"]
-IMU_TO_INS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z"]
+# the time-tagged motion set and increments: sarins.systems' GIMBAL_LINKS and INCREMENT_LINKS, written out
+# (this driver also runs in a host without the project, test_fmu_runs_in_a_host_without_this_project)
+TT_TO_IMU = [f"{q}_{j}" for j in (1, 2, 3) for q in ("angle", "rate", "accel")] + [
+    "ambient_temp", "ambient_temp_rate", "motion_time"]
+IMU_TO_INS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z", "increment_end_time"]
 
 
 def check_parameter_error(fmu_path, params: dict, text: str) -> None:

@@ -35,6 +35,13 @@ def test_fmpy_validate_finds_no_problem(fmu_dir, name):
     assert validate_fmu(str(fmu_dir / f"{name}.fmu")) == []
 
 
+def test_driver_links_are_the_systems_links():
+    import fmu_driver
+    from sarins.systems import GIMBAL_LINKS, INCREMENT_LINKS
+
+    assert fmu_driver.TT_TO_IMU == GIMBAL_LINKS and fmu_driver.IMU_TO_INS == INCREMENT_LINKS
+
+
 def test_units_and_display_units_in_model_description(fmu_dir):
     from fmpy import read_model_description
 
@@ -121,7 +128,7 @@ def test_bad_step_and_bad_inputs_give_an_error_with_a_logged_message(fmu_dir):
 def _steps(slave, n, **inputs):
     out = []
     for k in range(n):
-        slave.set(**inputs)
+        slave.set(motion_time=float(k), **inputs)  # a static table: the start-of-step motion set for t = k
         slave.fmu.doStep(float(k), 1.0)
         out.append(slave.get("dtheta_x", "dtheta_y", "dv_x", "temp_gyro_z"))
     return np.array(out)
@@ -154,8 +161,9 @@ def test_two_instances_do_not_share_state(fmu_dir):
             s.fmu.exitInitializationMode()
         out_a, out_b = [], []
         for k in range(20):  # interleaved stepping
-            a.fmu.doStep(float(k), 1.0)
-            b.fmu.doStep(float(k), 1.0)
+            for s in (a, b):
+                s.set(motion_time=float(k))
+                s.fmu.doStep(float(k), 1.0)
             out_a.append(a.get("dtheta_x"))
             out_b.append(b.get("dtheta_x"))
         out_c = _steps(c, 20)[:, 0]

@@ -8,6 +8,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from fmu_driver import Slave, check_parameter_error
+from sarins.systems import GIMBAL_LINKS, INCREMENT_LINKS
 from fmus.build import build_fmus
 from sarins_fmu.experiments.online_rls import GYRO_Z, imu_unit
 from sarins_fmu.identify.online import OnlineDriftUpdater, UpdaterSettings, prior_covariance
@@ -21,7 +22,7 @@ from sarins_fmu.vehicle import VehicleTrajectory
 
 LAT = math.radians(40.0)
 COEF = np.array([1e-6, -4e-5, 0.0025]) * DPH_TO_RPS
-INPUTS = ("v_e", "v_n", "yaw", "pitch", "roll", "lat", "temp_gyro_z", "vehicle_speed")
+INPUTS = ("v_e", "v_n", "yaw", "pitch", "roll", "lat", "temp_gyro_z", "vehicle_speed", "nav_time")
 OUTPUTS = ("compensation_drift", "drift_a", "drift_b", "drift_c", "stop_timer")
 
 
@@ -53,7 +54,7 @@ def drive_rows():
     dtheta, dv, temps = imu.step(angle, rate, accel)
     out = ins.step(dtheta, dv)
     return np.column_stack([out[:, 3], out[:, 4], out[:, 6], out[:, 7], out[:, 8], out[:, 0], temps[:, GYRO_Z],
-                            tr.speed[1:]])
+                            tr.speed[1:], np.arange(1.0, len(out) + 1)])  # last: the rows' nav_time tags
 
 
 def test_fmpy_validate_finds_no_problem(fmu_path):
@@ -144,16 +145,18 @@ def test_nan_input_and_changed_step_are_errors(fmu_path):
 
 ALIGN = 1200.0  # s
 MOVE_OFF = ALIGN + 1900.0  # s, the vehicle moves off after a 31.7-min stop
-TT_TO_IMU = ["angle_1", "rate_1", "ambient_temp"]
-IMU_TO_INS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z"]
-INS_TO_UPD = ["v_e", "v_n", "yaw", "pitch", "roll", "lat"]
+TT_TO_IMU = GIMBAL_LINKS
+IMU_TO_INS = INCREMENT_LINKS
+INS_TO_UPD = ["v_e", "v_n", "yaw", "pitch", "roll", "lat", "nav_time"]
+LATENCY = 10  # s, the updater's default latency (steps of 1 s)
 
 
 def test_closed_loop_chain_updates_the_model_like_the_library(fmu_dir):
-    """Turntable -> IMUThermal -> StrapdownINS <-> DriftModelUpdater (Gauss-Seidel,
-    the INS subtracts the updater's previous output): the stop after the
-    alignment updates the model when the vehicle moves off, and every number
-    equals the library run with the same one-step feedback."""
+    """Turntable -> IMUThermal -> StrapdownINS <-> DriftModelUpdater (Gauss-Seidel;
+    the INS subtracts the updater's output from its apply_from on, the row's
+    nav_time + latency): the stop after the alignment updates the model when
+    the vehicle moves off, and every number equals the library run with the
+    same latency."""
     n = int(MOVE_OFF) + 100
     names = ("tt", "imu", "ins", "upd")
     slaves = [Slave(fmu_dir / f"{name}.fmu", tag) for name, tag in zip(CHAIN, names)]
@@ -165,6 +168,7 @@ def test_closed_loop_chain_updates_the_model_like_the_library(fmu_dir):
         upd.set(a0=COEF[0], b0=COEF[1], c0=COEF[2], lat=math.radians(28.222))
         for s in slaves:
             s.fmu.enterInitializationMode()
+        imu_fmu.fmu.setReal([imu_fmu.vr[v] for v in TT_TO_IMU], tt.get(*TT_TO_IMU))  # the start-of-run motion
         for s in slaves:
             s.fmu.exitInitializationMode()
         rows = []
@@ -174,7 +178,8 @@ def test_closed_loop_chain_updates_the_model_like_the_library(fmu_dir):
             imu_fmu.fmu.setReal([imu_fmu.vr[v] for v in TT_TO_IMU], tt.get(*TT_TO_IMU))
             imu_fmu.fmu.doStep(t, 1.0)
             ins_fmu.fmu.setReal([ins_fmu.vr[v] for v in IMU_TO_INS], imu_fmu.get(*IMU_TO_INS))
-            ins_fmu.set(axial_drift_correction=upd.get("compensation_drift")[0])
+            comp, apply_from = upd.get("compensation_drift", "apply_from")
+            ins_fmu.set(axial_drift_correction=comp, axial_drift_apply_from=apply_from)
             ins_fmu.fmu.doStep(t, 1.0)
             upd.fmu.setReal([upd.vr[v] for v in INS_TO_UPD], ins_fmu.get(*INS_TO_UPD))
             upd.set(temp_gyro_z=imu_fmu.get("temp_gyro_z")[0], vehicle_speed=1.0 if t + 1 >= MOVE_OFF else 0.0)
@@ -205,12 +210,13 @@ def _library_closed_loop(n):
     ins = StrapdownINS(InsConfig(lat=lat, align_time=ALIGN))
     rls = ForgettingRLS(COEF, prior_covariance(11.0, 0.0, 50.0), 0.0, RLSSettings(0.8))
     up = OnlineDriftUpdater(rls, lat)
-    comp = float(np.polyval(COEF, 20.0))  # the updater's output at initialisation (temp_gyro_z start 20 degC)
     out = np.empty(n)
     for k in range(n):
+        # interval k starts at nav time k - ALIGN: compensated by the updater's output of row k - 1 - LATENCY
+        # (rows during the alignment are never applied: the INS compensates only while navigating)
+        comp = out[k - 1 - LATENCY] if k - 1 - LATENCY >= 0 else 0.0
         row = ins.step(dtheta[k], dv[k], comp)[0]
         speed = 1.0 if k + 1 >= MOVE_OFF else 0.0
-        comp = float(up.step([k + 1.0], [speed], [row[3:5]], [row[6:9]], [temps[k, GYRO_Z]], [row[0]],
-                             [ins.phase == "navigate"])[0])
-        out[k] = comp
+        out[k] = float(up.step([k + 1.0 - ALIGN], [speed], [row[3:5]], [row[6:9]], [temps[k, GYRO_Z]], [row[0]],
+                               [ins.phase == "navigate"])[0])
     return out

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sarins_fmu.identify.axial import DriftIdentifier
+from sarins_fmu.identify.axial import APPLY_LATENCY, DriftIdentifier
 from sarins_fmu.units import DEG_TO_RAD, DPH_TO_RPS, HOUR, NM, RAD_TO_DEG
 from sarins_fmu.experiments import axial_rbf as s0
 from sarins_fmu.experiments.static_run import run_static
@@ -232,7 +232,8 @@ def _live(e, model_file, feats, engine, fmu_dir) -> dict:
         drift = run["identified_drift_dph"]
     else:
         drift = expected
-        run = run_inprocess(e, hours, correction_dph=drift, correction_from_hours=s0.IDENTIFY_HOURS)
+        run = run_inprocess(e, hours, correction_dph=drift,
+                                correction_from_hours=s0.IDENTIFY_HOURS + APPLY_LATENCY / HOUR)
     err = window(run, s0.IDENTIFY_HOURS, hours)
     return {"live_ident_dph": drift, "live_twin_diff_dph": drift - expected,
             "live_max_nm": max_error_nm(err), "live_end_nm": float(np.hypot(*err[-1]) / NM),
@@ -253,7 +254,7 @@ def cosim_check_task(exp: dict, model_file: str, fmu_dir: str, align_hours: floa
     ref0 = run_inprocess(e, trigger_hours, align_hours=align_hours)
     expected = predict(model_file, run_features(ref0, trigger_hours))
     ref = run_inprocess(e, nav_hours, correction_dph=fmu["identified_drift_dph"],
-                        correction_from_hours=trigger_hours, align_hours=align_hours)
+                        correction_from_hours=trigger_hours + APPLY_LATENCY / HOUR, align_hours=align_hours)
     diff = max(float(np.max(np.abs(fmu[k] - ref[k]))) for k in ("north_error", "east_error"))
     return {"fmu_drift_dph": fmu["identified_drift_dph"], "inprocess_drift_dph": expected,
             "max_diff_m": diff, "max_error_m": float(np.max(np.abs(ref["north_error"])))}

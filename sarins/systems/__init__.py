@@ -14,8 +14,9 @@ from pathlib import Path
 
 from orchestration import Component, Connection, System, write_ssd, write_ssp
 
-GIMBAL_LINKS = ["angle_1", "rate_1", "angle_2", "rate_2", "angle_3", "rate_3", "ambient_temp"]
-INCREMENT_LINKS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z"]
+GIMBAL_LINKS = [f"{q}_{j}" for j in (1, 2, 3) for q in ("angle", "rate", "accel")] + [
+    "ambient_temp", "ambient_temp_rate", "motion_time"]
+INCREMENT_LINKS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z", "increment_end_time"]
 SHIPPED = Path(__file__).resolve().parent
 
 
@@ -47,27 +48,60 @@ def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: floa
 
     Turntable -> IMUThermal -> StrapdownINS -> RBFIdentifier -> (axial drift
     correction) StrapdownINS.  The identifier reads the INS latitude error,
-    navigation time and alignment temperature change and the IMU's azimuth
-    gyro temperature; at its trigger time (default 12 h of navigation) it
-    outputs the identified drift, held, which the INS subtracts from the
-    next step on.  Gauss-Seidel order Turntable, IMUThermal, StrapdownINS,
-    RBFIdentifier; the loop INS -> identifier -> INS is broken at the INS
-    input (one step of delay, the same timing as ``run_static``'s
-    ``correction_from_hours``).  Default stop: 4 h alignment + 84 h.
+    navigation time, alignment temperature change and azimuth gyro
+    temperature (all tagged nav_time); at its trigger time (default 12 h of
+    navigation) it outputs the identified drift, held, with the navigation
+    time ``apply_from`` (trigger + the identifier's latency) from which the
+    INS subtracts it: ``run_static``'s ``correction_from_hours``.  Every
+    output is a state output, so the loop INS -> identifier -> INS has no
+    direct feedthrough; the result is the same under Gauss-Seidel and
+    Jacobi.  Default stop: 4 h alignment + 84 h.
     """
     base = standard_static(fmu_dir, hours=hours, turntable=turntable, imu=imu, ins=ins)
     identifier_fmu = Component("identifier", Path(fmu_dir) / "RBFIdentifier.fmu", dict(identifier or {}))
     loop = [Connection("ins", "lat_error", "identifier", "lat_error"),
             Connection("ins", "nav_time", "identifier", "nav_time"),
             Connection("ins", "temp_change_align", "identifier", "temp_change"),
-            Connection("imu", "temp_gyro_z", "identifier", "temperature"),
-            Connection("identifier", "axial_drift", "ins", "axial_drift_correction")]
+            Connection("ins", "temp_azimuth_gyro", "identifier", "temperature"),
+            Connection("identifier", "axial_drift", "ins", "axial_drift_correction"),
+            Connection("identifier", "apply_from", "ins", "axial_drift_apply_from")]
     return System(name="standard_static_identified", components=[*base.components, identifier_fmu],
                   connections=[*base.connections, *loop], start_time=base.start_time,
                   stop_time=base.stop_time, step_size=base.step_size)
 
 
-SYSTEMS = {"standard_static": standard_static, "standard_static_identified": standard_static_identified}
+VEHICLE_LINKS = [f"vehicle_{a}{q}" for q in ("", "_rate", "_accel") for a in ("yaw", "pitch", "roll")] + [
+    f"base_{kind}_{ax}" for kind in ("rate", "force") for ax in "enu"] + ["base_motion_time"]
+
+
+def vehicle_rins(fmu_dir: Path | str = "resources", *, hours: float = 2.0, vehicle=None, turntable=None, imu=None,
+                 ins=None) -> System:
+    """VehicleMotion -> IMUThermal (base = input) <- Turntable, IMUThermal -> StrapdownINS.
+
+    The RINS's turntable rides on a land vehicle (seed 002): the vehicle's
+    attitude, base rate and specific force reach the IMU as a time-tagged
+    start-of-step set like the turntable's.  The vehicle stands still for its
+    ``lead_time`` (default 900 s), the INS aligns over the same time.
+    """
+    fmu_dir = Path(fmu_dir)
+    vehicle = dict(vehicle or {})
+    lead = float(vehicle.get("lead_time", 900.0))
+    start = {k: vehicle[v] for k, v in (("lat0", "lat0"), ("lon0", "lon0")) if v in vehicle}
+    components = [
+        Component("vehicle", fmu_dir / "VehicleMotion.fmu", vehicle),
+        Component("turntable", fmu_dir / "Turntable.fmu", {"align_time": 0.0, **dict(turntable or {})}),
+        Component("imu", fmu_dir / "IMUThermal.fmu", {"base": "input", **dict(imu or {})}),
+        Component("ins", fmu_dir / "StrapdownINS.fmu", {"align_time": lead, **start, **dict(ins or {})}),
+    ]
+    connections = [Connection("vehicle", v, "imu", v) for v in VEHICLE_LINKS]
+    connections += [Connection("turntable", v, "imu", v) for v in GIMBAL_LINKS]
+    connections += [Connection("imu", v, "ins", v) for v in INCREMENT_LINKS]
+    return System(name="vehicle_rins", components=components, connections=connections,
+                  start_time=0.0, stop_time=hours * 3600.0, step_size=1.0)
+
+
+SYSTEMS = {"standard_static": standard_static, "standard_static_identified": standard_static_identified,
+           "vehicle_rins": vehicle_rins}
 
 
 def write_systems(fmu_dir: Path | str) -> list[Path]:

@@ -29,6 +29,10 @@ from ..site import SITE_LAT_DEG
 DATA = Path(__file__).resolve().parents[1] / "data"
 DEFAULT_MODELS = {"hot": DATA / "axial_rbf_hot.json", "cold": DATA / "axial_rbf_cold.json"}
 KNOWN_INPUTS = ("lat_error_deg", "lat_deg", "temp_c", "temp_change_c")
+# delay from the identification (nav time) to the first navigation interval
+# compensated with its result, s: a few steps, so that the INS receives the
+# drift in time under any co-simulation scheme (Jacobi adds a step per link)
+APPLY_LATENCY = 10.0
 
 
 def default_model_path(kind: str) -> Path:

@@ -1,0 +1,126 @@
+"""VehicleMotion FMU: a land vehicle's drives, turns and stops (seed 002) as moving-base motion."""
+
+import math
+
+import numpy as np
+from pythonfmu import Fmi2Slave
+from pythonfmu.default_experiment import DefaultExperiment
+
+from fmus.slave_support import (OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
+                                discard_on_error, guarded, same_time)
+from sarins_fmu import vehicle
+from sarins_fmu.site import SITE_LAT_DEG
+
+DEG = math.pi / 180.0
+
+
+def parse_legs(text: str):
+    """'drive 300 10; turn 90; stop 1800' -> [('drive', 300.0, 10.0), ('turn', 90.0), ('stop', 1800.0)]."""
+    legs = []
+    for part in filter(None, (p.strip() for p in text.split(";"))):
+        kind, *numbers = part.split()
+        try:
+            legs.append((kind, *(float(x) for x in numbers)))
+        except ValueError:
+            raise ParameterError(f"leg {part!r}: numbers expected after {kind!r}") from None
+        want = {"drive": 2, "turn": 1, "stop": 1}.get(kind)
+        if want is None or len(numbers) != want:
+            raise ParameterError(f"leg {part!r}: use 'drive SECONDS SPEED', 'turn DEGREES' or 'stop SECONDS'")
+    if not legs:
+        raise ParameterError("legs is empty")
+    return legs
+
+
+class VehicleMotion(Fmi2Slave):
+
+    author = "sarins-fmu"
+    description = (
+        "A land vehicle's truth motion (seed 002's drives, turns and stops; level road, no vibration) as "
+        "moving-base inputs of IMUThermal (base = input). Legs: 'drive SECONDS SPEED_M_S; turn DEGREES; stop "
+        "SECONDS; ...' (turns positive to the left), after lead_time s at rest. Longitudinal and yaw "
+        "accelerations change only on the grid (= the communication step). Contract (standard FMI timing): the "
+        "outputs describe the step that STARTS at base_motion_time (the start time at initialisation, t + h "
+        "after doStep(t, h)): attitude yaw (CCW from north), pitch, roll (mat_nv = Rz(yaw) Rx(pitch) Ry(roll), ENU, "
+        "body right-front-up) with rates and angular accelerations constant over the step; the inertial rate "
+        "(omega_ie + omega_en) of the local-level ENU frame at the vehicle and the specific force in it, held "
+        "over the step (exact for the IMU: f = dv/h + (2 omega_ie + omega_en) x v_mean - g, v_mean the step's "
+        "Simpson mean velocity); position, velocity and speed at base_motion_time and stopped (1 at rest). After "
+        "the last leg the vehicle stays parked. All outputs are state outputs (no direct feedthrough). Nothing "
+        "but the trajectory is held.")
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=7200.0, step_size=1.0)
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        declare(self, "string", "legs", PARAMETER, "drive/turn/stop legs, ';'-separated",
+                "drive 300 10; turn 90; drive 300 12; stop 1800; drive 180 10")
+        declare(self, "real", "lat0", PARAMETER, "start latitude [rad; deg]", SITE_LAT_DEG * DEG)
+        declare(self, "real", "lon0", PARAMETER, "start longitude [rad; deg]", 0.0)
+        declare(self, "real", "heading0", PARAMETER, "start heading, CCW from north [rad; deg]", 0.0)
+        declare(self, "real", "lead_time", PARAMETER, "time at rest before the first leg (alignment) [s]", 900.0)
+        declare(self, "real", "grid", PARAMETER, "time grid of acceleration changes = communication step [s]", 1.0)
+        for q, unit in (("", "rad; deg"), ("_rate", "rad/s; deg/s"), ("_accel", "rad/s2; deg/s2")):
+            for angle in ("yaw", "pitch", "roll"):
+                declare(self, "real", f"vehicle_{angle}{q}", OUTPUT,
+                        f"vehicle {angle}{q.replace('_', ' ')} from base_motion_time on [{unit}]", 0.0)
+        for ax in "enu":
+            declare(self, "real", f"base_rate_{ax}", OUTPUT,
+                    f"inertial rate of the local-level frame, {ax} axis, over the step [rad/s]", 0.0)
+        for ax in "enu":
+            declare(self, "real", f"base_force_{ax}", OUTPUT, f"specific force, {ax} axis, over the step [m/s2]", 0.0)
+        for name, unit, text in (("lat", "rad; deg", "latitude"), ("lon", "rad; deg", "longitude"),
+                                 ("v_e", "m/s", "east velocity"), ("v_n", "m/s", "north velocity"),
+                                 ("speed", "m/s", "speed"), ("base_motion_time", "s", "time tag of the outputs")):
+            declare(self, "real", name, OUTPUT, f"{text} at base_motion_time [{unit}]", 0.0)
+        declare(self, "integer", "stopped", OUTPUT, "1 while the vehicle is at rest [1]", 1)
+        self._trajectory = None
+        self._step = None
+        self._start_time = 0.0
+
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._start_time = float(start_time)
+
+    @guarded
+    def exit_initialization_mode(self):
+        check_finite(self, ["lat0", "lon0", "heading0", "lead_time", "grid"], positive=["grid"],
+                     non_negative=["lead_time"])
+        legs = parse_legs(self.legs)
+        try:
+            self._trajectory = vehicle.VehicleTrajectory(legs, self.lat0, self.lon0, self.heading0, step=self.grid,
+                                                         rotation="none", lead_time=self.lead_time)
+        except ValueError as exc:
+            raise ParameterError(str(exc)) from None
+        self._publish(self._start_time)
+
+    def _publish(self, time):
+        tr = self._trajectory
+        k = int(round((time - self._start_time) / tr.step))
+        if not same_time(k * tr.step + self._start_time, time, tr.step):
+            raise ValueError(f"time {time:.9g} s is not on the vehicle's grid of {tr.step} s")
+        if k > tr.n_steps - 1 and tr.speed[-1] != 0.0:
+            raise ValueError(f"time {time:.9g} s is beyond the drive and the legs do not end with a stop")
+        k_motion = min(k, tr.n_steps - 1)  # after the last leg: parked (the last step is at rest)
+        angle, rate, accel = (x[0] for x in tr.schedule.state(min(k, tr.n_steps) * tr.step))
+        parked = k >= tr.n_steps
+        self.vehicle_yaw, self.vehicle_yaw_rate = float(angle[0]), 0.0 if parked else float(rate[0])
+        self.vehicle_yaw_accel = 0.0 if parked else float(accel[0])
+        w_t, f_t = tr.base_motion(np.array([k_motion * tr.step]), tr.step)
+        for i, ax in enumerate("enu"):
+            setattr(self, f"base_rate_{ax}", float(w_t[0, i]))
+            setattr(self, f"base_force_{ax}", float(f_t[0, i]))
+        j = min(k, tr.n_steps)
+        self.lat, self.lon = float(tr.lat[j]), float(tr.lon[j])
+        self.v_e, self.v_n = float(tr.velocity_n[j, 0]), float(tr.velocity_n[j, 1])
+        self.speed = float(tr.speed[j])
+        self.stopped = int(not tr.moving()[j])
+        self.base_motion_time = float(time)
+
+    @guarded
+    def do_step(self, current_time, step_size):
+        try:
+            self._step = check_step(self, step_size, self._step)
+            if not same_time(step_size, self._trajectory.step, step_size):
+                raise ValueError(f"communication step {step_size} s differs from the vehicle grid {self.grid} s")
+            self._publish(current_time + step_size)
+        except ValueError as exc:
+            return discard_on_error(self, exc)
+        return True
