@@ -5,7 +5,7 @@ values; the IMU sees a table at rest), and the resident set size is sampled
 every 10 % of the run.  A flat profile means no per-step growth: the figure
 reported is the RSS increase over the second half of the run, per step.
 
-Usage: ``python benchmarks/bench_memory.py [--steps 1000000]``
+Usage: ``python benchmarks/bench_memory.py [--steps 1000000] [--only NAME ...]``
 """
 from __future__ import annotations
 
@@ -58,6 +58,7 @@ def static_increments() -> dict:
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=1_000_000)
+    parser.add_argument("--only", nargs="+", metavar="NAME", default=None, help="measure only these FMUs")
     args = parser.parse_args()
     sys.path.insert(0, str(ROOT))
     from fmus.build import build_fmus
@@ -71,6 +72,8 @@ def main():
             print(f"{'IMUCompensator':<13} skipped: no FMU with a model could be built "
                   f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})")
         for fmu in fmus:
+            if args.only and fmu.stem not in args.only:
+                continue
             code = CHILD.format(root=str(ROOT), tests=str(ROOT / "tests"), fmu=str(fmu), steps=args.steps,
                                 inputs=static_increments() if fmu.stem == "StrapdownINS" else {})
             out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

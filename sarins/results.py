@@ -139,14 +139,16 @@ def _fsync_dir(folder: Path) -> None:
 
 
 @contextlib.contextmanager
-def atomic_output(path):
-    """Yield a temporary path beside ``path`` (hidden, same suffix); on
-    success fsync it, move it to ``path`` and fsync the folder; on failure
-    remove it.  The caller writes the temporary path (any writer: numpy,
-    json, a model's save)."""
+def atomic_output(path, keep_suffix: bool = False):
+    """Yield a temporary path beside ``path`` (hidden, ending in ``.tmp``, or
+    in ``.tmp<suffix>`` with ``keep_suffix`` for writers that choose the
+    format by suffix); on success fsync it, move it to ``path`` and fsync
+    the folder; on failure remove it.  The caller writes the temporary path
+    (any writer: numpy, json, a model's save)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{path.suffix}", dir=path.parent)
+    suffix = f".tmp{path.suffix}" if keep_suffix else ".tmp"
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent)
     os.close(fd)
     tmp = Path(tmp)
     try:

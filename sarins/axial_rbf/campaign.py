@@ -87,7 +87,7 @@ def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0,
     model_dir.mkdir(parents=True, exist_ok=True)
     nets = {}
     for kind, inputs in (("hot", s0.HOT_INPUTS), ("cold", s0.COLD_INPUTS)):
-        with atomic_output(model_dir / f"{kind}.json") as tmp:  # a kill never leaves half a model
+        with atomic_output(model_dir / f"{kind}.json", keep_suffix=True) as tmp:  # a kill never leaves half a model
             nets[kind] = s0.train_rbf(rows[kind], inputs, tmp, target=target)
     models = {k: str(model_dir / f"{k}.json") for k in nets}
     digests = {k: _digest(model_dir / f"{k}.json") for k in nets}

@@ -187,7 +187,7 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
         residuals[name] = model.predict(test.X) - test.Y
         info[name] = dict(n_parameters=int(model.n_parameters), fit_s=float(model.fit_seconds or 0.0),
                           predict_s=time.perf_counter() - t1)
-        with atomic_output(model_dir / f"{name}.npz") as tmp:
+        with atomic_output(model_dir / f"{name}.npz", keep_suffix=True) as tmp:
             model.save(tmp)
     wall["model evaluation"] = time.perf_counter() - t0
     wall["model fitting (sum of the fit times)"] = sum(i["fit_s"] for i in info.values())
