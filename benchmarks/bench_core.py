@@ -63,7 +63,7 @@ def main():
         rest = wall - sum(totals.values())
         print(f"88 h run: {wall:.2f} s wall, {simulated / wall:,.0f}x real time | "
               f"IMU {totals['IMU'] / wall:.0%}, INS {totals['StrapdownINS'] / wall:.0%}, rest {rest / wall:.0%} "
-              f"| position error {result.position_error[-1] / 1852:.2f} nm")
+              f"| position error {result.position_error[-1] / 1852:.2f} nmi")
     best = min(walls)
     base = _baseline(int(simulated * 200))
     print(f"baseline (numpy sin over the run's {simulated * 200:.3g} samples): {base:.2f} s; "

@@ -6,7 +6,7 @@ Reports, in one process:
   Gauss-Seidel, 1 s step, nav-rlg, recording three outputs) and of the
   identical in-process run (``run_static``), and their ratio;
 * where a co-simulation step goes: the slaves' own Python work per step
-  (their ``do_step`` called directly, no FMI), the FMI/pythonfmu layer, and
+  (their ``do_step`` called directly, no FMI), the FMI layer (FMPy + native layer), and
   the master's own overhead (master minus a bare FMPy loop that does the same
   get/set/doStep calls).
 
@@ -103,7 +103,7 @@ def main():
           f"{t_raw * 1e6:.0f} us -> master's own overhead {per_step - t_raw * 1e6:.0f} us")
     print("slave work (do_step in Python, no FMI), us/step: "
           + ", ".join(f"{k} {v:.0f}" for k, v in work.items())
-          + f"; sum {sum(work.values()):.0f} us -> FMI/pythonfmu layer ~{t_raw * 1e6 - sum(work.values()):.0f} us")
+          + f"; sum {sum(work.values()):.0f} us -> FMI layer (FMPy + native layer) ~{t_raw * 1e6 - sum(work.values()):.0f} us")
 
 
 if __name__ == "__main__":

@@ -34,6 +34,8 @@ import sarins_fmu
 from . import SLAVES, native
 
 HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent  # the folder holding the packages sarins_fmu and fmus
+SHIPPED_PACKAGES = ("sarins_fmu", "fmus")
 DEFAULT_OUT = Path("build") / "fmus"
 
 # unit -> SI base-unit exponents (FMI 2.0 BaseUnit attributes) and factor/offset
@@ -161,10 +163,77 @@ def _documentation(model_name: str, description: str) -> str:
 
 def _fmu_builder():
     """pythonfmu's ``FmuBuilder`` (only its model-description writing and resource copying are used:
-    the binaries come from :mod:`fmus.native`, so a pythonfmu copy without binaries is fine)."""
+    the binaries come from :mod:`fmus.native`).
+
+    The builder embeds the Python sources of the ``pythonfmu`` it was imported
+    from.  After a plain pythonfmu FMU was loaded in this process, ``pythonfmu``
+    may be that FMU's copy in an extracted folder that is gone by now, and the
+    builder would silently embed nothing; so the sources are always taken from
+    the installed distribution.
+    """
+    from importlib.metadata import PackageNotFoundError, distribution
+
     from pythonfmu import builder
 
+    try:
+        installed = Path(distribution("pythonfmu").locate_file("pythonfmu"))
+    except PackageNotFoundError:
+        installed = builder.HERE
+    if not (installed / "fmi2slave.py").is_file():
+        raise RuntimeError(f"pythonfmu's sources are missing in {installed} (reinstall pythonfmu)")
+    builder.HERE = installed
     return builder.FmuBuilder
+
+
+def shipped_modules(slave_path: Path) -> list[str]:
+    """The modules an FMU runs: the import closure of its slave within
+    :data:`SHIPPED_PACKAGES`, with every package ``__init__.py`` on the way,
+    as paths relative to :data:`ROOT` (imports inside functions count too).
+    The library's CLI, campaigns and reports live in other packages and are
+    never shipped."""
+    import ast
+
+    def module_file(name: str) -> Path | None:
+        base = ROOT.joinpath(*name.split("."))
+        for candidate in (base.with_suffix(".py"), base / "__init__.py"):
+            if candidate.is_file():
+                return candidate
+        return None
+
+    def package_of(path: Path) -> str:
+        rel = path.relative_to(ROOT).with_suffix("")
+        parts = list(rel.parts)
+        return ".".join(parts[:-1]) if parts[-1] != "__init__" else ".".join(parts[:-1])
+
+    seen: set[Path] = set()
+    todo = [Path(slave_path).resolve()]
+    while todo:
+        path = todo.pop()
+        if path in seen:
+            continue
+        seen.add(path)
+        in_tree = ROOT in path.parents
+        package = package_of(path) if in_tree else ""
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = package.split(".")[:len(package.split(".")) - node.level + 1]
+                    module = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    module = node.module or ""
+                names = [module] + [f"{module}.{a.name}" for a in node.names]
+            for name in names:
+                if name.split(".")[0] not in SHIPPED_PACKAGES:
+                    continue
+                parts = name.split(".")
+                for k in range(1, len(parts) + 1):  # the packages on the way and the module itself
+                    found = module_file(".".join(parts[:k]))
+                    if found is not None and found not in seen:
+                        todo.append(found)
+    return sorted(str(p.relative_to(ROOT)) for p in seen if ROOT in p.parents)
 
 
 def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
@@ -181,14 +250,18 @@ def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
     with tempfile.TemporaryDirectory(prefix="sarins_fmu_build_") as tmp:
         tmp = Path(tmp)
         # clean copies of the packages (no caches, no build products)
-        ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "*.fmu")
-        shutil.copytree(Path(sarins_fmu.__file__).parent, tmp / "sarins_fmu", ignore=ignore)
-        shutil.copytree(HERE, tmp / "fmus", ignore=ignore)
+        for rel in shipped_modules(HERE / slave_file):
+            target = tmp / rel
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / rel, target)
+        shutil.copytree(Path(sarins_fmu.__file__).parent / "data", tmp / "sarins_fmu" / "data")
         script = tmp / slave_file
         shutil.copy2(HERE / slave_file, script)
         project_files = [tmp / "sarins_fmu", tmp / "fmus", *(Path(p) for p in extra_files)]
         fmu = FmuBuilder.build_FMU(script, dest=tmp / "out", project_files=project_files,
                                    needsExecutionTool=False, canHandleVariableCommunicationStepSize=False)
+        if "resources/pythonfmu/fmi2slave.py" not in zipfile.ZipFile(fmu).namelist():
+            raise RuntimeError(f"pythonfmu wrote {fmu.name} without its slave base class in resources/")
         target = out_dir / fmu.name
         _rewrite(fmu, target, declared_dependencies(slave_file, tmp))
     return target

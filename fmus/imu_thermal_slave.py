@@ -7,7 +7,7 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, StartOfStepInputs, check_finite,
-                                check_step, declare, discard_on_error, guarded, same_time)
+                                check_step, declare, discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import imu, imu_params
 from sarins_fmu.thermal import SENSORS, ThermalModel
 
@@ -103,6 +103,9 @@ class IMUThermal(Fmi2Slave):
         self._model = None
         self._step = None
         self._state = None
+        # buffer slots for vectorised output (see fmus.slave_support)
+        self._out_slots = real_slots(self, [f"dtheta_{ax}" for ax in "xyz"] + [f"dv_{ax}" for ax in "xyz"]
+                                     + [f"temp_{sensor}" for sensor in SENSORS])
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._start_time = float(start_time)
@@ -207,10 +210,6 @@ class IMUThermal(Fmi2Slave):
             dtheta, dv, temps = self._sensor.step(angle0, rate0, accel, ambient=[amb0 + amb_rate * step_size])
         except ValueError as exc:
             return discard_on_error(self, exc)
-        for i, ax in enumerate("xyz"):
-            setattr(self, f"dtheta_{ax}", float(dtheta[0, i]))
-            setattr(self, f"dv_{ax}", float(dv[0, i]))
-        for j, sensor in enumerate(SENSORS):
-            setattr(self, f"temp_{sensor}", float(temps[0, j]))
+        self._fmi_buffer[self._out_slots] = np.concatenate((dtheta[0], dv[0], temps[0]))
         self.increment_end_time = current_time + step_size
         return True

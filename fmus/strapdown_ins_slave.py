@@ -8,7 +8,7 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
-                                discard_on_error, guarded, same_time)
+                                discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import ins
 
 DEG = math.pi / 180.0
@@ -85,6 +85,14 @@ class StrapdownINS(Fmi2Slave):
         self._ins = None
         self._step = None
         self._config = None
+        # buffer slots for vectorised I/O (see fmus.slave_support)
+        self._in_slots = real_slots(self, [f"dtheta_{a}" for a in "xyz"] + [f"dv_{a}" for a in "xyz"])
+        self._nav_slots = real_slots(self, ["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll"])
+        self._err_slots = real_slots(self, ["lat_error", "lon_error", "north_error", "east_error", "position_error"])
+        self._est_slots = real_slots(self, ["gyro_drift_est_x", "gyro_drift_est_y", "accel_bias_est_x",
+                                            "accel_bias_est_y"])
+        self._err = np.zeros(5)
+        self._est = np.zeros(4)
         self._start_time = 0.0
         self._compensation = None
 
@@ -120,7 +128,7 @@ class StrapdownINS(Fmi2Slave):
             if self._ins is None:
                 self._config = self._make_config(step_size)
                 self._ins = ins.StrapdownINS(self._config)
-            increments = np.array([[self.dtheta_x, self.dtheta_y, self.dtheta_z, self.dv_x, self.dv_y, self.dv_z]])
+            increments = self._fmi_buffer[self._in_slots][None, :]
             tag = float(self.increment_end_time)
             if not (np.isfinite(increments).all() and math.isfinite(tag)):
                 raise ValueError("increments or increment_end_time contain NaN or infinity")
@@ -144,15 +152,18 @@ class StrapdownINS(Fmi2Slave):
 
     def _publish(self, row):
         state = self._ins
-        self.lat, self.lon, self.height, self.v_e, self.v_n, self.v_u, self.yaw, self.pitch, self.roll = (
-            float(x) for x in row)
-        err = state.position_error(row[None, :])[0]
-        self.lat_error, self.lon_error, self.north_error, self.east_error = (float(x) for x in err)
-        self.position_error = math.hypot(self.north_error, self.east_error)
+        buffer = self._fmi_buffer
+        buffer[self._nav_slots] = row
+        err = self._err
+        err[:4] = state.position_error(row[None, :])[0]
+        err[4] = math.hypot(err[2], err[3])
+        buffer[self._err_slots] = err
         self.phase = PHASES[state.phase]
         self.nav_time = state.time - self._config.align_time
-        self.gyro_drift_est_x, self.gyro_drift_est_y = (float(x) for x in state.gyro_comp[:2])
-        self.accel_bias_est_x, self.accel_bias_est_y = (float(x) for x in state.accel_comp[:2])
+        est = self._est
+        est[:2] = state.gyro_comp[:2]
+        est[2:] = state.accel_comp[:2]
+        buffer[self._est_slots] = est
         self.temp_azimuth_gyro = float(self.temp_gyro_z)
         if state.phase != "navigate" or abs(self.nav_time) < 0.5 * self._step:
             self.temp_align_end = float(self.temp_gyro_z)

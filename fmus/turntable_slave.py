@@ -7,7 +7,7 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
-                                discard_on_error, guarded)
+                                discard_on_error, guarded, real_slots)
 from sarins_fmu import thermal, turntable
 from sarins_fmu.thermal import Ambient
 
@@ -79,6 +79,8 @@ class Turntable(Fmi2Slave):
         self._schedule = None
         self._ambient = None
         self._step = None
+        self._out = np.zeros(9)
+        self._out_slots = real_slots(self, [f"{q}_{j}" for q in ("angle", "rate", "accel") for j in (1, 2, 3)])
         self._start_time = 0.0
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
@@ -128,11 +130,10 @@ class Turntable(Fmi2Slave):
 
     def _publish(self, time):
         angle, rate, acc = (x[0] for x in self._schedule.state(time))
-        for j in range(3):
-            inside = j < len(angle)
-            setattr(self, f"angle_{j + 1}", float(angle[j]) if inside else 0.0)
-            setattr(self, f"rate_{j + 1}", float(rate[j]) if inside else 0.0)
-            setattr(self, f"accel_{j + 1}", float(acc[j]) if inside else 0.0)
+        n = len(angle)
+        out = self._out  # angle_1..3, rate_1..3, accel_1..3 (0 beyond the gimbals in use)
+        out[0:n], out[3:3 + n], out[6:6 + n] = angle, rate, acc
+        self._fmi_buffer[self._out_slots] = out
         span = self.grid if self._step is None else self._step
         self.ambient_temp, self.ambient_temp_rate = thermal.ambient_segment(self._ambient, time, span)
         self.motion_time = float(time)

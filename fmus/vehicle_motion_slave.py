@@ -35,7 +35,9 @@ class VehicleMotion(Fmi2Slave):
 
     author = "sarins-fmu"
     description = (
-        "A land vehicle's truth motion (seed 002's drives, turns and stops; level road, no vibration) as "
+        "A land vehicle's truth motion (seed 002's drives, turns and stops on a level road, with the body's "
+        "pitch and roll sway and vibration while moving: sarins_fmu.vehicle.BodyMotion, amplitudes at "
+        "reference_speed, phases from body_seed; set the amplitudes to 0 for a rigid body) as "
         "moving-base inputs of IMUThermal (base = input). Legs: 'drive SECONDS SPEED_M_S; turn DEGREES; stop "
         "SECONDS; ...' (turns positive to the left), after lead_time s at rest. Longitudinal and yaw "
         "accelerations change only on the grid (= the communication step). Contract (standard FMI timing): the "
@@ -58,6 +60,18 @@ class VehicleMotion(Fmi2Slave):
         declare(self, "real", "heading0", PARAMETER, "start heading, CCW from north [rad; deg]", 0.0)
         declare(self, "real", "lead_time", PARAMETER, "time at rest before the first leg (alignment) [s]", 900.0)
         declare(self, "real", "grid", PARAMETER, "time grid of acceleration changes = communication step [s]", 1.0)
+        body = vehicle.BodyMotion()
+        declare(self, "real", "sway_pitch", PARAMETER, "pitch sway amplitude at reference_speed [rad; deg]",
+                body.sway_pitch)
+        declare(self, "real", "sway_roll", PARAMETER, "roll sway amplitude at reference_speed [rad; deg]",
+                body.sway_roll)
+        declare(self, "real", "sway_period", PARAMETER, "sway period [s]", body.sway_period)
+        declare(self, "real", "vibration", PARAMETER,
+                "pitch/roll vibration amplitude per frequency (0.13, 0.29, 0.41 Hz) at reference_speed [rad; deg]",
+                body.vibration)
+        declare(self, "real", "reference_speed", PARAMETER, "speed of the stated amplitudes [m/s]",
+                body.reference_speed)
+        declare(self, "integer", "body_seed", PARAMETER, "seed of the sway and vibration phases [1]", 0)
         for q, unit in (("", "rad; deg"), ("_rate", "rad/s; deg/s"), ("_accel", "rad/s2; deg/s2")):
             for angle in ("yaw", "pitch", "roll"):
                 declare(self, "real", f"vehicle_{angle}{q}", OUTPUT,
@@ -81,12 +95,15 @@ class VehicleMotion(Fmi2Slave):
 
     @guarded
     def exit_initialization_mode(self):
-        check_finite(self, ["lat0", "lon0", "heading0", "lead_time", "grid"], positive=["grid"],
-                     non_negative=["lead_time"])
+        check_finite(self, ["lat0", "lon0", "heading0", "lead_time", "grid", "sway_pitch", "sway_roll", "sway_period",
+                            "vibration", "reference_speed"], positive=["grid", "sway_period", "reference_speed"],
+                     non_negative=["lead_time", "sway_pitch", "sway_roll", "vibration"])
         legs = parse_legs(self.legs)
         try:
+            body = vehicle.BodyMotion(self.sway_pitch, self.sway_roll, self.sway_period, self.vibration,
+                                      reference_speed=self.reference_speed, seed=int(self.body_seed))
             self._trajectory = vehicle.VehicleTrajectory(legs, self.lat0, self.lon0, self.heading0, step=self.grid,
-                                                         rotation="none", lead_time=self.lead_time)
+                                                         rotation="none", lead_time=self.lead_time, body=body)
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
         self._publish(self._start_time)
@@ -101,8 +118,10 @@ class VehicleMotion(Fmi2Slave):
         k_motion = min(k, tr.n_steps - 1)  # after the last leg: parked (the last step is at rest)
         angle, rate, accel = (x[0] for x in tr.schedule.state(min(k, tr.n_steps) * tr.step))
         parked = k >= tr.n_steps
-        self.vehicle_yaw, self.vehicle_yaw_rate = float(angle[0]), 0.0 if parked else float(rate[0])
-        self.vehicle_yaw_accel = 0.0 if parked else float(accel[0])
+        for j, name in enumerate(("yaw", "pitch", "roll")):
+            setattr(self, f"vehicle_{name}", float(angle[j]))
+            setattr(self, f"vehicle_{name}_rate", 0.0 if parked else float(rate[j]))
+            setattr(self, f"vehicle_{name}_accel", 0.0 if parked else float(accel[j]))
         w_t, f_t = tr.base_motion(np.array([k_motion * tr.step]), tr.step)
         for i, ax in enumerate("enu"):
             setattr(self, f"base_rate_{ax}", float(w_t[0, i]))

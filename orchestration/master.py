@@ -470,7 +470,8 @@ class Master:
 
     def _loop(self, segments, total: int, recorder: Recorder, every: int, bar: Progress,
               pacer: RealTimePacer | None, callback: StepCallback | None) -> int:
-        plan, fail, sample, transfer = self._plan, self._fail, recorder.sample, self._transfer
+        plan, fail, sample = self._plan, self._fail, recorder.sample
+        multiply, add = np.multiply, np.add
         pending = interrupt.PENDING
         done = 0
         next_record = min(every, total)
@@ -480,8 +481,16 @@ class Master:
             for j in range(count):
                 t = begin + j * h
                 for transfers, steps in plan:
-                    if transfers:
-                        transfer(transfers, t)
+                    # every source value of the stage is read before any input is set
+                    for get, src, src_vrs, n, buffer, _, _, _, link, convert in transfers:
+                        if (status := get(src, src_vrs, n, buffer)) > FMI_WARNING:
+                            fail(link.source, f"fmi2Get{link.kind}", status, t)
+                        if convert is not None:
+                            multiply(convert[0], convert[1], out=convert[0])
+                            add(convert[0], convert[2], out=convert[0])
+                    for _, _, _, n, buffer, set_, dst, dst_vrs, link, _ in transfers:
+                        if (status := set_(dst, dst_vrs, n, buffer)) > FMI_WARNING:
+                            fail(link.target, f"fmi2Set{link.kind}", status, t)
                     for step, component, index in steps:
                         if (status := step(component, t, h, 1)) > FMI_WARNING:
                             fail(index, "fmi2DoStep", status, t)

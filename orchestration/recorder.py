@@ -160,7 +160,7 @@ class Recorder:
         n = self.count
         out = np.empty(n, dtype=dtype)
         out["time"] = self.time[:n]
-        for field, kind, b, k in self.columns:
+        for field, _, b, k in self.columns:
             out[field] = self.blocks[b][6][:n, k]
         return ResultArray(out, meta)
 

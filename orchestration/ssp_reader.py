@@ -158,11 +158,15 @@ def _parse(file: Path, shown: Path, schema: str):
     from fmpy.ssp.ssd import validate_tree
 
     try:
-        root = etree.parse(str(file), xml_parser()).getroot()
+        tree = etree.parse(str(file), xml_parser())
     except etree.XMLSyntaxError as error:
         raise SystemFileError(f"not well-formed XML: {error}", file=str(shown)) from None
     except OSError as error:
         raise SystemFileError(f"cannot read: {error}", file=str(shown)) from None
+    if tree.docinfo.doctype:
+        raise SystemFileError("a DOCTYPE (DTD, entity declarations) is not allowed in an SSP "
+                              "file; refused", file=str(shown))
+    root = tree.getroot()
     try:
         validate_tree(root, schema)
     except Exception as error:  # fmpy raises a bare Exception listing the schema errors

@@ -12,7 +12,6 @@ turns into a conversion of the transferred values.
 """
 from __future__ import annotations
 
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -174,7 +173,7 @@ class System:
     source_file: Path | None = None
     units: dict = field(default_factory=dict)
     inputs_without_source: list[str] = field(default_factory=list)
-    _workdir: tempfile.TemporaryDirectory | None = field(default=None, repr=False,
+    _workdir: object | None = field(default=None, repr=False,
                                                         compare=False)
 
     def __post_init__(self) -> None:

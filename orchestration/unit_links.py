@@ -68,7 +68,7 @@ def connection_maps(checked, descriptions: Sequence, files: Sequence[str],
         hops = c.hops or _PLAIN
         where = system_file if system_file is not None else files[j]
 
-        def fail(message: str) -> None:
+        def fail(message: str, c=c, where=where) -> None:
             raise IncompatibleConnectionError(f"connection {c}: {message}", file=where,
                                               component=c.end_component,
                                               variable=c.end_variable)

@@ -21,7 +21,7 @@ Units
 SI inside: rad, rad/s, m, m/s, m/s^2, s; temperatures in degree Celsius.
 Papers' units (deg/h, nautical miles, degrees) appear only at the edges (CLI,
 FMU display units, reports) and the variable says so: ``drift_dph``,
-``lat_deg``, ``error_nm``.  Conversion constants live in
+``lat_deg``, ``error_nmi``.  Conversion constants live in
 :mod:`sarins_fmu.units`.
 
 Modules
@@ -34,6 +34,40 @@ turntable    gimbal schedules: rotation schemes and rate-table profiles
 ins          strapdown mechanization (ENU, two-speed) and alignment
 kalman       static-base / zero-velocity Kalman filter models
 experiments  the papers' protocols as scenario functions
+
+Public API
+----------
+The names in ``__all__`` are re-exported here and imported on first use
+(so ``import sarins_fmu`` stays cheap and an FMU that ships part of the
+library imports only what it runs): ``sarins_fmu.run_static(...)``,
+``sarins_fmu.IMU``, ``sarins_fmu.preset("nav-rlg")`` ...
 """
 
+from importlib import import_module
+
 __version__ = "0.1.0"
+
+# public name -> submodule that defines it
+_PUBLIC = {
+    "IMU": "imu", "ImuModel": "imu", "StaticBase": "imu", "preset": "imu", "PRESETS": "imu",
+    "ThermalModel": "thermal", "ThermalParams": "thermal", "Ambient": "thermal",
+    "GimbalSchedule": "turntable", "single_axis": "turntable", "dual_axis": "turntable",
+    "schedule_for": "turntable", "chain_matrix": "turntable",
+    "StrapdownINS": "ins", "InsConfig": "ins",
+    "StopKalmanFilter": "kalman", "StopFilterSettings": "kalman",
+    "VehicleTrajectory": "vehicle",
+    "run_static": "experiments", "StaticRunResult": "experiments",
+    "SITE_LAT_DEG": "site",
+}
+
+__all__ = ["__version__", *_PUBLIC]
+
+
+def __getattr__(name):
+    try:
+        module = _PUBLIC[name]
+    except KeyError:
+        raise AttributeError(f"module 'sarins_fmu' has no attribute {name!r}") from None
+    value = getattr(import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value

@@ -25,6 +25,7 @@ import numpy as np
 
 from . import earth
 from ._jit import jit
+from .filter_kernel import propagate, velocity_update
 from .rotations import quat_mult, quat_to_mat, rotvec_to_quat
 
 
@@ -144,20 +145,8 @@ def align_steps(q, v, pos, dtheta, dv, h, gyro_comp, accel_comp, x, p, q_diag, r
             f[3 + i, 7], f[3 + i, 8] = c[i, 0], c[i, 1]
         fh = f * h
         phi_m = eye + fh + 0.5 * (fh @ fh)
-        # x = Phi x ; P = Phi P Phi' + Q h
-        x[:] = phi_m @ x
-        p[:, :] = phi_m @ p @ phi_m.T
-        for i in range(9):
-            p[i, i] += q_diag[i] * h
-        # z = v_EN ; K = P H' (H P H' + R)^-1 ; x += K (z - H x) ; P = (I - K H) P
-        s = hm @ p @ hm.T
-        s[0, 0] += r_var
-        s[1, 1] += r_var
-        gain = p @ hm.T @ np.linalg.inv(s)
-        innov = np.array([v[0] - x[3], v[1] - x[4]])
-        x += gain @ innov
-        ikh = eye - gain @ hm
-        p[:, :] = ikh @ p @ ikh.T + r_var * (gain @ gain.T)
+        propagate(x, p, phi_m, q_diag, h)
+        velocity_update(x, p, hm, eye, r_var, v[0], v[1])
         # closed-loop feedback: q_true = q(phi) * q_computed
         qn = quat_mult(rotvec_to_quat(x[0:3].copy()), q)
         q[:] = qn / math.sqrt(qn[0] ** 2 + qn[1] ** 2 + qn[2] ** 2 + qn[3] ** 2)

@@ -56,7 +56,9 @@ import numpy as np
 
 from . import earth
 from ._jit import jit
+from .filter_kernel import propagate, velocity_update
 from .imu import ImuModel
+from .rotations import euler_to_mat
 from .units import ARCSEC_TO_RAD, DEG_TO_RAD, DPH_TO_RPS, UG_TO_MPS2
 
 N_STATES = 11
@@ -134,25 +136,6 @@ class StopFilterSettings:
 
 
 @jit
-def _euler_to_mat(yaw, pitch, roll):
-    """mat_nb = Rz(yaw) Rx(pitch) Ry(roll) (same convention as rotations.euler_to_mat)."""
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cr, sr = math.cos(roll), math.sin(roll)
-    c = np.empty((3, 3))
-    c[0, 0] = cy * cr - sy * sp * sr
-    c[0, 1] = -sy * cp
-    c[0, 2] = cy * sr + sy * sp * cr
-    c[1, 0] = sy * cr + cy * sp * sr
-    c[1, 1] = cy * cp
-    c[1, 2] = sy * sr - cy * sp * cr
-    c[2, 0] = -cp * sr
-    c[2, 1] = sp
-    c[2, 2] = cp * cr
-    return c
-
-
-@jit
 def stop_filter_steps(x, p, velocity_en, attitude, lat, dt, q_diag, r_var):
     """Propagate and update the stop filter over K measurements (in place).
 
@@ -188,7 +171,7 @@ def stop_filter_steps(x, p, velocity_en, attitude, lat, dt, q_diag, r_var):
     hm[0, 3] = 1.0
     hm[1, 4] = 1.0
     for k in range(n):
-        c = _euler_to_mat(attitude[k, 0], attitude[k, 1], attitude[k, 2])
+        c = euler_to_mat(attitude[k, 0], attitude[k, 1], attitude[k, 2])
         for i in range(3):
             f[i, 5], f[i, 6], f[i, 7] = -c[i, 0], -c[i, 1], -c[i, 2]
         for i in range(2):
@@ -197,20 +180,8 @@ def stop_filter_steps(x, p, velocity_en, attitude, lat, dt, q_diag, r_var):
         # Phi = I + F dt + (F dt)^2 / 2 + (F dt)^3 / 6
         fh2 = fh @ fh
         phi_m = eye + fh + 0.5 * fh2 + (fh2 @ fh) / 6.0
-        # x = Phi x ; P = Phi P Phi' + Q dt
-        x[:] = phi_m @ x
-        p[:, :] = phi_m @ p @ phi_m.T
-        for i in range(11):
-            p[i, i] += q_diag[i] * dt
-        # K = P H' (H P H' + R)^-1 ; x += K (z - H x) ; P = (I - K H) P (I - K H)' + K R K'
-        s = hm @ p @ hm.T
-        s[0, 0] += r_var
-        s[1, 1] += r_var
-        gain = p @ hm.T @ np.linalg.inv(s)
-        innov = np.array([velocity_en[k, 0] - x[3], velocity_en[k, 1] - x[4]])
-        x += gain @ innov
-        ikh = eye - gain @ hm
-        p[:, :] = ikh @ p @ ikh.T + r_var * (gain @ gain.T)
+        propagate(x, p, phi_m, q_diag, dt)
+        velocity_update(x, p, hm, eye, r_var, velocity_en[k, 0], velocity_en[k, 1])
         out[k, 0] = x[EPS_Z]
         out[k, 1] = math.sqrt(p[EPS_Z, EPS_Z])
     return out

@@ -103,15 +103,24 @@ def mat_to_rotvec(mat):
     return 2.0 * math.atan2(s, q[0]) * q[1:] / s
 
 
+@jit
 def euler_to_mat(yaw, pitch, roll):
-    """mat_nb = Rz(yaw) Rx(pitch) Ry(roll) for ENU / right-front-up, angles in rad."""
+    """mat_nb = Rz(yaw) Rx(pitch) Ry(roll) for ENU / right-front-up, angles in rad
+    (the product written out element by element; compiled, so kernels call it too)."""
     cy, sy = math.cos(yaw), math.sin(yaw)
     cp, sp = math.cos(pitch), math.sin(pitch)
     cr, sr = math.cos(roll), math.sin(roll)
-    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, cp, -sp], [0.0, sp, cp]])
-    ry = np.array([[cr, 0.0, sr], [0.0, 1.0, 0.0], [-sr, 0.0, cr]])
-    return rz @ rx @ ry
+    c = np.empty((3, 3))
+    c[0, 0] = cy * cr - sy * sp * sr
+    c[0, 1] = -sy * cp
+    c[0, 2] = cy * sr + sy * sp * cr
+    c[1, 0] = sy * cr + cy * sp * sr
+    c[1, 1] = cy * cp
+    c[1, 2] = sy * sr - cy * sp * cr
+    c[2, 0] = -cp * sr
+    c[2, 1] = sp
+    c[2, 2] = cp * cr
+    return c
 
 
 def mat_to_euler(mat_nb):

@@ -32,10 +32,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import earth, turntable
-from .turntable import AXIS_Z, GimbalSchedule
+from .turntable import AXIS_X, AXIS_Y, AXIS_Z, GimbalSchedule
 from .units import DEG_TO_RAD
 
 VEHICLE_AXES = (AXIS_Z, AXIS_Z)  # heading (outer), RINS rotation about azimuth (inner)
+# with body motion: heading, pitch, roll (mat_nv = Rz Rx Ry, sarins_fmu.rotations.euler_to_mat), RINS rotation
+VEHICLE_BODY_AXES = (AXIS_Z, AXIS_X, AXIS_Y, AXIS_Z)
 LEG_KINDS = ("stop", "drive", "turn")
 
 
@@ -55,6 +57,57 @@ def _ramp_steps(v0: float, v1: float, rate: float, step: float) -> tuple[int, fl
         return 0, 0.0
     n = max(1, math.ceil(abs(v1 - v0) / (rate * step) - 1e-9))
     return n, (v1 - v0) / (n * step)
+
+
+@dataclass(frozen=True)
+class BodyMotion:
+    """Pitch and roll of the vehicle body while it moves (suspension sway and vibration).
+
+    Each angle's rate is a sum of sinusoids scaled by speed / ``reference_speed``
+    (so the body is still at a stop and the rate is continuous), sampled on
+    the grid and linear in between (constant angular acceleration per step,
+    like every gimbal here): a slow sway of amplitude ``sway_*`` (rad) and
+    period ``sway_period`` (s), and vibration of amplitude ``vibration`` (rad)
+    per component at the frequencies ``vibration_hz`` (our choice: 0.13, 0.29,
+    0.41 Hz, below the 0.5 Hz Nyquist limit of a 1 s grid; faster vibration
+    needs a finer grid).  Phases come from ``seed``.  Defaults (our choice):
+    0.5 deg pitch and 0.3 deg roll sway over 20 s, 0.05 deg vibration at 10 m/s.
+    The translational motion is unchanged (a level road): these are attitude
+    oscillations of the body, starting level (so their mean can be offset by
+    up to an amplitude).
+    """
+
+    sway_pitch: float = 0.5 * DEG_TO_RAD
+    sway_roll: float = 0.3 * DEG_TO_RAD
+    sway_period: float = 20.0
+    vibration: float = 0.05 * DEG_TO_RAD
+    vibration_hz: tuple = (0.13, 0.29, 0.41)
+    reference_speed: float = 10.0
+    seed: int = 0
+
+    def __post_init__(self):
+        for name in ("sway_pitch", "sway_roll", "sway_period", "vibration", "reference_speed"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"body motion {name} must be a non-negative number, got {value}")
+        if not (self.sway_period > 0 and self.reference_speed > 0):
+            raise ValueError("sway_period and reference_speed must be positive")
+        if not all(math.isfinite(f) and f > 0 for f in self.vibration_hz):
+            raise ValueError("vibration frequencies must be positive")
+
+    def rates(self, time: np.ndarray, speed: np.ndarray) -> np.ndarray:
+        """Pitch and roll rates (K, 2), rad/s, at the grid ``time`` (K,) s for ``speed`` (K,) m/s."""
+        rng = np.random.default_rng([self.seed, 61])
+        phase = rng.uniform(0.0, 2 * math.pi, size=(2, 1 + len(self.vibration_hz)))
+        w_sway = 2 * math.pi / self.sway_period
+        out = np.empty((time.size, 2))
+        for j, sway in enumerate((self.sway_pitch, self.sway_roll)):
+            rate = sway * w_sway * np.cos(w_sway * time + phase[j, 0])
+            for i, f in enumerate(self.vibration_hz):
+                w = 2 * math.pi * f
+                rate += self.vibration * w * np.cos(w * time + phase[j, i + 1])
+            out[:, j] = rate * (speed / self.reference_speed)
+        return out
 
 
 def legs_to_accelerations(legs, step: float = 1.0, settings: DriveSettings = DriveSettings()):
@@ -160,17 +213,21 @@ class VehicleTrajectory:
     settings : DriveSettings
     lead_time : float
         Stationary time before the first leg, s (alignment), counted in t.
+    body : BodyMotion, optional
+        Pitch and roll of the body while moving; then the schedule's gimbals
+        are (heading, pitch, roll, RINS rotation), :data:`VEHICLE_BODY_AXES`.
 
     Attributes
     ----------
     time : (K+1,) grid times, s.  speed : (K+1,) m/s.  heading : (K+1,) rad.
     lat, lon : (K+1,) rad.  velocity_n : (K+1, 3) m/s.
-    schedule : GimbalSchedule with axes (heading, RINS rotation).
+    schedule : GimbalSchedule with axes (heading, RINS rotation), or
+        (heading, pitch, roll, RINS rotation) with ``body``.
     """
 
     def __init__(self, legs, lat: float, lon: float = 0.0, heading: float = 0.0, *, step: float = 1.0,
                  rotation: str = "forward-reverse", rate_dps: float = 6.0, accel_dps2: float = 6.0,
-                 settings: DriveSettings = DriveSettings(), lead_time: float = 0.0):
+                 settings: DriveSettings = DriveSettings(), lead_time: float = 0.0, body: BodyMotion | None = None):
         for name, value in (("lat", lat), ("lon", lon), ("heading", heading), ("step", step),
                             ("lead_time", lead_time)):
             if not math.isfinite(value):
@@ -194,8 +251,17 @@ class VehicleTrajectory:
         self.heading = heading + np.concatenate([[0.0], np.cumsum(yaw_rate[:-1] * step + 0.5 * yaw_acc * step**2)])
         rot = turntable.single_axis(rotation, (n + 1) * step, rate_dps=rate_dps, accel_dps2=accel_dps2, grid=step)
         rot_acc = rot.state(self.time[:-1])[2][:, 0]
+        if body is None:
+            self.axes = VEHICLE_AXES
+            columns, angle0 = [yaw_acc, rot_acc], np.array([heading, 0.0])
+        else:  # pitch and roll rates linear between grid points: accel = rate difference / step
+            body_rate = body.rates(self.time, self.speed)
+            body_acc = np.diff(body_rate, axis=0) / step
+            self.axes = VEHICLE_BODY_AXES
+            columns, angle0 = [yaw_acc, body_acc[:, 0], body_acc[:, 1], rot_acc], np.array([heading, 0.0, 0.0, 0.0])
         self.schedule = turntable.schedule_from_segments(
-            VEHICLE_AXES, _compress(np.column_stack([yaw_acc, rot_acc]), step), angle0=np.array([heading, 0.0]))
+            self.axes, _compress(np.column_stack(columns), step), angle0=angle0,
+            rate0=np.zeros(len(angle0)) if body is None else np.array([0.0, *body_rate[0], 0.0]))
         self._build_motion(lat, lon, acc, yaw_acc, yaw_rate)
 
     def _velocity_n(self, speed, heading):
@@ -247,7 +313,7 @@ class VehicleTrajectory:
     def mat_nb(self, k: int) -> np.ndarray:
         """True IMU attitude at grid point ``k``, mat_nb (3, 3)."""
         angle = self.schedule.state(self.time[k])[0][0]
-        return turntable.chain_matrix(VEHICLE_AXES, angle)
+        return turntable.chain_matrix(self.axes, angle)
 
     def moving(self) -> np.ndarray:
         """(K+1,) bool: speed above zero at each grid point."""

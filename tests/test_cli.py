@@ -14,7 +14,7 @@ def test_navigate_json(capsys):
     assert main(["navigate", "--json", "--nav-hours", "12", "--align-hours", "0.5", "--imu", "ideal",
                  "--axial-drift-dph", "0.003"]) == 0
     out = json.loads(capsys.readouterr().out)
-    for key in ("lat_error_deg", "lon_error_deg", "position_error_nm", "lat_error_deg_12h"):
+    for key in ("lat_error_deg", "lon_error_deg", "position_error_nmi", "lat_error_deg_12h"):
         assert key in out
     # 12 h latitude error of 0.003 deg/h: 2 cos L eps / w_ie = 0.0201 deg (Table 1)
     assert out["lat_error_deg_12h"] == pytest.approx(0.0201, rel=0.05)
@@ -82,3 +82,32 @@ def test_version_and_help_are_plain(capsys):
     assert capsys.readouterr().out.startswith("sarins ")
     assert main_exit(["--help"]) == 0
     assert "``" not in capsys.readouterr().out
+
+
+def test_layers_import_one_way():
+    """sarins_fmu (physics) imports none of fmus / orchestration / sarins; fmus and
+    orchestration never import the application layer (sarins); orchestration knows no FMU of ours."""
+    import ast
+
+    def imported(folder):
+        names = set()
+        for path in (ROOT / folder).rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text())):
+                if isinstance(node, ast.Import):
+                    names |= {(str(path), a.name.split(".")[0]) for a in node.names}
+                elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                    names.add((str(path), node.module.split(".")[0]))
+        return names
+
+    forbidden = {"sarins_fmu": {"fmus", "orchestration", "sarins", "fmpy", "pythonfmu"},
+                 "fmus": {"orchestration", "sarins"}, "orchestration": {"fmus", "sarins", "sarins_fmu"}}
+    bad = [(path, name) for folder, names in forbidden.items() for path, name in imported(folder) if name in names]
+    assert bad == []
+
+
+def test_public_api_is_reexported():
+    import sarins_fmu
+
+    for name in sarins_fmu.__all__:
+        assert getattr(sarins_fmu, name) is not None
+    assert sarins_fmu.run_static.__module__ == "sarins_fmu.experiments.static_run"

@@ -23,13 +23,6 @@ SHORT = dict(align_time=1200.0)  # 20 min alignment keeps the tests short
 ROOT = Path(__file__).resolve().parents[1]
 
 
-@pytest.fixture(scope="session")
-def fmu_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("fmus")
-    build_fmus(out)
-    return out
-
-
 @pytest.mark.parametrize("name", ["Turntable", "IMUThermal", "StrapdownINS"])
 def test_fmpy_validate_finds_no_problem(fmu_dir, name):
     assert validate_fmu(str(fmu_dir / f"{name}.fmu")) == []
@@ -218,8 +211,9 @@ def test_fmu_runs_in_a_host_without_this_project(fmu_dir, tmp_path):
 
 def test_build_after_loading_a_pythonfmu_fmu_still_ships_binaries(tmp_path):
     """A loaded pythonfmu FMU puts its own copy of pythonfmu (no binaries) first
-    on sys.path; building afterwards in the same fresh process must still
-    write the export binaries."""
+    on sys.path, in an extracted folder that is deleted when the FMU is freed;
+    building afterwards in the same fresh process must still write the
+    binaries and embed pythonfmu's sources (it silently embedded none)."""
     code = f"""
 import sys, zipfile
 sys.path[:0] = [{str(ROOT)!r}, {str(ROOT / 'tests')!r}]
@@ -232,7 +226,34 @@ import pythonfmu
 assert 'resources' in pythonfmu.__file__, pythonfmu.__file__  # the FMU's copy was imported
 from fmus.build import build_fmus
 fmu = build_fmus({str(tmp_path / 'out')!r}, names=['Turntable'])[0]
-assert any(n.startswith('binaries/') for n in zipfile.ZipFile(fmu).namelist())
+names = zipfile.ZipFile(fmu).namelist()
+assert any(n.startswith('binaries/') for n in names)
+assert any(n.endswith('/pythonfmu/fmi2slave.py') for n in names), names
 """
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]
+
+
+def test_build_fmus_never_writes_an_fmu_that_cannot_run(tmp_path):
+    """IMUCompensator needs a trained model: without one it is refused, not built empty."""
+    with pytest.raises(ValueError, match="needs a trained model"):
+        build_fmus(tmp_path, ["IMUCompensator"])
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    done = subprocess.run([sys.executable, "-m", "sarins", "build-fmus", "--only", "IMUCompensator", "--out",
+                           str(tmp_path / "out")], capture_output=True, text=True, timeout=300, env=env)
+    assert done.returncode == 2 and "needs a trained model" in done.stderr, done.stderr
+    assert not (tmp_path / "out" / "IMUCompensator.fmu").exists()
+
+
+def test_model_description_states_the_requirements(fmu_dir):
+    import zipfile
+
+    from fmpy import read_model_description
+
+    md = read_model_description(str(fmu_dir / "IMUThermal.fmu"))
+    assert md.coSimulation.needsExecutionTool is True
+    assert "sarins-fmi" in md.generationTool and "PythonFMU" in md.generationTool
+    with zipfile.ZipFile(fmu_dir / "IMUThermal.fmu") as z:
+        doc = z.read("documentation/index.html").decode()
+        assert not any(n.startswith("binaries/win64") for n in z.namelist())
+    assert "CPython 3." in doc and "SARINS_FMU_PYTHON" in doc and "Linux x86-64" in doc

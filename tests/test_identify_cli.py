@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from sarins.cli.identify import DEFAULT_GOAL, main, register
+from sarins.cli import main
+from sarins.cli.identify import DEFAULT_GOAL, register
 from sarins_fmu.identify.rbf import RBFNetwork
 from sarins_fmu.identify.tables import (
     TABLE2_HOT,

@@ -46,3 +46,14 @@ def test_errors_exit_nonzero_with_a_message(fixture_fmus, tmp_path, capsys):
     assert "\nsarins cosim: failed:" in "\n" + err and "fmi2DoStep returned DISCARD at t = 0.2 s" in err
     assert main(["cosim", str(tmp_path / "none.ssp"), "--stop-time", "1", "--step", "1"]) == 2
     assert "not found" in capsys.readouterr().err
+
+
+def test_output_csv_has_a_units_sidecar(fmu_dir, tmp_path, capsys):
+    import json
+
+    out = tmp_path / "run.csv"
+    assert main(["cosim", str(fmu_dir / "standard_static.ssp"), "--stop-time", "3", "--step", "1",
+                 "--record", "ins.lat_error", "--record", "imu.temp_gyro_z", "--output", str(out),
+                 "--no-progress"]) == 0
+    units = json.loads((tmp_path / "run.csv.units.json").read_text())
+    assert units == {"time": "s", "ins.lat_error": "rad", "imu.temp_gyro_z": "degC"}

@@ -182,7 +182,7 @@ def test_many_runs_in_one_process_exit_cleanly(fixture_fmus, tmp_path):
                 result = master.simulate(1.0, 0.1)
         print("final", result["g2.y"][-1])
     """)
-    for attempt in range(3):
+    for _attempt in range(3):
         done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                               timeout=120, cwd=str(tmp_path),
                               env={**__import__("os").environ,

@@ -161,3 +161,15 @@ def test_ssp_extraction_folder_goes_with_the_system(ramp_gain, tmp_path):
     gc.collect()
     assert not workdir.exists()
     assert np.isfinite(simulate_system(tmp_path / "y.ssp", 0.5, 0.25)["gain.y"]).all()
+
+
+def test_entity_declarations_are_refused(folder):
+    dtd = ('<!DOCTYPE x [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">'
+           '<!ENTITY xxe SYSTEM "file:///etc/passwd">]>\n')
+    text = hand_written("Ramp.fmu", "Gain.fmu").replace('?>\n', '?>\n' + dtd, 1)
+    (folder / "SystemStructure.ssd").write_text(text.replace('name="hand">', 'name="&b;">', 1))
+    with pytest.raises(SystemFileError, match="DOCTYPE"):
+        read_system(folder)
+    (folder / "SystemStructure.ssd").write_text(text.replace('name="hand">', 'name="&xxe;">', 1))
+    with pytest.raises(SystemFileError, match="external entity|DOCTYPE"):
+        read_system(folder)

@@ -109,9 +109,13 @@ def test_nested_system_with_units_runs_with_converted_numbers(folder):
         "celsius.y -> sub.feed.u", "deg_source.y -> sub.feed.angle", "sub.feed.y -> sink.u"]
     assert system.inputs_without_source == ["sink.angle (through system connector "
                                             "'angle_ext')"]
+    seen = {}
     with pytest.warns(UserWarning, match="sink.angle"):
-        result = simulate_system(system, 1.0, 0.25, record=["sub.feed.*", "sink.*"])
+        result = simulate_system(system, 1.0, 0.25, record=["sub.feed.*", "sink.*"],
+                                 callback=lambda now, m: seen.setdefault(
+                                     now, m.get("sub.feed.angle")))
     t = result["time"]
+    assert seen[0.5] == result["sub.feed.angle"][2]  # nested names resolve in get/set
     assert_allclose(result["sub.feed.angle"], math.radians(90.0) * t, rtol=1e-15)  # deg->rad
     assert_allclose(result["sub.feed.u"], 20.0 + t + 273.15, rtol=1e-15)  # degC->K
     assert_allclose(result["sink.u"], 2.0 * (20.0 + t) + 1.0, rtol=1e-13)  # K->degC, 2x+1

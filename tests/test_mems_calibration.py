@@ -202,15 +202,6 @@ def test_recurrent_without_torch_names_the_extra(monkeypatch):
 
 
 # --------------------------------------------------------------- co-simulation
-@pytest.fixture(scope="module")
-def fmu_dir(tmp_path_factory):
-    from fmus.build import build_fmus
-
-    out = tmp_path_factory.mktemp("mems_calibration_fmus")
-    build_fmus(out, ["Turntable", "IMUThermal"])
-    return out
-
-
 @pytest.mark.integration
 def test_cosimulated_recording_equals_in_process(fmu_dir, tmp_path):
     prof = mems_calibration.with_profile(QUICK, warmup=20.0, ramp_c_per_min=65.0, hold_min=0.5)
@@ -275,12 +266,8 @@ def test_campaign_without_torch_says_how_to_install_and_runs_the_others(tmp_path
 
 # ----------------------------------------------------------- compensator FMU
 @pytest.fixture(scope="module")
-def chain_fmus(tmp_path_factory):
-    from fmus.build import build_fmus
-
-    out = tmp_path_factory.mktemp("mems_calibration_chain")
-    build_fmus(out, ["Turntable", "IMUThermal", "StrapdownINS"])
-    return out
+def chain_fmus(fmu_dir):
+    return fmu_dir
 
 
 SHORT = mems_calibration.with_profile(QUICK, warmup=20.0, ramp_c_per_min=65.0, hold_min=0.5)
@@ -293,7 +280,7 @@ def short_training():
 
 
 def _compensator_run(chain_fmus, fmu, stop=30.0, ins=True):
-    from fmus.compensator_export import compensated_chain
+    from sarins.systems import compensated_chain
     from orchestration import simulate_system
 
     system = compensated_chain(

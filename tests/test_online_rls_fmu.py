@@ -9,7 +9,6 @@ from fmpy.validation import validate_fmu
 
 from fmu_driver import Slave, check_parameter_error
 from sarins.systems import GIMBAL_LINKS, INCREMENT_LINKS
-from fmus.build import build_fmus
 from sarins_fmu.experiments.online_rls import GYRO_Z, imu_unit
 from sarins_fmu.identify.online import OnlineDriftUpdater, UpdaterSettings, prior_covariance
 from sarins_fmu.identify.rls import ForgettingRLS, RLSSettings
@@ -27,13 +26,6 @@ OUTPUTS = ("compensation_drift", "drift_a", "drift_b", "drift_c", "stop_timer")
 
 
 CHAIN = ["Turntable", "IMUThermal", "StrapdownINS", "DriftModelUpdater"]
-
-
-@pytest.fixture(scope="module")
-def fmu_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("fmu_online_rls")
-    build_fmus(out, CHAIN)
-    return out
 
 
 @pytest.fixture(scope="module")

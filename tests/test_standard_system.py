@@ -10,23 +10,14 @@ from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
 
 from fmu_fixtures.thirdparty import ensure_libtbb, has_module
-from fmus.build import build_fmus
 from sarins.systems import build_system_fmu
-from sarins.systems import standard_static, write_systems
+from sarins.systems import standard_static
 from orchestration import simulate_system, write_ssp
 from sarins_fmu.experiments import run_static
 
 SHORT_TT = dict(align_time=600.0)
 SHORT_INS = dict(align_time=600.0, coarse_time=120.0)
 RECORD = ["ins.lat_error", "ins.lon_error", "ins.position_error"]
-
-
-@pytest.fixture(scope="module")
-def fmu_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("standard")
-    build_fmus(out)
-    write_systems(out)
-    return out
 
 
 @pytest.fixture(scope="module")

@@ -66,3 +66,24 @@ def test_bad_legs_and_times():
         tr.base_motion(np.array([0.0]), 0.5)
     with pytest.raises(ValueError, match="outside"):
         tr.base_motion(np.array([1e6]), 1.0)
+
+
+def test_body_motion_pitches_and_rolls_while_moving_and_is_still_at_stops():
+    from sarins_fmu.vehicle import VEHICLE_BODY_AXES, BodyMotion
+
+    legs = [("drive", 200.0, 10.0), ("stop", 100.0), ("drive", 100.0, 10.0)]
+    body = BodyMotion(seed=3)
+    tr = VehicleTrajectory(legs, LAT, 0.0, 0.0, body=body)
+    plain = VehicleTrajectory(legs, LAT, 0.0, 0.0)
+    assert np.array_equal(tr.schedule.axes, VEHICLE_BODY_AXES) and tr.schedule.n_axes == 4
+    angle, rate, _ = tr.schedule.state(tr.time)
+    np.testing.assert_allclose(angle[:, 0], plain.schedule.state(plain.time)[0][:, 0], atol=1e-12)  # heading unchanged
+    pitch, roll = angle[:, 1], angle[:, 2]
+    still = tr.speed == 0.0
+    assert np.max(np.abs(rate[still, 1:3])) < 1e-15  # still when the vehicle is (to the summed rate changes)
+    bound = body.sway_pitch + 3 * body.vibration
+    assert 0.3 * body.sway_pitch < np.max(np.abs(pitch)) < 2.5 * bound
+    assert np.max(np.abs(roll)) > 0.3 * body.sway_roll
+    assert not np.array_equal(pitch, VehicleTrajectory(legs, LAT, body=BodyMotion(seed=4)).schedule.state(tr.time)[0][:, 1])
+    with pytest.raises(ValueError, match="sway_period"):
+        BodyMotion(sway_period=0.0)

@@ -17,7 +17,7 @@ from sarins.systems import vehicle_rins
 from sarins_fmu import imu as imu_mod
 from sarins_fmu.ins import InsConfig, StrapdownINS
 from sarins_fmu.site import SITE_LAT
-from sarins_fmu.vehicle import VehicleTrajectory
+from sarins_fmu.vehicle import BodyMotion, VehicleTrajectory
 
 LEGS = "drive 120 10; turn 90; drive 120 12; stop 200; drive 60 8; turn -45; drive 60 8; stop 30"
 LEAD = 600.0
@@ -32,7 +32,8 @@ def fmu_dir(tmp_path_factory):
 
 
 def _trajectory(rotation="forward-reverse"):
-    return VehicleTrajectory(parse_legs(LEGS), SITE_LAT, 0.0, 0.0, step=1.0, rotation=rotation, lead_time=LEAD)
+    return VehicleTrajectory(parse_legs(LEGS), SITE_LAT, 0.0, 0.0, step=1.0, rotation=rotation, lead_time=LEAD,
+                             body=BodyMotion())  # the FMU's default sway and vibration
 
 
 def _run(fmu_dir, scheme):
@@ -62,8 +63,9 @@ def test_vehicle_system_equals_the_in_process_vehicle_run(fmu_dir):
     n_align = int(LEAD)  # compare the navigation (the library's batched alignment holds rows differently)
     cosim, ref = cosim[1:][n_align:], ref[n_align:]
     assert np.max(np.hypot(cosim[:, 2], cosim[:, 3])) > 5.0  # it did drive
-    # the vehicle FMU's heading schedule has other breakpoints than the in-process two-gimbal schedule
-    # (heading and RINS rotation merged), so the angles are summed in another order: last-bit differences
+    assert np.max(np.abs(cosim[:, 5])) > 0.1 * BodyMotion().sway_pitch  # and pitched
+    # the vehicle FMU's attitude schedule has other breakpoints than the in-process schedule (attitude and
+    # RINS rotation merged), so the angles are summed in another order: last-bit differences
     ref_disp = ref[:, :2] - ref[0, :2]
     scale = np.max(np.abs(ref_disp), axis=0)
     assert np.all(np.max(np.abs((cosim[:, :2] - cosim[0, :2]) - ref_disp), axis=0) <= 1e-9 * scale)

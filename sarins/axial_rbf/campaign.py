@@ -136,7 +136,7 @@ def _comparisons(rows: dict, tested: dict) -> dict:
         table = {}
         for name, est in methods.items():
             table[name] = [{"drift_dph": float(d), "error_dph": float(d - t["drift_dph"]),
-                            "max_nm": s0.compensated_max_nm(t, d)} for d, t in zip(est, tests)]
+                            "max_nmi": s0.compensated_max_nmi(t, d)} for d, t in zip(est, tests)]
         out[kind] = table
     return out
 

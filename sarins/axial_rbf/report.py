@@ -49,18 +49,18 @@ def table4(rows, hot_net) -> str:
 def table3(tests, live: bool) -> str:
     """Hot held-out experiments (Table 3 analogue)."""
     heads = ["#", "latitude (deg)", "true drift (deg/h)", "paper's truth (deg/h)", "RBF (deg/h)",
-             "error vs true (deg/h)", "error vs paper's (deg/h)", "before (nm/72h)", "after (nm/72h)",
-             "paper's truth after (nm/72h)"]
+             "error vs true (deg/h)", "error vs paper's (deg/h)", "before (nmi/72h)", "after (nmi/72h)",
+             "paper's truth after (nmi/72h)"]
     if live:
-        heads += ["live: FMU drift (deg/h)", "live: max 12-84 h (nm)"]
+        heads += ["live: FMU drift (deg/h)", "live: max 12-84 h (nmi)"]
     body = []
     for i, t in enumerate(tests):
         row = [i + 1, f"{s0.SITE_LAT_DEG + t['lat_error_deg']:.4f}", f"{t['drift_dph']:+.5f}",
                f"{t['paper_truth_dph']:+.5f}", f"{t['ident_dph']:+.5f}", f"{t['ident_dph'] - t['drift_dph']:+.5f}",
-               f"{t['ident_dph'] - t['paper_truth_dph']:+.5f}", f"{t['max_uncomp_nm']:.2f}",
-               f"{t['max_comp_nm']:.2f}", f"{t['paper_truth_max_nm']:.2f}"]
+               f"{t['ident_dph'] - t['paper_truth_dph']:+.5f}", f"{t['max_uncomp_nmi']:.2f}",
+               f"{t['max_comp_nmi']:.2f}", f"{t['paper_truth_max_nmi']:.2f}"]
         if live:
-            row += [f"{t['live_ident_dph']:+.5f}", f"{t['live_max_nm']:.2f}"]
+            row += [f"{t['live_ident_dph']:+.5f}", f"{t['live_max_nmi']:.2f}"]
         body.append(row)
     return _md(heads, body)
 
@@ -70,11 +70,11 @@ def table5(tests) -> str:
     body = [(i + 1, _rng(t["temp_align_min"], t["temp_align_max"]), f"{t['temp_change_c']:.1f}",
              _rng(t["temp_calib_min"], t["temp_calib_max"]), f"{t['drift_dph']:+.5f}",
              f"{t['ident_hot_dph'] - t['drift_dph']:+.5f}", f"{t['ident_cold_dph'] - t['drift_dph']:+.5f}",
-             f"{t['max_uncomp_nm']:.2f}", f"{t['max_hot_nm']:.2f}", f"{t['max_cold_nm']:.2f}")
+             f"{t['max_uncomp_nmi']:.2f}", f"{t['max_hot_nmi']:.2f}", f"{t['max_cold_nmi']:.2f}")
             for i, t in enumerate(tests)]
     return _md(["#", "alignment temp. (degC)", "diff", "calibration temp. (degC)", "true drift (deg/h)",
-                "hot-model error (deg/h)", "cold-model error (deg/h)", "uncompensated (nm/72h)",
-                "hot model (nm/72h)", "cold model (nm/72h)"], body)
+                "hot-model error (deg/h)", "cold-model error (deg/h)", "uncompensated (nmi/72h)",
+                "hot model (nmi/72h)", "cold model (nmi/72h)"], body)
 
 
 def comparison_table(comp: dict) -> str:
@@ -82,10 +82,10 @@ def comparison_table(comp: dict) -> str:
     for kind, methods in comp.items():
         for name, res in methods.items():
             err = np.array([r["error_dph"] for r in res])
-            nm = np.array([r["max_nm"] for r in res])
+            nm = np.array([r["max_nmi"] for r in res])
             body.append((kind, name, f"{np.sqrt(np.mean(err**2)):.5f}", f"{np.max(np.abs(err)):.5f}",
                          f"{np.mean(nm):.2f}", f"{np.max(nm):.2f}"))
-    return _md(["start", "method", "RMS error (deg/h)", "max error (deg/h)", "mean nm/72h", "max nm/72h"], body)
+    return _md(["start", "method", "RMS error (deg/h)", "max error (deg/h)", "mean nmi/72h", "max nmi/72h"], body)
 
 
 def verdict(comp: dict) -> str:
@@ -141,10 +141,10 @@ def _figures(summary, folder: Path) -> list[str]:
         t = hot[0]
         fig, ax = plt.subplots(figsize=(7, 4))
         th = t["time_h"]
-        ax.plot(th, t["pos_uncomp_nm"], label="before identification")
-        ax.plot(th, t["pos_hot_nm"], label=f"after (RBF {t['ident_dph']:+.5f} deg/h)")
+        ax.plot(th, t["pos_uncomp_nmi"], label="before identification")
+        ax.plot(th, t["pos_hot_nmi"], label=f"after (RBF {t['ident_dph']:+.5f} deg/h)")
         ax.set_xlabel("navigation time (h)")
-        ax.set_ylabel("position error (nm)")
+        ax.set_ylabel("position error (nmi)")
         ax.legend()
         ax.set_title(f"Fig. 3 analogue: {t['name']} (true drift {t['drift_dph']:+.5f} deg/h)")
         names.append(_save(fig, folder / "fig3_position_hot.png"))
@@ -152,10 +152,10 @@ def _figures(summary, folder: Path) -> list[str]:
     if cold:
         t = cold[0]
         fig, ax = plt.subplots(figsize=(7, 4))
-        ax.plot(t["time_h"], t["pos_hot_nm"], label=f"hot model ({t['ident_hot_dph']:+.5f} deg/h)")
-        ax.plot(t["time_h"], t["pos_cold_nm"], label=f"cold model ({t['ident_cold_dph']:+.5f} deg/h)")
+        ax.plot(t["time_h"], t["pos_hot_nmi"], label=f"hot model ({t['ident_hot_dph']:+.5f} deg/h)")
+        ax.plot(t["time_h"], t["pos_cold_nmi"], label=f"cold model ({t['ident_cold_dph']:+.5f} deg/h)")
         ax.set_xlabel("navigation time (h)")
-        ax.set_ylabel("position error (nm)")
+        ax.set_ylabel("position error (nmi)")
         ax.legend()
         ax.set_title(f"Fig. 4 analogue: cold start {t['name']} (true {t['drift_dph']:+.5f} deg/h)")
         names.append(_save(fig, folder / "fig4_position_cold.png"))
@@ -185,7 +185,7 @@ def write_report(summary: dict, folder) -> Path:
         f"target: {summary['truth']} truth. Wall time of the invocation that wrote this report "
         f"{summary['wall_seconds']:.0f} s (workers: {summary['workers'] or 'all cores'}; experiments finished "
         f"by an earlier invocation are reused, not rerun). Site 28.222 deg N, 4 h alignment, identification "
-        "at 12 h of navigation, 72 h evaluation. Position errors *nm/72h* are the largest horizontal error over "
+        "at 12 h of navigation, 72 h evaluation. Position errors *nmi/72h* are the largest horizontal error over "
         "72 h of navigation re-run with the drift subtracted from the start of navigation (the paper's "
         "offline protocol); *live* is the single co-simulation align -> 12 h -> identify -> compensate -> "
         "72 h, its largest error over 12-84 h (it keeps what the uncompensated first 12 h accumulated).",
@@ -194,7 +194,7 @@ def write_report(summary: dict, folder) -> Path:
         f"{np.max(np.abs(herr)):.5f} deg/h over {len(hot)} held-out experiments (paper: better than 0.0003).",
     ]
     if cold:
-        wins = sum(t["max_cold_nm"] < t["max_hot_nm"] for t in cold)
+        wins = sum(t["max_cold_nmi"] < t["max_hot_nmi"] for t in cold)
         lines.append(f"Cold start: the cold model beats the hot model on {wins} of {len(cold)} held-out experiments.")
     nets = summary["nets"]
     lines += ["", "Networks (goal: training RMS 0.0003 deg/h; SPREAD in standardised units chosen by "
@@ -209,7 +209,7 @@ def write_report(summary: dict, folder) -> Path:
         lines += [f"Live runs ({summary['engine']}): the identified drift equals the in-process prediction from "
                   f"the uncompensated run's 12 h features within {diff:.2g} deg/h on all {len(every)} held-out "
                   f"experiments; live largest error over 12-84 h: "
-                  + ", ".join(f"{t['live_max_nm']:.2f}" for t in every) + " nm.", ""]
+                  + ", ".join(f"{t['live_max_nmi']:.2f}" for t in every) + " nmi.", ""]
     walls = [t["wall_seconds"] for t in summary["train"]["hot"] + summary["train"]["cold"]]
     lines += [f"Per-experiment wall time: training runs {np.mean(walls):.0f} s mean, held-out "
               f"{np.mean([t['wall_seconds'] for t in every]):.0f} s mean (machine shared with other jobs).", ""]
@@ -228,7 +228,7 @@ def write_report(summary: dict, folder) -> Path:
               "closed_form: Table 1 inverted from the 12 h latitude error; linear: least-squares affine fit on "
               "the same training rows; kalman: filter over the 12 h latitude-error series "
               "(`sarins_fmu/identify/latitude_kf.py`); rbf: the network (cold: rbf_hot_model is the hot "
-              "network applied to cold starts). nm/72h from the affine error map of each experiment.", "",
+              "network applied to cold starts). nmi/72h from the affine error map of each experiment.", "",
               comparison_table(summary["comparison"]), "", verdict(summary["comparison"]), ""]
     lines += ["## Figures", ""] + [f"![{n}]({n})" for n in figs] + [""]
     path = folder / "report.md"

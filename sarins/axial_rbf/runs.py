@@ -129,7 +129,7 @@ def window(run: dict, start_h: float, end_h: float) -> np.ndarray:
     return np.column_stack([run["north_error"][sel], run["east_error"][sel]])
 
 
-def max_error_nm(err: np.ndarray) -> float:
+def max_error_nmi(err: np.ndarray) -> float:
     return float(np.max(np.hypot(err[:, 0], err[:, 1])) / NM)
 
 
@@ -191,7 +191,7 @@ def test_task(exp: dict, models: dict, engine: str = "inprocess", fmu_dir: str |
     sel12 = r0["time_h"] <= s0.IDENTIFY_HOURS + 1e-9
     out = {**e.to_dict(), **feats, "engine": engine, "time_h": r0["time_h"],
            "lat_error_series_deg": r0["lat_error"] * RAD_TO_DEG, "lon_error_series_deg": r0["lon_error"] * RAD_TO_DEG,
-           "pos_uncomp_nm": np.hypot(err0[:, 0], err0[:, 1]) / NM, "max_uncomp_nm": max_error_nm(err0),
+           "pos_uncomp_nmi": np.hypot(err0[:, 0], err0[:, 1]) / NM, "max_uncomp_nmi": max_error_nmi(err0),
            "temp_align_min": r0["temp_align"][0], "temp_align_max": r0["temp_align"][1],
            "temp_calib_min": float(r0["temp_z"][sel12].min()), "temp_calib_max": float(r0["temp_z"][sel12].max())}
     own = "cold" if e.start == "cold" else "hot"
@@ -214,9 +214,9 @@ def test_task(exp: dict, models: dict, engine: str = "inprocess", fmu_dir: str |
             err1 = err0 + drift * out["slope_ne"]
         out[f"ident_{kind}_dph"] = drift
         out[f"pos_{kind}_nm"] = np.hypot(err1[:, 0], err1[:, 1]) / NM
-        out[f"max_{kind}_nm"] = max_error_nm(err1)
-    out["ident_dph"], out["max_comp_nm"] = drifts[own], out[f"max_{own}_nm"]
-    out["paper_truth_dph"], out["paper_truth_max_nm"] = s0.paper_true_drift(err0, err_p, probe)
+        out[f"max_{kind}_nm"] = max_error_nmi(err1)
+    out["ident_dph"], out["max_comp_nmi"] = drifts[own], out[f"max_{own}_nm"]
+    out["paper_truth_dph"], out["paper_truth_max_nmi"] = s0.paper_true_drift(err0, err_p, probe)
     if live:
         out.update(_live(e, models[own], feats, engine, fmu_dir))
     out["wall_seconds"] = _time.perf_counter() - t0
@@ -236,8 +236,8 @@ def _live(e, model_file, feats, engine, fmu_dir) -> dict:
                                 correction_from_hours=s0.IDENTIFY_HOURS + APPLY_LATENCY / HOUR)
     err = window(run, s0.IDENTIFY_HOURS, hours)
     return {"live_ident_dph": drift, "live_twin_diff_dph": drift - expected,
-            "live_max_nm": max_error_nm(err), "live_end_nm": float(np.hypot(*err[-1]) / NM),
-            "live_pos_nm": np.hypot(err[:, 0], err[:, 1]) / NM}
+            "live_max_nmi": max_error_nmi(err), "live_end_nmi": float(np.hypot(*err[-1]) / NM),
+            "live_pos_nmi": np.hypot(err[:, 0], err[:, 1]) / NM}
 
 
 def cosim_check_task(exp: dict, model_file: str, fmu_dir: str, align_hours: float = 0.5,

@@ -2,7 +2,9 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -88,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
                                          output_every=args.output_every,
                                          progress=False if args.no_progress else None,
                                          realtime=args.realtime)
+                units = column_units(master, result.dtype.names)
             interrupt.check()
     except interrupt.Interrupted as stop:
         print(f"sarins cosim: {stop} (FMUs freed, extracted files removed)", file=sys.stderr)
@@ -100,8 +103,23 @@ def run(args: argparse.Namespace) -> int:
     if realtime is not None:
         print(realtime_summary(realtime))
     if args.output:
-        print(f"results written to {write_csv(result, args.output)}")
+        path = write_csv(result, args.output)
+        sidecar = Path(str(path) + ".units.json")
+        sidecar.write_text(json.dumps(units, indent=1) + "\n")
+        print(f"results written to {path} (units in {sidecar.name})")
     return 0
+
+
+def column_units(master, columns) -> dict:
+    """{column: unit} of a result's columns from the FMUs' model descriptions
+    ("s" for time, "1" where a variable declares no unit)."""
+    units = {"time": "s"}
+    index = {name: i for i, name in enumerate(master.names)}
+    for column in columns[1:]:
+        component, _, variable = column.partition(".")
+        found = master.variables[index[component]].get(variable) if component in index else None
+        units[column] = (getattr(found, "unit", None) or "1") if found is not None else "1"
+    return units
 
 
 def realtime_summary(report: dict) -> str:

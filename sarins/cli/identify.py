@@ -7,8 +7,7 @@
         --spread 2 --goal 9e-8 [--max-neurons N] --out model.json
     sarins identify predict --model model.json --data tests.csv [--out predictions.csv]
 
-The project's ``sarins`` command adds these through :func:`register`;
-``python -m sarins.cli.identify`` runs them alone.
+The ``sarins`` command adds these through :func:`register`.
 
 Latitude reading or error
     Seed 000 feeds the network the latitude *reading* after 4 h alignment and
@@ -46,7 +45,7 @@ from sarins_fmu.identify.modelfile import ModelFileError
 from sarins_fmu.identify.rbf import RBFNetwork
 from sarins_fmu.identify.tables import SEED000_SITE_LAT_DEG, TableError, numeric_column, read_table, write_table
 
-__all__ = ["register", "run", "main", "DEFAULT_GOAL", "DEFAULT_SPREAD"]
+__all__ = ["register", "run", "DEFAULT_GOAL", "DEFAULT_SPREAD"]
 
 DEFAULT_SPREAD = 2.0  # seed 000's SPREAD (standardised units here)
 DEFAULT_GOAL = 0.0003**2  # (deg/h)^2: seed 000's 0.0003 deg/h training error as an RMS
@@ -275,15 +274,3 @@ def run(args: argparse.Namespace) -> int:
         print(f"{where}: error: {message}", file=sys.stderr)
         return 2
     return 0
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Stand-alone entry: ``python -m sarins.cli.identify identify train ...``."""
-    parser = argparse.ArgumentParser(prog="sarins")
-    register(parser.add_subparsers(dest="command", required=True))
-    args = parser.parse_args(argv)
-    return args.func(args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -16,6 +16,8 @@ from orchestration import Component, Connection, System, write_ssd, write_ssp
 
 GIMBAL_LINKS = [f"{q}_{j}" for j in (1, 2, 3) for q in ("angle", "rate", "accel")] + [
     "ambient_temp", "ambient_temp_rate", "motion_time"]
+RAW_LINKS = [(f"dtheta_{a}", f"raw_dtheta_{a}") for a in "xyz"] + [(f"dv_{a}", f"raw_dv_{a}") for a in "xyz"]  # IMU -> IMUCompensator
+TEMPS = ["temp_gyro_x", "temp_gyro_y", "temp_gyro_z", "temp_accel_x", "temp_accel_y", "temp_accel_z"]
 INCREMENT_LINKS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z", "increment_end_time"]
 SHIPPED = Path(__file__).resolve().parent
 
@@ -139,3 +141,24 @@ def build_system_fmu(fmu_dir: Path | str) -> Path:
     path = build_container_fmu(system, Path(fmu_dir) / "StandardStaticSystem.fmu", step_size=1.0)
     fix_fmu_description(path, [(c.name, c.source) for c in system.components])
     return path
+
+
+def compensated_chain(fmu_dir: str | Path, compensator_fmu: str | Path, *, turntable=None, imu=None, ins=None,
+                      step: float = 0.05, stop: float = 3600.0):
+    """System Turntable -> IMUThermal -> IMUCompensator -> StrapdownINS (Gauss-Seidel order).
+
+    ``fmu_dir`` holds Turntable.fmu, IMUThermal.fmu and StrapdownINS.fmu;
+    the INS reads the compensated increments and the IMU's z-gyro temperature.
+    """
+    fmu_dir = Path(fmu_dir)
+    components = [Component("turntable", fmu_dir / "Turntable.fmu", dict(turntable or {})),
+                  Component("imu", fmu_dir / "IMUThermal.fmu", dict(imu or {})),
+                  Component("comp", Path(compensator_fmu), {}),
+                  Component("ins", fmu_dir / "StrapdownINS.fmu", dict(ins or {}))]
+    connections = [Connection("turntable", v, "imu", v) for v in GIMBAL_LINKS]
+    connections += [Connection("imu", a, "comp", b) for a, b in RAW_LINKS]
+    connections += [Connection("imu", t, "comp", t) for t in TEMPS]
+    connections += [Connection("comp", v, "ins", v) for v, _ in RAW_LINKS]
+    connections += [Connection("imu", "temp_gyro_z", "ins", "temp_gyro_z")]
+    return System(name="compensated_chain", components=components, connections=connections, start_time=0.0,
+                  stop_time=stop, step_size=step)

@@ -214,7 +214,7 @@ def paper_true_drift(err0: np.ndarray, err1: np.ndarray, drift1_dph: float,
         run without correction and of the run with ``drift1_dph`` subtracted
         (both from the start of navigation, same noise).  The errors are
         affine in the subtracted drift c, e(c) = err0 + c (err1 - err0)/drift1.
-    Returns (c*, max position error at c* in nm).
+    Returns (c*, max position error at c* in nmi).
     """
     from scipy.optimize import minimize_scalar
 
@@ -297,8 +297,8 @@ def kalman_drift_dph(time_h: np.ndarray, lat_error_deg: np.ndarray, hours: float
     return est["drift"] / DPH_TO_RPS
 
 
-def compensated_max_nm(result: dict, drift_dph: float) -> float:
-    """Largest 72 h position error (nm) of a re-run subtracting ``drift_dph``,
+def compensated_max_nmi(result: dict, drift_dph: float) -> float:
+    """Largest 72 h position error (nmi) of a re-run subtracting ``drift_dph``,
     from the affine map stored by the test task (uncompensated errors + slope)."""
     err = result["err0_ne"] + drift_dph * result["slope_ne"]
     return float(np.max(np.hypot(err[:, 0], err[:, 1])) / NM)

@@ -59,12 +59,12 @@ class StaticRunResult:
         return getattr(self, name)[k]
 
     def summary(self) -> dict:
-        """Scalars in the papers' units (deg, nm)."""
+        """Scalars in the papers' units (deg, nmi)."""
         out = {
             "lat_error_deg": float(self.lat_error[-1] * RAD_TO_DEG),
             "lon_error_deg": float(self.lon_error[-1] * RAD_TO_DEG),
-            "position_error_nm": float(self.position_error[-1] / NM),
-            "max_position_error_nm": float(np.max(self.position_error) / NM),
+            "position_error_nmi": float(self.position_error[-1] / NM),
+            "max_position_error_nmi": float(np.max(self.position_error) / NM),
         }
         if self.time[-1] >= 12 * HOUR - 1e-9:
             out["lat_error_deg_12h"] = float(self.at_hours("lat_error", 12.0) * RAD_TO_DEG)
@@ -133,7 +133,7 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
     initial = None
     if aligned_start:
         angle, _, _ = table.state(0.0)
-        initial = base.mat_nt @ _mat_tb(table.axes, angle[0])
+        initial = base.mat_nt @ turntable.chain_matrix(table.axes, angle[0])
     ins = StrapdownINS(config, initial_attitude=initial)
     align_error = np.zeros(3)
     nav_out = np.empty((n_total, 9))
@@ -147,7 +147,7 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
         if k0 < n_align <= k1:  # attitude error at the end of alignment vs the table truth
             nav_out[k0:n_align] = ins.step(dtheta[:n_align - k0], dv[:n_align - k0], corr[:n_align - k0])
             angle_end, _, _ = table.state(n_align * step)
-            align_error = small_angle_error(ins.mat_nb, base.mat_nt @ _mat_tb(table.axes, angle_end[0]))
+            align_error = small_angle_error(ins.mat_nb, base.mat_nt @ turntable.chain_matrix(table.axes, angle_end[0]))
             nav_out[n_align:k1] = ins.step(dtheta[n_align - k0:], dv[n_align - k0:], corr[n_align - k0:])
         else:
             nav_out[k0:k1] = ins.step(dtheta, dv, corr)
@@ -166,13 +166,3 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
               "accel_comp": ins.accel_comp.tolist(),
               "align_attitude_error": align_error.tolist()},
     )
-
-
-def _mat_tb(axes, angles):
-    """mat_tb of a gimbal chain at the given angles."""
-    from ..rotations import rotvec_to_mat
-
-    m = np.eye(3)
-    for axis, angle in zip(axes, angles):
-        m = m @ rotvec_to_mat(np.asarray(axis) * angle)
-    return m

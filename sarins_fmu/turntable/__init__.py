@@ -1,6 +1,6 @@
 """Turntable (gimbal) motion truth: rotation schemes and rate-table profiles.
 
-A :class:`GimbalSchedule` describes a chain of one to three gimbals.  Gimbal
+A :class:`GimbalSchedule` describes a chain of one to six gimbals.  Gimbal
 ``j`` turns by angle ``theta_j`` about the unit vector ``axes[j]`` expressed
 in its parent frame (the parent of gimbal 0 is the base frame ``t``; the
 innermost gimbal carries the IMU, frame ``b``), so

@@ -16,6 +16,7 @@ from .._jit import jit
 AXIS_X = (1.0, 0.0, 0.0)
 AXIS_Y = (0.0, 1.0, 0.0)
 AXIS_Z = (0.0, 0.0, 1.0)
+MAX_GIMBALS = 6  # a vehicle's three attitude gimbals and a table's three
 
 
 @dataclass(frozen=True)
@@ -44,8 +45,8 @@ class GimbalSchedule:
         axes = np.atleast_2d(np.asarray(self.axes, dtype=float))
         times = np.asarray(self.times, dtype=float)
         accel = np.asarray(self.accel, dtype=float).reshape(len(times) - 1, axes.shape[0])
-        if axes.shape[1] != 3 or not 1 <= axes.shape[0] <= 3:
-            raise ValueError("axes must have shape (A, 3) with 1 <= A <= 3")
+        if axes.shape[1] != 3 or not 1 <= axes.shape[0] <= MAX_GIMBALS:
+            raise ValueError(f"axes must have shape (A, 3) with 1 <= A <= {MAX_GIMBALS}")
         if not np.allclose(np.linalg.norm(axes, axis=1), 1.0):
             raise ValueError("gimbal axes must be unit vectors")
         if times.ndim != 1 or len(times) < 1 or np.any(np.diff(times) <= 0):

@@ -40,9 +40,9 @@ class Feed(Fmi2Slave):
         self.x += self.u * step_size
         return True
 
-    def to_xml(self, model_options=dict()):
+    def to_xml(self, model_options=None):
         """pythonfmu's description plus units and declared output dependencies."""
-        root = super().to_xml(model_options)
+        root = super().to_xml(model_options or {})
         units = Element("UnitDefinitions")
         unit = SubElement(units, "Unit", name="rad")
         SubElement(unit, "BaseUnit", rad="1")
