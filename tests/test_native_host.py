@@ -16,10 +16,9 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
-from fmus.build import build_fmus
 
 HERE = Path(__file__).resolve().parent
-NAMES = ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "DriftModelUpdater"]
+NAMES = ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "DriftModelUpdater", "VehicleMotion"]
 QUICK = {"IMUThermal": {"internal_rate": 10.0},  # plain-Python minor loop: keep the default run short
          # a static, level, north-pointing IMU at 28.222 deg (Earth rate and gravity per 1 s step)
          "StrapdownINS": {"dtheta_y": 6.4258e-5, "dtheta_z": 3.4486e-5, "dv_z": 9.7913, "align_time": 600.0}}
@@ -40,11 +39,11 @@ def host(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
-def unzipped(tmp_path_factory):
-    """{name: (unzipped folder, model description)} of freshly built FMUs."""
+def unzipped(fmu_dir, tmp_path_factory):
+    """{name: (unzipped folder, model description)} of the session's FMUs."""
     out = tmp_path_factory.mktemp("native_fmus")
     result = {}
-    for fmu in build_fmus(out / "fmus", NAMES):
+    for fmu in (fmu_dir / f"{name}.fmu" for name in NAMES):
         folder = out / fmu.stem
         with zipfile.ZipFile(fmu) as z:
             z.extractall(folder)

@@ -19,7 +19,6 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
-from fmus.build import build_fmus
 from sarins.systems import standard_static_identified
 
 pytestmark = pytest.mark.slow
@@ -29,19 +28,11 @@ ROOT = HERE.parent
 ALIGN, TRIGGER, STEPS = 600.0, 300.0, 1200
 PARAMS = dict(turntable=dict(align_time=ALIGN), ins=dict(align_time=ALIGN, coarse_time=120.0),
               identifier=dict(trigger_time=TRIGGER))
-NAMES = ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier"]
 
 
 def clean_env() -> dict:
     return {k: v for k, v in os.environ.items()
             if k not in ("PYTHONPATH", "PYTHONHOME", "LD_PRELOAD", "LD_LIBRARY_PATH", "SARINS_NO_NUMBA")}
-
-
-@pytest.fixture(scope="module")
-def fmu_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("stress_fmus")
-    build_fmus(out, NAMES)
-    return out
 
 
 def write_plan(system, fmu_dir: Path, unzip_root: Path, steps: int, step: float, prints) -> Path:
