@@ -54,7 +54,7 @@ class VehicleMotion(Fmi2Slave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         declare(self, "string", "legs", PARAMETER, "drive/turn/stop legs, ';'-separated",
-                "drive 300 10; turn 90; drive 300 12; stop 1800; drive 180 10")
+                "drive 300 10; turn 90; drive 300 12; stop 1800; drive 180 10; stop 60")
         declare(self, "real", "lat0", PARAMETER, "start latitude [rad; deg]", SITE_LAT_DEG * DEG)
         declare(self, "real", "lon0", PARAMETER, "start longitude [rad; deg]", 0.0)
         declare(self, "real", "heading0", PARAMETER, "start heading, CCW from north [rad; deg]", 0.0)

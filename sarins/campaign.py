@@ -2,12 +2,19 @@
 
 A campaign is a set of named tasks, each a module-level function and its
 keyword arguments, returning a dict of numbers, strings and numpy arrays.
-:func:`run_campaign` runs the tasks that have no stored result yet through a
-``concurrent.futures`` executor -- local processes by default, a Dask
-distributed cluster when a scheduler address is given -- and stores each
-result the moment it arrives (``<out_dir>/<task id>.npz``, written to a
-temporary file and renamed, so a file is either complete or absent).  Killed
-half-way, the same call later skips what is finished and runs the rest.
+:func:`run_campaign` runs the tasks that have no valid stored result through
+local worker processes (default) or a Dask distributed cluster (a scheduler
+address), and stores each result the moment it arrives
+(``<out_dir>/<task id>.npz``).  Killed half-way, the same call later reuses
+what is finished and runs the rest.
+
+A stored result is reused only if the record that made it (task function,
+canonical keyword arguments, campaign options, package version, hash of the
+code; :mod:`sarins.results`) equals the record of the task now, and it loads
+and validates; otherwise it is recomputed with a one-line notice naming the
+file.  Writes are atomic and durable; one campaign at a time holds an output
+folder (:func:`sarins.results.exclusive`); workers are single-threaded and
+die with the campaign process (:mod:`sarins.workers`).
 
 Nothing here knows what the tasks compute.
 """
@@ -15,136 +22,148 @@ Nothing here knows what the tasks compute.
 from __future__ import annotations
 
 import concurrent.futures as cf
-import multiprocessing
-import os
 import re
-import tempfile
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
+from .results import (OutputBusyError, StoredResultError, atomic_output, build_artifacts, canonical_json,  # noqa: F401
+                      code_hash, exclusive, load_result, load_valid, remove_stale_temporaries, save_result, task_record,
+                      write_text)
+from .workers import DependencyError, SchedulerError, make_pool  # noqa: F401
 
 _ID = re.compile(r"^[A-Za-z0-9_.-]+$")
 
 
 @dataclass(frozen=True)
 class Task:
-    """One experiment: ``fn(**kwargs)`` -> dict.  ``id`` names its result file."""
+    """One experiment: ``fn(**kwargs)`` -> dict.  ``id`` names its result file.
+
+    volatile : names of keyword arguments that do not change the result
+        (paths of artefacts keyed elsewhere, test delays); left out of the record.
+    identity : what else the result depends on (e.g. digests of model files
+        the kwargs only name); part of the record.
+    finite : result keys that must be present and finite for a stored
+        result to be reused.
+    """
 
     id: str
     fn: Callable
     kwargs: dict = field(default_factory=dict)
+    volatile: tuple = ()
+    identity: dict = field(default_factory=dict)
+    finite: tuple = ()
 
     def __post_init__(self):
         if not _ID.match(self.id):
             raise ValueError(f"task id {self.id!r} may only hold letters, digits, '_', '-' and '.'")
 
 
+class TaskFailed(RuntimeError):
+    """A task raised: the campaign stops (finished results stay stored)."""
+
+
+class CampaignResults(dict):
+    """{task id: result}; ``computed`` lists the ids computed by this call."""
+
+    computed: list
+
+
 def result_path(out_dir: Path, task_id: str) -> Path:
     return Path(out_dir) / f"{task_id}.npz"
 
 
-def save_result(path: Path, result: dict) -> None:
-    """Atomically write a result dict (values become numpy arrays; no pickle)."""
-    path = Path(path)
-    arrays = {}
-    for key, value in result.items():
-        arr = np.asarray(value)
-        if arr.dtype == object:
-            raise TypeError(f"result {key!r} of {path.name} is not numeric or text")
-        arrays[key] = arr
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".npz.tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            np.savez(fh, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
-
-
-def load_result(path: Path) -> dict:
-    """Read a stored result; scalars come back as Python numbers/strings."""
-    with np.load(path, allow_pickle=False) as data:
-        return {key: (data[key].item() if data[key].ndim == 0 else data[key]) for key in data.files}
-
-
-def _call(fn, kwargs):
-    return fn(**kwargs)
-
-
-def make_executor(workers: int | None = None, scheduler: str | None = None):
-    """A concurrent.futures executor: Dask when ``scheduler`` is an address
-    ('tcp://host:8786'), else a local process pool (spawned workers)."""
-    if scheduler:
-        try:
-            from dask.distributed import Client
-        except ImportError:
-            raise RuntimeError("a Dask scheduler was given but dask.distributed is not installed: "
-                               "pip install 'sarins-fmu[distributed]'") from None
-        client = Client(scheduler)
-        return client.get_executor(), client
-    ctx = multiprocessing.get_context("spawn")
-    return cf.ProcessPoolExecutor(max_workers=workers or os.cpu_count(), mp_context=ctx), None
+def _notice(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
 
 
 def run_campaign(tasks, out_dir, *, workers: int | None = None, scheduler: str | None = None,
-                 progress: bool = True, description: str = "campaign") -> dict:
-    """Run the tasks without a stored result; return {task id: result} for all.
+                 progress: bool = True, description: str = "campaign", options: dict | None = None,
+                 notice: Callable[[str], None] = _notice) -> CampaignResults:
+    """Run the tasks without a valid stored result; return {task id: result} for all.
 
     Parameters
     ----------
     tasks : iterable of Task (ids unique)
-    out_dir : directory for the per-task result files (created)
+    out_dir : directory for the per-task result files (created, locked while running)
     workers : local worker processes (default: CPU count); 1 runs in this
         process, one task after another
     scheduler : address of a Dask distributed scheduler (overrides workers)
     progress : show a tqdm progress bar
+    description : label of the bar and of the notices
+    options : campaign options that change results without being task
+        arguments; part of every task's record
+    notice : callable receiving one-line notices (stale or corrupt files)
     """
     tasks = list(tasks)
     ids = [t.id for t in tasks]
     if len(set(ids)) != len(ids):
         raise ValueError("task ids must be unique")
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    todo = [t for t in tasks if not result_path(out_dir, t.id).exists()]
-    bar = _bar(len(tasks), len(tasks) - len(todo), progress, description)
-    try:
-        if todo and (workers == 1 and not scheduler):
-            for task in todo:
-                save_result(result_path(out_dir, task.id), task.fn(**task.kwargs))
-                bar.update(1)
-        elif todo:
-            _run_parallel(todo, out_dir, workers, scheduler, bar)
-    finally:
-        bar.close()
-    return {t.id: load_result(result_path(out_dir, t.id)) for t in tasks}
+    with exclusive(out_dir):
+        remove_stale_temporaries(out_dir)
+        records = {t.id: task_record(t, options) for t in tasks}
+        results = CampaignResults()
+        todo = []
+        for task in tasks:
+            path = result_path(out_dir, task.id)
+            try:
+                results[task.id] = load_valid(path, records[task.id], task.finite)
+            except FileNotFoundError:
+                todo.append(task)
+            except StoredResultError as exc:
+                notice(f"{description}: recomputing {path}: {exc}")
+                todo.append(task)
+        results.computed = [t.id for t in todo]
+        bar = _bar(len(tasks), len(tasks) - len(todo), progress, description)
+        try:
+            if todo and (workers == 1 and not scheduler):
+                for task in todo:
+                    try:
+                        result = task.fn(**task.kwargs)
+                    except Exception as exc:
+                        raise TaskFailed(f"task {task.id} failed: {type(exc).__name__}: {exc}") from exc
+                    results[task.id] = _store(out_dir, task, result, records[task.id])
+                    bar.update(1)
+            elif todo:
+                _run_parallel(todo, out_dir, workers, scheduler, bar, records, results)
+        finally:
+            bar.close()
+    return _ordered(results, ids)
 
 
-def _run_parallel(todo, out_dir, workers, scheduler, bar):
-    executor, client = make_executor(workers, scheduler)
-    futures = {}
+def _ordered(results: CampaignResults, ids) -> CampaignResults:
+    out = CampaignResults((i, results[i]) for i in ids)
+    out.computed = results.computed
+    return out
+
+
+def _store(out_dir, task, result, record) -> dict:
+    if not isinstance(result, dict):
+        raise TypeError(f"task {task.id} returned {type(result).__name__}, not a dict")
+    path = result_path(out_dir, task.id)
+    save_result(path, result, record)
+    return load_result(path)  # what a resume would see
+
+
+def _run_parallel(todo, out_dir, workers, scheduler, bar, records, results):
+    pool = make_pool(workers, scheduler)
+    interrupted = True
     try:
-        futures = {executor.submit(_call, t.fn, t.kwargs): t for t in todo}
+        futures = {pool.submit(t.fn, t.kwargs): t for t in todo}
         for future in cf.as_completed(futures):
             task = futures[future]
             try:
                 result = future.result()
             except Exception as exc:
-                raise RuntimeError(f"task {task.id} failed: {type(exc).__name__}: {exc}") from exc
-            save_result(result_path(out_dir, task.id), result)
+                raise TaskFailed(f"task {task.id} failed: {type(exc).__name__}: {exc}") from exc
+            results[task.id] = _store(out_dir, task, result, records[task.id])
             bar.update(1)
-    except BaseException:
-        for future in futures:
-            future.cancel()
-        raise
+        interrupted = False
     finally:
-        executor.shutdown(wait=True, cancel_futures=True)
-        if client is not None:
-            client.close()
+        pool.close(interrupted)
 
 
 class _NoBar:

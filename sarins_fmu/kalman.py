@@ -197,21 +197,30 @@ class StopKalmanFilter:
     settings : StopFilterSettings
     dt : float
         Measurement interval, s (the INS output step).
+    history_limit : int
+        Most rows of :attr:`history` kept per stop (default 0: none, so a
+        long stop costs no memory; :meth:`convergence` needs a limit > 0).
+        Rows past the limit are dropped, the estimate is unaffected.
 
     Attributes
     ----------
     elapsed : float
         Time since the last reset, s.
     history : list of (K, 2) arrays
-        ε_z estimate and its standard deviation after each step, rad/s.
+        ε_z estimate and its standard deviation after each step, rad/s, the
+        first ``history_limit`` steps of the stop.
     """
 
-    def __init__(self, lat: float, settings: StopFilterSettings = StopFilterSettings(), dt: float = 1.0):
+    def __init__(self, lat: float, settings: StopFilterSettings = StopFilterSettings(), dt: float = 1.0,
+                 history_limit: int = 0):
         if not (math.isfinite(lat) and abs(lat) <= 89.9 * DEG_TO_RAD):
             raise ValueError(f"latitude must be finite and within +-89.9 deg, got {lat!r} rad")
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"filter step must be positive, got {dt!r}")
+        if int(history_limit) < 0:
+            raise ValueError(f"history_limit must be >= 0, got {history_limit!r}")
         self.lat, self.settings, self.dt = float(lat), settings, float(dt)
+        self.history_limit = int(history_limit)
         self._q = settings.process_noise()
         self._r = settings.velocity_meas_std**2
         self.reset()
@@ -229,6 +238,7 @@ class StopKalmanFilter:
         self._temperature_sum = 0.0
         self._n = 0
         self.history: list[np.ndarray] = []
+        self._history_rows = 0
 
     def step(self, velocity_en, attitude, axial_correction=0.0, temperature=np.nan) -> np.ndarray:
         """Process K INS output rows taken at the stop.
@@ -255,7 +265,10 @@ class StopKalmanFilter:
         if not (np.isfinite(vel).all() and np.isfinite(att).all() and np.isfinite(corr).all()):
             raise ValueError("INS outputs contain NaN or infinity")
         out = stop_filter_steps(self.x, self.p, vel, att, self.lat, self.dt, self._q, self._r)
-        self.history.append(out)
+        room = self.history_limit - self._history_rows
+        if room > 0:  # bounded: a parked vehicle's stop may last months
+            self.history.append(out[:room].copy())
+            self._history_rows += min(room, n)
         self.elapsed += n * self.dt
         self._correction_sum += float(np.sum(corr))
         self._temperature_sum += float(np.sum(temp))
@@ -284,7 +297,8 @@ class StopKalmanFilter:
         return self._temperature_sum / self._n if self._n else float("nan")
 
     def convergence(self) -> np.ndarray:
-        """(K, 3): time since reset (s), ε_z residual estimate and std (rad/s)."""
+        """(K, 3): time since reset (s), ε_z residual estimate and std (rad/s),
+        the first ``history_limit`` steps of the stop."""
         if not self.history:
             return np.empty((0, 3))
         h = np.concatenate(self.history)

@@ -16,3 +16,17 @@ def square(x, marker_dir=None, delay=0.0):
 
 def fail(x):
     raise ValueError(f"bad input {x}")
+
+
+def environment():
+    """What a worker sees: its single-thread settings and its parent."""
+    import sys
+
+    numba = sys.modules.get("numba")
+    return {"numba_env": os.environ.get("NUMBA_NUM_THREADS", ""), "omp_env": os.environ.get("OMP_NUM_THREADS", ""),
+            "numba_threads": numba.get_num_threads() if numba is not None else -1, "pid": os.getpid()}
+
+
+def sleeper(x, seconds=60.0):
+    time.sleep(seconds)
+    return {"x": x}

@@ -55,7 +55,8 @@ def test_killed_campaign_resumes_without_losing_or_redoing_work(tmp_path):
         sys.path[:0] = [{str(HERE)!r}, {str(HERE.parent)!r}]
         from campaign_tasks import square
         from sarins.campaign import Task, run_campaign
-        tasks = [Task(f"sq{{x}}", square, {{"x": x, "marker_dir": {str(markers)!r}, "delay": 0.4}}) for x in range(12)]
+        tasks = [Task(f"sq{{x}}", square, {{"x": x, "marker_dir": {str(markers)!r}, "delay": 0.4}},
+                      volatile=("marker_dir", "delay")) for x in range(12)]
         run_campaign(tasks, {str(out)!r}, workers=2, progress=False)
     """)
     proc = subprocess.Popen([sys.executable, "-c", script], start_new_session=True)
@@ -68,7 +69,8 @@ def test_killed_campaign_resumes_without_losing_or_redoing_work(tmp_path):
     assert 3 <= len(finished) < 12
     for task_id in finished:  # every stored file is complete (written whole, then renamed)
         assert load_result(out / f"{task_id}.npz")["y"] == int(task_id[2:]) ** 2
-    tasks = [Task(f"sq{x}", square, {"x": x, "marker_dir": str(markers), "delay": 0.0}) for x in range(12)]
+    tasks = [Task(f"sq{x}", square, {"x": x, "marker_dir": str(markers), "delay": 0.0}, volatile=("marker_dir", "delay"))
+             for x in range(12)]
     results = run_campaign(tasks, out, workers=2, progress=False)
     runs = {}
     for marker in markers.iterdir():

@@ -86,3 +86,20 @@ def test_bad_inputs_are_rejected():
         kf.step([np.nan, 0.0], [0.0, 0.0, 0.0])
     with pytest.raises(ValueError, match="attitude"):
         kf.step(np.zeros((3, 2)), np.zeros((2, 3)))
+
+
+def test_history_is_bounded_and_does_not_change_the_estimate():
+    """A long stop (a parked vehicle) costs no memory: by default no history,
+    with a limit at most that many rows; the estimate is the same either way."""
+    rng = np.random.default_rng(0)
+    vel, att = rng.normal(0, 1e-3, (300, 2)), np.tile([0.1, 0.0, 0.0], (300, 1))
+    lat = 30 * DEG_TO_RAD
+    kept, none = StopKalmanFilter(lat, history_limit=250), StopKalmanFilter(lat)
+    for k in range(0, 300, 100):
+        kept.step(vel[k:k + 100], att[k:k + 100])
+        none.step(vel[k:k + 100], att[k:k + 100])
+    assert none.history == [] and none.convergence().shape == (0, 3)
+    assert kept.convergence().shape == (250, 3)
+    assert kept.drift_estimate == none.drift_estimate
+    with pytest.raises(ValueError):
+        StopKalmanFilter(lat, history_limit=-1)

@@ -29,7 +29,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--engine", choices=("inprocess", "cosim"), default=None,
                         help="run the experiments in process or through the FMUs "
                              "(default: quick inprocess, paper cosim)")
-    parser.add_argument("--seed", type=int, default=0, help="campaign seed (default 0)")
+    from sarins.cli import seed_value
+
+    parser.add_argument("--seed", type=seed_value, default=0,
+                        help="base random seed of the campaign (draws the experiments' conditions and noise "
+                             "seeds), 0 .. 2**31-1 (default 0)")
     parser.add_argument("--truth", choices=("simulated", "paper"), default="simulated",
                         help="training target: the simulated true drift, or the paper's protocol "
                              "(drift minimising the 72 h position error of a re-run)")
@@ -38,7 +42,7 @@ def add_arguments(parser) -> None:
 
 
 def _digest(path: Path) -> str:
-    return hashlib.sha1(Path(path).read_bytes()).hexdigest()[:10]
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:10]
 
 
 def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0, out, workers=None,
@@ -49,7 +53,7 @@ def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0,
     sizes : (hot train, hot test, cold train, cold test), default the profile's;
     nav_hours : evaluation window of the held-out runs (default 72 h; shorter
     only to test the campaign machinery quickly)."""
-    from sarins.campaign import Task, run_campaign
+    from sarins.campaign import Task, atomic_output, build_artifacts, code_hash, run_campaign
 
     from sarins_fmu.experiments import axial_rbf as s0
     from . import runs
@@ -64,34 +68,42 @@ def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0,
     t_start = time.perf_counter()
     fmu_dir = None
     if engine == "cosim" or profile == "quick":
-        from fmus.build import build_fmus
+        from fmus.build import DEFAULT_NAMES, build_fmus
 
-        fmu_dir = str(build_fmus(out / "fmus")[0].parent)
+        # built in a temporary folder and moved into place; rebuilt when the code changes
+        fmu_dir = str(build_artifacts(out / "fmus", [f"{n}.fmu" for n in DEFAULT_NAMES], build_fmus,
+                                      code_hash())[0].parent)
     exps = {"hot": s0.generate("hot", n_ht, n_hv, seed), "cold": s0.generate("cold", n_ct, n_cv, seed)}
     common = dict(workers=workers, scheduler=scheduler, progress=progress)
     tr = "" if truth == "simulated" else "-ptruth"
     train_tasks = [Task(f"s{seed}-{e.name}-{engine}{tr}", runs.train_task,
-                        {"exp": e.to_dict(), "engine": engine, "fmu_dir": fmu_dir, "paper_truth": truth == "paper"})
+                        {"exp": e.to_dict(), "engine": engine, "fmu_dir": fmu_dir, "paper_truth": truth == "paper"},
+                        volatile=("fmu_dir",), finite=("drift_dph", "lat_error_deg"))
                    for k in exps for e in exps[k] if e.role == "train"]
     train = run_campaign(train_tasks, run_dir, description="axial-rbf training runs", **common)
     rows = {k: [train[t.id] for t in train_tasks if t.kwargs["exp"]["start"] == k] for k in exps}
     target = "drift_dph" if truth == "simulated" else "paper_truth_dph"
     model_dir = out / "models"
     model_dir.mkdir(parents=True, exist_ok=True)
-    nets = {"hot": s0.train_rbf(rows["hot"], s0.HOT_INPUTS, model_dir / "hot.json", target=target),
-            "cold": s0.train_rbf(rows["cold"], s0.COLD_INPUTS, model_dir / "cold.json", target=target)}
+    nets = {}
+    for kind, inputs in (("hot", s0.HOT_INPUTS), ("cold", s0.COLD_INPUTS)):
+        with atomic_output(model_dir / f"{kind}.json", keep_suffix=True) as tmp:  # a kill never leaves half a model
+            nets[kind] = s0.train_rbf(rows[kind], inputs, tmp, target=target)
     models = {k: str(model_dir / f"{k}.json") for k in nets}
-    tag = _digest(model_dir / "hot.json") + _digest(model_dir / "cold.json")
+    digests = {k: _digest(model_dir / f"{k}.json") for k in nets}
+    tag = digests["hot"] + digests["cold"]
     nav = s0.NAV_HOURS if nav_hours is None else float(nav_hours)
     exact = profile == "paper"
     test_tasks = [Task(f"s{seed}-{e.name}-{engine}-{'live' if live else 'nolive'}-{nav:g}h-{int(exact)}-{tag}",
                        runs.test_task, {"exp": e.to_dict(), "models": models, "engine": engine, "fmu_dir": fmu_dir,
-                                        "live": live, "rerun_all": exact, "nav_hours": nav})
+                                        "live": live, "rerun_all": exact, "nav_hours": nav},
+                       volatile=("models", "fmu_dir"), identity={"models": digests})
                   for k in exps for e in exps[k] if e.role == "test"]
     if profile == "quick":
         first = exps["hot"][n_ht]
         test_tasks.append(Task(f"s{seed}-cosim-check-{tag}", runs.cosim_check_task,
-                               {"exp": first.to_dict(), "model_file": models["hot"], "fmu_dir": fmu_dir}))
+                               {"exp": first.to_dict(), "model_file": models["hot"], "fmu_dir": fmu_dir},
+                               volatile=("model_file", "fmu_dir"), identity={"model": digests["hot"]}))
     tests = run_campaign(test_tasks, run_dir, description="axial-rbf held-out runs", **common)
     check = tests.pop(test_tasks[-1].id) if profile == "quick" else None
     tested = {k: [tests[t.id] for t in test_tasks if t.id in tests and t.kwargs["exp"]["start"] == k]

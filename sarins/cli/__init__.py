@@ -3,8 +3,13 @@
 Each sub-command lives in a module of this package with ``register(sub)``
 (adds its parser, sets ``func``) and a function that calls the library or
 the application layer and prints.  Conventions for every command: exit 0 on
-success, 2 for bad usage or input, 1 for a run that failed; every message is
-one line starting with the command's name; warnings print as one plain line.
+success, 2 for bad usage or input, 1 for a run that failed, 130 on Ctrl-C
+(SIGINT) and 143 on SIGTERM; every message is one line starting with the
+command's name (``sarins <command>: error: ...`` or ``...: failed: ...``),
+never a traceback (``SARINS_DEBUG=1`` re-raises unexpected errors); warnings
+print as one plain line.  ``--seed`` means the same in every command: the
+base random seed of the run or campaign, an integer in 0 .. 2**31-1 (the
+FMUs' 32-bit Integer).
 """
 
 from __future__ import annotations
@@ -12,7 +17,10 @@ from __future__ import annotations
 import argparse
 import importlib
 import math
+import os
+import signal
 import sys
+import threading
 import warnings
 
 from sarins import __version__
@@ -31,6 +39,15 @@ class RunError(RuntimeError):
     """A run that failed (not the user's input): one line, exit status 1."""
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is (so the clean-up of Ctrl-C runs): exit 143."""
+
+
+EXIT_SIGINT = 130  # 128 + SIGINT
+EXIT_SIGTERM = 143  # 128 + SIGTERM
+SEED_MAX = 2**31 - 1  # random seeds reach the FMUs as fmi2Integer (32-bit)
+
+
 def finite(text: str) -> float:
     """argparse type: a finite float."""
     try:
@@ -40,6 +57,53 @@ def finite(text: str) -> float:
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
     return value
+
+
+def seed_value(text: str) -> int:
+    """argparse type: a random seed the FMUs' 32-bit Integer can carry (0 .. 2**31 - 1)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if not 0 <= value <= SEED_MAX:
+        raise argparse.ArgumentTypeError(f"must be in 0 .. 2**31-1, got {value}")
+    return value
+
+
+def bounded_int(low: int, high: int):
+    """argparse type: an integer in [low, high] (sizes are checked before anything is allocated)."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"must be in {low} .. {high}, got {value}")
+        return value
+
+    return parse
+
+
+def available_memory() -> int:
+    """Bytes the kernel says are available (MemAvailable), or 4 GiB if unknown."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 4 * 2**30
+
+
+def check_size(n_items: float, bytes_each: float, what: str) -> None:
+    """Refuse (UsageError) before allocating ``n_items * bytes_each`` bytes if
+    that is more than half the available memory."""
+    need = float(n_items) * float(bytes_each)
+    have = available_memory()
+    if not need <= have / 2:
+        raise UsageError(f"{what} needs about {need / 2**30:.3g} GiB of memory, more than half of the "
+                         f"{have / 2**30:.3g} GiB available")
 
 
 def positive_int(text: str) -> int:
@@ -74,22 +138,62 @@ def _plain_warning(message, category, filename, lineno, file=None, line=None):
     print(f"sarins: warning: {message}", file=sys.stderr if file is None else file)
 
 
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
+
+
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     name = f"sarins {args.command}"
+    if getattr(args, "campaign", None):
+        name += f" {args.campaign}"
+    old_warning = warnings.showwarning
     warnings.showwarning = _plain_warning
+    old_term = None
+    if threading.current_thread() is threading.main_thread():
+        old_term = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
         return int(args.func(args) or 0)
-    except (UsageError, ValueError, OSError) as exc:
-        print(f"{name}: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
-    except RunError as exc:
-        print(f"{name}: failed: {exc}", file=sys.stderr)
-        return EXIT_FAILED
+    except Terminated:
+        print(f"{name}: terminated", file=sys.stderr)
+        return EXIT_SIGTERM
     except KeyboardInterrupt:
         print(f"{name}: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_SIGINT
+    except RecursionError as exc:  # a deeply nested input file that escaped its reader
+        if os.environ.get("SARINS_DEBUG"):
+            raise
+        print(f"{name}: error: input nested too deeply ({_one_line(exc)})", file=sys.stderr)
+        return EXIT_USAGE
+    except ImportError as exc:  # an optional dependency the chosen options need
+        missing = getattr(exc, "name", None) or _one_line(exc)
+        print(f"{name}: error: this needs the package {missing!r}, which is not installed or cannot be "
+              "imported", file=sys.stderr)
+        return EXIT_USAGE
+    except (UsageError, ValueError, OSError) as exc:
+        print(f"{name}: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+    except (RunError, RuntimeError) as exc:  # incl. an FMU call that failed, a campaign task that failed
+        print(f"{name}: failed: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_FAILED
+    except MemoryError:
+        print(f"{name}: failed: out of memory", file=sys.stderr)
+        return EXIT_FAILED
+    except Exception as exc:
+        if os.environ.get("SARINS_DEBUG"):
+            raise
+        print(f"{name}: failed: internal error {type(exc).__name__}: {_one_line(exc)} "
+              "(SARINS_DEBUG=1 shows the traceback)", file=sys.stderr)
+        return EXIT_FAILED
+    finally:
+        warnings.showwarning = old_warning
+        if old_term is not None:
+            signal.signal(signal.SIGTERM, old_term)
 
 
 if __name__ == "__main__":

@@ -29,7 +29,7 @@ def register(sub) -> None:
                    help="analyse this recorded static log (.csv or .npz, docs/imu-log.md) instead of a preset")
     p.add_argument("--hours", type=finite, default=28.0, help="length of the static record, h (default 28)")
     p.add_argument("--rate-hz", type=finite, default=1.0, help="sample rate, Hz (default 1)")
-    p.add_argument("--seed", type=seed_value, default=0, help="random seed of the IMU")
+    p.add_argument("--seed", type=seed_value, default=0, help="base random seed of the run (the IMU noise), 0 .. 2**31-1 (default 0)")
     p.add_argument("--plot", default=None, help="write the annotated Allan plot to this PNG file")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)

@@ -9,7 +9,12 @@ name to it) exposing
   (reported by ``sarins`` as one line, exit status 2).
 
 The options every campaign shares (``--profile``, ``--workers``,
-``--scheduler``, ``--out``, ``--no-progress``) are added here.  A campaign
+``--scheduler``, ``--out``, ``--no-progress``) are added and checked here,
+before any work: ``--scheduler`` needs Dask installed, ``--out`` must be a
+folder, and one campaign at a time holds it (a second one on the same
+``--out`` is refused with exit status 2 and the holder's pid; it does not
+wait).  A task that fails, or an FMU call that fails, ends the campaign
+with exit status 1; Ctrl-C and SIGTERM stop it and its workers (130/143).  A campaign
 module that cannot be imported (it is missing or an optional dependency is
 absent at import time) is not offered.
 """
@@ -18,7 +23,9 @@ from __future__ import annotations
 
 import importlib
 
-from . import positive_int
+from pathlib import Path
+
+from . import RunError, UsageError, bounded_int
 
 CAMPAIGNS = {
     "axial-rbf": "sarins.axial_rbf.campaign",  # seed 000: RBF identification of the axial drift
@@ -30,10 +37,12 @@ CAMPAIGNS = {
 def _add_common(parser, name: str) -> None:
     parser.add_argument("--profile", choices=("quick", "paper"), default="quick",
                         help="quick: minutes, for tests; paper: the paper's protocol (default quick)")
-    parser.add_argument("--workers", type=positive_int, default=None,
-                        help="local worker processes (default: all cores; 1 runs in this process)")
+    parser.add_argument("--workers", type=bounded_int(1, 1024), default=None,
+                        help="local worker processes, each single-threaded (default: all cores; 1 runs in this "
+                             "process)")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                        help="Dask distributed scheduler address, e.g. tcp://host:8786")
+                        help="Dask distributed scheduler address, e.g. tcp://host:8786 (needs "
+                             "'sarins-fmu[distributed]'; start workers with --nthreads 1)")
     parser.add_argument("--out", default=f"results/{name}", metavar="DIR",
                         help=f"output directory; finished experiments there are not redone (default results/{name})")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -53,4 +62,30 @@ def register(subparsers) -> None:
         p = sub.add_parser(name, help=module.HELP, description=module.HELP)
         _add_common(p, name)
         module.add_arguments(p)
-        p.set_defaults(func=module.run)
+        p.set_defaults(func=run, campaign_run=module.run)
+
+
+def run(args) -> int:
+    """Check the shared options, lock ``--out`` and run the campaign."""
+    from orchestration.errors import FMUCallError
+    from sarins.campaign import TaskFailed, exclusive, remove_stale_temporaries
+
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out {out} exists and is not a folder")
+    if args.scheduler:
+        import importlib.util
+
+        try:
+            found = importlib.util.find_spec("distributed") is not None
+        except (ImportError, ValueError):  # a None entry in sys.modules
+            found = False
+        if not found:
+            raise UsageError("--scheduler needs Dask's distributed scheduler, which is not installed: "
+                             "pip install 'sarins-fmu[distributed]'")
+    with exclusive(out):
+        remove_stale_temporaries(out)  # what a killed run left half-written (under the lock: nobody writes)
+        try:
+            return args.campaign_run(args)
+        except (TaskFailed, FMUCallError) as exc:
+            raise RunError(str(exc)) from None

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from sarins_fmu.units import NM, RAD_TO_DEG
 
-from . import UsageError, finite
+from . import RunError, UsageError, finite
 from .navigate import add_run_options, check_run_args
 
 
@@ -26,19 +28,28 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    from orchestration.errors import FMUCallError
     from sarins.demo import run_demo
 
     check_run_args(args)
-    if args.identify_hours <= 0:
-        raise UsageError("--identify-hours must be positive")
+    if args.model_file is not None:  # a bad model file is refused before anything is built
+        from sarins_fmu.identify.axial import DriftIdentifier
+
+        DriftIdentifier(args.model_file)
+    fmu_dir = Path(args.fmu_dir)
+    if fmu_dir.exists() and not fmu_dir.is_dir():
+        raise UsageError(f"--fmu-dir {fmu_dir} exists and is not a folder")
     hours = args.align_hours + args.identify_hours + args.nav_hours
     print(f"sarins demo: co-simulating {hours:g} h of the identified static system "
           f"({args.imu} IMU, {args.start} start, {args.rotation} rotation, {args.lat_deg:g} deg; "
           f"identify at {args.identify_hours:g} h) in {args.fmu_dir}")
-    out = run_demo(lat_deg=args.lat_deg, align_hours=args.align_hours, identify_hours=args.identify_hours,
-                   nav_hours=args.nav_hours, imu=args.imu, rotation=args.rotation, start=args.start,
-                   seed=args.seed, axial_drift_dph=args.axial_drift_dph, model=args.model,
-                   model_file=args.model_file, fmu_dir=args.fmu_dir, progress=not args.no_progress)
+    try:
+        out = run_demo(lat_deg=args.lat_deg, align_hours=args.align_hours, identify_hours=args.identify_hours,
+                       nav_hours=args.nav_hours, imu=args.imu, rotation=args.rotation, start=args.start,
+                       seed=args.seed, axial_drift_dph=args.axial_drift_dph, model=args.model,
+                       model_file=args.model_file, fmu_dir=args.fmu_dir, progress=not args.no_progress)
+    except FMUCallError as exc:  # the co-simulation failed: a failed run, not bad input
+        raise RunError(str(exc)) from None
     res, ref = out["cosim"], out["reference"]
     nav = res["ins.nav_time"]
     after = nav > args.identify_hours * 3600.0 + 0.5

@@ -26,8 +26,9 @@ Goal
 
 The model file (JSON) stores the input column names, the target name and the
 site latitude; ``predict`` requires the same inputs. Predictions are written
-as the input table plus a column ``<target>_pred``. A bad CSV or model file
-gives a one-line error on stderr and exit status 2.
+as the input table plus a column ``<target>_pred``. A bad CSV, model file or
+option gives a one-line error on stderr and exit status 2 (the ``sarins``
+convention).
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from sarins_fmu.identify.axial import site_latitude_deg
 from sarins_fmu.identify.modelfile import ModelFileError
 from sarins_fmu.identify.rbf import RBFNetwork
 from sarins_fmu.identify.tables import SEED000_SITE_LAT_DEG, TableError, numeric_column, read_table, write_table
@@ -53,6 +55,19 @@ _PROG = "sarins identify"
 
 class _UsageError(Exception):
     """A problem with the user's files or options (one-line message, exit 2)."""
+
+
+def _check_number(name: str, value, *, low=None, high=None, positive=False) -> None:
+    """Refuse a non-finite or out-of-range option value (one line naming the option)."""
+    if value is None:
+        return
+    ok = np.isfinite(value) and (not positive or value > 0)
+    ok = ok and (low is None or value >= low) and (high is None or value <= high)
+    if not ok:
+        limits = "positive and finite" if positive else "finite"
+        if low is not None or high is not None:
+            limits += f", within [{low if low is not None else '-inf'}, {high if high is not None else 'inf'}]"
+        raise _UsageError(f"{name} must be {limits}, got {value!r}")
 
 
 def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -158,6 +173,11 @@ def _train(args: argparse.Namespace) -> None:
         raise _UsageError(f"--inputs must be distinct comma-separated column names, got {args.inputs!r}")
     if not np.isfinite(args.local_lat_deg) or abs(args.local_lat_deg) > 90.0:
         raise _UsageError(f"--local-lat-deg must be within [-90, 90], got {args.local_lat_deg}")
+    # spread: standardised units; beyond 1e6 every basis function is flat to double precision
+    _check_number("--spread", args.spread, low=1e-6, high=1e6)
+    _check_number("--goal", args.goal, low=0.0, high=1e300)
+    if args.max_neurons is not None and not 1 <= args.max_neurons <= 100_000:
+        raise _UsageError(f"--max-neurons must be in 1 .. 100000, got {args.max_neurons}")
     table = read_table(args.data)
     x = _input_matrix(table, names, args.local_lat_deg, args.data)
     y = numeric_column(table, args.target, args.data)
@@ -200,7 +220,9 @@ def _predict(args: argparse.Namespace) -> None:
         )
     lat = args.local_lat_deg
     if lat is None:
-        lat = float(net.metadata.get("local_lat_deg", SEED000_SITE_LAT_DEG))
+        lat = site_latitude_deg(net.metadata, args.model)
+    elif not np.isfinite(lat) or abs(lat) > 90.0:
+        raise _UsageError(f"--local-lat-deg must be within [-90, 90], got {lat}")
     table = read_table(args.data)
     x = _input_matrix(table, list(net.input_names), lat, args.data)
     pred = net.predict(x)
@@ -246,7 +268,7 @@ def run(args: argparse.Namespace) -> int:
         # the reader of stdout went away (e.g. `| head`): stop quietly
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
-    except (_UsageError, TableError, ModelFileError, ValueError, OSError) as exc:
+    except (_UsageError, TableError, ModelFileError, ValueError, OSError, RecursionError) as exc:
         message = " ".join(str(exc).split())
         where = f"{_PROG} {command}" if command else _PROG
         print(f"{where}: error: {message}", file=sys.stderr)

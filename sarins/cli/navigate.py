@@ -11,7 +11,7 @@ from sarins_fmu import imu as imu_mod
 from sarins_fmu.site import SITE_LAT_DEG
 from sarins_fmu.turntable import ROTATION_SCHEMES
 
-from . import UsageError, finite
+from . import UsageError, check_size, finite, seed_value  # noqa: F401  (seed_value: reused by other commands)
 
 
 def add_run_options(p, nav_hours: float) -> None:
@@ -25,33 +25,33 @@ def add_run_options(p, nav_hours: float) -> None:
     p.add_argument("--imu", choices=sorted(imu_mod.PRESETS), default="nav-rlg", help="IMU error preset")
     p.add_argument("--rotation", choices=ROTATION_SCHEMES, default="forward-reverse", help="rotation scheme")
     p.add_argument("--start", choices=("hot", "cold"), default="hot", help="thermal start (default hot)")
-    p.add_argument("--seed", type=seed_value, default=0, help="random seed of the IMU noise (0 .. 2**31-1)")
-
-
-def seed_value(text: str) -> int:
-    """argparse type: a random seed the FMUs' 32-bit Integer can carry (0 .. 2**31 - 1)."""
-    import argparse
-
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if not 0 <= value < 2**31:
-        raise argparse.ArgumentTypeError(f"must be in 0 .. 2**31-1, got {value}")
-    return value
+    p.add_argument("--seed", type=seed_value, default=0, help="base random seed of the run (the IMU noise), 0 .. 2**31-1 (default 0)")
 
 
 def check_run_args(args) -> None:
     if abs(args.lat_deg) > 89.9:
         raise UsageError(f"--lat-deg {args.lat_deg} is outside +-89.9 deg")
-    if args.align_hours < 0 or args.nav_hours <= 0:
-        raise UsageError("hours must be positive")
+    if args.align_hours < 0:
+        raise UsageError(f"--align-hours must not be negative, got {args.align_hours:g}")
+    if args.nav_hours <= 0:
+        raise UsageError(f"--nav-hours must be positive, got {args.nav_hours:g}")
+    if getattr(args, "identify_hours", 1.0) <= 0:
+        raise UsageError(f"--identify-hours must be positive, got {args.identify_hours:g}")
     if args.align_hours * 3600 < 600:
         raise UsageError("--align-hours must be at least 1/6 h (coarse + fine alignment)")
     if args.nav_hours * 3600 < 1:
         raise UsageError(f"--nav-hours {args.nav_hours:g} is shorter than one 1 s navigation step")
-    if args.align_hours + args.nav_hours > 24 * 3650:
-        raise UsageError("runs longer than 10 years are refused")
+    if args.axial_drift_dph is not None and abs(args.axial_drift_dph) > 1e3:
+        raise UsageError(f"--axial-drift-dph {args.axial_drift_dph:g} deg/h is not a gyro drift (|drift| <= 1000)")
+    parts = ["--align-hours", "--nav-hours"] + (["--identify-hours"] if hasattr(args, "identify_hours") else [])
+    hours = sum(getattr(args, p[2:].replace("-", "_")) for p in parts)
+    named = " + ".join(parts)
+    if hours > 24 * 3650:
+        raise UsageError(f"{named} = {hours:g} h: runs longer than 10 years are refused")
+    check_size(hours * 3600.0, BYTES_PER_STEP, f"{named} = {hours:g} h (1 s steps)")
+
+
+BYTES_PER_STEP = 400  # stored per 1 s step by a run (INS outputs, temperatures, errors, recorder)
 
 
 def register(sub) -> None:

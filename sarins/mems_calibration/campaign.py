@@ -20,7 +20,7 @@ import sys
 import time
 from pathlib import Path
 
-from sarins.cli.campaign import positive_int
+from sarins.cli import bounded_int, seed_value
 
 HELP = "seed 003: MEMS IMU dynamic calibration on a 3-axis thermal rate table (traditional, RBFNN, GRNN, LSTM, GRU)"
 
@@ -33,13 +33,16 @@ MODEL_DEFAULTS = {  # per profile: recurrent training steps, GRNN patterns, RBF 
 def add_arguments(parser) -> None:
     parser.add_argument("--models", default="traditional,rbf,grnn,lstm,gru",
                         help="comma-separated subset of traditional,rbf,grnn,lstm,gru")
-    parser.add_argument("--rnn-steps", type=positive_int, default=None,
-                        help="recurrent training steps (default: quick 60, paper 4000 as the paper)")
-    parser.add_argument("--grnn-patterns", type=positive_int, default=None,
-                        help="GRNN pattern-layer size, evenly spaced training samples (quick 5000, paper 20000)")
-    parser.add_argument("--rbf-samples", type=positive_int, default=None,
-                        help="RBF training samples, evenly spaced (quick 10000, paper 50000)")
-    parser.add_argument("--seed", type=int, default=3, help="IMU noise seed (default 3)")
+    parser.add_argument("--rnn-steps", type=bounded_int(1, 1_000_000), default=None,
+                        help="recurrent training steps, 1 .. 10**6 (default: quick 60, paper 4000 as the paper)")
+    parser.add_argument("--grnn-patterns", type=bounded_int(1, 200_000), default=None,
+                        help="GRNN pattern-layer size, evenly spaced training samples, 1 .. 200000 "
+                             "(quick 5000, paper 20000)")
+    parser.add_argument("--rbf-samples", type=bounded_int(1, 1_000_000), default=None,
+                        help="RBF training samples, evenly spaced, 1 .. 10**6 (quick 10000, paper 50000)")
+    parser.add_argument("--seed", type=seed_value, default=3,
+                        help="base random seed of the campaign: the IMU noise of the recordings, 0 .. 2**31-1 "
+                             "(default 3; the networks' initialisation has its own fixed seed)")
     parser.add_argument("--report-dir", default=None, help="write report.md and the PNGs here (default: --out)")
     parser.add_argument("--refit", action="store_true",
                         help="fit the models again even if <out>/models holds them from a run with the same options")
@@ -73,17 +76,17 @@ def run(args) -> int:
 def record_all(profile_name: str, out: Path, *, workers=None, scheduler=None, progress=True, seed=3) -> dict:
     """Build the FMUs and run the three recordings as a resumable campaign."""
     from fmus.build import build_fmus
-    from sarins.campaign import Task, run_campaign
+    from sarins.campaign import Task, build_artifacts, code_hash, run_campaign
 
     from sarins_fmu.experiments import mems_calibration as mc
 
     from .recording import record_task
 
-    fmu_dir = out / "fmus"
-    if not all((fmu_dir / f"{n}.fmu").exists() for n in ("Turntable", "IMUThermal")):
-        build_fmus(fmu_dir, ["Turntable", "IMUThermal"])
-    tasks = [Task(kind, record_task, dict(kind=kind, profile_name=profile_name, fmu_dir=str(fmu_dir),
-                                                   seed=seed)) for kind in mc.KINDS]
+    names = ("Turntable", "IMUThermal")
+    fmu_dir = out / "fmus"  # built in a temporary folder, moved into place, rebuilt when the code changes
+    build_artifacts(fmu_dir, [f"{n}.fmu" for n in names], lambda tmp: build_fmus(tmp, list(names)), code_hash())
+    tasks = [Task(kind, record_task, dict(kind=kind, profile_name=profile_name, fmu_dir=str(fmu_dir), seed=seed),
+                  volatile=("fmu_dir",)) for kind in mc.KINDS]
     return run_campaign(tasks, out / "recordings", workers=workers, scheduler=scheduler, progress=progress,
                         description="mems-calibration recordings")
 
@@ -112,21 +115,27 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
     return models
 
 
-def _stored_models(out: Path, kinds, options: dict, profile_name: str, seed: int) -> dict:
-    """Models of an earlier run with the same profile, seed and options (fit times from its summary)."""
+def _stored_models(out: Path, kinds, models_key: str) -> dict:
+    """Models of an earlier run made from the same recordings, options and code
+    (``models_key``, fit times from its summary); an unreadable model file is
+    fitted again with a notice."""
     from sarins_fmu.identify import compensators
 
     try:
         old = json.loads((out / "summary.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+    except (OSError, ValueError, RecursionError):
         return {}
-    if old.get("options") != options or old.get("profile") != profile_name or old.get("seed", seed) != seed:
+    if not isinstance(old, dict) or old.get("models_key") != models_key:
         return {}
     stored = {}
     for kind in kinds:
         path = out / "models" / f"{kind}.npz"
         if path.exists():
-            model = compensators.load(path)
+            try:
+                model = compensators.load(path)
+            except (ValueError, OSError) as exc:
+                print(f"mems-calibration: refitting {path}: {' '.join(str(exc).split())}", file=sys.stderr)
+                continue
             if model.fit_seconds is None:
                 model.fit_seconds = old.get("models", {}).get(kind, {}).get("fit_s")
             stored[kind] = model
@@ -144,6 +153,7 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     """
     import numpy as np
 
+    from sarins.campaign import atomic_output, write_text
     from sarins_fmu import imu
     from sarins_fmu.experiments import mems_calibration as mc
     from . import report as rep
@@ -163,7 +173,8 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     options = dict(rnn_steps=rnn_steps, grnn_patterns=grnn_patterns, rbf_samples=rbf_samples)
     model_dir = out / "models"
     model_dir.mkdir(parents=True, exist_ok=True)
-    stored = {} if refit else _stored_models(out, kinds, options, profile_name, seed)
+    models_key = _models_key(recs, options)
+    stored = {} if refit else _stored_models(out, kinds, models_key)
     models = fit_models([k for k in kinds if k not in stored], train, fit, log=log, **options)
     models = {k: stored.get(k) or models[k] for k in kinds}
     residuals = {"raw": test.X[:, :6] - test.Y}
@@ -176,7 +187,8 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
         residuals[name] = model.predict(test.X) - test.Y
         info[name] = dict(n_parameters=int(model.n_parameters), fit_s=float(model.fit_seconds or 0.0),
                           predict_s=time.perf_counter() - t1)
-        model.save(model_dir / f"{name}.npz")
+        with atomic_output(model_dir / f"{name}.npz", keep_suffix=True) as tmp:
+            model.save(tmp)
     wall["model evaluation"] = time.perf_counter() - t0
     wall["model fitting (sum of the fit times)"] = sum(i["fit_s"] for i in info.values())
     stats = {name: rep.residual_stats(r) for name, r in residuals.items()}
@@ -194,7 +206,7 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
         accel_fit_rms_mg=fit.accel_rms_residual / rep.G_MG, models=info, wall_s=wall,
         reductions=red, table3=rep.table3(stats, red),
         stats={n: {k: v.tolist() for k, v in s.items()} for n, s in stats.items()},
-        options=options, seed=seed, reused_models=sorted(stored))
+        options=options, seed=seed, reused_models=sorted(stored), models_key=models_key)
     summary["notes"] = (
         f"GRNN pattern layer: {min(grnn_patterns, len(train))} of the {len(train)} training samples (evenly "
         f"spaced; the evaluation costs one exp per test-pattern pair). RBF trained on {min(rbf_samples, len(train))} "
@@ -207,6 +219,25 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
         summary.update(skipped=list(skipped), skip_reason=INSTALL_HINT)
     text = rep.markdown(summary, rep.calibration_tables(fit, imu.preset("mems")), figures)
     summary["report"] = str((report_dir / "report.md").resolve())
-    (report_dir / "report.md").write_text(text, encoding="utf-8")
-    (out / "summary.json").write_text(json.dumps(summary, indent=1), encoding="utf-8")
+    write_text(report_dir / "report.md", text)
+    write_text(out / "summary.json", json.dumps(summary, indent=1))
     return summary
+
+
+def _models_key(recs: dict, options: dict) -> str:
+    """Identity of fitted models: the recordings they were fitted on, the
+    fitting options and the code."""
+    import hashlib
+
+    import numpy as np
+
+    from sarins.campaign import canonical_json, code_hash
+
+    digest = hashlib.sha256(canonical_json(options).encode())
+    digest.update(code_hash([__file__]).encode())
+    for kind in sorted(recs):
+        for key in sorted(recs[kind]):
+            if key != "wall_s":
+                digest.update(key.encode())
+                digest.update(np.ascontiguousarray(recs[kind][key]).tobytes())
+    return digest.hexdigest()

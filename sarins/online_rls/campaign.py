@@ -45,39 +45,66 @@ PROFILES = {
 }
 
 
+MIN_LAMBDA = 0.01  # per month; below it the information matrix under-/overflows between stops
+
+
 def _scale_tag(scale: float) -> str:
     return "" if scale == 1.0 else f"_x{scale:g}"
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--lambda", dest="forgetting_factor", type=float, default=0.8,
-                        help="forgetting factor of FF-RLS per month (default 0.8, the paper's)")
+    from sarins.cli import finite
+    from sarins.cli.navigate import seed_value
+
+    def forgetting(text: str) -> float:
+        import argparse
+
+        value = finite(text)
+        if not MIN_LAMBDA <= value <= 1.0:
+            raise argparse.ArgumentTypeError(f"must be in [{MIN_LAMBDA}, 1], got {text!r}")
+        return value
+
+    parser.add_argument("--lambda", dest="forgetting_factor", type=forgetting, default=0.8,
+                        help=f"forgetting factor of FF-RLS per month, {MIN_LAMBDA} .. 1 (default 0.8, the paper's; "
+                             "a smaller one forgets a month's data within a day)")
+    parser.add_argument("--seed", type=seed_value, default=0,
+                        help="base random seed of the campaign: run k of each study uses seed + k "
+                             "(0 .. 2**31-1 minus the runs; default 0)")
 
 
-def build_tasks(profile: str, forgetting_factor: float = 0.8):
-    """The campaign's tasks for ``profile`` ('quick' or 'paper')."""
+def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0):
+    """The campaign's tasks for ``profile`` ('quick' or 'paper'); run k of
+    each study uses the random seed ``seed + k``."""
     from sarins.campaign import Task
     from sarins_fmu.experiments import online_rls
 
     if profile not in PROFILES:
         raise ValueError(f"unknown profile {profile!r}")
-    if not (0.0 < forgetting_factor <= 1.0):
-        raise ValueError(f"--lambda must be in (0, 1], got {forgetting_factor}")
+    if not (MIN_LAMBDA <= forgetting_factor <= 1.0):
+        raise ValueError(f"--lambda must be in [{MIN_LAMBDA}, 1], got {forgetting_factor}")
     p = PROFILES[profile]
+    most = max(n for _, n in p["stops"].items()) if p["stops"] else 0
+    most = max([most] + [row[3] for row in p["mc"]] + [row[2] for row in p["vehicle"]])
+    if not 0 <= seed <= 2**31 - most:
+        raise ValueError(f"--seed must be in 0 .. {2**31 - most} for the {profile} profile ({most} runs per study), "
+                         f"got {seed}")
     tasks = []
     for unit, n in p["stops"].items():
         tasks += [Task(f"stop-{unit}-{s:03d}", online_rls.simulate_stop,
-                       {"imu": unit, "seed": s, "temperature": 5.0 + 40.0 * ((s * 0.618) % 1.0)}) for s in range(n)]
+                       {"imu": unit, "seed": seed + s, "temperature": 5.0 + 40.0 * ((s * 0.618) % 1.0)},
+                       finite=("estimate_dph", "error_dph")) for s in range(n)]
     for ageing, unit, estimate, n, *scale in p["mc"]:
         x = scale[0] if scale else 1.0
         tasks += [Task(f"mc-{ageing}{_scale_tag(x)}-{unit}-{estimate}-{s:03d}", online_rls.model_update_run,
-                       {"seed": s, "unit": unit, "estimate": estimate, "ageing": ageing, "ageing_scale": x,
-                        "forgetting_factor": forgetting_factor}) for s in range(n)]
+                       {"seed": seed + s, "unit": unit, "estimate": estimate, "ageing": ageing, "ageing_scale": x,
+                        "forgetting_factor": forgetting_factor}, finite=("s_none", "s_rls", "s_ff"))
+                  for s in range(n)]
     for ageing, unit, n, *scale in p["vehicle"]:
         x = scale[0] if scale else 1.0
         tasks += [Task(f"veh-{ageing}{_scale_tag(x)}-{unit}-{s:03d}", online_rls.vehicle_test,
-                       {"seed": s, "unit": unit, "ageing": ageing, "forgetting_factor": forgetting_factor,
-                        "ageing_scale": x, **p["vehicle_kwargs"]}) for s in range(n)]
+                       {"seed": seed + s, "unit": unit, "ageing": ageing, "forgetting_factor": forgetting_factor,
+                        "ageing_scale": x, **p["vehicle_kwargs"]}, finite=("cep_initial", "cep_updated"))
+                  for s in range(n)]
     return tasks
 
 
@@ -86,14 +113,12 @@ def run(args) -> int:
 
     from .report import write_report
 
-    from sarins.campaign import result_path
-
-    tasks = build_tasks(args.profile, args.forgetting_factor)
+    tasks = build_tasks(args.profile, args.forgetting_factor, args.seed)
     out = Path(args.out)
-    computed = sum(not result_path(out / "runs", t.id).exists() for t in tasks)
     start = time.perf_counter()
     results = run_campaign(tasks, out / "runs", workers=args.workers, scheduler=args.scheduler,
                            progress=not args.no_progress, description="online-rls")
+    computed = len(results.computed)
     wall = time.perf_counter() - start
     report = write_report(results, out, profile=args.profile, wall_time=wall, workers=args.workers,
                           forgetting_factor=args.forgetting_factor, computed=computed)

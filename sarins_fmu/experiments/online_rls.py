@@ -116,7 +116,7 @@ def simulate_stop(*, imu: str = "nav-rlg", lat_deg: float = 40.0, temperature: f
     ins = StrapdownINS(InsConfig(lat=lat, align_time=0.0, step=step),
                        initial_attitude=_perturbed_attitude(mat_true, phi0))
     ins.v[:2] = rng.standard_normal(2) * velocity0
-    kf = StopKalmanFilter(lat, StopFilterSettings.for_model(model), dt=step)
+    kf = StopKalmanFilter(lat, StopFilterSettings.for_model(model), dt=step, history_limit=n)
     angle, rate, accel = table.state(np.arange(n) * step)
     dtheta, dv, temps = sensor.step(angle, rate, accel)
     comp = np.zeros(n) if compensation is None else np.polyval(np.asarray(compensation, float), temps[:, GYRO_Z])

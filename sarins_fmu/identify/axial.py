@@ -43,6 +43,15 @@ def default_model_path(kind: str) -> Path:
         raise ValueError(f"model kind must be 'hot' or 'cold', got {kind!r}") from None
 
 
+def site_latitude_deg(metadata: dict, path) -> float:
+    """The model's site latitude (deg; default the paper's site when absent),
+    checked: a number within +-90 deg, else :class:`ModelFileError`."""
+    value = metadata.get("local_lat_deg", SITE_LAT_DEG) if isinstance(metadata, dict) else None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) <= 90.0:
+        raise ModelFileError(path, f"'local_lat_deg' must be a latitude in deg within +-90, got {value!r}")
+    return float(value)
+
+
 class DriftIdentifier:
     """An RBF drift model with named inputs (see module docstring).
 
@@ -62,12 +71,12 @@ class DriftIdentifier:
         self.network = RBFNetwork.load(self.path)
         names = self.network.input_names
         if not names:
-            raise ModelFileError(f"{self.path}: the model does not name its inputs")
+            raise ModelFileError(self.path, "the model does not name its inputs")
         unknown = [n for n in names if n not in KNOWN_INPUTS]
         if unknown:
-            raise ModelFileError(f"{self.path}: unsupported model input(s) {unknown}; known: {KNOWN_INPUTS}")
+            raise ModelFileError(self.path, f"unsupported model input(s) {unknown}; known: {KNOWN_INPUTS}")
         self.input_names = tuple(names)
-        self.local_lat_deg = float(self.network.metadata.get("local_lat_deg", SITE_LAT_DEG))
+        self.local_lat_deg = site_latitude_deg(self.network.metadata, self.path)
 
     def inputs(self, lat_error: float, temp_c: float = np.nan, temp_change_c: float = np.nan) -> np.ndarray:
         """Model input row (1, d) from the latitude error (rad) and temperatures (degC)."""

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import json
 import zipfile
+import zlib
 from collections.abc import Callable, Collection, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
@@ -40,6 +41,7 @@ __all__ = [
 T = TypeVar("T")
 
 _HEADER_KEY = "__header__"
+MAX_JSON_BYTES = 256 * 2**20  # a JSON model file larger than this is refused before reading
 
 
 class ModelFileError(ValueError):
@@ -123,13 +125,19 @@ def save_model_file(
 
 def _read_json(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
     try:
+        if path.stat().st_size > MAX_JSON_BYTES:
+            raise ModelFileError(path, f"larger than {MAX_JSON_BYTES // 2**20} MiB, not a model file")
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
         raise ModelFileError(path, f"not a text (JSON) file: {exc}") from None
+    except OSError as exc:
+        raise ModelFileError(path, f"cannot be read: {exc.strerror or exc}") from None
     try:
         doc = json.loads(text, parse_constant=_reject_constant)
     except ValueError as exc:
         raise ModelFileError(path, f"not valid JSON: {exc}") from None
+    except RecursionError:
+        raise ModelFileError(path, "JSON nested too deeply") from None
     if not isinstance(doc, dict):
         raise ModelFileError(path, "top level is not a JSON object")
     raw_arrays = doc.get("arrays")
@@ -155,7 +163,7 @@ def _read_npz(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
     try:
         with np.load(path, allow_pickle=False) as npz:
             contents = {name: npz[name] for name in npz.files}
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError, zlib.error) as exc:
         raise ModelFileError(path, f"not a readable npz file: {exc}") from None
     if _HEADER_KEY not in contents:
         raise ModelFileError(path, f"missing '{_HEADER_KEY}' entry")
@@ -166,6 +174,8 @@ def _read_npz(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
         header = json.loads(str(raw_header), parse_constant=_reject_constant)
     except ValueError as exc:
         raise ModelFileError(path, f"header is not valid JSON: {exc}") from None
+    except RecursionError:
+        raise ModelFileError(path, "header JSON nested too deeply") from None
     if not isinstance(header, dict):
         raise ModelFileError(path, "header is not a JSON object")
     arrays = {}
@@ -231,8 +241,8 @@ def load_model_file(
         return build(meta, arrays)
     except KeyError as exc:
         raise ModelFileError(path, f"missing entry {exc}") from None
-    except (TypeError, ValueError) as exc:
-        raise ModelFileError(path, str(exc)) from None
+    except (TypeError, ValueError, AttributeError, IndexError, RecursionError) as exc:
+        raise ModelFileError(path, f"{type(exc).__name__}: {exc}" if not isinstance(exc, ValueError) else str(exc)) from None
 
 
 def get_array(
