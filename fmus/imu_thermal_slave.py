@@ -10,8 +10,9 @@ from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, StartO
                                 check_step, declare, discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import imu, imu_params
 from sarins_fmu.thermal import SENSORS, ThermalModel
+from sarins_fmu.units import DEG_TO_RAD
+from sarins_fmu.site import SITE_LAT
 
-DEG = math.pi / 180.0
 GIMBAL_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 UNIT_DISPLAY = {"rad/s": "deg/h", "rad": "deg"}
 NO_TAG = -1.0e9  # s, start value of motion_time: names no communication point of a run
@@ -22,7 +23,8 @@ class IMUThermal(Fmi2Slave):
     author = "sarins-fmu"
     description = (
         "Increment-output IMU on a turntable, on a static base (base = static: lat, height, base_yaw) or riding on "
-        "a vehicle (base = input: the vehicle's motion from an upstream FMU, see below). Contract (standard FMI timing, any master scheme): "
+        "a vehicle (base = input: the vehicle's motion from an upstream FMU, see below). Contract (standard "
+        "FMI timing, any master scheme): "
         "the motion inputs are a time-tagged set from the turntable describing the segment that starts at "
         "motion_time: gimbal angles, rates and angular accelerations (constant until the next communication "
         "point), the ambient temperature and its slope. doStep(t, h) needs the set tagged t: under Jacobi it "
@@ -33,7 +35,8 @@ class IMUThermal(Fmi2Slave):
         "sensor temperatures at t + h and the tag increment_end_time = t + h (the start time at "
         "initialisation: no increments yet). Under Gauss-Seidel the master must pass the turntable's initial outputs "
         "before the first step (FMI initialisation; motion_time starts at -1e9 s, no valid tag). If motion_time is "
-        "never set (no turntable connected), the motion inputs are constants: a fixed table. So the increments are bit-identical under every scheme. All "
+        "never set (no turntable connected), the motion inputs are constants: a fixed table. So the "
+        "increments are bit-identical under every scheme. All "
         "outputs are state outputs (no direct feedthrough). Held between steps: thermal state, "
         "bias-instability state, noise generator, the previous motion set. "
         "Moving base (base = input): the vehicle motion is a second time-tagged start-of-step set, tagged "
@@ -51,7 +54,7 @@ class IMUThermal(Fmi2Slave):
         declare(self, "string", "preset", PARAMETER, "IMU model: ideal, nav-rlg or mems", "nav-rlg")
         declare(self, "string", "base", PARAMETER, "static (lat, height, base_yaw) or input (vehicle motion inputs)",
                 "static")
-        declare(self, "real", "lat", PARAMETER, "latitude of the static base [rad; deg]", 28.222 * DEG)
+        declare(self, "real", "lat", PARAMETER, "latitude of the static base [rad; deg]", SITE_LAT)
         declare(self, "real", "height", PARAMETER, "height of the static base [m]", 0.0)
         declare(self, "real", "base_yaw", PARAMETER, "yaw of the turntable base, CCW from north [rad; deg]", 0.0)
         declare(self, "string", "gimbals", PARAMETER,
@@ -129,7 +132,7 @@ class IMUThermal(Fmi2Slave):
     def exit_initialization_mode(self):
         check_finite(self, ["lat", "height", "base_yaw", "internal_rate", "aging_days"],
                      positive=["internal_rate"], non_negative=["aging_days"])
-        if abs(self.lat) > 89.9 * DEG:
+        if abs(self.lat) > 89.9 * DEG_TO_RAD:
             raise ParameterError(f"parameter lat = {math.degrees(self.lat):.6g} deg is outside +-89.9 deg")
         if self.thermal_start not in ("hot", "cold"):
             raise ParameterError(f"thermal_start must be 'hot' or 'cold', got {self.thermal_start!r}")

@@ -10,8 +10,8 @@ from pythonfmu.default_experiment import DefaultExperiment
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
                                 discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import ins
+from sarins_fmu.site import SITE_LAT
 
-DEG = math.pi / 180.0
 PHASES = {"coarse": 0, "fine": 1, "navigate": 2}
 FILTER_UNITS = {"arw": "rad/sqrt(s)", "vrw": "m/s/sqrt(s)", "drift_rw": "rad/s/sqrt(s)", "bias_rw": "m/s2/sqrt(s)",
                 "velocity_meas_std": "m/s", "tilt0_std": "rad", "heading0_std": "rad", "velocity0_std": "m/s",
@@ -41,7 +41,7 @@ class StrapdownINS(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        declare(self, "real", "lat0", PARAMETER, "latitude of the static start [rad; deg]", 28.222 * DEG)
+        declare(self, "real", "lat0", PARAMETER, "latitude of the static start [rad; deg]", SITE_LAT)
         declare(self, "real", "lon0", PARAMETER, "longitude of the static start [rad; deg]", 0.0)
         declare(self, "real", "height0", PARAMETER, "height of the static start [m]", 0.0)
         declare(self, "real", "align_time", PARAMETER, "alignment duration [s]", 4 * 3600.0)

@@ -1,17 +1,16 @@
 """Turntable FMU: gimbal angles, rates and accelerations of a rotation scheme."""
 
-import math
 
 import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
+from fmus.slave_support import (OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
                                 discard_on_error, guarded, real_slots)
 from sarins_fmu import thermal, turntable
 from sarins_fmu.thermal import Ambient
+from sarins_fmu.units import DEG_TO_RAD
 
-DEG = math.pi / 180.0
 
 
 class Turntable(Fmi2Slave):
@@ -26,7 +25,8 @@ class Turntable(Fmi2Slave):
         "the communication step), plus the ambient (chamber) temperature at motion_time and its slope "
         "ambient_temp_rate over [motion_time, motion_time + h], h the communication step (the IMU takes the "
         "ambient linear over each step; at initialisation, before h is known, the slope is over [start, start + "
-        "grid]: start a chamber profile with a hold, as its warm-up does). At initialisation motion_time is the start time; after doStep(t, h) it is t + h. All outputs "
+        "grid]: start a chamber profile with a hold, as its warm-up does). At initialisation motion_time is "
+        "the start time; after doStep(t, h) it is t + h. All outputs "
         "are state outputs (no direct feedthrough). A connected IMU rebuilds the motion over its step [t, t+h] "
         "exactly from the set tagged t: under Jacobi it receives that set, under Gauss-Seidel (turntable "
         "stepped first) it receives the set tagged t + h and uses the one it kept from its previous step. "
@@ -37,8 +37,8 @@ class Turntable(Fmi2Slave):
         super().__init__(**kwargs)
         declare(self, "string", "scheme", PARAMETER,
                 "rotation scheme: " + ", ".join(turntable.SCHEMES), "forward-reverse")
-        declare(self, "real", "rate", PARAMETER, "peak rotation rate [rad/s; deg/s]", 6.0 * DEG)
-        declare(self, "real", "accel", PARAMETER, "angular acceleration of the moves [rad/s2; deg/s2]", 6.0 * DEG)
+        declare(self, "real", "rate", PARAMETER, "peak rotation rate [rad/s; deg/s]", 6.0 * DEG_TO_RAD)
+        declare(self, "real", "accel", PARAMETER, "angular acceleration of the moves [rad/s2; deg/s2]", 6.0 * DEG_TO_RAD)
         declare(self, "real", "dwell", PARAMETER, "stop at each position or reversal [s]", 0.0)
         declare(self, "integer", "revolutions", PARAMETER, "turns each way (forward-reverse) [1]", 1)
         declare(self, "real", "align_time", PARAMETER,
@@ -46,14 +46,14 @@ class Turntable(Fmi2Slave):
         declare(self, "real", "align_dwell", PARAMETER, "stop at each alignment position [s]", 300.0)
         declare(self, "real", "grid", PARAMETER, "time grid of acceleration changes [s]", 1.0)
         declare(self, "real", "duration", PARAMETER, "length of the generated pattern [s]", 100 * 3600.0)
-        declare(self, "real", "outer_rate", PARAMETER, "dual-axis: outer flip rate [rad/s; deg/s]", 6.0 * DEG)
+        declare(self, "real", "outer_rate", PARAMETER, "dual-axis: outer flip rate [rad/s; deg/s]", 6.0 * DEG_TO_RAD)
         declare(self, "real", "outer_accel", PARAMETER, "dual-axis: outer flip acceleration [rad/s2; deg/s2]",
-                6.0 * DEG)
+                6.0 * DEG_TO_RAD)
         for name, rate, acc in (("inner", 1.0, 0.01), ("middle", 10.0, 0.1), ("outer", 100.0, 1.0)):
             declare(self, "real", f"table_{name}_rate", PARAMETER,
-                    f"rate-table-3axis: {name} gimbal peak rate [rad/s; deg/s]", rate * DEG)
+                    f"rate-table-3axis: {name} gimbal peak rate [rad/s; deg/s]", rate * DEG_TO_RAD)
             declare(self, "real", f"table_{name}_accel", PARAMETER,
-                    f"rate-table-3axis: {name} gimbal acceleration [rad/s2; deg/s2]", acc * DEG)
+                    f"rate-table-3axis: {name} gimbal acceleration [rad/s2; deg/s2]", acc * DEG_TO_RAD)
         declare(self, "real", "warmup", PARAMETER, "rate-table-3axis: static warm-up [s]", 600.0)
         declare(self, "string", "ambient_mode", PARAMETER,
                 "ambient: 'sinusoid' (mean, amplitude, period) or 'chamber' (ramp/hold cycle)", "sinusoid")
@@ -105,12 +105,12 @@ class Turntable(Fmi2Slave):
                      non_negative=["rate", "accel", "dwell", "align_time", "align_dwell"])
         try:
             self._schedule = turntable.schedule_for(
-                self.scheme, self.duration, rate_dps=self.rate / DEG, accel_dps2=self.accel / DEG,
+                self.scheme, self.duration, rate_dps=self.rate / DEG_TO_RAD, accel_dps2=self.accel / DEG_TO_RAD,
                 dwell=self.dwell, grid=self.grid, revolutions=int(self.revolutions),
                 align_time=self.align_time, align_dwell=self.align_dwell,
-                outer_rate_dps=self.outer_rate / DEG, outer_accel_dps2=self.outer_accel / DEG,
-                table_rates_dps=[getattr(self, f"table_{n}_rate") / DEG for n in ("inner", "middle", "outer")],
-                table_accels_dps2=[getattr(self, f"table_{n}_accel") / DEG for n in ("inner", "middle", "outer")],
+                outer_rate_dps=self.outer_rate / DEG_TO_RAD, outer_accel_dps2=self.outer_accel / DEG_TO_RAD,
+                table_rates_dps=[getattr(self, f"table_{n}_rate") / DEG_TO_RAD for n in ("inner", "middle", "outer")],
+                table_accels_dps2=[getattr(self, f"table_{n}_accel") / DEG_TO_RAD for n in ("inner", "middle", "outer")],
                 warmup=self.warmup)
             if self.ambient_mode == "chamber":
                 profile = thermal.chamber_profile(

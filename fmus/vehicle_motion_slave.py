@@ -1,6 +1,5 @@
 """VehicleMotion FMU: a land vehicle's drives, turns and stops (seed 002) as moving-base motion."""
 
-import math
 
 import numpy as np
 from pythonfmu import Fmi2Slave
@@ -10,8 +9,8 @@ from fmus.slave_support import (OUTPUT, PARAMETER, ParameterError, check_finite,
                                 discard_on_error, guarded, same_time)
 from sarins_fmu import vehicle
 from sarins_fmu.site import SITE_LAT_DEG
+from sarins_fmu.units import DEG_TO_RAD
 
-DEG = math.pi / 180.0
 
 
 def parse_legs(text: str):
@@ -55,7 +54,7 @@ class VehicleMotion(Fmi2Slave):
         super().__init__(**kwargs)
         declare(self, "string", "legs", PARAMETER, "drive/turn/stop legs, ';'-separated",
                 "drive 300 10; turn 90; drive 300 12; stop 1800; drive 180 10; stop 60")
-        declare(self, "real", "lat0", PARAMETER, "start latitude [rad; deg]", SITE_LAT_DEG * DEG)
+        declare(self, "real", "lat0", PARAMETER, "start latitude [rad; deg]", SITE_LAT_DEG * DEG_TO_RAD)
         declare(self, "real", "lon0", PARAMETER, "start longitude [rad; deg]", 0.0)
         declare(self, "real", "heading0", PARAMETER, "start heading, CCW from north [rad; deg]", 0.0)
         declare(self, "real", "lead_time", PARAMETER, "time at rest before the first leg (alignment) [s]", 900.0)

@@ -33,7 +33,7 @@ import numpy as np
 
 from . import earth
 from .ins_kernel import align_steps, coarse_steps, nav_steps
-from .rotations import mat_to_quat, quat_mult, quat_to_mat, rotvec_to_quat
+from .rotations import mat_to_quat, quat_to_mat, rotvec_to_quat
 from .units import DEG_TO_RAD, DPH_TO_RPS, DPSH_TO_RPSS, UG_TO_MPS2
 
 OUTPUT_COLUMNS = ("lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll")

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import earth, turntable
-from .turntable import AXIS_X, AXIS_Y, AXIS_Z, GimbalSchedule
+from .turntable import AXIS_X, AXIS_Y, AXIS_Z
 from .units import DEG_TO_RAD
 
 VEHICLE_AXES = (AXIS_Z, AXIS_Z)  # heading (outer), RINS rotation about azimuth (inner)

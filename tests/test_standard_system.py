@@ -106,3 +106,12 @@ def test_imu_initialises_from_the_tables_start_temperature(fmu_dir, scheme):
         runs[ambient] = simulate_system(system, 60.0, 1.0, scheme=scheme, record=record, progress=False)
     assert runs[35.0]["turntable.ambient_temp"][0] == 35.0
     assert runs[35.0]["imu.temp_gyro_z"][0] - runs[20.0]["imu.temp_gyro_z"][0] == pytest.approx(15.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("name", ["standard_static", "standard_static_identified", "vehicle_rins"])
+def test_shipped_systems_run_without_any_warning(fmu_dir, name, recwarn):
+    """No input left unconnected by accident, no algebraic loop: the master has nothing to warn about."""
+    from sarins.systems import SYSTEMS
+
+    simulate_system(SYSTEMS[name](fmu_dir, hours=0.01), 5.0, 1.0, progress=False)
+    assert [str(w.message) for w in recwarn] == []

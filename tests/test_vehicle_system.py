@@ -3,7 +3,6 @@ StrapdownINS equals the in-process vehicle run (sarins_fmu.vehicle + IMU + INS)
 and gives the same solution at the same nav_time under Gauss-Seidel and Jacobi
 (issue 11, part 2)."""
 
-import math
 import warnings
 
 import numpy as np

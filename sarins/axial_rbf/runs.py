@@ -213,9 +213,9 @@ def test_task(exp: dict, models: dict, engine: str = "inprocess", fmu_dir: str |
         else:
             err1 = err0 + drift * out["slope_ne"]
         out[f"ident_{kind}_dph"] = drift
-        out[f"pos_{kind}_nm"] = np.hypot(err1[:, 0], err1[:, 1]) / NM
-        out[f"max_{kind}_nm"] = max_error_nmi(err1)
-    out["ident_dph"], out["max_comp_nmi"] = drifts[own], out[f"max_{own}_nm"]
+        out[f"pos_{kind}_nmi"] = np.hypot(err1[:, 0], err1[:, 1]) / NM
+        out[f"max_{kind}_nmi"] = max_error_nmi(err1)
+    out["ident_dph"], out["max_comp_nmi"] = drifts[own], out[f"max_{own}_nmi"]
     out["paper_truth_dph"], out["paper_truth_max_nmi"] = s0.paper_true_drift(err0, err_p, probe)
     if live:
         out.update(_live(e, models[own], feats, engine, fmu_dir))

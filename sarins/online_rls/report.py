@@ -64,7 +64,7 @@ def vehicle_summary(results: dict) -> dict:
     out = {}
     for cfg in _configs(results, "veh"):
         runs = _group(results, cfg + "-")
-        get = lambda key: np.array([r[key] for r in runs], float)  # noqa: E731
+        get = lambda key, runs=runs: np.array([r[key] for r in runs], float)  # noqa: E731
         out[cfg[4:]] = {
             "runs": len(runs), "mean_updates": float(get("n_updates").mean()),
             "mean_cep_initial": float(get("cep_initial").mean()), "mean_cep_updated": float(get("cep_updated").mean()),

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from fmus.imu_thermal_slave import NO_TAG
 from orchestration import Component, Connection, System, write_ssd, write_ssp
 
 GIMBAL_LINKS = [f"{q}_{j}" for j in (1, 2, 3) for q in ("angle", "rate", "accel")] + [
@@ -35,8 +36,8 @@ def standard_static(fmu_dir: Path | str = "resources", *, hours: float = 88.0, t
     fmu_dir = Path(fmu_dir)
     components = [
         Component("turntable", fmu_dir / "Turntable.fmu", dict(turntable or {})),
-        Component("imu", fmu_dir / "IMUThermal.fmu", dict(imu or {})),
-        Component("ins", fmu_dir / "StrapdownINS.fmu", dict(ins or {})),
+        Component("imu", fmu_dir / "IMUThermal.fmu", {**STATIC_BASE_HELD, **dict(imu or {})}),
+        Component("ins", fmu_dir / "StrapdownINS.fmu", {**NO_CORRECTION, **dict(ins or {})}),
     ]
     connections = [Connection("turntable", v, "imu", v) for v in GIMBAL_LINKS]
     connections += [Connection("imu", v, "ins", v) for v in INCREMENT_LINKS]
@@ -60,6 +61,8 @@ def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: floa
     Jacobi.  Default stop: 4 h alignment + 84 h.
     """
     base = standard_static(fmu_dir, hours=hours, turntable=turntable, imu=imu, ins=ins)
+    for name in NO_CORRECTION:  # fed by the identifier here
+        base.components[2].parameters.pop(name, None)
     identifier_fmu = Component("identifier", Path(fmu_dir) / "RBFIdentifier.fmu", dict(identifier or {}))
     loop = [Connection("ins", "lat_error", "identifier", "lat_error"),
             Connection("ins", "nav_time", "identifier", "nav_time"),
@@ -74,6 +77,14 @@ def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: floa
 
 VEHICLE_LINKS = [f"vehicle_{a}{q}" for q in ("", "_rate", "_accel") for a in ("yaw", "pitch", "roll")] + [
     f"base_{kind}_{ax}" for kind in ("rate", "force") for ax in "enu"] + ["base_motion_time"]
+
+
+# On a static base IMUThermal (base = static) does not read its moving-base inputs: the
+# static systems hold them at their declared start values explicitly, so no input is left
+# unconnected by accident (and the master has nothing to warn about).
+# Without an identifier the INS's axial-drift correction inputs are held at zero explicitly.
+NO_CORRECTION = {"axial_drift_correction": 0.0, "axial_drift_apply_from": 0.0}
+STATIC_BASE_HELD = {name: (NO_TAG if name == "base_motion_time" else 0.0) for name in VEHICLE_LINKS}
 
 
 def vehicle_rins(fmu_dir: Path | str = "resources", *, hours: float = 2.0, vehicle=None, turntable=None, imu=None,
@@ -93,7 +104,7 @@ def vehicle_rins(fmu_dir: Path | str = "resources", *, hours: float = 2.0, vehic
         Component("vehicle", fmu_dir / "VehicleMotion.fmu", vehicle),
         Component("turntable", fmu_dir / "Turntable.fmu", {"align_time": 0.0, **dict(turntable or {})}),
         Component("imu", fmu_dir / "IMUThermal.fmu", {"base": "input", **dict(imu or {})}),
-        Component("ins", fmu_dir / "StrapdownINS.fmu", {"align_time": lead, **start, **dict(ins or {})}),
+        Component("ins", fmu_dir / "StrapdownINS.fmu", {"align_time": lead, **NO_CORRECTION, **start, **dict(ins or {})}),
     ]
     connections = [Connection("vehicle", v, "imu", v) for v in VEHICLE_LINKS]
     connections += [Connection("turntable", v, "imu", v) for v in GIMBAL_LINKS]

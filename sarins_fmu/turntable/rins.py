@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 
 from ..units import DEG_TO_RAD
 from .schedule import AXIS_Y, AXIS_Z, GimbalSchedule
