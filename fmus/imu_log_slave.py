@@ -18,7 +18,8 @@ class IMULog(Fmi2Slave):
         "increments or rates in SI units, optional temperatures; checked when loaded). Contract: FMU time 0 "
         "is the start of the log's first interval (first time_s minus the log's interval h); the "
         "communication step must equal h; after doStep(t, h) the outputs are the log's increments over "
-        "(t, t + h] in body axes and the six temperatures at t + h (20 degC when the log has none). "
+        "(t, t + h] in body axes, tagged increment_end_time = t + h as StrapdownINS expects, and the six "
+        "temperatures at t + h (20 degC when the log has none). "
         "lat_deg, lon_deg and height_m of the log are outputs, to set the INS start from. A missing or bad "
         "log fails fmi2ExitInitializationMode naming the line; stepping past the end of the log fails "
         "the step. Held between steps: the sample index.")
@@ -34,6 +35,8 @@ class IMULog(Fmi2Slave):
         for sensor in SENSORS:
             declare(self, "real", f"temp_{sensor}", OUTPUT, f"temperature of the {sensor} sensor [degC]", 20.0)
         declare(self, "real", "log_time", OUTPUT, "log timestamp of the current outputs [s]", 0.0)
+        declare(self, "real", "increment_end_time", OUTPUT,
+                "time tag: FMU time at the end of the increments' interval (0: none yet) [s]", 0.0)
         declare(self, "real", "log_step", OUTPUT, "sample interval of the log [s]", 0.0)
         declare(self, "real", "lat_deg", OUTPUT, "static start latitude of the log [deg]", 0.0)
         declare(self, "real", "lon_deg", OUTPUT, "static start longitude of the log [deg]", 0.0)
@@ -80,4 +83,5 @@ class IMULog(Fmi2Slave):
         if log.temps is not None:
             self._set_temps(log.temps[k])
         self.log_time = float(log.time[k])
+        self.increment_end_time = (k + 1) * step_size
         return True

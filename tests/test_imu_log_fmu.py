@@ -11,7 +11,7 @@ from tests.fmu_driver import Slave, check_parameter_error
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]  # builds its own two FMUs
 ALIGN, NAV = 900.0, 300.0
-INCREMENTS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z"]
+INCREMENTS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z", "increment_end_time"]
 
 
 @pytest.fixture(scope="module")
