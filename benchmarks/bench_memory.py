@@ -34,7 +34,10 @@ s.set(**{inputs!r})
 n = {steps}
 marks = []
 t0 = time.perf_counter()
+tag = s.vr.get("increment_end_time")  # a time-tagged input (StrapdownINS): the interval about to be fed
 for k in range(n):
+    if tag is not None:
+        s.fmu.setReal([tag], [float(k + 1)])
     s.fmu.doStep(float(k), 1.0)
     if k % (n // 10) == 0 or k == n - 1:
         marks.append(rss_kb())
