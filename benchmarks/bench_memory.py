@@ -35,9 +35,12 @@ n = {steps}
 marks = []
 t0 = time.perf_counter()
 tag = s.vr.get("increment_end_time")  # a time-tagged input (StrapdownINS): the interval about to be fed
+row = s.vr.get("nav_time")  # DriftModelUpdater: the INS row it processes
 for k in range(n):
     if tag is not None:
         s.fmu.setReal([tag], [float(k + 1)])
+    if row is not None:
+        s.fmu.setReal([row], [float(k)])
     s.fmu.doStep(float(k), 1.0)
     if k % (n // 10) == 0 or k == n - 1:
         marks.append(rss_kb())
@@ -76,6 +79,9 @@ def main():
                   f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})")
         for fmu in fmus:
             if args.only and fmu.stem not in args.only:
+                continue
+            if fmu.stem == "IMULog":  # plays a recorded log: nothing to measure without one
+                print(f"{fmu.stem:<13} skipped: needs a recorded log file (parameter log_file)")
                 continue
             code = CHILD.format(root=str(ROOT), tests=str(ROOT / "tests"), fmu=str(fmu), steps=args.steps,
                                 inputs=static_increments() if fmu.stem == "StrapdownINS" else {})
