@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._jit import jit
+from .checks import finite_number
 
 SENSORS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
 N_SENSORS = len(SENSORS)
@@ -245,19 +246,6 @@ def die_temperatures(reported0, reported, h, tau, die):
     return out
 
 
-def _nonneg(name: str, value, *, positive: bool = False) -> float:
-    """``value`` as a finite float, >= 0 (or > 0 if ``positive``), else ValueError."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{name} must be finite, got {v}")
-    if v < 0 or (positive and v == 0):
-        raise ValueError(f"{name} must be {'positive' if positive else 'non-negative'}, got {v}")
-    return v
-
-
 def chamber_profile(duration: float, *, low_c: float = -25.0, high_c: float = 40.0,
                     ramp_c_per_min: float = 1.0, hold_min: float = 30.0, start_c: float = 20.0,
                     delay: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -305,10 +293,10 @@ def chamber_profile(duration: float, *, low_c: float = -25.0, high_c: float = 40
         On NaN, a non-positive duration or ramp, a negative hold or delay, or
         low_c >= high_c.
     """
-    duration = _nonneg("duration", duration, positive=True)
-    ramp = _nonneg("ramp_c_per_min", ramp_c_per_min, positive=True) / 60.0  # degC/s
-    hold = _nonneg("hold_min", hold_min) * 60.0  # s
-    delay = _nonneg("delay", delay)
+    duration = finite_number("duration", duration, positive=True)
+    ramp = finite_number("ramp_c_per_min", ramp_c_per_min, positive=True) / 60.0  # degC/s
+    hold = finite_number("hold_min", hold_min) * 60.0  # s
+    delay = finite_number("delay", delay)
     for name, value in (("low_c", low_c), ("high_c", high_c), ("start_c", start_c)):
         if not math.isfinite(float(value)):
             raise ValueError(f"{name} must be finite, got {value}")

@@ -11,20 +11,8 @@ import math
 
 import numpy as np
 
+from ..checks import finite_number as number  # noqa: F401 (used by rins, rate_table)
 from .schedule import GimbalSchedule
-
-
-def number(name: str, value, *, positive: bool = False) -> float:
-    """``value`` as a finite float, >= 0 (or > 0 if ``positive``), else ValueError."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{name} must be finite, got {v}")
-    if v < 0 or (positive and v == 0):
-        raise ValueError(f"{name} must be {'positive' if positive else 'non-negative'}, got {v}")
-    return v
 
 
 def ceil_steps(duration: float, grid: float) -> int:
