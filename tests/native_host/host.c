@@ -3,6 +3,7 @@
  * usage: host UNZIPPED_DIR MODEL_IDENTIFIER GUID STEPS [STEP_SIZE] [ops...]
  *   ops before initialisation:  rVR=VALUE  iVR=VALUE  sVR=TEXT
  *   probes after initialisation: probe-real=VR  probe-int=VR (get with that vr/type)
+ *   after the last step:         final-real=VR (prints "VALUE VR %.17g")
  *
  * Runs instantiate -> setupExperiment -> set -> enter/exit initialisation ->
  * STEPS doSteps -> terminate -> free, prints "<function> <status>" for every
@@ -75,7 +76,7 @@ int main(int argc, char **argv) {
     report("fmi2SetupExperiment", fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
     for (int k = first_op; k < argc; k++) {
         char *op = argv[k], *eq = strchr(op, '=');
-        if (!eq || strncmp(op, "probe-", 6) == 0) continue;
+        if (!eq || strncmp(op, "probe-", 6) == 0 || strncmp(op, "final-", 6) == 0) continue;
         fmi2ValueReference vr = (fmi2ValueReference)strtoul(op + 1, NULL, 10);
         if (op[0] == 'r') {
             fmi2Real v = atof(eq + 1);
@@ -105,6 +106,13 @@ int main(int argc, char **argv) {
     long done = 0;
     for (long n = 0; ok && n < steps; n++, done++)
         ok = report("fmi2DoStep", fmi2DoStep(c, n * h, h, fmi2True)) == fmi2OK;
+    for (int k = first_op; ok && k < argc; k++) {
+        if (strncmp(argv[k], "final-real=", 11) != 0) continue;
+        fmi2ValueReference vr = (fmi2ValueReference)strtoul(argv[k] + 11, NULL, 10);
+        fmi2Real v;
+        ok = report("fmi2GetReal", fmi2GetReal(c, &vr, 1, &v)) == fmi2OK;
+        if (ok) printf("VALUE %u %.17g\n", (unsigned)vr, v);
+    }
     if (ok) report("fmi2Terminate", fmi2Terminate(c));
     fmi2FreeInstance(c);
     printf("DONE %ld\n", done);
