@@ -31,8 +31,9 @@ class DriftModelUpdater(Fmi2Slave):
         "with the INS row of the same time: the updater keeps the last 8 speeds, so a speed that arrives before "
         "the row (Jacobi: two links ahead) is found; a row without its speed is an error (fmi2Error with the "
         "tags). If speed_time is not connected, vehicle_speed is taken as it is at each doStep. The updater's "
-        "clock is start_day + nav_time of the row. The vehicle is stopped while vehicle_speed < speed_threshold and ins_phase = 2 "
-        "(navigating); at the start of a stop a static Kalman filter (velocity = 0 measurement, states "
+        "clock is start_day + nav_time of the row. The vehicle is stopped while vehicle_speed < speed_threshold "
+        "and the INS navigates (ins_phase = 2 and nav_time >= 0: the phase input may be held at 2, the row's "
+        "nav_time tells); at the start of a stop a static Kalman filter (velocity = 0 measurement, states "
         "attitude, velocity, gyro drifts incl. the azimuth drift, accelerometer biases, north position) is "
         "reset and a timer starts; when the vehicle moves off, a stop of at least time_threshold updates the "
         "model by forgetting-factor RLS (lambda^(dt/m)) with the pair (mean gyro temperature, estimated "
@@ -195,7 +196,7 @@ class DriftModelUpdater(Fmi2Slave):
             time = self.start_day * DAY + float(self.nav_time)
             comp = self._core.step([time], [speed], [[self.v_e, self.v_n]],
                                    [[self.yaw, self.pitch, self.roll]], [self.temp_gyro_z], [self.lat],
-                                   [int(self.ins_phase) == NAVIGATE])
+                                   [int(self.ins_phase) == NAVIGATE and self.nav_time >= 0.0])
         except ValueError as exc:
             return discard_on_error(self, exc)
         self.row_time = tag

@@ -186,3 +186,24 @@ def _rls_state(res, before: ForgettingRLS, n_new: int) -> ForgettingRLS:
     rls = ForgettingRLS(x, p, float(res["updater.model_time"][-1]), before.settings)
     rls.n_updates = before.n_updates + n_new
     return rls
+
+
+# ---------------------------------------------------------------------- campaign task
+ENGINES = ("inprocess", "cosim")
+FMUS = ("VehicleMotion", "Turntable", "IMUThermal", "StrapdownINS", "DriftModelUpdater")  # vehicle_rins_online's
+
+
+def vehicle_task(*, engine: str = "inprocess", fmu_dir: str | None = None, **kwargs) -> dict:
+    """One vehicle test (:func:`~sarins_fmu.experiments.online_rls.vehicle_test` keyword arguments)
+    in process or through the FMUs in ``fmu_dir`` (``engine='cosim'``): the same numbers."""
+    from sarins_fmu.experiments.online_rls import vehicle_test
+
+    if engine == "cosim":
+        if fmu_dir is None:
+            raise ValueError("the cosim engine needs the folder of the built FMUs")
+        result = vehicle_test(**kwargs, engine=CosimEngine(fmu_dir))
+    elif engine == "inprocess":
+        result = vehicle_test(**kwargs)
+    else:
+        raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
+    return {**result, "engine": engine}

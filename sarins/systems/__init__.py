@@ -118,8 +118,10 @@ def vehicle_rins(fmu_dir: Path | str = "resources", *, hours: float = 2.0, vehic
 # DriftModelUpdater <-> StrapdownINS (seed 002's online update): the INS row it reads (all tagged
 # solution_time), the vehicle's speed (tagged base_motion_time) and the model it sends back (tagged apply_from)
 INS_TO_UPDATER = [("v_e", "v_e"), ("v_n", "v_n"), ("yaw", "yaw"), ("pitch", "pitch"), ("roll", "roll"), ("lat", "lat"),
-                  ("temp_azimuth_gyro", "temp_gyro_z"), ("nav_time", "nav_time"), ("solution_time", "solution_time"),
-                  ("phase", "ins_phase")]
+                  ("temp_azimuth_gyro", "temp_gyro_z"), ("nav_time", "nav_time"), ("solution_time", "solution_time")]
+# the updater's ins_phase input is held at 2 (navigating): the row's nav_time (>= 0 in navigation) tells the
+# phase, and an Integer connection is one libcosimpy 0.0.6 cannot make
+UPDATER_HELD = {"ins_phase": 2}
 VEHICLE_TO_UPDATER = [("speed", "vehicle_speed"), ("base_motion_time", "speed_time")]
 UPDATER_TO_INS = [("drift_a", "axial_drift_correction_a"), ("drift_b", "axial_drift_correction_b"),
                   ("drift_c", "axial_drift_correction"), ("apply_from", "axial_drift_apply_from")]
@@ -147,7 +149,8 @@ def vehicle_rins_online(fmu_dir: Path | str = "resources", *, hours: float = 1.2
     ins_component = base.components[3]
     for name in NO_CORRECTION:  # fed by the updater here
         ins_component.parameters.pop(name, None)
-    component = Component("updater", fmu_dir / "DriftModelUpdater.fmu", {"latency": 1.0, **dict(updater or {})})
+    component = Component("updater", fmu_dir / "DriftModelUpdater.fmu",
+                          {"latency": 1.0, **UPDATER_HELD, **dict(updater or {})})
     loop = [Connection("ins", a, "updater", b) for a, b in INS_TO_UPDATER]
     loop += [Connection("vehicle", a, "updater", b) for a, b in VEHICLE_TO_UPDATER]
     loop += [Connection("updater", a, "ins", b) for a, b in UPDATER_TO_INS]
