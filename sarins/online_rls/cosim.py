@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fmus.drift_model_updater_slave import P_INDEX, P_UNITS
 from sarins_fmu import imu as imu_mod
 from sarins_fmu import imu_params
 from sarins_fmu.experiments.online_rls_vehicle import RIGID_BODY, RINS_ROTATION, UPDATE_LATENCY, VehicleRun
@@ -34,8 +35,7 @@ from sarins_fmu.kalman import StopFilterSettings
 
 BASE_PRESET = "nav-rlg"  # the IMUThermal preset the run's unit is expressed against
 NAV = ["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll"]
-P_NAMES = ["p_aa", "p_ab", "p_ac", "p_bb", "p_bc", "p_cc"]
-P_INDEX = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)]
+P_NAMES = list(P_UNITS)  # the DriftModelUpdater's inverse-information outputs, element P_INDEX[k] each
 LAST_STOP = ["last_stop_time", "last_stop_duration", "last_stop_temp", "last_stop_drift", "last_stop_drift_std"]
 FILTER_PARAMETERS = ("arw", "vrw", "velocity_meas_std", "heading0_std")  # the stop-filter settings the FMU takes
 
