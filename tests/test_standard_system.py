@@ -114,3 +114,22 @@ def test_shipped_systems_run_without_any_warning(fmu_dir, name, recwarn):
     for scheme in ("gauss-seidel", "jacobi"):
         simulate_system(SYSTEMS[name](fmu_dir, hours=0.01), 5.0, 1.0, scheme=scheme, progress=False)
     assert [str(w.message) for w in recwarn] == []
+
+
+@pytest.mark.parametrize("name", list(SYSTEMS))
+def test_shipped_ssd_is_the_system_function(name):
+    """sarins/systems/<name>/SystemStructure.ssd is what ``SYSTEMS[name]`` writes (rewrite it with
+    ``sarins.systems.write_shipped_ssds()`` after changing a system)."""
+    from pathlib import Path
+
+    from orchestration.ssp_reader import read_system
+    from sarins.systems import SHIPPED
+
+    shipped = read_system(SHIPPED / name / "SystemStructure.ssd")
+    made = SYSTEMS[name](Path("resources"))
+    assert [(c.name, Path(c.source).name, c.parameters) for c in shipped.components] == \
+        [(c.name, Path(c.source).name, c.parameters) for c in made.components]
+    key = lambda c: (c.start_component, c.start_variable, c.end_component, c.end_variable)  # noqa: E731
+    assert sorted(map(key, shipped.connections)) == sorted(map(key, made.connections))
+    assert (shipped.start_time, shipped.stop_time, shipped.step_size) == (made.start_time, made.stop_time,
+                                                                          made.step_size)
