@@ -21,9 +21,10 @@ components had in Initialization Mode: a component whose outputs feed
 another must compute them there (in ``fmi2EnterInitializationMode``), not
 only when it leaves it.
 
-Refused (with the connection named): connections that need a unit
-conversion or a linear transformation (the binary copies values as they
-are).
+Start values given in another unit (SSP ``ssv:Real unit``) are converted
+to the variable's unit here, like the master does.  Refused (with the
+connection named): connections that need a unit conversion or a linear
+transformation (the binary copies values as they are).
 """
 from __future__ import annotations
 
@@ -37,7 +38,7 @@ from .errors import ImporterUnavailableError, SystemDescriptionError
 from .master import coerce_value
 from .ssp_reader import parse_literal, read_system
 from .system import System
-from .unit_links import refuse_conversions
+from .unit_links import refuse_conversions, start_in_variable_unit
 
 __all__ = ["build_container_fmu", "CONTAINER_FMI_VERSION"]
 
@@ -177,6 +178,10 @@ def _exposed_variables(system: System, components, variables, checked) -> dict:
             if var.name in component.parameters:
                 start = coerce_value(var, component.parameters[var.name],
                                      component=component.name, file=None)
+                if var.name in component.parameter_units:  # the container applies starts as they are
+                    start = start_in_variable_unit(start, component.parameter_units[var.name], var,
+                                                   components[i].modelDescription, system.units,
+                                                   file=None, component=component.name)
             elif var.causality == "input" and var.start is not None:
                 start = parse_literal(value_type(var), var.start, component=component.name,
                                       variable=var.name)
