@@ -55,6 +55,62 @@ def test_quick_campaign_through_the_fmus_equals_in_process(tmp_path):
     assert str(runs["cosim"]["veh-markov-premise-000"]["engine"]) == "cosim"
 
 
+def test_a_session_is_the_same_under_every_engine(fmu_dir, tmp_path):
+    """One session of the vehicle test (drive, a stop that updates the model, drive, a short stop at the
+    end so the Jacobi engines can run two steps longer) through the shipped system under the master's
+    Gauss-Seidel and Jacobi, Ecos and libcosim: every INS row and the updated model equal the in-process
+    session bit for bit."""
+    import warnings
+    from dataclasses import replace
+
+    from fmu_fixtures.thirdparty import ensure_libtbb, has_module
+    from orchestration import simulate_system, write_ssp
+    from sarins.online_rls.cosim import NAV, CosimEngine, ins_rows
+    from sarins_fmu.experiments.online_rls import _session_run, imu_unit
+    from sarins_fmu.experiments.online_rls_vehicle import InProcessEngine
+    from sarins_fmu.identify.online import OnlineDriftUpdater, UpdaterSettings, prior_covariance
+    from sarins_fmu.identify.rls import ForgettingRLS, RLSSettings
+    from sarins_fmu.kalman import StopFilterSettings
+
+    unit = imu_unit("premise")
+    run = _session_run(unit, unit.axial_drift_poly, day=12.0, temperature=30.0, stop_seconds=420.0,
+                       lat=math.radians(40.0), seed=8)
+    run = replace(run, legs=(*run.legs[:4], ("drive", 60.0, 8.0), ("stop", 30.0)))
+
+    def updater():
+        rls = ForgettingRLS(unit.axial_drift_poly, prior_covariance(11.0, 0.0, 50.0), 0.0, RLSSettings(0.8))
+        return OnlineDriftUpdater(rls, run.lat, 1.0, StopFilterSettings.for_model(unit), UpdaterSettings(360.0))
+
+    ref = updater()
+    ref_rows = InProcessEngine().session(run, ref)
+    assert [e[1] for e in ref.events] == ["update"]
+    n = len(ref_rows)
+    engine = CosimEngine(fmu_dir)
+    system = engine.session_system(run, updater(), updater().rls.save(tmp_path / "rls.json"))
+    record = ["ins." + v for v in ["solution_time", *NAV]] + ["updater.drift_a", "updater.drift_b", "updater.drift_c"]
+    stop = n + 2.0  # Jacobi engines: the updater's row two steps behind
+    runs = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for scheme in ("gauss-seidel", "jacobi"):
+            runs[f"master {scheme}"] = simulate_system(system, stop, 1.0, scheme=scheme, record=record,
+                                                       progress=False)
+    if has_module("ecospy") and not ensure_libtbb():
+        from orchestration.importers import simulate_with_ecos
+
+        runs["Ecos"] = simulate_with_ecos(write_ssp(system, tmp_path / "session.ssp"), stop, 1.0, record=record)
+    if has_module("libcosimpy"):
+        from orchestration.importers import simulate_with_libcosim
+
+        runs["libcosim"] = simulate_with_libcosim(system, stop, 1.0, record=record)
+    assert len(runs) >= 2
+    for name, res in runs.items():
+        rows = ins_rows(res, "solution_time", float(n))
+        assert rows.shape == ref_rows.shape, name
+        assert np.array_equal(rows, ref_rows), name
+        assert [res[f"updater.drift_{c}"][-1] for c in "abc"] == list(ref.rls.parameters), name
+
+
 # ------------------------------------------------------------------ the updater's pairing
 ROW = dict(v_e=0.0, v_n=0.0, yaw=0.1, pitch=0.0, roll=0.0, lat=math.radians(40.0), temp_gyro_z=25.0)
 

@@ -107,24 +107,29 @@ class CosimEngine:
                                    output_every=1)
 
     # ------------------------------------------------------------------ engine interface
-    def session(self, run: VehicleRun, updater: OnlineDriftUpdater, latency: float = UPDATE_LATENCY) -> int:
-        """One drive with a stop through the FMUs, the INS starting from ``run.attitude0``; ``updater``
-        (its RLS state and events) is brought up to date from the DriftModelUpdater's outputs."""
+    def session_system(self, run: VehicleRun, updater: OnlineDriftUpdater, model_file,
+                       latency: float = UPDATE_LATENCY):
+        """The system of a session: the INS starts from ``run.attitude0``, the DriftModelUpdater from the
+        RLS state in ``model_file`` with ``updater``'s settings."""
+        return self.system(replace(run, align_time=0.0),
+                           {"model_file": str(model_file), "latency": latency, **_updater_parameters(updater)})
+
+    def session(self, run: VehicleRun, updater: OnlineDriftUpdater, latency: float = UPDATE_LATENCY) -> np.ndarray:
+        """One drive with a stop through the FMUs; ``updater`` (its RLS state and events) is brought up
+        to date from the DriftModelUpdater's outputs.  Returns the INS rows like the in-process engine."""
         traj = run.trajectory()
         names = ["updater." + n for n in ["drift_a", "drift_b", "drift_c", *P_NAMES, "model_time", "n_updates",
                                           "n_resets", "stopped", *LAST_STOP, "last_stop_used"]]
+        names += ["ins." + n for n in ["solution_time", *NAV]]
         with tempfile.TemporaryDirectory(prefix="sarins_online_rls_") as tmp:
-            model_file = updater.rls.save(Path(tmp) / "rls.json")
-            system = self.system(replace(run, align_time=0.0),
-                                 {"model_file": str(model_file), "latency": latency,
-                                  **_updater_parameters(updater)})
+            system = self.session_system(run, updater, updater.rls.save(Path(tmp) / "rls.json"), latency)
             res = self._simulate(system, traj.n_steps * run.step, run.step, names)
         if res["updater.stopped"][-1]:
             raise ValueError("a session must end moving (the stop in progress would be lost between sessions)")
         updater.events.extend(_events(res))
         n_new = int(res["updater.n_updates"][-1])
         updater.rls = _rls_state(res, updater.rls, n_new)
-        return traj.n_steps
+        return ins_rows(res, "solution_time", traj.n_steps * run.step)
 
     def drive(self, run: VehicleRun, models) -> list:
         """Navigate the drive through the FMUs once per model ([a, b, c] rad/s per °C^n, or None);
@@ -140,10 +145,16 @@ class CosimEngine:
             if res["updater.n_updates"][-1]:
                 raise ValueError("the drive updated the model (a stop of 30 min or more): the in-process drive "
                                  "navigates with a fixed model")
-            nav = np.asarray(res["ins.nav_time"])
-            keep = np.concatenate([[True], np.diff(nav) != 0]) & (nav > 0)
-            out.append(np.column_stack([res["ins." + n] for n in NAV])[keep])
+            out.append(ins_rows(res, "nav_time", traj.n_steps * run.step - run.align_time))
         return out
+
+
+def ins_rows(res, tag: str, last: float) -> np.ndarray:
+    """The INS rows (K, 9) of a result with ``tag`` (``nav_time`` or ``solution_time``) in (0, last],
+    one per tag (a Jacobi engine repeats a row): the rows of any engine, in the same order."""
+    t = np.asarray(res["ins." + tag])
+    keep = np.concatenate([[True], np.diff(t) != 0]) & (t > 0) & (t <= last + 1e-9)
+    return np.column_stack([res["ins." + n] for n in NAV])[keep]
 
 
 def _updater_parameters(updater: OnlineDriftUpdater) -> dict:

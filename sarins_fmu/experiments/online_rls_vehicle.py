@@ -130,6 +130,19 @@ def state_blocks(moving: np.ndarray):
     return list(zip(np.concatenate([[0], edges]), np.concatenate([edges, [moving.size]])))
 
 
+def session_blocks(moving: np.ndarray, lag: int):
+    """:func:`state_blocks`, each moving block after a stop split ``lag`` rows after its start: the
+    model updated at its first row is in force from there (so the rows before are integrated, and seen
+    by the updater, before the rows after)."""
+    out = []
+    for k0, k1 in state_blocks(moving):
+        if moving[k0] and k0 > 0 and k1 - k0 > lag:
+            out += [(k0, k0 + lag), (k0 + lag, k1)]
+        else:
+            out.append((k0, k1))
+    return out
+
+
 def _compensation(in_force: list, k0: int, temperature: np.ndarray) -> np.ndarray:
     """Drift compensation of rows k0.. (temperature (K,) °C at each row's end), rad/s: the
     model of ``in_force`` [(first row, [a, b, c]), ...] in force at each row."""
@@ -147,10 +160,10 @@ class InProcessEngine:
 
     name = "inprocess"
 
-    def session(self, run: VehicleRun, updater: OnlineDriftUpdater, latency: float = UPDATE_LATENCY) -> int:
+    def session(self, run: VehicleRun, updater: OnlineDriftUpdater, latency: float = UPDATE_LATENCY) -> np.ndarray:
         """One drive with a stop: IMU -> INS (compensated by the model in force) -> ``updater`` (Fig. 2,
         updated in place; its events grow).  The INS starts navigating from ``run.attitude0``.
-        Returns the number of rows."""
+        Returns the INS rows (K, 9): lat, lon, height, v_e, v_n, v_u, yaw, pitch, roll at t = 1 .. K steps."""
         traj = run.trajectory()
         table = run.table(traj)
         sensor = make_imu(run, traj, table)
@@ -159,15 +172,19 @@ class InProcessEngine:
         lag = 1 + int(round(latency / run.step))  # rows from the updating row to the first compensated one
         in_force = [(0, updater.rls.parameters)]
         moving = traj.moving()[1:]
-        for k0, k1 in state_blocks(moving):
+        rows = []
+        for k0, k1 in session_blocks(moving, lag):
             dtheta, dv, temps = sensor.step(*motion(traj, table, traj.time[k0:k1]))
             out = ins.step(dtheta, dv, _compensation(in_force, k0, temps[:, GYRO_Z]))
+            rows.append(out)
             n_updates = updater.rls.n_updates
             updater.step(t0 + traj.time[k0 + 1:k1 + 1], traj.speed[k0 + 1:k1 + 1], out[:, 3:5], out[:, 6:9],
                          temps[:, GYRO_Z], out[:, 0])
             if updater.rls.n_updates != n_updates:  # updated at the block's first row (the vehicle moved off)
+                if not (moving[k0] and k0 > 0):
+                    raise RuntimeError("the model can only be updated at the first row of a moving block")
                 in_force.append((k0 + lag, updater.rls.parameters))
-        return traj.n_steps
+        return np.concatenate(rows)
 
     def drive(self, run: VehicleRun, models) -> list:
         """Navigate the drive once per model ([a, b, c] rad/s per °C^n, or None) on the same
