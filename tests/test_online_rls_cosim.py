@@ -196,3 +196,17 @@ def test_ins_applies_a_temperature_model_like_the_constant_it_evaluates_to(fmu_d
     assert runs[0] == runs[1]
     assert runs[0][3] == 200.0
     assert runs[0][0] != 0.3  # the correction turned the heading
+
+
+def test_updater_model_file_errors_name_the_file(fmu_dir, tmp_path):
+    """A missing or corrupt model_file, or one with other forgetting settings than the parameters, is
+    an fmi2Error at the end of initialisation naming the file."""
+    from fmu_driver import check_parameter_error
+    from sarins_fmu.identify.rls import ForgettingRLS, RLSSettings
+
+    path = fmu_dir / "DriftModelUpdater.fmu"
+    check_parameter_error(path, {"model_file": str(tmp_path / "missing.json")}, "missing.json")
+    (tmp_path / "bad.json").write_text("{not json")
+    check_parameter_error(path, {"model_file": str(tmp_path / "bad.json")}, "bad.json")
+    other = ForgettingRLS([0.0, 0.0, 1e-8], np.eye(3), 0.0, RLSSettings(0.5)).save(tmp_path / "lam.json")
+    check_parameter_error(path, {"model_file": str(other)}, "forgetting factor 0.5")
