@@ -6,8 +6,8 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, StartOfStepInputs, check_finite,
-                                check_step, declare, discard_on_error, guarded, real_slots, same_time)
+from fmus.slave_support import (INPUT, NO_TAG, OUTPUT, PARAMETER, ParameterError, StartOfStepInputs,
+                                check_finite, check_step, declare, discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import imu, imu_params
 from sarins_fmu.thermal import SENSORS, ThermalModel
 from sarins_fmu.units import DEG_TO_RAD
@@ -15,7 +15,6 @@ from sarins_fmu.site import SITE_LAT
 
 GIMBAL_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 UNIT_DISPLAY = {"rad/s": "deg/h", "rad": "deg"}
-NO_TAG = -1.0e9  # s, start value of motion_time: names no communication point of a run
 
 
 class IMUThermal(Fmi2Slave):
@@ -34,7 +33,9 @@ class IMUThermal(Fmi2Slave):
         "angle and velocity increments of [t, t + h] (coning and sculling applied, body axes at t), the six "
         "sensor temperatures at t + h and the tag increment_end_time = t + h (the start time at "
         "initialisation: no increments yet). Under Gauss-Seidel the master must pass the turntable's initial outputs "
-        "before the first step (FMI initialisation; motion_time starts at -1e9 s, no valid tag). If motion_time is "
+        "before the first step (FMI initialisation; motion_time starts at -1e9 s, no valid tag). The thermal state "
+        "starts at the ambient of the set tagged with the start time (so a Jacobi host that passes connections "
+        "only after initialisation gives the same run). If motion_time is "
         "never set (no turntable connected), the motion inputs are constants: a fixed table. So the "
         "increments are bit-identical under every scheme. All "
         "outputs are state outputs (no direct feedthrough). Held between steps: thermal state, "
@@ -153,10 +154,9 @@ class IMUThermal(Fmi2Slave):
         self._motion.prime(self.motion_time, self._read_motion())
         if self.base == "input":
             self._vehicle.prime(self.base_motion_time, self._read_vehicle())
-        self._ambient0 = float(self.ambient_temp)
         self.increment_end_time = self._start_time
         initial = ThermalModel(self._model.thermal, start=self.thermal_start)
-        initial.reset(0.0, self._ambient0)
+        initial.reset(0.0, float(self.ambient_temp))  # the initial outputs; the state starts at the first step
         for j, sensor in enumerate(SENSORS):
             setattr(self, f"temp_{sensor}", float(initial.temperature[j]))
 
@@ -180,7 +180,10 @@ class IMUThermal(Fmi2Slave):
             raise ValueError("vehicle motion inputs contain NaN or infinity")
         return angle, rate, accel, w_t, f_t
 
-    def _start(self, step_size):
+    def _start(self, step_size, ambient0):
+        """Build the IMU at the first step; its thermal state starts at ``ambient0`` (degC), the ambient
+        of the motion set tagged with the start time (a host that passes no connected inputs during
+        initialisation delivers it with the first step)."""
         axes = self._axes if self.base == "static" else np.vstack([imu.VEHICLE_ATTITUDE_AXES, self._axes])
         try:
             self._sensor = imu.IMU(self._model, self._base, axes, output_interval=step_size,
@@ -188,22 +191,22 @@ class IMUThermal(Fmi2Slave):
                                    thermal_start=self.thermal_start, aging_days=self.aging_days)
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
-        self._sensor.reset(ambient0=self._ambient0)
+        self._sensor.reset(ambient0=ambient0)
 
     @guarded
     def do_step(self, current_time, step_size):
         try:
             self._step = check_step(self, step_size, self._step)
-            if self._sensor is None:
-                self._start(step_size)
-            if not same_time(self._sensor.time + self._start_time, current_time, step_size):
-                raise ValueError(f"doStep at t={current_time:.9g} s but the IMU stands at "
-                                 f"{self._sensor.time + self._start_time:.9g} s (steps must follow each other)")
             if self.motion_time == NO_TAG and self._motion.held_tag == NO_TAG:  # never set: fixed table
                 angle0, rate0, accel, (amb0, amb_rate) = self._read_motion()
             else:
                 angle0, rate0, accel, (amb0, amb_rate) = self._motion.select(
                     current_time, step_size, self.motion_time, self._read_motion())
+            if self._sensor is None:
+                self._start(step_size, amb0)
+            if not same_time(self._sensor.time + self._start_time, current_time, step_size):
+                raise ValueError(f"doStep at t={current_time:.9g} s but the IMU stands at "
+                                 f"{self._sensor.time + self._start_time:.9g} s (steps must follow each other)")
             if self.base == "input":
                 v_angle, v_rate, v_accel, w_t, f_t = self._vehicle.select(
                     current_time, step_size, self.base_motion_time, self._read_vehicle())
