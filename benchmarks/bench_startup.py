@@ -55,7 +55,7 @@ def one_run(host: str, fmu: Path, feed, env: dict, work: Path, c_host: Path | No
         folder = fmu_runs.unzip(fmu, Path(tempfile.mkdtemp(prefix=f"{fmu.stem}.", dir=work)))
         argv = fmu_runs.c_host_command(c_host, folder, fmu, feed, LAST_STAMP, stamps=(1, LAST_STAMP))
     try:
-        return fmu_runs.stamps_after(argv, env, t0)
+        return fmu_runs.run_host(argv, env, t0)[0]
     finally:
         if host == "c":
             shutil.rmtree(folder, ignore_errors=True)

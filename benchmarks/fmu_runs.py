@@ -20,7 +20,8 @@ initialisation, and time-tagged inputs set to ``t + offset`` before every
 
 Run as a script, this file is the FMPy child: ``python fmu_runs.py FMU FEED_JSON
 STEPS [STAMP_STEP ...]`` extracts the FMU to a new folder, runs it and prints
-``STAMP k <unix time>`` after each listed step and ``ok`` at the end.  It imports
+``STAMP k <unix time>`` after each listed step, ``VALUE vr value`` for the
+Real outputs the feed JSON lists under ``print`` and ``ok`` at the end.  It imports
 only FMPy and the standard library (as a third-party Python host would).
 """
 from __future__ import annotations
@@ -153,14 +154,16 @@ def host_env(base: dict, **extra) -> dict:
     return env
 
 
-def fmpy_command(fmu: Path, feed: Feed, steps: int, stamps=(1,)) -> list[str]:
-    """argv of a fresh FMPy host process running ``fmu`` (this file as the child)."""
-    spec = json.dumps({"values": feed.values, "tags": feed.tags})
+def fmpy_command(fmu: Path, feed: Feed, steps: int, stamps=(1,), printed=()) -> list[str]:
+    """argv of a fresh FMPy host process running ``fmu`` (this file as the child); ``printed``:
+    Real variables whose values it prints after the last step."""
+    spec = json.dumps({"values": feed.values, "tags": feed.tags, "print": list(printed)})
     return [sys.executable, str(Path(__file__).resolve()), str(fmu), spec, str(steps), *map(str, stamps)]
 
 
-def c_host_command(host: Path, folder: Path, fmu: Path, feed: Feed, steps: int, stamps=(1,)) -> list[str]:
-    """argv of the C host running the FMU unzipped in ``folder``."""
+def c_host_command(host: Path, folder: Path, fmu: Path, feed: Feed, steps: int, stamps=(1,),
+                   printed=()) -> list[str]:
+    """argv of the C host running the FMU unzipped in ``folder`` (``printed`` as for :func:`fmpy_command`)."""
     from fmpy import read_model_description
 
     md = read_model_description(str(fmu))
@@ -172,6 +175,7 @@ def c_host_command(host: Path, folder: Path, fmu: Path, feed: Feed, steps: int, 
                    else f"{kind}{var[name].valueReference}={value}")
     ops += [f"tag{var[name].valueReference}={offset!r}" for name, offset in feed.tags.items()]
     ops += [f"stamp-at={k}" for k in stamps]
+    ops += [f"print-real={var[name].valueReference}" for name in printed]
     return [str(host), str(folder), md.coSimulation.modelIdentifier, md.guid, str(steps), repr(STEP), *ops]
 
 
@@ -182,20 +186,24 @@ def unzip(fmu: Path, folder: Path) -> Path:
     return folder
 
 
-def stamps_after(argv: list[str], env: dict, t0: float, timeout: float = 900.0) -> dict:
-    """Run ``argv``; {step k: seconds from ``t0`` (unix time) to the end of doStep k}.
+def run_host(argv: list[str], env: dict, t0: float, timeout: float = 900.0) -> tuple[dict, dict]:
+    """Run ``argv``: ({step k: seconds from ``t0`` (unix time) to the end of doStep k},
+    {value reference: printed value}).
 
-    Raises RuntimeError when the process fails or a step does not return OK."""
+    Raises RuntimeError when the process fails or a call does not return OK."""
     proc = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=timeout)
     out = proc.stdout
     if proc.returncode != 0 or "STATUS" in out or not ("ok" in out.split() or "DONE" in out):
         raise RuntimeError(f"{argv[1]}: exit {proc.returncode}\n{out[-1500:]}\n{proc.stderr[-1500:]}")
-    stamps = {}
+    stamps, values = {}, {}
     for line in out.splitlines():
         if line.startswith("STAMP "):
             _, k, when = line.split()
             stamps[int(k)] = float(when) - t0
-    return stamps
+        elif line.startswith("VALUE "):
+            _, vr, value = line.split()
+            values[int(vr)] = float(value)
+    return stamps, values
 
 
 def _child(argv: list[str]) -> None:
@@ -225,6 +233,9 @@ def _child(argv: list[str]) -> None:
         fmu.doStep(t, STEP)  # raises on a status other than OK
         if k + 1 in stamp_at:
             print(f"STAMP {k + 1} {time.time():.6f}", flush=True)
+    printed = [var[name].valueReference for name in spec["print"]]
+    for vr, value in zip(printed, fmu.getReal(printed) if printed else []):
+        print(f"VALUE {vr} {value!r}")
     fmu.terminate()
     fmu.freeInstance()
     shutil.rmtree(folder, ignore_errors=True)

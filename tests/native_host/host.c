@@ -5,6 +5,7 @@
  *   probes after initialisation: probe-real=VR  probe-int=VR (get with that vr/type)
  *   time-tagged Real input:     tagVR=OFFSET (set to t + OFFSET before every doStep(t, h))
  *   timestamp:                  stamp-at=K (print "STAMP K <unix time, s>" after the K-th doStep)
+ *   result:                     print-real=VR (print "VALUE VR <value>" after the last doStep)
  *
  * Runs instantiate -> setupExperiment -> set -> enter/exit initialisation ->
  * STEPS doSteps -> terminate -> free, prints "<function> <status>" for every
@@ -100,7 +101,8 @@ int main(int argc, char **argv) {
     report("fmi2SetupExperiment", fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
     for (int k = first_op; k < argc; k++) {
         char *op = argv[k], *eq = strchr(op, '=');
-        if (!eq || is_op(op, "probe-") || is_op(op, "tag") || is_op(op, "stamp-at=")) continue;
+        if (!eq || is_op(op, "probe-") || is_op(op, "tag") || is_op(op, "stamp-at=") || is_op(op, "print-"))
+            continue;
         fmi2ValueReference vr = (fmi2ValueReference)strtoul(op + 1, NULL, 10);
         if (op[0] == 'r') {
             fmi2Real v = atof(eq + 1);
@@ -133,6 +135,13 @@ int main(int argc, char **argv) {
         ok = ok && report("fmi2DoStep", fmi2DoStep(c, n * h, h, fmi2True)) == fmi2OK;
         for (int k = first_op; ok && k < argc; k++)
             if (is_op(argv[k], "stamp-at=") && atol(argv[k] + 9) == n + 1) stamp(n + 1);
+    }
+    for (int k = first_op; ok && k < argc; k++) {
+        if (!is_op(argv[k], "print-real=")) continue;
+        fmi2ValueReference vr = (fmi2ValueReference)strtoul(argv[k] + 11, NULL, 10);
+        fmi2Real v;
+        ok = report("fmi2GetReal", fmi2GetReal(c, &vr, 1, &v)) == fmi2OK;
+        if (ok) printf("VALUE %u %.17g\n", (unsigned)vr, v);
     }
     if (ok) report("fmi2Terminate", fmi2Terminate(c));
     fmi2FreeInstance(c);
