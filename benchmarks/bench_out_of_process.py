@@ -433,52 +433,59 @@ VARIANTS = {  # name: (chain kind, stepping method)
     "out of process, per call (8 round trips)": ("remote", "run_per_call"),
     "out of process, batched (3 round trips)": ("remote", "run_batched"),
 }
-PER_CALL, BATCHED = list(VARIANTS)[2:]
+NATIVE, BATCHED = list(VARIANTS)[1], list(VARIANTS)[3]
+IN_PROCESS = "in-process run (run_static, no FMUs)"
 
 
 def per_step_costs(fmu_dir: Path, steps: int, rounds: int) -> None:
-    """Interleaved rounds of ``steps`` navigation steps per variant; median us/step; outputs compared."""
+    """Interleaved rounds of ``steps`` navigation steps per variant (and of the in-process run);
+    median us/step; outputs compared with the native layer's."""
     chains = {name: Chain(kind, fmu_dir) for name, (kind, _) in VARIANTS.items()}
     rows = {name: [] for name in VARIANTS}
     for name, (_, method) in VARIANTS.items():  # alignment (and any compilation) untimed
         rows[name] += getattr(chains[name], method)(int(ALIGN) + 100)
-    cost = {name: [] for name in VARIANTS}
+    in_process_per_step(100)  # the library's kernels compiled / loaded
+    cost = {name: [] for name in [*VARIANTS, IN_PROCESS]}
     for _ in range(rounds):
         for name, (_, method) in VARIANTS.items():
             t0 = time.perf_counter()
             rows[name] += getattr(chains[name], method)(steps)
             cost[name].append((time.perf_counter() - t0) / steps * 1e6)
-    remote = chains[BATCHED].slaves[0]
-    pings = []
-    for _ in range(2000):
+        cost[IN_PROCESS].append(in_process_per_step(steps))
+    pings = round_trips(chains[BATCHED].slaves[0], 2000)
+    codes = {name: chain.free() for name, chain in chains.items()}
+    ref = np.array(rows[NATIVE], dtype=float)
+    base, inproc = statistics.median(cost[NATIVE]), statistics.median(cost[IN_PROCESS])
+    print(f"per step ({rounds} interleaved rounds of {steps} navigation steps, median; Turntable -> IMUThermal -> "
+          "StrapdownINS, 1 s, nav-rlg at 200 Hz)")
+    for name in cost:
+        med = statistics.median(cost[name])
+        notes = [f"rounds {min(cost[name]):.0f}-{max(cost[name]):.0f} us"]
+        if name in rows:
+            notes.append("outputs " + ("bit-identical" if np.array_equal(np.array(rows[name], float), ref)
+                                       else "DIFFER"))
+        if name in VARIANTS and VARIANTS[name][0] == "remote":
+            notes.append(f"server exit codes {codes[name]}")
+        print(f"  {name:42s} {med:6.0f} us = {med / base:4.2f}x the native layer = {med / inproc:4.1f}x the "
+              f"in-process run ({'; '.join(notes)})")
+    print(f"  bare round trip (empty request and reply, {len(pings)}x): median {statistics.median(pings):.1f} us")
+
+
+def round_trips(remote: RemoteSlave, n: int) -> list:
+    """Microseconds of ``n`` empty round trips to a server."""
+    out = []
+    for _ in range(n):
         t0 = time.perf_counter()
         remote.ping()
-        pings.append(time.perf_counter() - t0)
-    codes = {name: chain.free() for name, chain in chains.items()}
-    ref_name = "native layer, in process (FMPy)"
-    ref = np.array(rows[ref_name], dtype=float)
-    base = statistics.median(cost[ref_name])
-    print(f"per step ({rounds} rounds of {steps} navigation steps, median; Turntable -> IMUThermal -> "
-          "StrapdownINS, 1 s, nav-rlg at 200 Hz)")
-    for name in VARIANTS:
-        same = np.array_equal(np.array(rows[name], dtype=float), ref)
-        med = statistics.median(cost[name])
-        servers = f"; server exit codes {codes[name]}" if VARIANTS[name][0] == "remote" else ""
-        print(f"  {name:42s} {med:7.0f} us  ({med / base:4.2f}x the native layer; rounds "
-              f"{min(cost[name]):.0f}-{max(cost[name]):.0f} us; outputs "
-              f"{'bit-identical' if same else 'DIFFER'}{servers})")
-    print(f"  bare round trip (empty request and reply, {len(pings)}x): median {statistics.median(pings) * 1e6:.1f} us")
-    inproc = in_process_per_step(steps * rounds)
-    print(f"  in-process run (run_static, no FMUs) {inproc:.0f} us/step: native layer "
-          f"{base / inproc:.1f}x, out of process per call {statistics.median(cost[PER_CALL]) / inproc:.1f}x, "
-          f"batched {statistics.median(cost[BATCHED]) / inproc:.1f}x the in-process run")
+        out.append((time.perf_counter() - t0) * 1e6)
+    return out
 
 
 def in_process_per_step(nav_steps: int) -> float:
-    """Microseconds per 1 s step of the same chain run in process by the library (``run_static``)."""
+    """Microseconds per 1 s step of the same chain run in process by the library (``run_static``:
+    the same alignment, then ``nav_steps`` of navigation)."""
     from sarins_fmu.experiments import run_static
 
-    run_static(align_hours=ALIGN / 3600, nav_hours=0.05)  # kernels compiled / loaded first
     t0 = time.perf_counter()
     run_static(align_hours=ALIGN / 3600, nav_hours=nav_steps / 3600, seed=0)
     return (time.perf_counter() - t0) / (ALIGN + nav_steps) * 1e6

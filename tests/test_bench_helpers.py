@@ -35,8 +35,7 @@ def c_host(tmp_path_factory):
         pytest.skip(str(exc))
 
 
-@pytest.mark.parametrize("host", ["fmpy", "c"])
-@pytest.mark.parametrize("name", TAGGED)
+@pytest.mark.parametrize("name, host", [(name, "c") for name in TAGGED] + [("StrapdownINS", "fmpy")])
 def test_start_up_feed_runs_five_real_steps(fmu_dir, c_host, tmp_path, name, host):
     feed = fmu_runs.feeds()[name]
     if name == "IMUThermal":  # plain-Python minor loop: keep it short
