@@ -174,8 +174,8 @@ def c_host_command(host: Path, folder: Path, fmu: Path, feed: Feed, steps: int, 
         ops.append(f"{kind}{var[name].valueReference}={value!r}" if kind == "r"
                    else f"{kind}{var[name].valueReference}={value}")
     ops += [f"tag{var[name].valueReference}={offset!r}" for name, offset in feed.tags.items()]
-    ops += [f"stamp-at={k}" for k in stamps]
-    ops += [f"print-real={var[name].valueReference}" for name in printed]
+    ops += [f"time-at={k}" for k in stamps]
+    ops += [f"final-real={var[name].valueReference}" for name in printed]
     return [str(host), str(folder), md.coSimulation.modelIdentifier, md.guid, str(steps), repr(STEP), *ops]
 
 

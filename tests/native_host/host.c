@@ -3,9 +3,9 @@
  * usage: host UNZIPPED_DIR MODEL_IDENTIFIER GUID STEPS [STEP_SIZE] [ops...]
  *   ops before initialisation:  rVR=VALUE  iVR=VALUE  sVR=TEXT
  *   probes after initialisation: probe-real=VR  probe-int=VR (get with that vr/type)
- *   time-tagged Real input:     tagVR=OFFSET (set to t + OFFSET before every doStep(t, h))
- *   timestamp:                  stamp-at=K (print "STAMP K <unix time, s>" after the K-th doStep)
- *   result:                     print-real=VR (print "VALUE VR <value>" after the last doStep)
+ *   after the last step:         final-real=VR (prints "VALUE VR %.17g")
+ *   time-tagged Real input:      tagVR=OFFSET (set to t + OFFSET before every doStep(t, h))
+ *   timestamp:                   time-at=K (prints "STAMP K <unix time, s>" after the K-th doStep)
  *
  * Runs instantiate -> setupExperiment -> set -> enter/exit initialisation ->
  * STEPS doSteps -> terminate -> free, prints "<function> <status>" for every
@@ -50,16 +50,17 @@ static void stamp(long k) {
 }
 
 /* Before doStep(t, h): every tagVR=OFFSET input gets t + OFFSET. */
-static int set_tags(fmi2SetRealTYPE *set_real, fmi2Component c, int argc, char **argv, int first_op, double t) {
+static fmi2Status set_tags(fmi2SetRealTYPE *set_real, fmi2Component c, int argc, char **argv, int first_op,
+                           double t) {
     for (int k = first_op; k < argc; k++) {
-        if (!is_op(argv[k], "tag")) continue;
         char *eq = strchr(argv[k], '=');
-        if (!eq) continue;
+        if (!is_op(argv[k], "tag") || !eq) continue;
         fmi2ValueReference vr = (fmi2ValueReference)strtoul(argv[k] + 3, NULL, 10);
         fmi2Real v = t + atof(eq + 1);
-        if (set_real(c, &vr, 1, &v) != fmi2OK) return 0;
+        fmi2Status st = set_real(c, &vr, 1, &v);
+        if (st != fmi2OK) return st;
     }
-    return 1;
+    return fmi2OK;
 }
 
 static int report(const char *fn, fmi2Status st) {
@@ -101,8 +102,7 @@ int main(int argc, char **argv) {
     report("fmi2SetupExperiment", fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
     for (int k = first_op; k < argc; k++) {
         char *op = argv[k], *eq = strchr(op, '=');
-        if (!eq || is_op(op, "probe-") || is_op(op, "tag") || is_op(op, "stamp-at=") || is_op(op, "print-"))
-            continue;
+        if (!eq || strncmp(op, "probe-", 6) == 0 || strncmp(op, "final-", 6) == 0) continue;
         fmi2ValueReference vr = (fmi2ValueReference)strtoul(op + 1, NULL, 10);
         if (op[0] == 'r') {
             fmi2Real v = atof(eq + 1);
@@ -131,13 +131,13 @@ int main(int argc, char **argv) {
     }
     long done = 0;
     for (long n = 0; ok && n < steps; n++, done++) {
-        ok = report("fmi2SetReal", set_tags(fmi2SetReal, c, argc, argv, first_op, n * h) ? fmi2OK : fmi2Error) == fmi2OK;
+        ok = report("fmi2SetReal", set_tags(fmi2SetReal, c, argc, argv, first_op, n * h)) == fmi2OK;
         ok = ok && report("fmi2DoStep", fmi2DoStep(c, n * h, h, fmi2True)) == fmi2OK;
         for (int k = first_op; ok && k < argc; k++)
-            if (is_op(argv[k], "stamp-at=") && atol(argv[k] + 9) == n + 1) stamp(n + 1);
+            if (is_op(argv[k], "time-at=") && atol(argv[k] + 8) == n + 1) stamp(n + 1);
     }
     for (int k = first_op; ok && k < argc; k++) {
-        if (!is_op(argv[k], "print-real=")) continue;
+        if (strncmp(argv[k], "final-real=", 11) != 0) continue;
         fmi2ValueReference vr = (fmi2ValueReference)strtoul(argv[k] + 11, NULL, 10);
         fmi2Real v;
         ok = report("fmi2GetReal", fmi2GetReal(c, &vr, 1, &v)) == fmi2OK;
