@@ -14,6 +14,8 @@ import numpy as np
 
 from sarins_fmu.experiments import axial_rbf as s0
 
+from .report_additions import cold6_section, fig1_section, multitemp_section, sweep_section
+
 
 def _md(headers, rows) -> str:
     lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
@@ -27,7 +29,7 @@ def _rng(lo, hi) -> str:
 
 def table2(rows) -> str:
     """Hot-start training samples (Table 2 analogue)."""
-    body = [(i + 1, f"{s0.SITE_LAT_DEG + r['lat_error_deg']:.4f}", f"{r['lat_error_deg']:+.4f}",
+    body = [(i + 1, f"{r['lat_deg'] + r['lat_error_deg']:.4f}", f"{r['lat_error_deg']:+.4f}",
              _rng(r["temp_align_min"], r["temp_align_max"]), f"{r['drift_dph']:+.5f}",
              "" if not np.isfinite(r.get("paper_truth_dph", np.nan)) else f"{r['paper_truth_dph']:+.5f}")
             for i, r in enumerate(rows)]
@@ -40,7 +42,7 @@ def table4(rows, hot_net) -> str:
     hot = hot_net.predict(np.array([[r["lat_error_deg"]] for r in rows]))
     body = [(i + 1, _rng(r["temp_align_min"], r["temp_align_max"]), f"{r['temp_change_c']:.1f}",
              _rng(r["temp_calib_min"], r["temp_calib_max"]), f"{r['temp_calib_max'] - r['temp_calib_min']:.1f}",
-             f"{s0.SITE_LAT_DEG + r['lat_error_deg']:.4f}", f"{r['drift_dph']:+.5f}", f"{h:+.5f}")
+             f"{r['lat_deg'] + r['lat_error_deg']:.4f}", f"{r['drift_dph']:+.5f}", f"{h:+.5f}")
             for i, (r, h) in enumerate(zip(rows, hot))]
     return _md(["#", "alignment temp. (degC)", "diff", "calibration temp. (degC)", "diff", "latitude (deg)",
                 "true drift (deg/h)", "hot RBF (deg/h)"], body)
@@ -55,7 +57,7 @@ def table3(tests, live: bool) -> str:
         heads += ["live: FMU drift (deg/h)", "live: max 12-84 h (nmi)"]
     body = []
     for i, t in enumerate(tests):
-        row = [i + 1, f"{s0.SITE_LAT_DEG + t['lat_error_deg']:.4f}", f"{t['drift_dph']:+.5f}",
+        row = [i + 1, f"{t['lat_deg'] + t['lat_error_deg']:.4f}", f"{t['drift_dph']:+.5f}",
                f"{t['paper_truth_dph']:+.5f}", f"{t['ident_dph']:+.5f}", f"{t['ident_dph'] - t['drift_dph']:+.5f}",
                f"{t['ident_dph'] - t['paper_truth_dph']:+.5f}", f"{t['max_uncomp_nmi']:.2f}",
                f"{t['max_comp_nmi']:.2f}", f"{t['paper_truth_max_nmi']:.2f}"]
@@ -175,6 +177,14 @@ def write_report(summary: dict, folder) -> Path:
     """Write report.md + PNGs into ``folder``; returns the Markdown path."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    if summary.get("sweep_only"):
+        lines, figs = sweep_section(summary["sweep"], folder)
+        head = ["# Seed 000: identification error over gyro noise and latitude", "",
+                f"Sweep only; wall time of the invocation that wrote this report {summary['wall_seconds']:.0f} s "
+                f"(workers: {summary['workers'] or 'all cores'}).", ""]
+        path = folder / "report.md"
+        path.write_text("\n".join(head + lines + ["## Figures", ""] + [f"![{n}]({n})" for n in figs] + [""]))
+        return path
     figs = _figures(summary, folder)
     hot, cold = summary["test"]["hot"], summary["test"]["cold"]
     herr = np.array([t["ident_dph"] - t["drift_dph"] for t in hot])
@@ -228,8 +238,15 @@ def write_report(summary: dict, folder) -> Path:
               "closed_form: Table 1 inverted from the 12 h latitude error; linear: least-squares affine fit on "
               "the same training rows; kalman: filter over the 12 h latitude-error series "
               "(`sarins_fmu/identify/latitude_kf.py`); rbf: the network (cold: rbf_hot_model is the hot "
-              "network applied to cold starts). nmi/72h from the affine error map of each experiment.", "",
+              "network applied to cold starts; mt_*: after the multi-temperature compensation, see below; "
+              "cold6_*: cold network on 6 rows, see below). nmi/72h from the affine error map of each experiment "
+              "(mt_*: of the compensated re-runs).", "",
               comparison_table(summary["comparison"]), "", verdict(summary["comparison"]), ""]
+    lines += multitemp_section(summary) + cold6_section(summary) + fig1_section(summary)
+    if summary.get("sweep"):
+        sweep_lines, sweep_figs = sweep_section(summary["sweep"], folder)
+        lines += sweep_lines
+        figs += sweep_figs
     lines += ["## Figures", ""] + [f"![{n}]({n})" for n in figs] + [""]
     path = folder / "report.md"
     path.write_text("\n".join(lines))
