@@ -141,7 +141,7 @@ def test_residual_truth_is_the_true_drift_minus_the_table_mean():
     assert s0.window_mean_table_dph(e, MultiTemperatureTable((0.0, 90.0), (0.001, 0.001))) == pytest.approx(0.001)
     law = MultiTemperatureTable(tuple(np.arange(0.0, 91.0, 1.0)), tuple(s0.steady_drift_dph(0.0, np.arange(0.0, 91.0))))
     residual = e.drift_dph - s0.window_mean_table_dph(e, law)
-    temp, sel = s0._window_temperature(e, 0.0, s0.NAV_HOURS)
+    temp, sel = s0.window_temperature(e, 0.0, s0.NAV_HOURS)
     rate_term = s0.DTDT_DPH_PER_CPH * np.mean((np.gradient(temp, s0.TRUTH_GRID) * HOUR)[sel])
     assert residual == pytest.approx(e.eps0_dph + rate_term, abs=2e-6)  # 1 degC grid: linear-interpolation error
 

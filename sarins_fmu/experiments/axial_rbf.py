@@ -22,10 +22,18 @@ Experiment model (our choice, stated in ``docs/axial-rbf.md``)
       experiment so that the true drift over the 72 h after identification
       is uniform in +-0.0035 deg/h (the range of Table 2).
     * Gyro white noise and bias instability are 0.4 x the ``nav-rlg``
-      preset's (ARW 0.0002 deg/sqrt(h)): with the preset's 0.0005 deg/sqrt(h)
-      the 12 h latitude error alone scatters the identified drift by about
-      0.0003 deg/h (1 sigma), the paper's whole error budget.  The other
-      sensor errors are the preset's; every run is seeded.
+      preset's (ARW 0.0002 deg/sqrt(h); ``Experiment.noise_scale``, swept by
+      the campaign's ``--sweep`` with the site latitude ``lat_deg``): with the
+      preset's 0.0005 deg/sqrt(h) the 12 h latitude error alone scatters the
+      identified drift by about 0.0003 deg/h (1 sigma), the paper's whole
+      error budget.  The other sensor errors are the preset's; every run is
+      seeded.
+
+Multi-temperature compensation (sec. 2.3, :mod:`sarins_fmu.identify.multitemp`)
+    The unit is calibrated at steady temperature points
+    (:func:`calibration_unit`); with the table compensating the z gyro, the
+    drift left for the network is the *residual truth*
+    ``drift_dph - window_mean_table_dph`` over the same 72 h window.
 
 True drift
     *Simulated truth*: the time mean of the deterministic drift eps(T(t))
@@ -159,7 +167,7 @@ def steady_drift_dph(eps0_dph: float, temperature) -> np.ndarray:
     return eps0_dph + K1_DPH_PER_C * dev + K2_DPH_PER_C2 * dev**2
 
 
-def _window_temperature(exp: Experiment, start_h: float, end_h: float):
+def window_temperature(exp: Experiment, start_h: float, end_h: float):
     """z-gyro temperature (degC) on the TRUTH_GRID from the run start to just
     past ``end_h`` h of navigation, and the selection of ``[start_h, end_h]``."""
     t0 = (ALIGN_HOURS + start_h) * HOUR
@@ -171,7 +179,7 @@ def _window_temperature(exp: Experiment, start_h: float, end_h: float):
 def window_mean_drift_dph(exp: Experiment, start_h: float, end_h: float) -> float:
     """Simulated true drift: time mean of the deterministic drift (deg/h)
     over ``[start_h, end_h]`` hours of navigation."""
-    temp, sel = _window_temperature(exp, start_h, end_h)
+    temp, sel = window_temperature(exp, start_h, end_h)
     return float(np.mean(drift_series_dph(exp, temp, TRUTH_GRID)[sel]))
 
 
@@ -180,7 +188,7 @@ def window_mean_table_dph(exp: Experiment, table, start_h: float = 0.0, end_h: f
     :mod:`sarins_fmu.identify.multitemp`) subtracts over ``[start_h, end_h]``
     hours of navigation; the drift left for the network is
     ``window_mean_drift_dph - window_mean_table_dph`` (the residual truth)."""
-    temp, sel = _window_temperature(exp, start_h, end_h)
+    temp, sel = window_temperature(exp, start_h, end_h)
     return float(np.mean(table.drift_at(temp)[sel]))
 
 
@@ -244,7 +252,7 @@ def deterministic_errors(exp: Experiment, hours: float = IDENTIFY_HOURS) -> tupl
     :func:`sarins_fmu.static_errors.drift_history_errors`)."""
     from ..static_errors import drift_history_errors
 
-    temp, sel = _window_temperature(exp, 0.0, hours)
+    temp, sel = window_temperature(exp, 0.0, hours)
     eps = drift_series_dph(exp, temp, TRUTH_GRID)[sel] * DPH_TO_RPS
     tau = np.arange(eps.size) * TRUTH_GRID
     return drift_history_errors(hours * HOUR, tau, eps, exp.lat_deg * DEG_TO_RAD)
