@@ -32,6 +32,17 @@ def ratio_lon_to_lat(lat_deg: float, hours: float = s0.IDENTIFY_HOURS) -> float:
     return math.tan(lat_deg * DEG_TO_RAD) * (w - math.sin(w)) / (1.0 - math.cos(w))
 
 
+def flip_threshold_dph(phi_u: float, hours: float = s0.IDENTIFY_HOURS) -> float:
+    """Azimuth drift (deg/h) below which a heading error ``phi_u`` (rad) can
+    turn the longitude error's sign against the latitude error's at ``hours``:
+    |eps| (t - sin Wt / W) < (1 - cos Wt) |phi_u|."""
+    from sarins_fmu.earth import RATE
+    from sarins_fmu.units import DPH_TO_RPS
+
+    t = hours * HOUR
+    return (1.0 - math.cos(RATE * t)) * abs(phi_u) / (t - math.sin(RATE * t) / RATE) / DPH_TO_RPS
+
+
 def sign_analysis(rows: list[dict], hours: float = s0.IDENTIFY_HOURS) -> dict:
     """Signs and closed-form decomposition of the 12 h errors of simulated runs.
 
@@ -66,7 +77,10 @@ def sign_analysis(rows: list[dict], hours: float = s0.IDENTIFY_HOURS) -> dict:
     lat_known = np.array([r["lat_error_deg"] for r in known])
     differ = np.sign(lat_known) != np.sign(obs)
     predicted = np.sign(lat_known) != np.sign(both)
-    out.update({"n_decomposed": len(known), "rms_lon_deg": _rms(obs),
+    threshold = flip_threshold_dph(_rms(heading) / 3600.0 * DEG_TO_RAD, hours)
+    out.update({"flip_threshold_dph": threshold,
+                "below_threshold": int(sum(abs(r["drift_dph"]) < threshold for r in known)),
+                "n_decomposed": len(known), "rms_lon_deg": _rms(obs),
                 "rms_minus_drift_deg": _rms(obs - drift_only), "rms_minus_both_deg": _rms(obs - both),
                 "heading_rms_arcsec": _rms(heading), "differ_decomposed": int(np.sum(differ)),
                 "differ_predicted": int(np.sum(differ & predicted)),

@@ -87,9 +87,11 @@ def summarise(grid: str, seed: int, results: dict) -> dict:
         cf = np.array([float(s0.closed_form_drift_dph(r["lat_error_deg"], lat_deg=lat)) - r["drift_dph"]
                        for r in got])
         floor = noise_floor_dph(s, lat)
+        held_out = np.array([r["role"] == "test" for r in got])
         points.append({"noise_scale": s, "lat_deg": lat, "n_train": len(train), "n_test": len(test),
                        "rbf_rms_dph": _rms(rbf), "rbf_max_dph": float(np.max(np.abs(rbf))),
                        "closed_rms_dph": _rms(cf), "closed_max_dph": float(np.max(np.abs(cf))),
+                       "closed_test_rms_dph": _rms(cf[held_out]), "closed_train_rms_dph": _rms(cf[~held_out]),
                        "closed_within": float(np.mean(np.abs(cf) < CLAIM_DPH)), "floor_dph": floor,
                        "holds": bool(np.max(np.abs(rbf)) < CLAIM_DPH),
                        "floor_holds": bool(2.0 * floor < CLAIM_DPH), "spread": net.settings.spread})
