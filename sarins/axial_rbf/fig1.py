@@ -76,7 +76,7 @@ def sign_analysis(rows: list[dict], hours: float = s0.IDENTIFY_HOURS) -> dict:
     obs, drift_only, both = map(np.array, (obs, drift_only, both))
     lat_known = np.array([r["lat_error_deg"] for r in known])
     differ = np.sign(lat_known) != np.sign(obs)
-    predicted = np.sign(lat_known) != np.sign(both)
+    predicted = (np.sign(both) != 0) & (np.sign(lat_known) != np.sign(both))  # at the equator both terms vanish
     threshold = flip_threshold_dph(_rms(heading) / 3600.0 * DEG_TO_RAD, hours)
     out.update({"flip_threshold_dph": threshold,
                 "below_threshold": int(sum(abs(r["drift_dph"]) < threshold for r in known)),
@@ -84,7 +84,7 @@ def sign_analysis(rows: list[dict], hours: float = s0.IDENTIFY_HOURS) -> dict:
                 "rms_minus_drift_deg": _rms(obs - drift_only), "rms_minus_both_deg": _rms(obs - both),
                 "heading_rms_arcsec": _rms(heading), "differ_decomposed": int(np.sum(differ)),
                 "differ_predicted": int(np.sum(differ & predicted)),
-                "drift_only_differ": int(np.sum(np.sign(lat_known) != np.sign(drift_only)))})
+                "drift_only_differ": int(np.sum((np.sign(drift_only) != 0) & (np.sign(lat_known) != np.sign(drift_only))))})
     return out
 
 

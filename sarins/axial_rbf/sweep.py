@@ -88,10 +88,15 @@ def summarise(grid: str, seed: int, results: dict) -> dict:
                        for r in got])
         floor = noise_floor_dph(s, lat)
         held_out = np.array([r["role"] == "test" for r in got])
+        # what no identifier reading the 12 h latitude error can remove without training: the drift's history
+        # over those 12 h (deterministic closed form) differs from its 72 h mean, the truth
+        gap = np.array([float(s0.closed_form_drift_dph(s0.deterministic_errors(e)[0] / DEG_TO_RAD, lat_deg=lat))
+                        - e.drift_dph for e in exps])
         points.append({"noise_scale": s, "lat_deg": lat, "n_train": len(train), "n_test": len(test),
                        "rbf_rms_dph": _rms(rbf), "rbf_max_dph": float(np.max(np.abs(rbf))),
                        "closed_rms_dph": _rms(cf), "closed_max_dph": float(np.max(np.abs(cf))),
                        "closed_test_rms_dph": _rms(cf[held_out]), "closed_train_rms_dph": _rms(cf[~held_out]),
+                       "truth_gap_rms_dph": _rms(gap), "truth_gap_mean_dph": float(np.mean(gap)),
                        "closed_within": float(np.mean(np.abs(cf) < CLAIM_DPH)), "floor_dph": floor,
                        "holds": bool(np.max(np.abs(rbf)) < CLAIM_DPH),
                        "floor_holds": bool(2.0 * floor < CLAIM_DPH), "spread": net.settings.spread})
