@@ -211,7 +211,7 @@ DYNAMIC_KINDS = ("dynamic", "heldout", "repowered")
 KINDS = DYNAMIC_KINDS + ("tumble", "rates")
 
 PROFILES = {
-    # about a minute: the same programmes with twice the chamber ramp rates (training 2, held-out 1.5
+    # minutes, not hours: the same programmes with twice the chamber ramp rates (training 2, held-out 1.5
     # degC/min: their ratio and the temperature range kept, so the errors driven by the temperature rate
     # stay of the paper profile's size), shorter holds and dwells, coarser steps
     "quick": Profile(step=0.2, cal_step=0.25, tumble_dwell=10.0, rate_settle=0.0,
