@@ -352,8 +352,9 @@ def quick_campaign(tmp_path_factory):
 def _assert_report_claims(summary: dict, recurrent_models) -> None:
     """What docs/results/mems-calibration/report.md claims for the paper profile, on the quick profile."""
     from sarins.mems_calibration.analysis import ordered_metrics
+    from sarins.mems_calibration.report import CARRY_OVER, MEMORY_EFFECT
 
-    red = summary["reductions"]
+    red, ins = summary["reductions"], summary["reductions_in_sample"]
     order = summary["order"]
     # recurrent > shallow > traditional on the held-out run: std, mean |r| and the systematic residual
     assert set(ordered_metrics(order)) >= {"std", "mae", "sys"}, order
@@ -362,11 +363,14 @@ def _assert_report_claims(summary: dict, recurrent_models) -> None:
     for name in red:
         if name != "traditional":
             assert all(red[name][m] > red["traditional"][m] for m in red[name]), name
-    # memory is not what makes the recurrent models better: the memoryless control is as good (3 points)
-    assert red["lstm"]["sys"] < red["lstm-memoryless"]["sys"] + 3.0
+    # memory is not what makes the recurrent models better: their memoryless controls score the same
+    for cell in ("lstm", "gru"):
+        if cell in red:
+            assert abs(red[cell]["sys"] - red[f"{cell}-memoryless"]["sys"]) < MEMORY_EFFECT, cell
     assert red["lstm-memoryless"]["sys"] > max(red["rbf"]["sys"], red["grnn"]["sys"])
-    # GRNN fits its training run far better than the held-out one (it does not carry over to a new programme)
-    assert summary["reductions_in_sample"]["grnn"]["sys"] > red["grnn"]["sys"] + 10.0
+    # RBFNN carries over to the new programme (it underfits both), GRNN does not (it recalls its training run)
+    assert ins["rbf"]["sys"] - red["rbf"]["sys"] < CARRY_OVER
+    assert ins["grnn"]["sys"] - red["grnn"]["sys"] >= CARRY_OVER
 
 
 @pytest.mark.integration
@@ -396,11 +400,14 @@ def test_quick_campaign_with_every_model_and_the_ablation(tmp_path):
     """Every model (both readings of the recurrent architecture) and the all-terms-off ablation: the
     same claims, and without the time-correlated terms the recurrent-shallow gap stays and memory still
     adds nothing."""
+    from sarins.mems_calibration.report import MEMORY_EFFECT
+
     summary = _campaign(tmp_path / "c", "--ablation", "all")
     _assert_report_claims(summary, ("lstm", "gru", "lstm3", "gru3"))
     red, off = summary["reductions"], summary["ablation"]["all"]["reductions"]
-    assert off["lstm"]["sys"] - max(off["rbf"]["sys"], off["grnn"]["sys"]) > 5.0
-    assert off["lstm"]["sys"] < off["lstm-memoryless"]["sys"] + 3.0
+    gap = red["lstm"]["sys"] - max(red["rbf"]["sys"], red["grnn"]["sys"])
+    assert off["lstm"]["sys"] - max(off["rbf"]["sys"], off["grnn"]["sys"]) > gap - MEMORY_EFFECT > 5.0
+    assert abs(off["lstm"]["sys"] - off["lstm-memoryless"]["sys"]) < MEMORY_EFFECT
     assert off["lstm"]["sys"] > red["lstm"]["sys"]  # the time-correlated terms cost the networks accuracy
     rms = np.asarray(summary["ablation"]["all"]["term_rms"])
     assert np.all(rms > 0)

@@ -21,6 +21,7 @@ without it they are skipped with that message and the others still run.
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -192,8 +193,8 @@ def run_ablations(ablations, recs: dict, full_test, prof, kinds, out: Path, floo
     for term in ablations:
         pair = {k: recs[f"{k}.no-{term}"] for k in ("dynamic", "heldout")}
         train, test = mc.dynamic_dataset(pair["dynamic"], pair["heldout"], prof)
-        models, reused = model_set(out / "models" / f"no-{term}", kinds, train, None,
-                                   {"dynamic": pair["dynamic"]}, options, refit=refit, log=log)
+        models, reused, _ = model_set(out / "models" / f"no-{term}", kinds, train, None,
+                                      {"dynamic": pair["dynamic"]}, options, refit=refit, log=log)
         _, stats, info = evaluate(models, test, floor, log=log, stream_samples=0)
         red = _reductions(stats)
         result[term] = dict(reductions=red, order=analysis.ordering(red), reused_models=reused,
@@ -225,6 +226,7 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
 
     out = Path(out)
     wall = {}
+    load_start = os.getloadavg()[0]
     t0 = time.perf_counter()
     recs = record_all(profile_name, out, workers=workers, scheduler=scheduler, progress=progress, seed=seed,
                       ablations=ablations)
@@ -241,7 +243,8 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     options = dict(rnn_steps=rnn_steps, grnn_patterns=grnn_patterns, rbf_samples=rbf_samples)
     fitted_on = {k: recs[k] for k in ("dynamic", "tumble", "rates")}
     t0 = time.perf_counter()
-    models, reused = model_set(out / "models", kinds, train, fit, fitted_on, options, refit=refit, log=log)
+    models, reused, fit_load = model_set(out / "models", kinds, train, fit, fitted_on, options, refit=refit,
+                                         log=log)
     wall["model fitting (this call)"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     residuals, stats, info = evaluate(models, test, floor, log=log)
@@ -266,6 +269,7 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
         step_cost_ms=step_costs(kinds), table3=rep.table3(stats, red),
         stats={n: {k: v.tolist() for k, v in s.items()} for n, s in stats.items()},
         ablation=ablation, options=options, seed=seed, reused_models=reused, rnn_window=RNN_WINDOW,
+        load_average=[load_start, os.getloadavg()[0]], fit_load_average=fit_load,
         rnn_streams=RNN_STREAMS)
     if skipped:
         from sarins_fmu.identify.recurrent import INSTALL_HINT

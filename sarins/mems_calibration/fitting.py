@@ -8,6 +8,7 @@ report-only changes elsewhere in the application never force a refit.
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -46,17 +47,23 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
     return models
 
 
+def _index(model_dir: Path) -> dict:
+    """``<model_dir>/index.json`` as a dict ({} when missing or unreadable)."""
+    try:
+        index = json.loads((model_dir / "index.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return {}
+    return index if isinstance(index, dict) else {}
+
+
 def _stored_models(model_dir: Path, kinds, key: str) -> dict:
     """Models of an earlier run made from the same recordings, options and code (``models_key`` in
     ``<model_dir>/index.json``, with their fit times); an unreadable model file is fitted again with a
     notice."""
     from sarins_fmu.identify import compensators
 
-    try:
-        index = json.loads((model_dir / "index.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError):
-        return {}
-    if not isinstance(index, dict) or index.get("models_key") != key:
+    index = _index(model_dir)
+    if index.get("models_key") != key:
         return {}
     fit_times = index.get("fit_s") if isinstance(index.get("fit_s"), dict) else {}
     stored = {}
@@ -76,20 +83,28 @@ def _stored_models(model_dir: Path, kinds, key: str) -> dict:
 
 def model_set(model_dir: Path, kinds, train, fit, recs: dict, options: dict, *, refit=False, log=None):
     """The fitted models of one training set: reused from ``model_dir`` when made from the same
-    recordings ``recs``, options and code, else fitted and saved there.  Returns (models, reused names)."""
+    recordings ``recs``, options and code, else fitted and saved there.
+
+    Returns (models, reused names, load): ``load`` is the machine's 1-min
+    load average before and after the fits that made the models' fit times
+    (from the index when every model is reused; None if unknown).
+    """
     from sarins.campaign import atomic_output, write_text
 
     model_dir.mkdir(parents=True, exist_ok=True)
     key = models_key(recs, options)
     stored = {} if refit else _stored_models(model_dir, kinds, key)
-    fitted = fit_models([k for k in kinds if k not in stored], train, fit, log=log, **options)
+    todo = [k for k in kinds if k not in stored]
+    load_before = os.getloadavg()[0]
+    fitted = fit_models(todo, train, fit, log=log, **options)
+    load = [load_before, os.getloadavg()[0]] if todo else _index(model_dir).get("fit_load_average")
     models = {k: stored.get(k) or fitted[k] for k in kinds}
     for name, model in fitted.items():
         with atomic_output(model_dir / f"{name}.npz", keep_suffix=True) as tmp:
             model.save(tmp)
-    index = dict(models_key=key, fit_s={k: m.fit_seconds for k, m in models.items()})
+    index = dict(models_key=key, fit_s={k: m.fit_seconds for k, m in models.items()}, fit_load_average=load)
     write_text(model_dir / "index.json", json.dumps(index, indent=1))
-    return models, sorted(stored)
+    return models, sorted(stored), load
 
 
 def step_costs(kinds) -> dict:
