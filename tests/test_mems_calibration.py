@@ -610,3 +610,19 @@ def test_build_fmus_cli_ships_a_compensator(tmp_path):
                          timeout=300, env=env)
     assert bad.returncode != 0 and "missing.json" in bad.stderr
     assert not (tmp_path / "out_bad").exists()  # nothing built
+
+
+def test_recording_records_name_the_ablation_and_the_run():
+    """A stored recording is reused only for the same run, seed and switched-off term (canonical record)."""
+    from sarins.campaign import Task
+    from sarins.mems_calibration.recording import record_task
+    from sarins.results import task_record
+
+    def record(**kwargs):
+        args = dict(kind="heldout", profile_name="quick", fmu_dir="f", seed=3) | kwargs
+        return task_record(Task("r", record_task, args, volatile=("fmu_dir",)))
+
+    base = record()
+    assert base == record(fmu_dir="elsewhere")
+    assert len({str(r) for r in (base, record(ablation="flicker"), record(ablation="all"), record(kind="repowered"),
+                                 record(seed=4), record(profile_name="paper"))}) == 6
