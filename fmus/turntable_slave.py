@@ -61,6 +61,10 @@ class Turntable(Fmi2Slave):
         declare(self, "real", "chamber_high", PARAMETER, "chamber high temperature [degC]", 40.0)
         declare(self, "real", "chamber_ramp", PARAMETER, "chamber ramp rate [degC/s]", 1.0 / 60.0)
         declare(self, "real", "chamber_hold", PARAMETER, "chamber hold at each end [s]", 1800.0)
+        declare(self, "string", "chamber_first", PARAMETER, "chamber: end of the first ramp, 'low' or 'high'", "low")
+        declare(self, "real", "chamber_step", PARAMETER,
+                "chamber: intermediate stop every this much on the ramps between the ends (0: none) [degC]", 0.0)
+        declare(self, "real", "chamber_step_hold", PARAMETER, "chamber: length of each intermediate stop [s]", 0.0)
         declare(self, "real", "ambient_mean", PARAMETER, "ambient temperature mean (chamber start) [degC]", 20.0)
         declare(self, "real", "ambient_amplitude", PARAMETER, "ambient daily amplitude [degC]", 0.0)
         declare(self, "real", "ambient_period", PARAMETER, "ambient period [s]", 86400.0)
@@ -99,7 +103,8 @@ class Turntable(Fmi2Slave):
     def _build(self):
         check_finite(self, ["rate", "accel", "dwell", "align_time", "align_dwell", "grid", "duration",
                             "ambient_mean", "ambient_amplitude", "ambient_period", "outer_rate", "outer_accel",
-                            "warmup", "chamber_low", "chamber_high", "chamber_ramp", "chamber_hold"]
+                            "warmup", "chamber_low", "chamber_high", "chamber_ramp", "chamber_hold", "chamber_step",
+                            "chamber_step_hold"]
                      + [f"table_{n}_{q}" for n in ("inner", "middle", "outer") for q in ("rate", "accel")],
                      positive=["grid", "duration", "ambient_period"],
                      non_negative=["rate", "accel", "dwell", "align_time", "align_dwell"])
@@ -116,7 +121,8 @@ class Turntable(Fmi2Slave):
                 profile = thermal.chamber_profile(
                     self.duration, low_c=self.chamber_low, high_c=self.chamber_high,
                     ramp_c_per_min=self.chamber_ramp * 60.0, hold_min=self.chamber_hold / 60.0,
-                    start_c=self.ambient_mean)
+                    start_c=self.ambient_mean, first=self.chamber_first, step_c=self.chamber_step,
+                    step_hold_min=self.chamber_step_hold / 60.0)
                 self._ambient = Ambient(profile=profile)
             elif self.ambient_mode == "sinusoid":
                 self._ambient = Ambient(mean=self.ambient_mean, amplitude=self.ambient_amplitude,

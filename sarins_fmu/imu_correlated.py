@@ -80,6 +80,17 @@ def _stack(model, name):
     return np.concatenate([getattr(model.gyro, name), getattr(model.accel, name)])
 
 
+def _turn_on(seed: int, std: np.ndarray) -> np.ndarray:
+    on = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(_STREAM_TURN_ON,)))
+    return on.standard_normal(6) * std
+
+
+def turn_on_bias(model, seed: int) -> np.ndarray:
+    """The turn-on bias an IMU of ``model`` draws at power-up with ``seed``: (6,) gyro x, y, z (rad/s),
+    accelerometer x, y, z (m/s^2)."""
+    return _turn_on(seed, _stack(model, "turn_on_bias"))
+
+
 class CorrelatedErrors:
     """State of the time-correlated terms of one IMU (see the module docstring).
 
@@ -111,8 +122,7 @@ class CorrelatedErrors:
         self.die = np.array(temperature, float)
         self.play = self.die.copy()
         self._rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(_STREAM_PROCESS,)))
-        on = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(_STREAM_TURN_ON,)))
-        self.turn_on = on.standard_normal(6) * self.turn_on_std
+        self.turn_on = _turn_on(self.seed, self.turn_on_std)
         self.x_flicker = self._rng.standard_normal(self.q.shape) * self.q if self._random else np.zeros(self.q.shape)
         self.x_rrw = np.zeros(6)
 

@@ -248,7 +248,8 @@ def die_temperatures(reported0, reported, h, tau, die):
 
 def chamber_profile(duration: float, *, low_c: float = -25.0, high_c: float = 40.0,
                     ramp_c_per_min: float = 1.0, hold_min: float = 30.0, start_c: float = 20.0,
-                    delay: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+                    delay: float = 0.0, first: str = "low", step_c: float = 0.0,
+                    step_hold_min: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Thermal-chamber temperature of seed 003's dynamic calibration.
 
     Seed 003 states only that the chamber is driven between -25 and 40 degC
@@ -257,10 +258,14 @@ def chamber_profile(duration: float, *, low_c: float = -25.0, high_c: float = 40
     The profile is piecewise linear::
 
         start_c for ``delay`` s, ramp to low_c, hold, ramp to high_c, hold,
-        ramp to low_c, hold, ... (cold end first)
+        ramp to low_c, hold, ... (cold end first; ``first='high'``: hot end first)
 
     cut at ``duration`` (the last value interpolated).  With the defaults one
-    cycle low -> high -> low takes 2 * 65 min + 2 * 30 min = 190 min.
+    cycle low -> high -> low takes 2 * 65 min + 2 * 30 min = 190 min.  With
+    ``step_c`` > 0 every ramp between the ends also stops for
+    ``step_hold_min`` at each ``step_c`` from the end it leaves (a staircase,
+    the soak-at-several-temperatures programme of thermal calibrations);
+    the first ramp from ``start_c`` has no intermediate stops.
 
     Parameters
     ----------
@@ -277,6 +282,13 @@ def chamber_profile(duration: float, *, low_c: float = -25.0, high_c: float = 40
     delay : float
         Hold at ``start_c`` before the first ramp, s, >= 0 (e.g. the
         warm-up of :func:`sarins_fmu.turntable.rate_table_3axis`).
+    first : 'low' or 'high'
+        End the first ramp goes to.
+    step_c : float
+        Spacing of the intermediate stops on the ramps between the ends,
+        degC, >= 0 (0: none).
+    step_hold_min : float
+        Length of each intermediate stop, min, >= 0.
 
     Returns
     -------
@@ -312,13 +324,42 @@ def chamber_profile(duration: float, *, low_c: float = -25.0, high_c: float = 40
             times.append(t_next)
             temps.append(temp)
 
-    to(delay, start_c)
-    target = low_c
-    while times[-1] < duration:
+    if first not in ("low", "high"):
+        raise ValueError(f"first must be 'low' or 'high', got {first!r}")
+    step_c = finite_number("step_c", step_c)
+    step_hold = finite_number("step_hold_min", step_hold_min) * 60.0
+
+    def ramp_to(target, stops):
+        for point in stops:
+            to(times[-1] + abs(point - temps[-1]) / ramp, point)
+            to(times[-1] + step_hold, point)
         to(times[-1] + abs(target - temps[-1]) / ramp, target)
+
+    to(delay, start_c)
+    target, stops = (low_c if first == "low" else high_c), ()
+    while times[-1] < duration:
+        ramp_to(target, stops)
         to(times[-1] + hold, target)
+        stops = _intermediate_stops(target, low_c + high_c - target, step_c)
         target = high_c if target == low_c else low_c
     times, temps = np.array(times), np.array(temps)
     keep = times < duration
     t_out = np.append(times[keep], duration)
     return t_out, np.append(temps[keep], np.interp(duration, times, temps))
+
+
+def _intermediate_stops(start: float, end: float, step: float) -> list:
+    """Set points every ``step`` from ``start`` towards ``end``, both ends excluded (none if step is 0)."""
+    if step <= 0:
+        return []
+    n = math.ceil(abs(end - start) / step - 1e-9) - 1
+    return [start + math.copysign(step * (i + 1), end - start) for i in range(max(n, 0))]
+
+
+def chamber_cycle_time(*, low_c: float = -25.0, high_c: float = 40.0, ramp_c_per_min: float = 1.0,
+                       hold_min: float = 30.0, step_c: float = 0.0, step_hold_min: float = 0.0) -> float:
+    """Length of one cycle of :func:`chamber_profile` (end -> other end -> end, holds included), s."""
+    ramp = finite_number("ramp_c_per_min", ramp_c_per_min, positive=True) / 60.0
+    stops = len(_intermediate_stops(low_c, high_c, finite_number("step_c", step_c)))
+    return 2.0 * ((high_c - low_c) / ramp + finite_number("hold_min", hold_min) * 60.0
+                  + stops * finite_number("step_hold_min", step_hold_min) * 60.0)

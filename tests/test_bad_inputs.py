@@ -117,7 +117,11 @@ def _cases():
               ("mems --rnn-steps 0", mems + ["--rnn-steps", "0"], "--rnn-steps"),
               ("mems --rnn-steps huge", mems + ["--rnn-steps", str(10**12)], "--rnn-steps"),
               ("mems --grnn-patterns -1", mems + ["--grnn-patterns", "-1"], "--grnn-patterns"),
-              ("mems --rbf-samples huge", mems + ["--rbf-samples", str(10**12)], "--rbf-samples")]
+              ("mems --rbf-samples huge", mems + ["--rbf-samples", str(10**12)], "--rbf-samples"),
+              ("mems --ablation bogus", mems + ["--ablation", "bogus"], "bogus"),
+              ("mems --ablation-models traditional", mems + ["--ablation", "all", "--ablation-models",
+                                                             "traditional"], "traditional"),
+              ("mems --ablation-models bogus", mems + ["--ablation", "every", "--ablation-models", "x"], "x")]
     cases.append(("axial-rbf --engine bogus", ["campaign", "axial-rbf", "--engine", "bogus"], "--engine"))
     return cases
 

@@ -85,6 +85,8 @@ def test_axial_correction_input_in_cosimulation(fmu_dir):
     ("IMUThermal", dict(internal_rate=float("nan")), "not a finite"),
     ("Turntable", dict(rate=-1.0), "must not be negative"),
     ("Turntable", dict(scheme="sideways"), "unknown scheme"),
+    ("Turntable", dict(ambient_mode="chamber", chamber_first="middle"), "'low' or 'high'"),
+    ("Turntable", dict(ambient_mode="chamber", chamber_step=-2.0), "step_c"),
     ("StrapdownINS", dict(kf_arw=0.0), "must be positive"),
 ])
 def test_bad_parameters_give_an_error_status_and_a_message(fmu_dir, fmu, params, text):

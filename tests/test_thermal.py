@@ -61,9 +61,34 @@ def test_chamber_profile_ramps_and_holds():
     assert_allclose(v2, -25.0) and t2[-1] == 600.0
 
 
+def test_chamber_staircase_hot_end_first():
+    """first='high' and intermediate stops every step_c on the ramps between the ends (not on the first
+    ramp from the start temperature); chamber_cycle_time is one end -> end -> end cycle."""
+    from sarins_fmu.thermal import chamber_cycle_time
+
+    kw = dict(low_c=-15.0, high_c=35.0, ramp_c_per_min=0.75, hold_min=20.0, first="high", step_c=12.5,
+              step_hold_min=10.0)
+    times, temps = chamber_profile(40000.0, **kw)
+    assert temps.max() == 35.0 and temps.min() == -15.0
+    assert times[np.argmax(temps)] < times[np.argmin(temps)]
+    slope = np.diff(temps) / np.diff(times) * 60.0
+    assert set(np.round(np.abs(slope), 12)) == {0.0, 0.75}
+    held = temps[:-1][slope == 0]
+    assert set(held) == {35.0, 22.5, 10.0, -2.5, -15.0}
+    stops = np.diff(times)[(slope == 0) & (np.abs(temps[:-1]) < 30) & (temps[:-1] > -10)]
+    assert_allclose(stops, 600.0)
+    cycle = chamber_cycle_time(**{k: v for k, v in kw.items() if k != "first"})
+    assert cycle == pytest.approx(2 * (50 / 0.75 * 60 + 1200 + 3 * 600))
+    first_top = times[1]  # 20 -> 35 degC with no stop, then the cycle starts at the hot end
+    hot = times[np.isclose(temps, 35.0)]
+    assert first_top == pytest.approx(15 / 0.75 * 60) and hot[2] - hot[0] == pytest.approx(cycle)
+    with pytest.raises(ValueError, match="first"):
+        chamber_profile(100.0, first="middle")
+
+
 @pytest.mark.parametrize("kwargs", [
     dict(duration=float("nan")), dict(duration=-1.0), dict(ramp_c_per_min=0.0), dict(hold_min=-1.0),
-    dict(low_c=50.0), dict(high_c=float("nan")), dict(delay=-1.0),
+    dict(low_c=50.0), dict(high_c=float("nan")), dict(delay=-1.0), dict(step_c=-1.0), dict(step_hold_min=-1.0),
 ])
 def test_chamber_profile_rejects_bad_input(kwargs):
     args = dict(duration=3600.0) | kwargs

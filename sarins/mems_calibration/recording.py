@@ -10,9 +10,10 @@ from pathlib import Path
 import numpy as np
 
 from orchestration import Component, Connection, System, simulate_system, write_csv
-from sarins.systems import GIMBAL_LINKS
-from sarins_fmu.experiments.mems_calibration import (Profile, imu_parameters, profile, stop_time,
-                                                     turntable_parameters, with_profile)
+from sarins.systems import GIMBAL_LINKS, STATIC_BASE_HELD
+from sarins_fmu.experiments.mems_calibration import (DYNAMIC_KINDS, Profile, imu_parameters, profile,
+                                                     recording_overrides, run_seed, stop_time, turntable_parameters,
+                                                     with_profile)
 
 RECORD = ["turntable.angle_?", "turntable.rate_?", "turntable.ambient_temp", "imu.dtheta_?", "imu.dv_?",
           "imu.temp_*"]
@@ -37,10 +38,10 @@ def record_cosim(kind: str, prof: Profile, fmu_dir: str | Path, *, seed: int = 3
 
     Parameters
     ----------
-    kind : 'dynamic', 'tumble' or 'rates'
+    kind : 'dynamic', 'heldout', 'tumble' or 'rates'
     prof : Profile
     fmu_dir : folder holding Turntable.fmu and IMUThermal.fmu
-    seed : IMU noise seed
+    seed : IMU noise seed (as given: :func:`record_task` applies the held-out run's own seed)
     csv : optional path: the master's recorder writes the raw result there too
     model_overrides : IMU coefficient parameters (flat names, SI) overriding the preset
 
@@ -51,11 +52,12 @@ def record_cosim(kind: str, prof: Profile, fmu_dir: str | Path, *, seed: int = 3
     ``dtheta`` (K, 3) rad, ``dv`` (K, 3) m/s, ``temps`` (K, 6) degC.
     """
     fmu_dir = Path(fmu_dir)
-    step = prof.step if kind == "dynamic" else prof.cal_step
+    step = prof.step if kind in DYNAMIC_KINDS else prof.cal_step
     system = System(
         name=f"mems_calibration_{kind}",
         components=[Component("turntable", fmu_dir / "Turntable.fmu", turntable_parameters(kind, prof)),
-                    Component("imu", fmu_dir / "IMUThermal.fmu", imu_parameters(prof, seed, model_overrides))],
+                    Component("imu", fmu_dir / "IMUThermal.fmu",
+                              {**STATIC_BASE_HELD, **imu_parameters(prof, seed, model_overrides)})],
         connections=[Connection("turntable", v, "imu", v) for v in GIMBAL_LINKS],
         start_time=0.0, stop_time=stop_time(kind, prof), step_size=step)
     result = simulate_system(system, stop_time(kind, prof), step, record=RECORD, progress=progress)
@@ -64,12 +66,20 @@ def record_cosim(kind: str, prof: Profile, fmu_dir: str | Path, *, seed: int = 3
     return _from_result(result)
 
 
-def record_task(kind: str, profile_name: str, fmu_dir: str, seed: int = 3, profile_changes: dict | None = None) -> dict:
-    """Campaign task: one co-simulated recording as a dict of arrays, plus its wall time ``wall_s``."""
+def record_task(kind: str, profile_name: str, fmu_dir: str, seed: int = 3, profile_changes: dict | None = None,
+                ablation: str | None = None) -> dict:
+    """Campaign task: one co-simulated recording as a dict of arrays, plus its wall time ``wall_s``.
+
+    ``seed`` is the campaign seed: the recording uses its
+    :func:`~sarins_fmu.experiments.mems_calibration.run_seed` and
+    :func:`~sarins_fmu.experiments.mems_calibration.recording_overrides`
+    (``ablation``: a time-correlated term switched off).
+    """
     import time as _time
 
     prof = with_profile(profile(profile_name), **(profile_changes or {}))
     t0 = _time.perf_counter()
-    rec = record_cosim(kind, prof, fmu_dir, seed=seed)
+    rec = record_cosim(kind, prof, fmu_dir, seed=run_seed(kind, seed),
+                       model_overrides=recording_overrides(kind, seed, ablation))
     rec["wall_s"] = _time.perf_counter() - t0
     return rec

@@ -2,16 +2,21 @@
 
 The paper's protocol (seed ``003_fa91fb144c9aac79``) as reusable functions:
 
-* three recordings of the Turntable -> IMUThermal chain (``mems`` preset,
+* five recordings of the Turntable -> IMUThermal chain (``mems`` preset,
   200 Hz minor loop), co-simulated through the project's master
   (:func:`sarins.mems_calibration.recording.record_cosim`) or run in-process on the same library objects
   (:func:`record_in_process`, same numbers):
 
-  - ``dynamic``: 10 min warm-up, then the inner / middle / outer gimbals
-    sweep +-1 deg/s at 0.01 deg/s^2, +-10 deg/s at 0.1 deg/s^2 and +-100
-    deg/s at 1 deg/s^2 while the chamber cycles between -25 and 40 degC,
-    repeated (:func:`sarins_fmu.turntable.rate_table_3axis`,
+  - ``dynamic`` (training): 10 min warm-up, then the inner / middle / outer
+    gimbals sweep +-1 deg/s at 0.01 deg/s^2, +-10 deg/s at 0.1 deg/s^2 and
+    +-100 deg/s at 1 deg/s^2 while the chamber cycles between -25 and 40
+    degC, repeated (:func:`sarins_fmu.turntable.rate_table_3axis`,
     :func:`~sarins_fmu.thermal.chamber_profile`);
+  - ``heldout`` (test): the same kind of programme with other rates,
+    accelerations, chamber set points, ramp, holds and order
+    (:data:`PAPER_HELDOUT_RUN`), in the training session (same turn-on
+    bias, new noise: :func:`recording_overrides`); ``repowered``: the same
+    programme after another power-up (its own turn-on bias);
   - ``tumble``: the 24-position tumble, 3 min per position
     (:func:`~sarins_fmu.turntable.tumble_24`);
   - ``rates``: the rate test, 22 rates per axis within +-200 deg/s over whole
@@ -25,9 +30,9 @@ The paper's protocol (seed ``003_fa91fb144c9aac79``) as reusable functions:
   angles, as in the paper, without the time-alignment error of sampling;
 * the data sets (:func:`dynamic_dataset`): inputs (Wx, Wy, Wz, Ax, Ay, Az, T)
   = measured mean rate (rad/s), specific force (m/s^2) and the mean sensor
-  temperature (degC); targets (wx, wy, wz, ax, ay, az) = truth; split by
-  time into a training part (the first chamber cycle) and a held-out test
-  part (the rest);
+  temperature (degC); targets (wx, wy, wz, ax, ay, az) = truth; the
+  training set is the ``dynamic`` recording, the test set the ``heldout``
+  one (warm-ups left out);
 * the traditional calibration (:func:`traditional_calibration`): eqs (1)-(2)
   fitted by least squares to the tumble position means (accelerometers and
   gyros) and the rate-test window means (gyros).
@@ -42,7 +47,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .. import imu, thermal, turntable
+from .. import imu, imu_correlated, imu_params, thermal, turntable
 from ..identify.calibration import TriadCalibration, fit_triad
 from ..thermal import Ambient
 from ..units import DEG_TO_RAD
@@ -56,13 +61,91 @@ AMBIENT_C = 20.0  # laboratory temperature of the tumble and rate test, degC
 
 
 @dataclass(frozen=True)
+class DynamicRun:
+    """Rate-table and chamber programme of one dynamic recording (seed 003's protocol).
+
+    The three gimbals sweep their rates as triangle waves at constant
+    acceleration (:func:`sarins_fmu.turntable.rate_table_3axis`) while the
+    chamber ramps between two set points with holds
+    (:func:`sarins_fmu.thermal.chamber_profile`), after the profile's static
+    warm-up.
+
+    Attributes
+    ----------
+    rates_dps : (3,) floats
+        Peak rates of the inner, middle and outer gimbals, deg/s.
+    accels_dps2 : (3,) floats
+        Their accelerations, deg/s^2 (a period is 4 rate / accel).
+    low_c, high_c : float
+        Chamber set points, degC.
+    ramp_c_per_min, hold_min : float
+        Chamber ramp rate (degC/min) and hold at each end (min); seed 003
+        gives neither (our choice for its programme: 1 degC/min, 30 min).
+    first : 'low' or 'high'
+        End the chamber goes to first.
+    step_c, step_hold_min : float
+        Intermediate stops on the ramps between the ends: every ``step_c``
+        degC for ``step_hold_min`` min (0: none).
+    cycles : int
+        Chamber cycles (end -> other end -> end) after the warm-up.
+    """
+
+    rates_dps: tuple = (1.0, 10.0, 100.0)
+    accels_dps2: tuple = (0.01, 0.1, 1.0)
+    low_c: float = -25.0
+    high_c: float = 40.0
+    ramp_c_per_min: float = 1.0
+    hold_min: float = 30.0
+    first: str = "low"
+    step_c: float = 0.0
+    step_hold_min: float = 0.0
+    cycles: int = 2
+
+    def __post_init__(self):
+        for name in ("rates_dps", "accels_dps2"):
+            values = tuple(float(v) for v in getattr(self, name))
+            if len(values) != 3 or not all(math.isfinite(v) and v > 0 for v in values):
+                raise ValueError(f"dynamic run {name} needs 3 positive values (inner, middle, outer), got {values}")
+        if int(self.cycles) != self.cycles or self.cycles < 1:
+            raise ValueError(f"dynamic run cycles must be a whole number >= 1, got {self.cycles}")
+        if self.first not in ("low", "high"):
+            raise ValueError(f"dynamic run first must be 'low' or 'high', got {self.first!r}")
+        thermal.chamber_profile(1.0, **self.chamber_options())  # checks the set points, ramp and holds
+
+    def chamber_options(self) -> dict:
+        """Keyword arguments of :func:`sarins_fmu.thermal.chamber_profile` (start and delay aside)."""
+        return dict(low_c=self.low_c, high_c=self.high_c, ramp_c_per_min=self.ramp_c_per_min,
+                    hold_min=self.hold_min, first=self.first, step_c=self.step_c, step_hold_min=self.step_hold_min)
+
+    @property
+    def cycle_time(self) -> float:
+        """One chamber cycle end -> other end -> end, s."""
+        opts = self.chamber_options()
+        del opts["first"]
+        return thermal.chamber_cycle_time(**opts)
+
+
+# seed 003's dynamic protocol as the paper gives it (the chamber's ramp and holds are our choice)
+PAPER_TRAINING_RUN = DynamicRun()
+# The held-out run: a second experiment of the same kind, every setting
+# inside the training envelope but none repeated: each gimbal's peak rate and
+# acceleration changed (periods 500 / 320 / 640 s instead of 400 / 400 /
+# 400 s, so the gimbals drift in and out of phase), the chamber between
+# -15 and 35 degC at 0.75 degC/min, hot end first, with 10-min soaks every
+# 12.5 degC on the ramps (the training ramps never stop between the ends).
+PAPER_HELDOUT_RUN = DynamicRun(rates_dps=(1.0, 8.0, 80.0), accels_dps2=(0.008, 0.1, 0.5), low_c=-15.0, high_c=35.0,
+                               ramp_c_per_min=0.75, hold_min=20.0, first="high", step_c=12.5, step_hold_min=10.0,
+                               cycles=1)
+
+
+@dataclass(frozen=True)
 class Profile:
     """Sizes of one campaign profile.
 
     Attributes
     ----------
     step : float
-        Communication step of the dynamic recording, s (the IMU runs its
+        Communication step of the dynamic recordings, s (the IMU runs its
         200 Hz minor loop inside; one data sample per step).
     cal_step : float
         Communication step of the tumble and rate-test recordings, s; the
@@ -70,11 +153,10 @@ class Profile:
         increment is a rotation vector, unique below 180 deg).
     warmup : float
         Static warm-up before the dynamic motion, s (paper: 10 min).
-    cycles : int
-        Chamber cycles of the dynamic recording (the first is for training).
-    ramp_c_per_min, hold_min : float
-        Chamber ramp rate (degC/min) and hold at each end (min); seed 003
-        gives neither (our choice for 'paper': 1 degC/min, 30 min).
+    train, test : DynamicRun
+        Programmes of the training recording ('dynamic') and of the
+        held-out recordings ('heldout', 'repowered'; see :func:`run_seed`
+        and :func:`recording_overrides`).
     tumble_dwell : float
         Static time per tumble position, s (paper: 3 min).
     rate_settle : float
@@ -86,24 +168,24 @@ class Profile:
     step: float = 0.05
     cal_step: float = 0.1
     warmup: float = 600.0
-    cycles: int = 2
-    ramp_c_per_min: float = 1.0
-    hold_min: float = 30.0
+    train: DynamicRun = PAPER_TRAINING_RUN
+    test: DynamicRun = PAPER_HELDOUT_RUN
     tumble_dwell: float = 180.0
     rate_settle: float = 2.0
     internal_rate: float = 200.0
 
     def __post_init__(self):
-        for name in ("step", "cal_step", "ramp_c_per_min", "tumble_dwell", "internal_rate"):
+        for name in ("step", "cal_step", "tumble_dwell", "internal_rate"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"profile {name} must be positive, got {value}")
-        for name in ("warmup", "hold_min", "rate_settle"):
+        for name in ("warmup", "rate_settle"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"profile {name} must not be negative, got {value}")
-        if int(self.cycles) < 2:
-            raise ValueError(f"profile cycles must be at least 2 (one to train, one to test), got {self.cycles}")
+        for name in ("train", "test"):
+            if not isinstance(getattr(self, name), DynamicRun):
+                raise ValueError(f"profile {name} must be a DynamicRun")
         if max(turntable.RATE_TEST_MAGNITUDES_DPS) * self.cal_step >= 180.0:
             raise ValueError(f"cal_step {self.cal_step} s: the rate test turns 180 deg or more per step")
         for name in ("step", "cal_step"):
@@ -111,21 +193,30 @@ class Profile:
             if abs(n - round(n)) > 1e-9:
                 raise ValueError(f"profile {name} must divide the turntable's 1 s grid, got {getattr(self, name)}")
 
-    @property
-    def cycle_time(self) -> float:
-        """One chamber cycle low -> high -> low, s."""
-        return 2.0 * (40.0 + 25.0) / self.ramp_c_per_min * 60.0 + 2.0 * self.hold_min * 60.0
+    def run(self, kind: str) -> DynamicRun:
+        """Programme of a dynamic recording ('dynamic': training; 'heldout', 'repowered': test)."""
+        if kind not in DYNAMIC_KINDS:
+            raise ValueError(f"{kind!r} is not a dynamic recording; choose one of {', '.join(DYNAMIC_KINDS)}")
+        return self.train if kind == "dynamic" else self.test
 
-    @property
-    def dynamic_duration(self) -> float:
-        """Warm-up plus ``cycles`` chamber cycles, rounded up to 400 s (a table period), s."""
-        return self.warmup + math.ceil(self.cycles * self.cycle_time / 400.0) * 400.0
+    def duration(self, kind: str) -> float:
+        """Warm-up plus the run's chamber cycles (the table completes its last periods after it), s."""
+        run = self.run(kind)
+        return self.warmup + math.ceil(run.cycles * run.cycle_time)
 
+
+# 'heldout': the test programme in the training session (the unit not switched off: the training run's
+# turn-on bias); 'repowered': the same programme after another power-up (its own turn-on bias)
+DYNAMIC_KINDS = ("dynamic", "heldout", "repowered")
+KINDS = DYNAMIC_KINDS + ("tumble", "rates")
 
 PROFILES = {
-    # a minute on one core: compressed chamber cycles, short dwells, coarser steps
-    "quick": Profile(step=0.1, cal_step=0.25, cycles=2, ramp_c_per_min=13.0, hold_min=2.0,
-                     tumble_dwell=10.0, rate_settle=0.0),
+    # minutes, not hours: the same programmes with twice the chamber ramp rates (training 2, held-out 1.5
+    # degC/min: their ratio and the temperature range kept, so the errors driven by the temperature rate
+    # stay of the paper profile's size), shorter holds and dwells, coarser steps
+    "quick": Profile(step=0.2, cal_step=0.25, tumble_dwell=10.0, rate_settle=0.0,
+                     train=replace(PAPER_TRAINING_RUN, ramp_c_per_min=2.0, hold_min=5.0),
+                     test=replace(PAPER_HELDOUT_RUN, ramp_c_per_min=1.5, hold_min=4.0, step_hold_min=2.0)),
     "paper": Profile(),
 }
 
@@ -138,13 +229,73 @@ def profile(name: str) -> Profile:
         raise ValueError(f"unknown profile {name!r}; choose one of {', '.join(PROFILES)}") from None
 
 
+def run_seed(kind: str, seed: int) -> int:
+    """IMU seed of a recording: the test runs ('heldout', 'repowered') draw new noise, bias-instability
+    and random-walk paths (seed + 1, mod 2**31); the training recordings share the campaign seed."""
+    return (int(seed) + 1) % 2 ** 31 if kind in ("heldout", "repowered") else int(seed)
+
+
+# The time-correlated terms of the mems preset (sarins_fmu.imu_correlated, thermal die lag), each as the
+# flat IMU parameters that switch it off when set to zero: the ablation of the report.
+_TRIADS = ("gyro", "accel")
+ABLATION_TERMS = {
+    "die-lag": tuple(f"die_time_constant_{s}" for s in thermal.SENSORS),
+    "gradient": tuple(f"{t}_{f}_{a}" for t in _TRIADS for f in ("bias_dtdt", "scale_factor_dtdt") for a in "xyz"),
+    "hysteresis": tuple(f"{t}_hysteresis_{a}" for t in _TRIADS for a in "xyz"),
+    "flicker": tuple(f"{t}_flicker_{a}" for t in _TRIADS for a in "xyz"),
+    "rate-random-walk": tuple(f"{t}_rate_random_walk_{a}" for t in _TRIADS for a in "xyz"),
+    "turn-on": tuple(f"{t}_turn_on_bias_{a}" for t in _TRIADS for a in "xyz"),
+}
+ABLATIONS = tuple(ABLATION_TERMS) + ("all",)  # 'all': every time-correlated term off at once
+
+
+def ablation_overrides(term: str) -> dict:
+    """Flat IMU parameters (all 0.0) that switch one time-correlated term off ('all': every one)."""
+    if term == "all":
+        return {name: 0.0 for names in ABLATION_TERMS.values() for name in names}
+    try:
+        return dict.fromkeys(ABLATION_TERMS[term], 0.0)
+    except KeyError:
+        raise ValueError(f"unknown ablation {term!r}; choose from {', '.join(ABLATIONS)}") from None
+
+
+def recording_overrides(kind: str, seed: int, ablation: str | None = None) -> dict:
+    """IMU parameter overrides of a campaign recording (flat names, SI).
+
+    ``ablation``: a term of :data:`ABLATIONS` switched off.  The 'heldout'
+    run belongs to the training session: its turn-on bias is the one the
+    training recordings drew (campaign ``seed``), set as a constant bias,
+    while its noise paths are its own (:func:`run_seed`).
+    """
+    overrides = {} if ablation is None else ablation_overrides(ablation)
+    if kind == "heldout":
+        model = imu_params.apply_overrides(imu.preset("mems"), overrides)
+        on = imu_correlated.turn_on_bias(model, run_seed("dynamic", seed))
+        for t, triad in enumerate(_TRIADS):
+            for i, ax in enumerate("xyz"):
+                overrides[f"{triad}_bias_{ax}"] = float(getattr(model, triad).bias[i] + on[3 * t + i])
+                overrides[f"{triad}_turn_on_bias_{ax}"] = 0.0
+    return overrides
+
+
+def recording_model(kind: str, seed: int, ablation: str | None = None) -> imu.ImuModel:
+    """The IMU model of a campaign recording: the mems preset with :func:`recording_overrides`."""
+    return imu_params.apply_overrides(imu.preset("mems"), recording_overrides(kind, seed, ablation))
+
+
 # ------------------------------------------------------------------ set-ups
 def turntable_parameters(kind: str, prof: Profile) -> dict:
     """Start values of the Turntable FMU for one recording (SI units)."""
-    if kind == "dynamic":
-        return dict(scheme="rate-table-3axis", duration=prof.dynamic_duration, warmup=prof.warmup,
-                    ambient_mode="chamber", ambient_mean=AMBIENT_C, chamber_low=-25.0, chamber_high=40.0,
-                    chamber_ramp=prof.ramp_c_per_min / 60.0, chamber_hold=prof.hold_min * 60.0)
+    if kind in DYNAMIC_KINDS:
+        run = prof.run(kind)
+        table = {f"table_{name}_{q}": v * DEG_TO_RAD for q, values in (("rate", run.rates_dps),
+                                                                        ("accel", run.accels_dps2))
+                 for name, v in zip(("inner", "middle", "outer"), values)}
+        return dict(scheme="rate-table-3axis", duration=prof.duration(kind), warmup=prof.warmup,
+                    ambient_mode="chamber", ambient_mean=AMBIENT_C, chamber_low=run.low_c, chamber_high=run.high_c,
+                    chamber_ramp=run.ramp_c_per_min / 60.0, chamber_hold=run.hold_min * 60.0,
+                    chamber_first=run.first, chamber_step=run.step_c, chamber_step_hold=run.step_hold_min * 60.0,
+                    **table)
     if kind == "tumble":
         return dict(scheme="tumble-24", dwell=prof.tumble_dwell, rate=10.0 * DEG_TO_RAD,
                     accel=10.0 * DEG_TO_RAD, duration=1.0, ambient_mean=AMBIENT_C)
@@ -156,9 +307,11 @@ def turntable_parameters(kind: str, prof: Profile) -> dict:
 
 def schedule_of(kind: str, prof: Profile):
     """(GimbalSchedule, windows or None) of a recording, as the Turntable FMU builds it."""
-    p = turntable_parameters(kind, prof)
-    if kind == "dynamic":
-        return turntable.schedule_for("rate-table-3axis", p["duration"], warmup=p["warmup"]), None
+    if kind in DYNAMIC_KINDS:
+        run = prof.run(kind)
+        return turntable.schedule_for("rate-table-3axis", prof.duration(kind), warmup=prof.warmup,
+                                      table_rates_dps=run.rates_dps, table_accels_dps2=run.accels_dps2), None
+    turntable_parameters(kind, prof)  # names the recording if unknown
     if kind == "tumble":
         return turntable.tumble_24(dwell=prof.tumble_dwell, rate_dps=10.0, accel_dps2=10.0)
     return turntable.rate_test(accel_dps2=10.0, position_rate_dps=10.0, settle=prof.rate_settle)
@@ -166,16 +319,16 @@ def schedule_of(kind: str, prof: Profile):
 
 def ambient_of(kind: str, prof: Profile) -> Ambient:
     """Chamber / laboratory temperature of a recording (as the Turntable FMU makes it)."""
-    if kind != "dynamic":
+    if kind not in DYNAMIC_KINDS:
         return Ambient(mean=AMBIENT_C)
-    return Ambient(profile=thermal.chamber_profile(
-        prof.dynamic_duration, ramp_c_per_min=prof.ramp_c_per_min, hold_min=prof.hold_min, start_c=AMBIENT_C))
+    return Ambient(profile=thermal.chamber_profile(prof.duration(kind), start_c=AMBIENT_C,
+                                                   **prof.run(kind).chamber_options()))
 
 
 def stop_time(kind: str, prof: Profile) -> float:
     """End of a recording on its step grid, s."""
     sched, _ = schedule_of(kind, prof)
-    step = prof.step if kind == "dynamic" else prof.cal_step
+    step = prof.step if kind in DYNAMIC_KINDS else prof.cal_step
     return math.ceil(sched.end_time / step - 1e-9) * step
 
 
@@ -201,7 +354,7 @@ def record_in_process(kind: str, prof: Profile, *, seed: int = 3, model: imu.Imu
     """
     model = imu.preset("mems") if model is None else model
     base = _default_base() if base is None else base
-    step = prof.step if kind == "dynamic" else prof.cal_step
+    step = prof.step if kind in DYNAMIC_KINDS else prof.cal_step
     sched, _ = schedule_of(kind, prof)
     n = int(round(stop_time(kind, prof) / step))
     time = np.arange(n + 1) * step
@@ -253,24 +406,28 @@ class Dataset:
     def __len__(self) -> int:
         return len(self.time)
 
+    def tail(self, n: int) -> "Dataset":
+        """The last ``n`` samples (contiguous, still in time order)."""
+        n = min(int(n), len(self))
+        return Dataset(self.X[-n:], self.Y[-n:], self.time[-n:])
 
-def dynamic_dataset(rec: dict, prof: Profile) -> tuple[Dataset, Dataset]:
-    """Training (first chamber cycle after the warm-up) and test (the rest) sets.
 
-    Samples of the warm-up are left out.  Time contiguous, so the recurrent
-    models see the time series in order.
-    """
+def dataset(rec: dict, prof: Profile) -> Dataset:
+    """The samples of a dynamic recording after its warm-up, in time order (the recurrent models need it)."""
     X = measured_of(rec)
     w, f = truth_of(rec, prof.internal_rate)
     Y = np.column_stack([w, f])
     t_end = rec["time"][1:]
     keep = t_end > prof.warmup + 1e-9
-    split = prof.warmup + prof.dynamic_duration / max(prof.cycles, 1) - prof.warmup / max(prof.cycles, 1)
-    train = keep & (t_end <= split)
-    test = keep & (t_end > split)
-    if not (train.any() and test.any()):
-        raise ValueError("the dynamic recording is too short for a training and a test part")
-    return Dataset(X[train], Y[train], t_end[train]), Dataset(X[test], Y[test], t_end[test])
+    if not keep.any():
+        raise ValueError("the dynamic recording ends within its warm-up")
+    return Dataset(X[keep], Y[keep], t_end[keep])
+
+
+def dynamic_dataset(train_rec: dict, test_rec: dict, prof: Profile) -> tuple[Dataset, Dataset]:
+    """Training set (the 'dynamic' recording) and held-out test set (the 'heldout' recording: another
+    chamber and table programme in the same session), each without its warm-up."""
+    return dataset(train_rec, prof), dataset(test_rec, prof)
 
 
 def window_means(rec: dict, windows, internal_rate: float = 200.0, base=None) -> tuple[np.ndarray, np.ndarray]:
@@ -321,5 +478,12 @@ def traditional_calibration(tumble: dict, rates: dict, prof: Profile, base=None)
 
 
 def with_profile(prof: Profile, **changes) -> Profile:
-    """Copy of a profile with some fields changed (validated by the recordings)."""
-    return replace(prof, **changes)
+    """Copy of a profile with some fields changed (validated); ``train`` / ``test`` may be a dict of
+    :class:`DynamicRun` fields to change in that run."""
+    try:
+        for name in ("train", "test"):
+            if isinstance(changes.get(name), dict):
+                changes[name] = replace(getattr(prof, name), **changes[name])
+        return replace(prof, **changes)
+    except TypeError as exc:  # an unknown field
+        raise ValueError(f"bad profile change: {exc}") from None

@@ -16,6 +16,9 @@ m/s^2), seed 003 Fig. 3.  Kinds (:data:`KINDS`):
     Specht's GRNN (:mod:`.grnn`), smoothing factor 0.07, inputs standardised.
 ``lstm``, ``gru``
     One recurrent layer of 60 units and a linear output (:mod:`.recurrent`).
+``lstm3``, ``gru3``
+    Three stacked recurrent layers of 60 units and a linear output: the
+    other reading of seed 003's "3-layer recurrent hidden layer".
 
 The networks learn the *correction* y - x[:6] (standardised per output with
 its training mean and std) rather than y itself: the same input-output map
@@ -47,7 +50,8 @@ from .rbf import RBFNetwork
 FORMAT_TAG = "sarins_fmu.identify.compensator"
 FORMAT_VERSION = 1
 N_IN, N_OUT = 7, 6
-KINDS = ("traditional", "rbf", "grnn", "lstm", "gru")
+KINDS = ("traditional", "rbf", "grnn", "lstm", "gru", "lstm3", "gru3")
+RECURRENT_KINDS = {"lstm": ("lstm", 1), "gru": ("gru", 1), "lstm3": ("lstm", 3), "gru3": ("gru", 3)}
 
 
 def _check_xy(X, Y=None):
@@ -257,18 +261,25 @@ class GRNNCompensator(_NetworkResidual):
 
 
 class RecurrentCompensator(_Residual):
-    """LSTM or GRU of ``hidden`` units (seed 003: 60, MSE, NAdam, 4000 steps).
+    """LSTM or GRU, ``layers`` (1 or 3) stacked layers of ``hidden`` units (seed 003: 60, MSE, NAdam, 4000 steps).
 
     ``threads``: torch intra-op threads while training (default 1: the
     network is small, and on a shared machine more threads mostly contend).
+    ``memory=False``: the control without memory (every sample from a zero
+    state, :func:`.recurrent.train`), not seed 003's method.
     """
 
-    def __init__(self, cell: str = "gru", *, hidden: int = 60, steps: int = 4000, seq_len: int = 100,
-                 streams: int = 32, lr: float = 2e-3, seed: int = 0, threads: int = 1):
+    def __init__(self, cell: str = "gru", *, hidden: int = 60, layers: int = 1, steps: int = 4000,
+                 seq_len: int = 100, streams: int = 32, lr: float = 2e-3, seed: int = 0, threads: int = 1,
+                 memory: bool = True):
         super().__init__()
         self.cell = recurrent._check_cell(cell)
-        self.options = dict(hidden=int(hidden), steps=int(steps), seq_len=int(seq_len), streams=int(streams),
-                            lr=float(lr), seed=int(seed), threads=int(threads))
+        if (self.cell, int(layers)) not in RECURRENT_KINDS.values():
+            raise ValueError(f"layers must be 1 or 3 (seed 003's two readings of its '3-layer recurrent hidden "
+                             f"layer'), got {layers}")
+        self.options = dict(hidden=int(hidden), layers=int(layers), steps=int(steps), seq_len=int(seq_len),
+                            streams=int(streams), lr=float(lr), seed=int(seed), threads=int(threads),
+                            memory=bool(memory))
         self.weights: recurrent.RecurrentWeights | None = None
         self.losses: np.ndarray | None = None
         self.input_mean: np.ndarray | None = None
@@ -276,7 +287,7 @@ class RecurrentCompensator(_Residual):
 
     @property
     def kind(self):
-        return self.cell
+        return next(k for k, v in RECURRENT_KINDS.items() if v == (self.cell, self.options["layers"]))
 
     def _fit(self, x, y):
         recurrent.require_torch()
@@ -292,15 +303,15 @@ class RecurrentCompensator(_Residual):
     def _predict(self, x):
         if self.weights is None:
             raise RuntimeError(f"{self.cell} compensator is not fitted")
-        return self._output(x, recurrent.run(self.weights, self._z(x)))
+        return self._output(x, recurrent.run(self.weights, self._z(x), self.options["memory"]))
 
     @property
     def n_parameters(self) -> int:
         """Trainable parameters (recurrent layer + linear output), as the paper counts them."""
         w = self.weights
         if w is None:
-            return recurrent.n_parameters(self.cell, N_IN, self.options["hidden"], N_OUT)
-        return recurrent.n_parameters(self.cell, w.n_in, w.hidden, w.n_out)
+            return recurrent.n_parameters(self.cell, N_IN, self.options["hidden"], N_OUT, self.options["layers"])
+        return recurrent.n_parameters(self.cell, w.n_in, w.hidden, w.n_out, w.layers)
 
     def stream(self) -> "RecurrentStream":
         return RecurrentStream(self)
@@ -314,11 +325,14 @@ class RecurrentCompensator(_Residual):
 
     @classmethod
     def _from_payload(cls, meta, arrays):
-        out = cls(meta["cell"], **meta["options"])
+        out = cls(meta["cell"], **({"layers": 1, "memory": True} | meta["options"]))  # older files lack both
         out.weights = recurrent.RecurrentWeights(meta["cell"], _unprefixed("net.", arrays))
         if out.weights.n_in != N_IN or out.weights.n_out != N_OUT:
             raise ValueError(f"recurrent weights map {out.weights.n_in} -> {out.weights.n_out}, "
                              f"expected {N_IN} -> {N_OUT}")
+        if out.weights.layers != out.options["layers"]:
+            raise ValueError(f"the file holds {out.weights.layers} recurrent layers, its options say "
+                             f"{out.options['layers']}")
         out.input_mean = get_array(arrays, "input_mean", (N_IN,))
         out.input_scale = get_array(arrays, "input_scale", (N_IN,))
         out._load_scaling(arrays)
@@ -333,20 +347,25 @@ class RecurrentStream(Stream):
 
     def step(self, x) -> np.ndarray:
         x = _check_xy(np.asarray(x, float).reshape(1, N_IN))
+        if not self.model.options["memory"]:
+            self.reset()
         z_out, self._state = self.model.weights.step(self.model._z(x), self._state)
         return self.model._output(x, z_out)[0]
 
 
-_CLASSES = {"traditional": TraditionalCompensator, "rbf": RBFCompensator, "grnn": GRNNCompensator,
-            "lstm": RecurrentCompensator, "gru": RecurrentCompensator}
+_CLASSES = {"traditional": TraditionalCompensator, "rbf": RBFCompensator, "grnn": GRNNCompensator} | {
+    kind: RecurrentCompensator for kind in RECURRENT_KINDS}
 
 
 def make(kind: str, **options) -> Compensator:
     """A new, unfitted compensator of one of :data:`KINDS` (seed 003's settings by default)."""
     if kind not in _CLASSES:
         raise ValueError(f"unknown compensator {kind!r}; choose one of {', '.join(KINDS)}")
-    if kind in ("lstm", "gru"):
-        return RecurrentCompensator(kind, **options)
+    if kind in RECURRENT_KINDS:
+        cell, layers = RECURRENT_KINDS[kind]
+        if options.get("layers", layers) != layers:
+            raise ValueError(f"{kind} has {layers} recurrent layer(s); choose the kind, not 'layers'")
+        return RecurrentCompensator(cell, **(options | {"layers": layers}))
     return _CLASSES[kind](**options)
 
 

@@ -1,10 +1,15 @@
 r"""LSTM and GRU regression networks of seed 003 (eqs (7)-(10)), torch optional.
 
-A single recurrent layer of ``hidden`` units (paper: 60) reads the input
-sequence x_t (d features) and a linear layer maps each hidden state to the
-m outputs.  The cells are PyTorch's (``torch.nn.LSTM`` / ``torch.nn.GRU``),
-whose activations are the paper's: sigmoid on the gates, tanh on the
-candidate state.  GRU, eqs (7)-(10) (PyTorch's form, two bias vectors):
+``layers`` stacked recurrent layers of ``hidden`` units each (paper: 60)
+read the input sequence x_t (d features), layer l > 0 reading the hidden
+state of layer l - 1, and a linear layer maps the last layer's hidden state
+to the m outputs.  Seed 003 says "usually a 3-layer recurrent hidden layer
+solves most problems": read as one recurrent layer between the input and
+output layers (``layers=1``) or as three stacked recurrent layers
+(``layers=3``); both are built.  The cells are PyTorch's
+(``torch.nn.LSTM`` / ``torch.nn.GRU``, ``num_layers``), whose activations
+are the paper's: sigmoid on the gates, tanh on the candidate state.  GRU,
+eqs (7)-(10) (PyTorch's form, two bias vectors):
 
 .. math::
 
@@ -58,10 +63,13 @@ def require_torch():
     return torch
 
 
-def n_parameters(cell: str, n_in: int, hidden: int, n_out: int) -> int:
-    """Trainable parameters of one recurrent layer (two bias vectors) plus the linear output layer."""
+def n_parameters(cell: str, n_in: int, hidden: int, n_out: int, layers: int = 1) -> int:
+    """Trainable parameters of ``layers`` stacked recurrent layers (two bias vectors each) plus the
+    linear output layer."""
     g = _GATES[_check_cell(cell)]
-    return g * (hidden * n_in + hidden * hidden + 2 * hidden) + hidden * n_out + n_out
+    first = g * (hidden * n_in + hidden * hidden + 2 * hidden)
+    later = g * (2 * hidden * hidden + 2 * hidden)
+    return first + (int(layers) - 1) * later + hidden * n_out + n_out
 
 
 def _check_cell(cell: str) -> str:
@@ -74,54 +82,79 @@ def _sigmoid(x):
     return 0.5 * (1.0 + np.tanh(0.5 * x))
 
 
+LAYER_NAMES = ("w_ih", "w_hh", "b_ih", "b_hh")
+
+
+def _layer_key(name: str, layer: int) -> str:
+    """Array name of a layer's weight: layer 0 unsuffixed (the one-layer files), then ``_l1``, ``_l2``..."""
+    return name if layer == 0 else f"{name}_l{layer}"
+
+
 class RecurrentWeights:
     """Weights of a trained network as float64 arrays (PyTorch layout).
 
-    ``w_ih`` (G h, d), ``w_hh`` (G h, h), ``b_ih``, ``b_hh`` (G h,),
-    ``w_out`` (m, h), ``b_out`` (m,), G = 4 (LSTM, gates i f g o) or 3 (GRU,
-    gates r z n).
+    Per layer l: ``w_ih`` (G h, d for l = 0, else h), ``w_hh`` (G h, h),
+    ``b_ih``, ``b_hh`` (G h,), stored as ``w_ih``, ... for layer 0 and
+    ``w_ih_l1``, ... for the next; then ``w_out`` (m, h), ``b_out`` (m,).
+    G = 4 (LSTM, gates i f g o) or 3 (GRU, gates r z n).
     """
-
-    NAMES = ("w_ih", "w_hh", "b_ih", "b_hh", "w_out", "b_out")
 
     def __init__(self, cell: str, arrays: dict):
         self.cell = _check_cell(cell)
-        for name in self.NAMES:
-            setattr(self, name, np.asarray(arrays[name], dtype=float))
-        g, h = _GATES[cell], self.w_hh.shape[1]
-        d, m = self.w_ih.shape[1], self.w_out.shape[0]
-        shapes = {"w_ih": (g * h, d), "w_hh": (g * h, h), "b_ih": (g * h,), "b_hh": (g * h,),
-                  "w_out": (m, h), "b_out": (m,)}
-        for name, shape in shapes.items():
-            if getattr(self, name).shape != shape:
-                raise ValueError(f"recurrent weight {name} has shape {getattr(self, name).shape}, expected {shape}")
+        self.layers = 1
+        while _layer_key("w_ih", self.layers) in arrays:
+            self.layers += 1
+        try:
+            self._layer = [{name: np.asarray(arrays[_layer_key(name, k)], dtype=float) for name in LAYER_NAMES}
+                           for k in range(self.layers)]
+            self.w_out = np.asarray(arrays["w_out"], dtype=float)
+            self.b_out = np.asarray(arrays["b_out"], dtype=float)
+        except KeyError as exc:
+            raise ValueError(f"recurrent weights lack {exc.args[0]!r}") from None
+        g, h = _GATES[cell], self._layer[0]["w_hh"].shape[-1]
+        d, m = self._layer[0]["w_ih"].shape[-1], self.w_out.shape[0]
+        for k, layer in enumerate(self._layer):
+            shapes = {"w_ih": (g * h, d if k == 0 else h), "w_hh": (g * h, h), "b_ih": (g * h,), "b_hh": (g * h,)}
+            for name, shape in shapes.items():
+                if layer[name].shape != shape:
+                    raise ValueError(f"recurrent weight {_layer_key(name, k)} has shape {layer[name].shape}, "
+                                     f"expected {shape}")
+        if self.w_out.shape != (m, h) or self.b_out.shape != (m,):
+            raise ValueError(f"recurrent output weights have shapes {self.w_out.shape}, {self.b_out.shape}, "
+                             f"expected {(m, h)}, {(m,)}")
         self.hidden, self.n_in, self.n_out = h, d, m
 
     def arrays(self) -> dict:
-        return {name: getattr(self, name) for name in self.NAMES}
+        out = {_layer_key(name, k): layer[name] for k, layer in enumerate(self._layer) for name in LAYER_NAMES}
+        return out | {"w_out": self.w_out, "b_out": self.b_out}
 
     def zero_state(self, batch: int = 1):
-        """Initial (h, c) state, each (batch, hidden); c unused by the GRU."""
-        return np.zeros((batch, self.hidden)), np.zeros((batch, self.hidden))
+        """Initial (h, c) state, each (layers, batch, hidden) as in PyTorch; c unused by the GRU."""
+        return np.zeros((self.layers, batch, self.hidden)), np.zeros((self.layers, batch, self.hidden))
 
-    def step(self, x: np.ndarray, state):
-        """One time step for a batch: x (B, d) -> outputs (B, m), new state."""
-        h, c = state
-        gi = x @ self.w_ih.T + self.b_ih
-        gh = h @ self.w_hh.T + self.b_hh
+    def _cell(self, layer: dict, x, h, c):
+        """One cell update of one layer: input x (B, d_l), state h, c (B, hidden) -> new h, c."""
+        gi = x @ layer["w_ih"].T + layer["b_ih"]
+        gh = h @ layer["w_hh"].T + layer["b_hh"]
         n = self.hidden
         if self.cell == "lstm":
             s = gi + gh
             i, f = _sigmoid(s[:, :n]), _sigmoid(s[:, n:2 * n])
             g, o = np.tanh(s[:, 2 * n:3 * n]), _sigmoid(s[:, 3 * n:])
             c = f * c + i * g  # c_t = f c_{t-1} + i g
-            h = o * np.tanh(c)  # h_t = o tanh(c_t)
-        else:
-            r = _sigmoid(gi[:, :n] + gh[:, :n])  # eq. (7)
-            z = _sigmoid(gi[:, n:2 * n] + gh[:, n:2 * n])  # eq. (8)
-            cand = np.tanh(gi[:, 2 * n:] + r * gh[:, 2 * n:])  # eq. (9)
-            h = (1.0 - z) * cand + z * h  # eq. (10)
-        return h @ self.w_out.T + self.b_out, (h, c)
+            return o * np.tanh(c), c  # h_t = o tanh(c_t)
+        r = _sigmoid(gi[:, :n] + gh[:, :n])  # eq. (7)
+        z = _sigmoid(gi[:, n:2 * n] + gh[:, n:2 * n])  # eq. (8)
+        cand = np.tanh(gi[:, 2 * n:] + r * gh[:, 2 * n:])  # eq. (9)
+        return (1.0 - z) * cand + z * h, c  # eq. (10)
+
+    def step(self, x: np.ndarray, state):
+        """One time step for a batch: x (B, d) -> outputs (B, m), new state."""
+        h, c = (np.array(a) for a in state)
+        for k, layer in enumerate(self._layer):
+            h[k], c[k] = self._cell(layer, x, h[k], c[k])
+            x = h[k]
+        return x @ self.w_out.T + self.b_out, (h, c)
 
     def run(self, z: np.ndarray) -> np.ndarray:
         """Outputs (T, m) of the whole sequence z (T, d) from a zero state (numpy, one step per sample)."""
@@ -133,13 +166,13 @@ class RecurrentWeights:
         return out
 
 
-def _torch_module(torch, cell: str, n_in: int, hidden: int, n_out: int):
+def _torch_module(torch, cell: str, n_in: int, hidden: int, n_out: int, layers: int = 1):
     rnn_cls = torch.nn.LSTM if cell == "lstm" else torch.nn.GRU
 
     class Net(torch.nn.Module):
         def __init__(self):
             super().__init__()
-            self.rnn = rnn_cls(n_in, hidden, batch_first=True)
+            self.rnn = rnn_cls(n_in, hidden, num_layers=int(layers), batch_first=True)
             self.out = torch.nn.Linear(hidden, n_out)
 
         def forward(self, x, state=None):
@@ -149,33 +182,44 @@ def _torch_module(torch, cell: str, n_in: int, hidden: int, n_out: int):
     return Net()
 
 
+_TORCH_NAMES = {"w_ih": "weight_ih", "w_hh": "weight_hh", "b_ih": "bias_ih", "b_hh": "bias_hh"}
+
+
 def _to_weights(cell: str, net) -> RecurrentWeights:
     sd = {k: v.detach().cpu().double().numpy() for k, v in net.state_dict().items()}
-    return RecurrentWeights(cell, {"w_ih": sd["rnn.weight_ih_l0"], "w_hh": sd["rnn.weight_hh_l0"],
-                                   "b_ih": sd["rnn.bias_ih_l0"], "b_hh": sd["rnn.bias_hh_l0"],
-                                   "w_out": sd["out.weight"], "b_out": sd["out.bias"]})
+    arrays = {_layer_key(name, k): sd[f"rnn.{_TORCH_NAMES[name]}_l{k}"]
+              for k in range(net.rnn.num_layers) for name in LAYER_NAMES}
+    return RecurrentWeights(cell, arrays | {"w_out": sd["out.weight"], "b_out": sd["out.bias"]})
 
 
 def _from_weights(torch, w: RecurrentWeights):
-    net = _torch_module(torch, w.cell, w.n_in, w.hidden, w.n_out)
+    net = _torch_module(torch, w.cell, w.n_in, w.hidden, w.n_out, w.layers)
     t = lambda a: torch.tensor(a, dtype=torch.float32)  # noqa: E731
-    net.load_state_dict({"rnn.weight_ih_l0": t(w.w_ih), "rnn.weight_hh_l0": t(w.w_hh),
-                         "rnn.bias_ih_l0": t(w.b_ih), "rnn.bias_hh_l0": t(w.b_hh),
-                         "out.weight": t(w.w_out), "out.bias": t(w.b_out)})
+    arrays = w.arrays()
+    sd = {f"rnn.{_TORCH_NAMES[name]}_l{k}": t(arrays[_layer_key(name, k)])
+          for k in range(w.layers) for name in LAYER_NAMES}
+    net.load_state_dict(sd | {"out.weight": t(w.w_out), "out.bias": t(w.b_out)})
     return net
 
 
-def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, steps: int = 4000, seq_len: int = 100,
-          streams: int = 32, lr: float = 2e-3, seed: int = 0, threads: int | None = None):
+def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, layers: int = 1, steps: int = 4000,
+          seq_len: int = 100, streams: int = 32, lr: float = 2e-3, seed: int = 0, threads: int | None = None,
+          memory: bool = True):
     """Train a recurrent network on one standardised time series.
 
     Parameters
     ----------
     cell : 'lstm' or 'gru'
     z : (T, d) inputs; t : (T, m) targets (both standardised)
-    hidden, steps, seq_len, streams, lr : architecture and optimiser sizes
+    hidden, layers : units per recurrent layer and stacked recurrent layers
+    steps, seq_len, streams, lr : optimiser sizes
     seed : torch seed (weights initialisation)
     threads : torch intra-op threads (default: torch's)
+    memory : False trains the same network without memory (a control, not
+        seed 003's method): every sample of a window is a sequence of
+        length one starting from a zero state, so the network is a
+        feed-forward map of the current input with the same cells, units
+        and number of samples per step; predict it with ``memory=False``
 
     Returns
     -------
@@ -184,7 +228,8 @@ def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, steps: i
     """
     torch = require_torch()
     cell = _check_cell(cell)
-    for name, value in (("hidden", hidden), ("steps", steps), ("seq_len", seq_len), ("streams", streams)):
+    for name, value in (("hidden", hidden), ("layers", layers), ("steps", steps), ("seq_len", seq_len),
+                        ("streams", streams)):
         if int(value) < 1:
             raise ValueError(f"{name} must be at least 1, got {value}")
     n = z.shape[0]
@@ -196,7 +241,7 @@ def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, steps: i
             raise ValueError(f"threads must be at least 1, got {threads}")
         torch.set_num_threads(int(threads))
     torch.manual_seed(int(seed))
-    net = _torch_module(torch, cell, z.shape[1], int(hidden), t.shape[1])
+    net = _torch_module(torch, cell, z.shape[1], int(hidden), t.shape[1], int(layers))
     opt = torch.optim.NAdam(net.parameters(), lr=float(lr))
     piece = n // streams
     windows = piece // seq_len
@@ -210,8 +255,13 @@ def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, steps: i
         if w == 0:
             state = None  # a new pass over the series starts from a zero state
         sl = slice(w * seq_len, (w + 1) * seq_len)
-        y, state = net(zs[:, sl], state)
-        loss = torch.mean((y - ts[:, sl]) ** 2)
+        if memory:
+            y, state = net(zs[:, sl], state)
+            target = ts[:, sl]
+        else:  # streams * seq_len independent one-sample sequences
+            y, state = net(zs[:, sl].reshape(-1, 1, zs.shape[-1]))
+            target = ts[:, sl].reshape(-1, 1, ts.shape[-1])
+        loss = torch.mean((y - target) ** 2)
         opt.zero_grad()
         loss.backward()
         opt.step()
@@ -220,16 +270,18 @@ def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, steps: i
     return _to_weights(cell, net), losses
 
 
-def run(weights: RecurrentWeights, z: np.ndarray) -> np.ndarray:
-    """Outputs (T, m) of the whole series z (T, d) from a zero state (torch if installed, else numpy)."""
+def run(weights: RecurrentWeights, z: np.ndarray, memory: bool = True) -> np.ndarray:
+    """Outputs (T, m) of the whole series z (T, d) from a zero state (torch if installed, else numpy);
+    ``memory=False``: every sample from a zero state (the control of :func:`train`)."""
     if not torch_available():
-        return weights.run(z)
+        return weights.run(z) if memory else weights.step(z, weights.zero_state(len(z)))[0]
     import torch
 
     net = _from_weights(torch, weights)
+    x = torch.tensor(z[None] if memory else z[:, None], dtype=torch.float32)
     with torch.no_grad():
-        y, _ = net(torch.tensor(z[None], dtype=torch.float32))
-    return y[0].double().numpy()
+        y, _ = net(x)
+    return (y[0] if memory else y[:, 0]).double().numpy()
 
 
 def save_state_dict(weights: RecurrentWeights, path) -> None:
@@ -246,3 +298,44 @@ def load_state_dict(path) -> RecurrentWeights:
     cell = CELLS[int(sd.pop("cell"))]
     return RecurrentWeights(cell, {k: v.numpy() for k, v in sd.items()})
 
+
+
+def training_step_seconds(cell: str, *, layers: int = 1, hidden: int = 60, n_in: int = 7, n_out: int = 6,
+                          seq_len: int = 100, streams: int = 32, steps: int = 20, onednn: bool = True,
+                          threads: int = 1) -> float:
+    """Mean wall time of one training step as :func:`train` takes it (forward and backward over one
+    window of every stream, NAdam, state carried), s, on random data.
+
+    ``onednn``: PyTorch's oneDNN (mkldnn) RNN path on or off; since PyTorch 2.0 it runs a CPU LSTM layer
+    as one fused operator, while a GRU layer is always built from per-time-step operators.
+    """
+    torch = require_torch()
+    torch.set_num_threads(int(threads))
+    torch.manual_seed(0)
+    net = _torch_module(torch, _check_cell(cell), n_in, hidden, n_out, layers)
+    opt = torch.optim.NAdam(net.parameters(), lr=2e-3)
+    x, t = torch.randn(streams, seq_len, n_in), torch.randn(streams, seq_len, n_out)
+    state = None
+
+    def one():
+        nonlocal state
+        y, state = net(x, state)
+        loss = torch.mean((y - t) ** 2)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        state = tuple(s.detach() for s in state) if isinstance(state, tuple) else state.detach()
+
+    import time
+
+    before = torch.backends.mkldnn.enabled  # (mkldnn.flags() would also touch the TF32 setting and warn)
+    torch.backends.mkldnn.enabled = bool(onednn)
+    try:
+        for _ in range(3):  # warm-up: allocations, oneDNN primitive creation
+            one()
+        t0 = time.perf_counter()
+        for _ in range(int(steps)):
+            one()
+        return (time.perf_counter() - t0) / int(steps)
+    finally:
+        torch.backends.mkldnn.enabled = before
