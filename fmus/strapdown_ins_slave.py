@@ -7,6 +7,7 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
+from fmus import compiled_steps
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
                                 discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import ins
@@ -95,6 +96,7 @@ class StrapdownINS(Fmi2Slave):
         self._est = np.zeros(4)
         self._start_time = 0.0
         self._compensation = None
+        self._fast = None  # the compiled step's context (fmus.compiled_steps)
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._start_time = float(start_time)
@@ -123,11 +125,15 @@ class StrapdownINS(Fmi2Slave):
 
     @guarded
     def do_step(self, current_time, step_size):
+        if self._fast is not None and self._fast.step(self._fmi_buffer, current_time, step_size):
+            return True
         try:
             self._step = check_step(self, step_size, self._step)
             if self._ins is None:
                 self._config = self._make_config(step_size)
                 self._ins = ins.StrapdownINS(self._config)
+                self._fast = compiled_steps.ins_context(self)
+                self._fmi_fast_step = None if self._fast is None else self._fast.address
             increments = self._fmi_buffer[self._in_slots][None, :]
             tag = float(self.increment_end_time)
             if not (np.isfinite(increments).all() and math.isfinite(tag)):
@@ -156,7 +162,7 @@ class StrapdownINS(Fmi2Slave):
         buffer[self._nav_slots] = row
         err = self._err
         err[:4] = state.position_error(row[None, :])[0]
-        err[4] = math.hypot(err[2], err[3])
+        err[4] = np.hypot(err[2], err[3])  # libm's, as the in-process runs and the compiled step
         buffer[self._err_slots] = err
         self.phase = PHASES[state.phase]
         self.nav_time = state.time - self._config.align_time
@@ -187,6 +193,11 @@ class Compensation:
         self.pending = collections.deque([(value, apply_from)])
         self.seen = (value, apply_from)
         self.started = False
+        self.state = np.zeros(4)  # seen value, seen apply_from, current, pending count (for a compiled step)
+        self._publish()
+
+    def _publish(self) -> None:
+        self.state[:] = (*self.seen, self.current, len(self.pending))
 
     def value_at(self, nav_start: float, value: float, apply_from: float, step: float) -> float:
         """Compensation for the interval starting at nav time ``nav_start`` given the current inputs."""
@@ -205,4 +216,5 @@ class Compensation:
         self.started = True
         while self.pending and nav_start >= self.pending[0][1] - tol:
             self.current = self.pending.popleft()[0]
+        self._publish()
         return self.current

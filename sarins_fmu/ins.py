@@ -140,8 +140,7 @@ class StrapdownINS:
     def reset(self) -> None:
         """Return to the initial state."""
         c = self.config
-        self.time = 0.0
-        self.steps = 0
+        self._count = np.zeros(1)  # major-loop steps done (a compiled step advances it in place)
         self.pos = np.array([c.lat, c.lon, c.height])
         self.v = np.zeros(3)
         self.q = np.array([1.0, 0.0, 0.0, 0.0]) if self._initial_attitude is None else mat_to_quat(self._initial_attitude)
@@ -216,10 +215,24 @@ class StrapdownINS:
                 m = n - k
                 out[k:] = nav_steps(self.q, self.v, self.pos, dtheta[k:], dv[k:], self.config.step,
                                     self.gyro_comp, self.accel_comp, corr[k:])
-            self.steps += m
+            self._count[0] += m
             k += m
-        self.time = self.steps * self.config.step
         return out
+
+    @property
+    def steps(self) -> int:
+        """Major-loop steps integrated so far."""
+        return int(self._count[0])
+
+    @property
+    def time(self) -> float:
+        """Time since the start, s (steps x step)."""
+        return self.steps * self.config.step
+
+    def state_arrays(self) -> tuple:
+        """(q, v, pos, gyro_comp, accel_comp, steps) as the arrays a step updates in place
+        (valid until :meth:`reset`)."""
+        return self.q, self.v, self.pos, self.gyro_comp, self.accel_comp, self._count
 
     def _held_row(self):
         yaw, pitch, roll = self.attitude_euler()
@@ -256,7 +269,7 @@ class StrapdownINS:
         zeta = earth.earth_rate_n(c.lat) * t_end
         mat_nn0 = quat_to_mat(rotvec_to_quat(-zeta))
         mat_nb = mat_nn0 @ mat_n0b0 @ quat_to_mat(self._q_b0b)
-        self.q = mat_to_quat(mat_nb)
+        self.q[:] = mat_to_quat(mat_nb)
 
     def position_error(self, out):
         """Errors of output rows wrt the known start: (K, 4) dlat, dlon (rad),

@@ -1,0 +1,300 @@
+"""Compiled ``doStep`` of the IMUThermal, StrapdownINS and Turntable slaves (numba only).
+
+A slave's step in its usual case is one compiled call on preallocated
+state: it reads the inputs from the slave's float64 Real buffer
+(:mod:`fmus.slave_support`), checks the communication point and the time
+tags, runs the library's kernels (the same ones the in-process runs use) and
+writes the outputs back to the buffer.  It returns 0 when it did the step,
+and 1 *without having changed any state* when it cannot (the first step,
+alignment phase changes, a block of random numbers to draw, a new drift
+compensation, any input or tag the Python ``do_step`` would refuse): the
+Python ``do_step`` then runs as before and stays the one place that raises
+the error messages.
+
+Two ways in:
+
+* :meth:`FastStep.step`, called first by the slave's Python ``do_step``;
+* a C function (``numba.cfunc``, cached on disk) that the native FMI layer
+  (``fmus/native/core.c``) calls from ``fmi2DoStep`` without entering
+  Python, through ``slave._fmi_fast_step = (function address, table address,
+  table rows)``; on a non-zero return it calls the Python ``do_step``.
+
+The state reaches compiled code as an array table
+(:func:`sarins_fmu._jit.array_table`): the library object's arrays, then an
+``io`` row of slots and settings, then the slave's own state rows.  The
+Python objects own the arrays and update them in place only.
+
+Without numba (``SARINS_NO_NUMBA=1`` or not installed) the contexts are None
+and every step runs in Python, with the same results.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from fmus.slave_support import real_slots
+from sarins_fmu import imu_step
+from sarins_fmu.ins_kernel import nav_steps
+from sarins_fmu.turntable.schedule import state_into
+from sarins_fmu._jit import HAVE_NUMBA, array_table, c_buffer, c_table, fast_step_cfunc, jit, table_view1, table_view2
+
+NO_TAG = -1.0e9  # s, the IMU's motion_time start value: names no communication point
+TAG_TOL = 1e-6  # of a step: two time tags name the same communication point (slave_support.same_time)
+
+
+class FastStep:
+    """A slave's compiled step: the array table, the arrays it points to, the C entry point."""
+
+    def __init__(self, step, body, arrays):
+        self.arrays = tuple(arrays)  # keeps every array the table points to alive
+        self.table = array_table(self.arrays)
+        self._step = step
+        self._body = body
+
+    def step(self, buffer, time: float, step: float) -> bool:
+        """Run the compiled step from Python; True when it did the step."""
+        return self._step(self.table, buffer, time, step) == 0
+
+    @property
+    def address(self):
+        """(C function address, table address, table rows) for the native FMI layer."""
+        return (_cfunc(self._body).address, self.table.ctypes.data, self.table.shape[0])
+
+
+_CFUNCS = {}
+
+
+def _cfunc(body):
+    """The C-callable version of a step body (compiled, or loaded from numba's cache, on first use)."""
+    if body not in _CFUNCS:
+        _CFUNCS[body] = fast_step_cfunc(body)
+    return _CFUNCS[body]
+
+
+@jit
+def _same_time(a, b, step):
+    return abs(a - b) <= TAG_TOL * step
+
+
+# ------------------------------------------------------------------ IMUThermal
+
+# io row: expected step, start time, gimbals A, slots of motion_time, ambient_temp,
+# ambient_temp_rate, angle_1..3, rate_1..3, accel_1..3, outputs (dtheta, dv, temps: 12),
+# increment_end_time
+_IMU_IO = 28
+_IMU_OUT = 15
+
+
+def imu_context(slave, step: float):
+    """The IMUThermal slave's compiled step (static base), or None without numba."""
+    if not HAVE_NUMBA:
+        return None
+    n = len(slave._axes)
+    io = np.zeros(_IMU_IO)
+    io[0], io[1], io[2] = step, slave._start_time, n
+    io[3:6] = real_slots(slave, ["motion_time", "ambient_temp", "ambient_temp_rate"])
+    for k, q in enumerate(("angle", "rate", "accel")):
+        io[6 + 3 * k:6 + 3 * k + n] = real_slots(slave, [f"{q}_{j + 1}" for j in range(n)])
+    io[_IMU_OUT:_IMU_OUT + 12] = slave._out_slots
+    io[27] = real_slots(slave, ["increment_end_time"])[0]
+    arrays = slave._sensor.state_arrays() + (io, slave._motion.store)
+    return FastStep(_imu_step, _imu_c_step, arrays)
+
+
+@jit
+def _imu_step(table, buf, t, h):
+    """One IMUThermal step (static base): see the slave's do_step for the contract."""
+    s = imu_step.from_table(table)
+    io = table_view1(table, imu_step.N_STATE_ARRAYS)
+    held = table_view1(table, imu_step.N_STATE_ARRAYS + 1)
+    consts, clock = s[imu_step.CONSTS], s[imu_step.CLOCK]
+    if not abs(h - io[0]) <= 1e-9 * io[0]:
+        return 1
+    if clock[2] >= consts[6]:  # random blocks used up: the Python step draws the next ones
+        return 1
+    if not _same_time(consts[0] + clock[0] * consts[1] + io[1], t, h):
+        return 1
+    n = int(io[2])
+    size = 3 * n + 2
+    current = np.empty(size)
+    for k in range(3):
+        for j in range(n):
+            current[k * n + j] = buf[int(io[6 + 3 * k + j])]
+    current[3 * n] = buf[int(io[4])]
+    current[3 * n + 1] = buf[int(io[5])]
+    tag = buf[int(io[3])]
+    for v in current:
+        if not math.isfinite(v):
+            return 1
+    fixed = tag == NO_TAG and held[0] != 0.0 and held[1] == NO_TAG  # no turntable connected
+    if fixed or _same_time(tag, t, h):
+        chosen = current
+    elif held[0] != 0.0 and _same_time(held[1], t, h):
+        chosen = held[2:2 + size].copy()
+    else:
+        return 1
+    amb_end = np.empty(1)
+    amb_end[0] = chosen[3 * n] + chosen[3 * n + 1] * h
+    if not (math.isfinite(amb_end[0]) and amb_end[0] >= -273.15):
+        return 1
+    # every check passed: from here on the step happens
+    if not fixed:
+        held[2:2 + size] = current
+        held[1] = tag
+        held[0] = 1.0
+    angle0 = chosen[0:n].copy().reshape(1, n)
+    rate0 = chosen[n:2 * n].copy().reshape(1, n)
+    accel = chosen[2 * n:3 * n].copy().reshape(1, n)
+    dtheta = np.empty((1, 3))
+    dv = np.empty((1, 3))
+    temps = np.empty((1, 6))
+    imu_step.one_interval(s, angle0, rate0, accel, amb_end, dtheta, dv, temps)
+    for i in range(3):
+        buf[int(io[_IMU_OUT + i])] = dtheta[0, i]
+        buf[int(io[_IMU_OUT + 3 + i])] = dv[0, i]
+    for i in range(6):
+        buf[int(io[_IMU_OUT + 6 + i])] = temps[0, i]
+    buf[int(io[27])] = t + h
+    return 0
+
+
+def _imu_c_step(table, rows, buffer, n, t, h):
+    return _imu_step(c_table(table, rows), c_buffer(buffer, n), t, h)
+
+
+# ---------------------------------------------------------------- StrapdownINS
+
+# io row: expected step, start time, align time, steps of the alignment, slots of dtheta/dv (6),
+# increment_end_time, temp_gyro_z, axial_drift_correction, axial_drift_apply_from, the 9 navigation
+# outputs, the 5 error outputs, the 4 estimates, nav_time, temp_azimuth_gyro, temp_align_start,
+# temp_align_end, temp_change_align; then lat0, lon0, (r_m + h0), (r_n + h0), cos(lat0)
+_INS_IN, _INS_NAV, _INS_ERR, _INS_EST, _INS_TEMP, _INS_SITE = 4, 14, 23, 28, 32, 37
+_INS_IO = 42
+
+
+def ins_context(slave):
+    """The StrapdownINS slave's compiled step (navigation phase), or None without numba."""
+    if not HAVE_NUMBA:
+        return None
+    from sarins_fmu import earth
+
+    config = slave._config
+    io = np.zeros(_INS_IO)
+    io[0:4] = config.step, slave._start_time, config.align_time, round(config.align_time / config.step)
+    io[_INS_IN:_INS_IN + 6] = slave._in_slots
+    io[_INS_IN + 6:_INS_NAV] = real_slots(slave, ["increment_end_time", "temp_gyro_z", "axial_drift_correction",
+                                                  "axial_drift_apply_from"])
+    io[_INS_NAV:_INS_ERR] = slave._nav_slots
+    io[_INS_ERR:_INS_EST] = slave._err_slots
+    io[_INS_EST:_INS_TEMP] = slave._est_slots
+    io[_INS_TEMP:_INS_SITE] = real_slots(slave, ["nav_time", "temp_azimuth_gyro", "temp_align_start",
+                                                 "temp_align_end", "temp_change_align"])
+    r_m, r_n = earth.radii(config.lat)
+    io[_INS_SITE:] = config.lat, config.lon, r_m + config.height, r_n + config.height, math.cos(config.lat)
+    arrays = slave._ins.state_arrays() + (io, slave._compensation.state)
+    return FastStep(_ins_step, _ins_c_step, arrays)
+
+
+@jit
+def _ins_step(table, buf, t, h):
+    """One StrapdownINS navigation step: see the slave's do_step for the contract."""
+    q, v, pos = table_view1(table, 0), table_view1(table, 1), table_view1(table, 2)
+    gyro_comp, accel_comp, count = table_view1(table, 3), table_view1(table, 4), table_view1(table, 5)
+    io, comp = table_view1(table, 6), table_view1(table, 7)
+    step = io[0]
+    if not abs(h - step) <= 1e-9 * step:
+        return 1
+    steps = count[0]
+    if steps < io[3] or steps == 0:  # alignment, and its end: the Python step
+        return 1
+    inc = np.empty((2, 3))
+    for i in range(6):
+        inc[i // 3, i % 3] = buf[int(io[_INS_IN + i])]
+    tag = buf[int(io[_INS_IN + 6])]
+    value, apply_from = buf[int(io[_INS_IN + 8])], buf[int(io[_INS_IN + 9])]
+    for x in (inc[0, 0], inc[0, 1], inc[0, 2], inc[1, 0], inc[1, 1], inc[1, 2], tag, value, apply_from):
+        if not math.isfinite(x):
+            return 1
+    if not _same_time(tag, io[1] + steps * h + h, h):  # the interval after the last one integrated
+        return 1
+    if not (value == comp[0] and apply_from == comp[1] and comp[3] == 0.0):  # a new compensation: Python
+        return 1
+    corr = np.full(1, comp[2])
+    row = nav_steps(q, v, pos, inc[0:1], inc[1:2], step, gyro_comp, accel_comp, corr)[0]
+    count[0] = steps + 1
+    for i in range(9):
+        buf[int(io[_INS_NAV + i])] = row[i]
+    dlat = row[0] - io[_INS_SITE]
+    dlon = row[1] - io[_INS_SITE + 1]
+    north = dlat * io[_INS_SITE + 2]
+    east = dlon * io[_INS_SITE + 3] * io[_INS_SITE + 4]
+    err = (dlat, dlon, north, east, math.hypot(north, east))
+    for i in range(5):
+        buf[int(io[_INS_ERR + i])] = err[i]
+    est = (gyro_comp[0], gyro_comp[1], accel_comp[0], accel_comp[1])
+    for i in range(4):
+        buf[int(io[_INS_EST + i])] = est[i]
+    nav_time = (steps + 1) * step - io[2]
+    temp_z = buf[int(io[_INS_IN + 7])]
+    buf[int(io[_INS_TEMP])] = nav_time
+    buf[int(io[_INS_TEMP + 1])] = temp_z
+    if abs(nav_time) < 0.5 * step:
+        buf[int(io[_INS_TEMP + 3])] = temp_z
+        buf[int(io[_INS_TEMP + 4])] = temp_z - buf[int(io[_INS_TEMP + 2])]
+    return 0
+
+
+def _ins_c_step(table, rows, buffer, n, t, h):
+    return _ins_step(c_table(table, rows), c_buffer(buffer, n), t, h)
+
+
+# ------------------------------------------------------------------- Turntable
+
+# io row: expected step, gimbals A, constant ambient (1/0), its value, slots of angle_1..3,
+# rate_1..3, accel_1..3, ambient_temp, ambient_temp_rate, motion_time
+_TT_IO = 16
+
+
+def turntable_context(slave):
+    """The Turntable slave's compiled step (constant ambient), or None without numba or otherwise."""
+    ambient = slave._ambient
+    if not HAVE_NUMBA or ambient.profile is not None or ambient.amplitude != 0.0 or ambient.slope != 0.0:
+        return None
+    io = np.zeros(_TT_IO)
+    io[0:4] = slave._step, slave._schedule.n_axes, 1.0, float(ambient.mean)
+    io[4:13] = slave._out_slots
+    io[13:16] = real_slots(slave, ["ambient_temp", "ambient_temp_rate", "motion_time"])
+    times, angle_bp, rate_bp, accel, angle0, rate0 = slave._schedule.tables()
+    arrays = (np.ascontiguousarray(times), angle_bp, rate_bp, accel, angle0, rate0, io)
+    if any(not a.flags.c_contiguous for a in arrays):
+        return None
+    return FastStep(_turntable_step, _turntable_c_step, arrays)
+
+
+@jit
+def _turntable_step(table, buf, t, h):
+    """One Turntable step: the gimbal state and the (constant) ambient at t + h."""
+    io = table_view1(table, 6)
+    if not abs(h - io[0]) <= 1e-9 * io[0] or io[2] == 0.0:
+        return 1
+    time = np.full(1, t + h)
+    if not math.isfinite(time[0]):
+        return 1
+    n = int(io[1])
+    angle, rate, acc = np.empty((1, n)), np.empty((1, n)), np.zeros((1, n))
+    state_into(time, table_view1(table, 0), table_view2(table, 1), table_view2(table, 2), table_view2(table, 3),
+               table_view1(table, 4), table_view1(table, 5), angle, rate, acc)
+    for j in range(n):
+        buf[int(io[4 + j])] = angle[0, j]
+        buf[int(io[7 + j])] = rate[0, j]
+        buf[int(io[10 + j])] = acc[0, j]
+    buf[int(io[13])] = io[3]
+    buf[int(io[14])] = (io[3] - io[3]) / h
+    buf[int(io[15])] = time[0]
+    return 0
+
+
+def _turntable_c_step(table, rows, buffer, n, t, h):
+    return _turntable_step(c_table(table, rows), c_buffer(buffer, n), t, h)
