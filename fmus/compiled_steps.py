@@ -219,8 +219,9 @@ def _ins_step(table, buf, t, h):
             return 1
     if not _same_time(tag, io[1] + steps * h + h, h):  # the interval after the last one integrated
         return 1
-    if not (value == comp[0] and apply_from == comp[1] and comp[3] == 0.0):  # a new compensation: Python
-        return 1
+    nav_start = steps * h - io[2]  # nav time of the interval's start
+    if not (value == comp[0] and apply_from == comp[1] and nav_start < comp[3] - TAG_TOL * h):
+        return 1  # a new compensation, or a queued one takes over: the Python step
     corr = np.full(1, comp[2])
     row = nav_steps(q, v, pos, inc[0:1], inc[1:2], step, gyro_comp, accel_comp, corr)[0]
     count[0] = steps + 1

@@ -193,11 +193,11 @@ class Compensation:
         self.pending = collections.deque([(value, apply_from)])
         self.seen = (value, apply_from)
         self.started = False
-        self.state = np.zeros(4)  # seen value, seen apply_from, current, pending count (for a compiled step)
+        self.state = np.zeros(4)  # seen value, seen apply_from, current, next apply_from (for a compiled step)
         self._publish()
 
     def _publish(self) -> None:
-        self.state[:] = (*self.seen, self.current, len(self.pending))
+        self.state[:] = (*self.seen, self.current, self.pending[0][1] if self.pending else math.inf)
 
     def value_at(self, nav_start: float, value: float, apply_from: float, step: float) -> float:
         """Compensation for the interval starting at nav time ``nav_start`` given the current inputs."""
