@@ -26,6 +26,7 @@ import sys
 import tempfile
 import time
 import warnings
+from ctypes import c_double
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -88,32 +89,34 @@ def bare_loop(fmu_dir: Path, n: int, align_s: float) -> float:
         links = []
         for src, dst, names in ((tt, imu, TT_TO_IMU), (imu, ins, IMU_TO_INS)):
             buffer = rawcalls.value_buffer("Real", len(names))
-            links.append((rawcalls.getter(src.fmu, "Real"), src.fmu.component,
-                          rawcalls.vr_array(src.vr[v] for v in names), len(names), buffer,
-                          rawcalls.setter(dst.fmu, "Real"), dst.fmu.component,
+            links.append((rawcalls.getter(src.fmu, "Real"), rawcalls.handle(src.fmu),
+                          rawcalls.vr_array(src.vr[v] for v in names), rawcalls.count(len(names)), buffer,
+                          rawcalls.setter(dst.fmu, "Real"), rawcalls.handle(dst.fmu),
                           rawcalls.vr_array(dst.vr[v] for v in names)))
         for get, sc, svr, m, buf, set_, dc, dvr in links:
             get(sc, svr, m, buf)
             set_(dc, dvr, m, buf)
         for s in slaves:
             s.fmu.exitInitializationMode()
-        steps = [(rawcalls.do_step(s.fmu), s.fmu.component) for s in slaves]
+        steps = [(rawcalls.do_step(s.fmu), rawcalls.handle(s.fmu)) for s in slaves]
         names = ["lat_error", "lon_error", "position_error"]
         rec_get = rawcalls.getter(ins.fmu, "Real")
         rec_vr, rec_buf = rawcalls.vr_array(ins.vr[v] for v in names), rawcalls.value_buffer("Real", 3)
+        rec_n = rawcalls.count(3)
         (step_tt, c_tt), (step_imu, c_imu), (step_ins, c_ins) = steps
         (g1, s1c, v1, m1, b1, p1, d1c, w1), (g2, s2c, v2, m2, b2, p2, d2c, w2) = links
+        one, no_prior = c_double(1.0), rawcalls.NO_SET_PRIOR
         t0 = time.perf_counter()
         for k in range(n):
-            t = float(k)
-            step_tt(c_tt, t, 1.0, 1)
+            t = c_double(k)
+            step_tt(c_tt, t, one, no_prior)
             g1(s1c, v1, m1, b1)
             p1(d1c, w1, m1, b1)
-            step_imu(c_imu, t, 1.0, 1)
+            step_imu(c_imu, t, one, no_prior)
             g2(s2c, v2, m2, b2)
             p2(d2c, w2, m2, b2)
-            step_ins(c_ins, t, 1.0, 1)
-            rec_get(c_ins, rec_vr, 3, rec_buf)
+            step_ins(c_ins, t, one, no_prior)
+            rec_get(c_ins, rec_vr, rec_n, rec_buf)
         return (time.perf_counter() - t0) / n
     finally:
         for s in reversed(slaves):

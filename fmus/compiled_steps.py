@@ -24,24 +24,31 @@ The state reaches compiled code as an array table
 ``io`` row of slots and settings, then the slave's own state rows.  The
 Python objects own the arrays and update them in place only.
 
-Without numba (``SARINS_NO_NUMBA=1`` or not installed) the contexts are None
-and every step runs in Python, with the same results.
+Without numba (``SARINS_NO_NUMBA=1`` or not installed), or with
+``SARINS_FMU_NO_COMPILED_STEP=1``, the contexts are None and every step runs
+the Python ``do_step``, with the same results bit for bit.
 """
 
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
 from fmus.slave_support import real_slots
 from sarins_fmu import imu_step
-from sarins_fmu.ins_kernel import nav_steps
+from sarins_fmu.ins_kernel import align_steps, held_row, nav_steps
 from sarins_fmu.turntable.schedule import state_into
 from sarins_fmu._jit import HAVE_NUMBA, array_table, c_buffer, c_table, fast_step_cfunc, jit, table_view1, table_view2
 
 NO_TAG = -1.0e9  # s, the IMU's motion_time start value: names no communication point
 TAG_TOL = 1e-6  # of a step: two time tags name the same communication point (slave_support.same_time)
+
+
+def enabled() -> bool:
+    """True when the slaves may use their compiled steps."""
+    return HAVE_NUMBA and os.environ.get("SARINS_FMU_NO_COMPILED_STEP", "") not in ("1", "true", "yes")
 
 
 class FastStep:
@@ -88,8 +95,8 @@ _IMU_OUT = 15
 
 
 def imu_context(slave, step: float):
-    """The IMUThermal slave's compiled step (static base), or None without numba."""
-    if not HAVE_NUMBA:
+    """The IMUThermal slave's compiled step (static base), or None (see :func:`enabled`)."""
+    if not enabled():
         return None
     n = len(slave._axes)
     io = np.zeros(_IMU_IO)
@@ -169,14 +176,15 @@ def _imu_c_step(table, rows, buffer, n, t, h):
 # io row: expected step, start time, align time, steps of the alignment, slots of dtheta/dv (6),
 # increment_end_time, temp_gyro_z, axial_drift_correction, axial_drift_apply_from, the 9 navigation
 # outputs, the 5 error outputs, the 4 estimates, nav_time, temp_azimuth_gyro, temp_align_start,
-# temp_align_end, temp_change_align; then lat0, lon0, (r_m + h0), (r_n + h0), cos(lat0)
-_INS_IN, _INS_NAV, _INS_ERR, _INS_EST, _INS_TEMP, _INS_SITE = 4, 14, 23, 28, 32, 37
-_INS_IO = 42
+# temp_align_end, temp_change_align; lat0, lon0, (r_m + h0), (r_n + h0), cos(lat0); steps of the
+# coarse alignment, the filter's velocity measurement variance
+_INS_IN, _INS_NAV, _INS_ERR, _INS_EST, _INS_TEMP, _INS_SITE, _INS_FILTER = 4, 14, 23, 28, 32, 37, 42
+_INS_IO = 44
 
 
 def ins_context(slave):
-    """The StrapdownINS slave's compiled step (navigation phase), or None without numba."""
-    if not HAVE_NUMBA:
+    """The StrapdownINS slave's compiled step (fine alignment, navigation), or None (see :func:`enabled`)."""
+    if not enabled():
         return None
     from sarins_fmu import earth
 
@@ -192,14 +200,18 @@ def ins_context(slave):
     io[_INS_TEMP:_INS_SITE] = real_slots(slave, ["nav_time", "temp_azimuth_gyro", "temp_align_start",
                                                  "temp_align_end", "temp_change_align"])
     r_m, r_n = earth.radii(config.lat)
-    io[_INS_SITE:] = config.lat, config.lon, r_m + config.height, r_n + config.height, math.cos(config.lat)
-    arrays = slave._ins.state_arrays() + (io, slave._compensation.state)
+    io[_INS_SITE:_INS_FILTER] = config.lat, config.lon, r_m + config.height, r_n + config.height, math.cos(config.lat)
+    io[_INS_FILTER:] = slave._ins._n_coarse, config.filter.velocity_meas_std ** 2
+    q, v, pos, gyro_comp, accel_comp, steps, x, p, q_diag, p_history = slave._ins.state_arrays()
+    if p_history.shape[0] == 0:
+        p_history = np.zeros((1, 9))  # no fine alignment: never written
+    arrays = (q, v, pos, gyro_comp, accel_comp, steps, io, slave._compensation.state, x, p, q_diag, p_history)
     return FastStep(_ins_step, _ins_c_step, arrays)
 
 
 @jit
 def _ins_step(table, buf, t, h):
-    """One StrapdownINS navigation step: see the slave's do_step for the contract."""
+    """One StrapdownINS step of fine alignment or navigation: see the slave's do_step for the contract."""
     q, v, pos = table_view1(table, 0), table_view1(table, 1), table_view1(table, 2)
     gyro_comp, accel_comp, count = table_view1(table, 3), table_view1(table, 4), table_view1(table, 5)
     io, comp = table_view1(table, 6), table_view1(table, 7)
@@ -207,7 +219,8 @@ def _ins_step(table, buf, t, h):
     if not abs(h - step) <= 1e-9 * step:
         return 1
     steps = count[0]
-    if steps < io[3] or steps == 0:  # alignment, and its end: the Python step
+    n_coarse, n_align = io[_INS_FILTER], io[3]
+    if steps < n_coarse or steps == 0 or steps == n_align - 1:  # coarse alignment, the end of the fine one
         return 1
     inc = np.empty((2, 3))
     for i in range(6):
@@ -222,8 +235,13 @@ def _ins_step(table, buf, t, h):
     nav_start = steps * h - io[2]  # nav time of the interval's start
     if not (value == comp[0] and apply_from == comp[1] and nav_start < comp[3] - TAG_TOL * h):
         return 1  # a new compensation, or a queued one takes over: the Python step
-    corr = np.full(1, comp[2])
-    row = nav_steps(q, v, pos, inc[0:1], inc[1:2], step, gyro_comp, accel_comp, corr)[0]
+    if steps < n_align:  # fine alignment (the phase stays the same)
+        hist = align_steps(q, v, pos, inc[0:1], inc[1:2], step, gyro_comp, accel_comp, table_view1(table, 8),
+                           table_view2(table, 9), table_view1(table, 10), io[_INS_FILTER + 1])
+        table_view2(table, 11)[int(steps - n_coarse)] = hist[0]
+        row = held_row(q, pos)
+    else:
+        row = nav_steps(q, v, pos, inc[0:1], inc[1:2], step, gyro_comp, accel_comp, np.full(1, comp[2]))[0]
     count[0] = steps + 1
     for i in range(9):
         buf[int(io[_INS_NAV + i])] = row[i]
@@ -241,7 +259,7 @@ def _ins_step(table, buf, t, h):
     temp_z = buf[int(io[_INS_IN + 7])]
     buf[int(io[_INS_TEMP])] = nav_time
     buf[int(io[_INS_TEMP + 1])] = temp_z
-    if abs(nav_time) < 0.5 * step:
+    if steps + 1 < n_align or abs(nav_time) < 0.5 * step:
         buf[int(io[_INS_TEMP + 3])] = temp_z
         buf[int(io[_INS_TEMP + 4])] = temp_z - buf[int(io[_INS_TEMP + 2])]
     return 0
@@ -259,9 +277,9 @@ _TT_IO = 16
 
 
 def turntable_context(slave):
-    """The Turntable slave's compiled step (constant ambient), or None without numba or otherwise."""
+    """The Turntable slave's compiled step (constant ambient), or None (see :func:`enabled`)."""
     ambient = slave._ambient
-    if not HAVE_NUMBA or ambient.profile is not None or ambient.amplitude != 0.0 or ambient.slope != 0.0:
+    if not enabled() or ambient.profile is not None or ambient.amplitude != 0.0 or ambient.slope != 0.0:
         return None
     io = np.zeros(_TT_IO)
     io[0:4] = slave._step, slave._schedule.n_axes, 1.0, float(ambient.mean)

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import earth
-from .ins_kernel import align_steps, coarse_steps, nav_steps
+from .ins_kernel import align_steps, coarse_steps, held_row, nav_steps
 from .rotations import mat_to_quat, quat_to_mat, rotvec_to_quat
 from .units import DEG_TO_RAD, DPH_TO_RPS, DPSH_TO_RPSS, UG_TO_MPS2
 
@@ -156,10 +156,11 @@ class StrapdownINS:
         self._q_b0b = np.array([1.0, 0.0, 0.0, 0.0])
         self._v_b0 = np.zeros(3)
         self._v_b0_half = None
-        self.p_history = []
         n_coarse = round(c.coarse_time / c.step) if c.align_time > 0 else 0
         self._n_coarse = n_coarse
         self._n_align = round(c.align_time / c.step)
+        # diagonal of P after each fine-alignment step (filled as the steps are made)
+        self.p_history = np.full((max(self._n_align - n_coarse, 0), 9), np.nan)
 
     @property
     def phase(self) -> str:
@@ -207,7 +208,8 @@ class StrapdownINS:
                 hist = align_steps(self.q, self.v, self.pos, dtheta[k:k + m], dv[k:k + m], self.config.step,
                                    self.gyro_comp, self.accel_comp, self.x, self.p, self.q_diag,
                                    self.config.filter.velocity_meas_std ** 2)
-                self.p_history.append(hist)
+                row = self.steps - self._n_coarse
+                self.p_history[row:row + m] = hist
                 out[k:k + m] = self._held_row()
                 if self.steps + m == self._n_align:
                     self.v[:] = 0.0  # known static start for navigation
@@ -230,13 +232,13 @@ class StrapdownINS:
         return self.steps * self.config.step
 
     def state_arrays(self) -> tuple:
-        """(q, v, pos, gyro_comp, accel_comp, steps) as the arrays a step updates in place
-        (valid until :meth:`reset`)."""
-        return self.q, self.v, self.pos, self.gyro_comp, self.accel_comp, self._count
+        """(q, v, pos, gyro_comp, accel_comp, steps, x, P, q_diag, p_history): the arrays a step
+        reads and updates in place (valid until :meth:`reset`)."""
+        return (self.q, self.v, self.pos, self.gyro_comp, self.accel_comp, self._count, self.x, self.p,
+                self.q_diag, self.p_history)
 
     def _held_row(self):
-        yaw, pitch, roll = self.attitude_euler()
-        return np.array([*self.pos, 0.0, 0.0, 0.0, yaw, pitch, roll])
+        return held_row(self.q, self.pos)
 
     def attitude_euler(self):
         """(yaw, pitch, roll) in rad of the current mat_nb."""

@@ -1,6 +1,7 @@
-"""The slaves' compiled steps (fmus.compiled_steps): same results as the in-process
-library bit for bit, called from C (no Python) or through do_step, and every error
-still reported by the Python do_step at the call that caused it."""
+"""The slaves' compiled steps (fmus.compiled_steps): the same outputs as the Python
+do_step bit for bit, called from C (no Python) or through do_step, the same as the
+in-process library, and every error still reported by the Python do_step at the call
+that caused it."""
 
 import sys
 
@@ -21,6 +22,10 @@ pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="the compiled steps need 
 ALIGN = 1200.0  # s (coarse alignment: the default 300 s)
 CORRECTION = 0.01 * DPH_TO_RPS  # rad/s, from nav time CORRECTION_FROM on
 CORRECTION_FROM = 1800.0
+INS_OUT = ["lat_error", "position_error", "yaw", "lat", "lon", "height", "v_e", "v_n", "v_u", "pitch", "roll",
+           "lon_error", "north_error", "east_error", "nav_time", "gyro_drift_est_x", "gyro_drift_est_y",
+           "accel_bias_est_x", "accel_bias_est_y", "temp_align_start", "temp_align_end", "temp_change_align",
+           "temp_azimuth_gyro"]
 
 
 class Chain:
@@ -54,7 +59,8 @@ class Chain:
             if correction and t == ALIGN + 600.0:  # a new compensation, well before its apply_from
                 self.ins.set(axial_drift_correction=CORRECTION, axial_drift_apply_from=CORRECTION_FROM)
             self.ins.fmu.doStep(t, 1.0)
-            rows.append(self.ins.get("lat_error", "position_error", "yaw", "nav_time"))
+            rows.append(self.ins.get(*INS_OUT) + self.imu.get(*IMU_TO_INS) + self.tt.get(*TT_TO_IMU)
+                        + [self.ins.fmu.getInteger([self.ins.vr["phase"]])[0]])
             self.k += 1
         return np.array(rows)
 
@@ -91,9 +97,11 @@ def _run(fmu_dir, n):
         chain.free()
 
 
-def test_fmu_chain_equals_the_in_process_run_bit_for_bit_with_or_without_the_c_entry(fmu_dir, monkeypatch):
+def test_fmu_chain_compiled_equals_python_and_in_process_bit_for_bit(fmu_dir, monkeypatch):
     """5400 steps: alignment, navigation past a random-number block (4096 intervals)
-    and a compensation change; from C, through do_step, and in process."""
+    and a compensation change; every output of the three FMUs at every step, with the
+    compiled steps called from C, through do_step, and without them; and the
+    in-process run."""
     n = 5400
     _run(fmu_dir, 2)  # loads the shipped slave modules
     counts = _count_python_steps(monkeypatch)
@@ -101,19 +109,23 @@ def test_fmu_chain_equals_the_in_process_run_bit_for_bit_with_or_without_the_c_e
     python_steps = dict(counts)
     monkeypatch.setenv("SARINS_FMU_NO_FAST_STEP", "1")
     counts.clear()
-    via_python = _run(fmu_dir, n)
+    via_do_step = _run(fmu_dir, n)
+    do_step_calls = dict(counts)
+    monkeypatch.setenv("SARINS_FMU_NO_COMPILED_STEP", "1")
+    python = _run(fmu_dir, n)
     ref = run_static(align_hours=ALIGN / 3600, nav_hours=(n - ALIGN) / 3600, seed=0,
                      correction_dph=0.01, correction_from_hours=CORRECTION_FROM / 3600)
     nav = int(ALIGN)
-    assert np.array_equal(fast, via_python)
+    assert np.array_equal(fast, python)
+    assert np.array_equal(via_do_step, python)
     assert np.array_equal(fast[nav:, 0], ref.lat_error)
     assert np.array_equal(fast[nav:, 1], ref.position_error)
     assert np.array_equal(fast[nav:, 2], ref.attitude[:, 0])
-    # from C, do_step ran only where the compiled step declines: first steps, the alignment,
-    # a new random block, the compensation change
+    # from C, do_step ran only where the compiled step declines: the first steps, the coarse
+    # alignment and its end, a new random block, the compensation change
     assert python_steps["Turntable"] <= 2 and python_steps["IMUThermal"] <= 3, python_steps
-    assert python_steps["StrapdownINS"] <= ALIGN + 3, python_steps
-    assert counts["IMUThermal"] == n  # with SARINS_FMU_NO_FAST_STEP every step enters Python
+    assert python_steps["StrapdownINS"] <= 300 + 4, python_steps
+    assert do_step_calls["IMUThermal"] == n  # with SARINS_FMU_NO_FAST_STEP every step enters Python
 
 
 @pytest.mark.parametrize("fault, slave, message", [
