@@ -7,8 +7,8 @@ standard FMI 2.0 C API of the FMU's shared library is used (the library
 handle comes from FMPy's ``FMU2Slave.dll``).
 
 Speed: the pointers have no ``argtypes``, so ctypes converts nothing per
-call (half the cost of a call with ``argtypes``, measured in
-benchmarks/bench_cosim.py's notes); every argument must therefore already be
+call (half the cost of a call with ``argtypes``; docs/native-layer.md,
+Speed); every argument must therefore already be
 a ctypes object of the C type: :func:`handle` for the instance,
 :func:`count` for array lengths, ``c_double`` for times, the arrays of
 :func:`vr_array` / :func:`value_buffer` or a ``c_void_p`` address for values.

@@ -242,9 +242,7 @@ class StrapdownINS:
 
     def attitude_euler(self):
         """(yaw, pitch, roll) in rad of the current mat_nb."""
-        c = quat_to_mat(self.q)
-        return (math.atan2(-c[0, 1], c[1, 1]), math.asin(max(-1.0, min(1.0, c[2, 1]))),
-                math.atan2(-c[2, 0], c[2, 2]))
+        return tuple(float(x) for x in held_row(self.q, self.pos)[6:9])
 
     @property
     def mat_nb(self):
