@@ -174,3 +174,20 @@ def test_random_blocks_do_not_change_the_streams():
         runs.append(np.vstack(out))
     for other in runs[1:]:
         assert np.array_equal(runs[0], other)
+
+
+def test_ins_filter_history_is_the_same_stepped_one_by_one_or_in_one_batch():
+    """StrapdownINS.p_history (preallocated, one row per fine-alignment step) whatever the batching."""
+    from sarins_fmu.ins import InsConfig, StrapdownINS
+
+    sched = turntable.single_axis("forward-reverse", 1000.0, grid=1.0, align_time=900.0, align_dwell=300.0)
+    sensor = IMU(imu.preset("nav-rlg"), StaticBase(0.6), sched.axes, seed=1)
+    dtheta, dv, _ = sensor.step(*sched.state(np.arange(900) * 1.0))
+    config = InsConfig(lat=0.6, align_time=900.0, coarse_time=300.0)
+    batch, single = StrapdownINS(config), StrapdownINS(config)
+    batch.step(dtheta, dv)
+    for k in range(900):
+        single.step(dtheta[k], dv[k])
+    assert batch.p_history.shape == (600, 9) and np.isfinite(batch.p_history).all()
+    assert np.array_equal(batch.p_history, single.p_history)
+    assert np.array_equal(batch.q, single.q) and batch.steps == single.steps == 900
