@@ -445,6 +445,17 @@ class Master:
             gets = [g for i in self.order for g in self._incoming[i][0]]
             sets = [s for i in self.order for s in self._incoming[i][1]]
             self._plan = [(gets, sets, [steps[i] for i in self.order])]
+        # the inner loop's calls in order, each (function, arguments, component, call name, conversion);
+        # doStep's time and step are the c_doubles self._c_t and self._c_h, updated by the loop
+        self._c_t, self._c_h = c_double(), c_double()
+        self._ops = []
+        for gets, sets, stage_steps in self._plan:
+            self._ops += [(get, (src, vrs, n, buffer), index, call, convert)
+                          for get, src, vrs, n, buffer, convert, index, call in gets]
+            self._ops += [(set_, (dst, vrs, n, buffer), index, call, None)
+                          for set_, dst, vrs, n, buffer, index, call in sets]
+            self._ops += [(step, (component, self._c_t, self._c_h, NO_SET_PRIOR), index, "fmi2DoStep", None)
+                          for step, component, index in stage_steps]
 
     def _transfer(self, transfers, time: float) -> None:
         """Make every get of ``transfers = (gets, sets)`` (and convert), then every set."""
@@ -473,7 +484,8 @@ class Master:
 
     def _loop(self, segments, total: int, recorder: Recorder, every: int, bar: Progress,
               pacer: RealTimePacer | None, callback: StepCallback | None) -> int:
-        plan, fail, sample = self._plan, self._fail, recorder.sample
+        ops, fail, sample = self._ops, self._fail, recorder.sample
+        c_t, c_h = self._c_t, self._c_h
         multiply, add = np.multiply, np.add
         pending = interrupt.PENDING
         done = 0
@@ -481,24 +493,17 @@ class Master:
         next_tick = bar.next_tick
         for segment in segments:
             begin, h, count_ = segment.begin, segment.step, segment.count
-            c_h = c_double(h)
+            c_h.value = h
             for j in range(count_):
                 t = begin + j * h
-                c_t = c_double(t)
-                for gets, sets, steps in plan:
-                    # every source value of the stage is read before any input is set
-                    for get, src, vrs, n, buffer, convert, index, call in gets:
-                        if (status := get(src, vrs, n, buffer)) > FMI_WARNING:
-                            fail(index, call, status, t)
-                        if convert is not None:
-                            multiply(convert[0], convert[1], out=convert[0])
-                            add(convert[0], convert[2], out=convert[0])
-                    for set_, dst, vrs, n, buffer, index, call in sets:
-                        if (status := set_(dst, vrs, n, buffer)) > FMI_WARNING:
-                            fail(index, call, status, t)
-                    for step, component, index in steps:
-                        if (status := step(component, c_t, c_h, NO_SET_PRIOR)) > FMI_WARNING:
-                            fail(index, "fmi2DoStep", status, t)
+                c_t.value = t
+                # the plan's calls in order: in each stage every get (and conversion) before any set
+                for function, args, index, call, convert in ops:
+                    if (status := function(*args)) > FMI_WARNING:
+                        fail(index, call, status, t)
+                    if convert is not None:
+                        multiply(convert[0], convert[1], out=convert[0])
+                        add(convert[0], convert[2], out=convert[0])
                 done += 1
                 t_end = segment.end if j == count_ - 1 else begin + (j + 1) * h
                 self.time = t_end
@@ -528,6 +533,7 @@ class Master:
             instance.release()
         self.instances = []
         self._plan = []
+        self._ops = []
 
     def close(self) -> None:
         """Release instances and delete the extracted FMUs (idempotent)."""
