@@ -129,6 +129,12 @@ class Recorder:
                                 vr_array(v.valueReference for v in members), count(n),
                                 ctypes.addressof(storage),
                                 n * ctypes.sizeof(C_TYPES[kind]), data, i, kind, ctypes.c_void_p()))
+        # per block: (function, its arguments (the last one the row's address), that c_void_p,
+        # the storage address, bytes per row, block index)
+        self._calls = [(get, (component, vrs, n, pointer), pointer, address, row_bytes, b)
+                       for b, (get, component, vrs, n, address, row_bytes, _, _, _, pointer)
+                       in enumerate(self.blocks)]
+        self._times = memoryview(self.time)  # item assignment without numpy's overhead
         position = {(block[7], v.name): (b, k) for b, block in enumerate(self.blocks)
                     for k, v in enumerate(groups[(block[7], block[8])])}
         for i, var in selection:
@@ -142,10 +148,10 @@ class Recorder:
         status (the row is then not kept), or -1 on success.
         """
         row = self.count
-        self.time[row] = time
-        for b, (get, component, vrs, n, address, row_bytes, _, _, _, pointer) in enumerate(self.blocks):
+        self._times[row] = time
+        for get, args, pointer, address, row_bytes, b in self._calls:
             pointer.value = address + row * row_bytes
-            if get(component, vrs, n, pointer) > 1:
+            if get(*args) > 1:
                 return b
         self.count = row + 1
         return -1
