@@ -66,8 +66,12 @@ class FastStep:
 
     @property
     def address(self):
-        """(C function address, table address, table rows) for the native FMI layer."""
-        return (_cfunc(self._body).address, self.table.ctypes.data, self.table.shape[0])
+        """(C function address, table address, table rows) for the native FMI layer, or None
+        when the C function cannot be made (the Python do_step then calls :meth:`step`)."""
+        try:
+            return (_cfunc(self._body).address, self.table.ctypes.data, self.table.shape[0])
+        except Exception:  # pragma: no cover - numba cannot compile a cfunc here
+            return None
 
 
 _CFUNCS = {}

@@ -104,6 +104,9 @@ if HAVE_NUMBA:
         ``step`` a jitted function that returns 0 when it did the step and
         non-zero when it did not change any state.
         """
-        return numba.cfunc(STEP_SIGNATURE, cache=True, nopython=True)(body)
+        try:
+            return numba.cfunc(STEP_SIGNATURE, cache=True, nopython=True)(body)
+        except Exception:  # pragma: no cover - numba refuses the cache dir
+            return numba.cfunc(STEP_SIGNATURE, nopython=True)(body)
 else:  # pragma: no cover
     table_view1 = table_view2 = c_table = c_buffer = fast_step_cfunc = None
