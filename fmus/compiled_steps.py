@@ -93,13 +93,15 @@ def _same_time(a, b, step):
 
 # io row: expected step, start time, gimbals A, slots of motion_time, ambient_temp,
 # ambient_temp_rate, angle_1..3, rate_1..3, accel_1..3, outputs (dtheta, dv, temps: 12),
-# increment_end_time
-_IMU_IO = 28
-_IMU_OUT = 15
+# increment_end_time; moving base (1/0), slots of base_motion_time and of the 15 vehicle inputs
+# (yaw, pitch, roll; their rates; their accelerations; base rate e, n, u; base force e, n, u)
+_IMU_OUT, _IMU_VEHICLE = 15, 28
+_IMU_IO = _IMU_VEHICLE + 17
+VEHICLE_SET = 15  # values in the vehicle input set
 
 
 def imu_context(slave, step: float):
-    """The IMUThermal slave's compiled step (static base), or None (see :func:`enabled`)."""
+    """The IMUThermal slave's compiled step, or None (see :func:`enabled`)."""
     if not enabled():
         return None
     n = len(slave._axes)
@@ -110,13 +112,43 @@ def imu_context(slave, step: float):
         io[6 + 3 * k:6 + 3 * k + n] = real_slots(slave, [f"{q}_{j + 1}" for j in range(n)])
     io[_IMU_OUT:_IMU_OUT + 12] = slave._out_slots
     io[27] = real_slots(slave, ["increment_end_time"])[0]
-    arrays = slave._sensor.state_arrays() + (io, slave._motion.store)
+    io[_IMU_VEHICLE] = slave.base == "input"
+    io[_IMU_VEHICLE + 1:] = real_slots(slave, ["base_motion_time"] + slave.VEHICLE_INPUTS)
+    arrays = slave._sensor.state_arrays() + (io, slave._motion.store, slave._vehicle.store)
     return FastStep(_imu_step, _imu_c_step, arrays)
 
 
 @jit
+def _read(buf, slots, out):
+    """out[i] = buf[slots[i]]; False if a value is not finite."""
+    for i in range(out.shape[0]):
+        out[i] = buf[int(slots[i])]
+        if not math.isfinite(out[i]):
+            return False
+    return True
+
+
+@jit
+def _choose(held, current, tag, t, h):
+    """The set tagged t among the current one and the held one (fmus.slave_support.StartOfStepInputs),
+    or an empty array when neither is."""
+    if _same_time(tag, t, h):
+        return current
+    if held[0] != 0.0 and _same_time(held[1], t, h):
+        return held[2:2 + current.shape[0]].copy()
+    return current[0:0]
+
+
+@jit
+def _keep(held, current, tag):
+    held[2:2 + current.shape[0]] = current
+    held[1] = tag
+    held[0] = 1.0
+
+
+@jit
 def _imu_step(table, buf, t, h):
-    """One IMUThermal step (static base): see the slave's do_step for the contract."""
+    """One IMUThermal step: see the slave's do_step for the contract."""
     s = imu_step.from_table(table)
     io = table_view1(table, imu_step.N_STATE_ARRAYS)
     held = table_view1(table, imu_step.N_STATE_ARRAYS + 1)
@@ -128,40 +160,51 @@ def _imu_step(table, buf, t, h):
     if not _same_time(consts[0] + clock[0] * consts[1] + io[1], t, h):
         return 1
     n = int(io[2])
-    size = 3 * n + 2
-    current = np.empty(size)
+    current = np.empty(3 * n + 2)
+    slots = np.empty(3 * n + 2)
     for k in range(3):
-        for j in range(n):
-            current[k * n + j] = buf[int(io[6 + 3 * k + j])]
-    current[3 * n] = buf[int(io[4])]
-    current[3 * n + 1] = buf[int(io[5])]
+        slots[k * n:(k + 1) * n] = io[6 + 3 * k:6 + 3 * k + n]
+    slots[3 * n:] = io[4:6]
     tag = buf[int(io[3])]
-    for v in current:
-        if not math.isfinite(v):
-            return 1
-    fixed = tag == NO_TAG and held[0] != 0.0 and held[1] == NO_TAG  # no turntable connected
-    if fixed or _same_time(tag, t, h):
-        chosen = current
-    elif held[0] != 0.0 and _same_time(held[1], t, h):
-        chosen = held[2:2 + size].copy()
-    else:
+    if not (_read(buf, slots, current) and math.isfinite(tag)):
         return 1
+    fixed = tag == NO_TAG and held[0] != 0.0 and held[1] == NO_TAG  # no turntable connected
+    chosen = current if fixed else _choose(held, current, tag, t, h)
+    if chosen.shape[0] == 0:
+        return 1
+    moving = io[_IMU_VEHICLE] != 0.0
+    vehicle = np.empty(VEHICLE_SET)
+    v_tag = buf[int(io[_IMU_VEHICLE + 1])]
+    v_chosen = vehicle
+    if moving:
+        v_held = table_view1(table, imu_step.N_STATE_ARRAYS + 2)
+        if not (_read(buf, io[_IMU_VEHICLE + 2:], vehicle) and math.isfinite(v_tag)):
+            return 1
+        v_chosen = _choose(v_held, vehicle, v_tag, t, h)
+        if v_chosen.shape[0] == 0:
+            return 1
     amb_end = np.empty(1)
     amb_end[0] = chosen[3 * n] + chosen[3 * n + 1] * h
     if not (math.isfinite(amb_end[0]) and amb_end[0] >= -273.15):
         return 1
     # every check passed: from here on the step happens
     if not fixed:
-        held[2:2 + size] = current
-        held[1] = tag
-        held[0] = 1.0
-    angle0 = chosen[0:n].copy().reshape(1, n)
-    rate0 = chosen[n:2 * n].copy().reshape(1, n)
-    accel = chosen[2 * n:3 * n].copy().reshape(1, n)
+        _keep(held, current, tag)
+    m = n + 3 if moving else n  # the vehicle's attitude gimbals carry the table's
+    motion = np.empty((3, m))
+    for k in range(3):
+        if moving:
+            motion[k, 0:3] = v_chosen[3 * k:3 * k + 3]
+        motion[k, m - n:] = chosen[k * n:(k + 1) * n]
+    if moving:
+        _keep(table_view1(table, imu_step.N_STATE_ARRAYS + 2), vehicle, v_tag)
+        base = s[imu_step.BASE]
+        base[0] = v_chosen[9:12]
+        base[1] = v_chosen[12:15]
     dtheta = np.empty((1, 3))
     dv = np.empty((1, 3))
     temps = np.empty((1, 6))
-    imu_step.one_interval(s, angle0, rate0, accel, amb_end, dtheta, dv, temps)
+    imu_step.one_interval(s, motion[0:1], motion[1:2], motion[2:3], amb_end, dtheta, dv, temps)
     for i in range(3):
         buf[int(io[_IMU_OUT + i])] = dtheta[0, i]
         buf[int(io[_IMU_OUT + 3 + i])] = dv[0, i]

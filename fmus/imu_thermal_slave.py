@@ -48,6 +48,8 @@ class IMUThermal(Fmi2Slave):
         "at the vehicle (omega_ie + omega_en) and the specific force resolved in it, both held over the step. "
         "IMU parameters: 'preset' chooses the model; any coefficient parameter that is set overrides it.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
+    VEHICLE_INPUTS = ([f"vehicle_{a}{q}" for q in ("", "_rate", "_accel") for a in ("yaw", "pitch", "roll")]
+                      + [f"base_{kind}_{ax}" for kind in ("rate", "force") for ax in "enu"])  # the flat vehicle set
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -175,9 +177,7 @@ class IMUThermal(Fmi2Slave):
     def _read_vehicle(self):
         """The vehicle inputs as one flat set: attitude angles, rates, accelerations (yaw, pitch, roll each),
         base rate and specific force (e, n, u each)."""
-        values = np.array([getattr(self, f"vehicle_{a}{q}") for q in ("", "_rate", "_accel")
-                           for a in ("yaw", "pitch", "roll")]
-                          + [getattr(self, f"base_{kind}_{ax}") for kind in ("rate", "force") for ax in "enu"])
+        values = np.array([getattr(self, name) for name in self.VEHICLE_INPUTS])
         if not np.isfinite(values).all():
             raise ValueError("vehicle motion inputs contain NaN or infinity")
         return values
@@ -191,9 +191,8 @@ class IMUThermal(Fmi2Slave):
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
         self._sensor.reset(ambient0=self._ambient0)
-        if self.base == "static":
-            self._fast = compiled_steps.imu_context(self, step_size)
-            self._fmi_fast_step = None if self._fast is None else self._fast.address
+        self._fast = compiled_steps.imu_context(self, step_size)
+        self._fmi_fast_step = None if self._fast is None else self._fast.address
 
     @guarded
     def do_step(self, current_time, step_size):

@@ -500,11 +500,6 @@ class IMU:
         """The arrays of :mod:`sarins_fmu.imu_step` (updated in place by every step; keep them alive)."""
         return self._state
 
-    def fast_step_ready(self) -> bool:
-        """True when :func:`sarins_fmu.imu_step.one_interval` may step this IMU (static base, and a
-        random row left in the blocks: else :meth:`step` refills them)."""
-        return isinstance(self.base, StaticBase) and self._state[imu_step.CLOCK][2] < self._block_rows
-
     def _refill(self, n: int) -> None:
         """Make the random blocks hold at least n unused rows (n <= block rows).
 
