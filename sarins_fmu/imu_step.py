@@ -36,8 +36,9 @@ Array layout (``s`` below, the tuple :meth:`IMU.state_arrays` returns):
                          random walks
  6    mats (9, 3)        gyro misalignment, g-sensitivity, accel misalignment
  7    axes (A, 3)        gimbal axes
- 8    base (2, 3)        a static base's inertial rate and specific force
-                         (resolved in t; the fast step's base motion)
+ 8    base (2, 3)        the base frame's inertial rate and specific force
+                         (resolved in t) held over :func:`one_interval`'s
+                         interval (a static base's at construction)
  9    gm_block (B, 6)    Gauss-Markov driving noise
 10    white_block (B, 6) white-noise draws
 11    corr_par (7, 6)    die time constant, gradient bias and scale factor,
@@ -135,7 +136,7 @@ def increments_args(s):
 
 @jit
 def one_interval(s, angle0, rate0, accel, amb_end, dtheta, dv, temps):
-    """One output interval on the static base of ``s`` (the FMU's fast step).
+    """One output interval, base motion from ``s[BASE]`` (the FMU's compiled step).
 
     angle0, rate0, accel : (1, A) gimbal state at the interval start;
     amb_end : (1,) ambient at its end, degC (checked by the caller);
