@@ -36,14 +36,12 @@ import os
 
 import numpy as np
 
-from fmus.slave_support import real_slots
+from fmus.slave_support import NO_TAG, TAG_TOL, real_slots
 from sarins_fmu import imu_step
 from sarins_fmu.ins_kernel import align_steps, held_row, nav_steps
 from sarins_fmu.turntable.schedule import state_into
 from sarins_fmu._jit import HAVE_NUMBA, array_table, c_buffer, c_table, fast_step_cfunc, jit, table_view1, table_view2
 
-NO_TAG = -1.0e9  # s, the IMU's motion_time start value: names no communication point
-TAG_TOL = 1e-6  # of a step: two time tags name the same communication point (slave_support.same_time)
 
 
 def enabled() -> bool:

@@ -7,7 +7,7 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus import compiled_steps
-from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, StartOfStepInputs, check_finite,
+from fmus.slave_support import (INPUT, NO_TAG, OUTPUT, PARAMETER, ParameterError, StartOfStepInputs, check_finite,
                                 check_step, declare, discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import imu, imu_params
 from sarins_fmu.thermal import SENSORS, ThermalModel
@@ -16,7 +16,6 @@ from sarins_fmu.site import SITE_LAT
 
 GIMBAL_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 UNIT_DISPLAY = {"rad/s": "deg/h", "rad": "deg"}
-NO_TAG = -1.0e9  # s, start value of motion_time: names no communication point of a run
 
 
 class IMUThermal(Fmi2Slave):

@@ -164,9 +164,13 @@ def guarded(method):
     return wrapper
 
 
+TAG_TOL = 1e-6  # of a step: two time tags closer than this name the same communication point
+NO_TAG = -1.0e9  # s, start value of a time-tag input: names no communication point of a run
+
+
 def same_time(a: float, b: float, step: float) -> bool:
-    """True if two time tags name the same communication point (to 1e-6 of a step)."""
-    return abs(a - b) <= 1e-6 * step
+    """True if two time tags name the same communication point (to TAG_TOL of a step)."""
+    return abs(a - b) <= TAG_TOL * step
 
 
 class StartOfStepInputs:
