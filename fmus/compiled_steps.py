@@ -218,13 +218,24 @@ def _imu_c_step(table, rows, buffer, n, t, h):
 
 # ---------------------------------------------------------------- StrapdownINS
 
-# io row: expected step, start time, align time, steps of the alignment, slots of dtheta/dv (6),
-# increment_end_time, temp_gyro_z, axial_drift_correction, axial_drift_apply_from, the 9 navigation
-# outputs, the 5 error outputs, the 4 estimates, nav_time, temp_azimuth_gyro, temp_align_start,
-# temp_align_end, temp_change_align; lat0, lon0, (r_m + h0), (r_n + h0), cos(lat0); steps of the
-# coarse alignment, the filter's velocity measurement variance
-_INS_IN, _INS_NAV, _INS_ERR, _INS_EST, _INS_TEMP, _INS_SITE, _INS_FILTER = 4, 14, 23, 28, 32, 37, 42
-_INS_IO = 44
+# io row: expected step, start time, align time, steps of the alignment; slots of the inputs (dtheta/dv (6),
+# increment_end_time, temp_gyro_z, the correction c, b, a, axial_drift_apply_from), the 9 navigation
+# outputs, the 5 error outputs, the 4 estimates, the time and temperature outputs (nav_time, temp_azimuth_gyro,
+# temp_align_start, temp_align_end, temp_change_align, solution_time); lat0, lon0, (r_m + h0), (r_n + h0),
+# cos(lat0); steps of the coarse alignment, the filter's velocity measurement variance
+INS_INPUTS = [f"dtheta_{a}" for a in "xyz"] + [f"dv_{a}" for a in "xyz"] + [
+    "increment_end_time", "temp_gyro_z", "axial_drift_correction", "axial_drift_correction_b",
+    "axial_drift_correction_a", "axial_drift_apply_from"]
+INS_TIME_TEMP = ["nav_time", "temp_azimuth_gyro", "temp_align_start", "temp_align_end", "temp_change_align",
+                 "solution_time"]
+_INS_IN = 4
+_INS_NAV = _INS_IN + len(INS_INPUTS)
+_INS_ERR = _INS_NAV + 9
+_INS_EST = _INS_ERR + 5
+_INS_TEMP = _INS_EST + 4
+_INS_SITE = _INS_TEMP + len(INS_TIME_TEMP)
+_INS_FILTER = _INS_SITE + 5
+_INS_IO = _INS_FILTER + 2
 
 
 def ins_context(slave):
@@ -236,14 +247,11 @@ def ins_context(slave):
     config = slave._config
     io = np.zeros(_INS_IO)
     io[0:4] = config.step, slave._start_time, config.align_time, round(config.align_time / config.step)
-    io[_INS_IN:_INS_IN + 6] = slave._in_slots
-    io[_INS_IN + 6:_INS_NAV] = real_slots(slave, ["increment_end_time", "temp_gyro_z", "axial_drift_correction",
-                                                  "axial_drift_apply_from"])
+    io[_INS_IN:_INS_NAV] = real_slots(slave, INS_INPUTS)
     io[_INS_NAV:_INS_ERR] = slave._nav_slots
     io[_INS_ERR:_INS_EST] = slave._err_slots
     io[_INS_EST:_INS_TEMP] = slave._est_slots
-    io[_INS_TEMP:_INS_SITE] = real_slots(slave, ["nav_time", "temp_azimuth_gyro", "temp_align_start",
-                                                 "temp_align_end", "temp_change_align"])
+    io[_INS_TEMP:_INS_SITE] = real_slots(slave, INS_TIME_TEMP)
     r_m, r_n = earth.radii(config.lat)
     io[_INS_SITE:_INS_FILTER] = config.lat, config.lon, r_m + config.height, r_n + config.height, math.cos(config.lat)
     io[_INS_FILTER:] = slave._ins._n_coarse, config.filter.velocity_meas_std ** 2
@@ -255,8 +263,28 @@ def ins_context(slave):
 
 
 @jit
+def _compensation_unchanged(comp, value, apply_from, nav_start, tol):
+    """True if the drift compensation inputs (value (c, b, a), apply_from) leave the value in force of the
+    slave's Compensation ``state`` (``comp``) for the interval starting at ``nav_start``: the pair seen
+    last, or its value again with an apply_from after every queued pair's (not queued), and no queued
+    pair takes over.  Otherwise the Python step queues the pair, lets a queued one take over, or refuses
+    a late one."""
+    for i in range(3):
+        if value[i] != comp[i]:
+            return False  # a new value
+    if apply_from != comp[3] and (apply_from < nav_start - tol or not comp[8] < apply_from - tol):
+        return False  # too late, or it replaces queued pairs
+    return nav_start < comp[7] - tol
+
+
+@jit
 def _ins_step(table, buf, t, h):
-    """One StrapdownINS step of fine alignment or navigation: see the slave's do_step for the contract."""
+    """One StrapdownINS step of fine alignment or navigation: see the slave's do_step for the contract.
+
+    The azimuth drift correction is the set (c, b, a) in force (``comp[4:7]``, see the slave's
+    Compensation) evaluated at the interval's temp_gyro_z T: (a T + b) T + c, as
+    :func:`sarins_fmu.drift_model.drift_model_value`.
+    """
     q, v, pos = table_view1(table, 0), table_view1(table, 1), table_view1(table, 2)
     gyro_comp, accel_comp, count = table_view1(table, 3), table_view1(table, 4), table_view1(table, 5)
     io, comp = table_view1(table, 6), table_view1(table, 7)
@@ -267,26 +295,31 @@ def _ins_step(table, buf, t, h):
     n_coarse, n_align = io[_INS_FILTER], io[3]
     if steps < n_coarse or steps == 0 or steps == n_align - 1:  # coarse alignment, the end of the fine one
         return 1
-    inc = np.empty((2, 3))
-    for i in range(6):
-        inc[i // 3, i % 3] = buf[int(io[_INS_IN + i])]
-    tag = buf[int(io[_INS_IN + 6])]
-    value, apply_from = buf[int(io[_INS_IN + 8])], buf[int(io[_INS_IN + 9])]
-    for x in (inc[0, 0], inc[0, 1], inc[0, 2], inc[1, 0], inc[1, 1], inc[1, 2], tag, value, apply_from):
-        if not math.isfinite(x):
-            return 1
+    n_in = _INS_NAV - _INS_IN
+    inputs = np.empty(n_in)
+    if not _read(buf, io[_INS_IN:_INS_NAV], inputs):
+        return 1
+    tag, temp_z, apply_from = inputs[6], inputs[7], inputs[n_in - 1]
     if not _same_time(tag, io[1] + steps * h + h, h):  # the interval after the last one integrated
         return 1
     nav_start = steps * h - io[2]  # nav time of the interval's start
-    if not (value == comp[0] and apply_from == comp[1] and nav_start < comp[3] - TAG_TOL * h):
-        return 1  # a new compensation, or a queued one takes over: the Python step
+    if not _compensation_unchanged(comp, inputs[8:11], apply_from, nav_start, TAG_TOL * h):
+        return 1
+    correction = np.full(1, (comp[6] * temp_z + comp[5]) * temp_z + comp[4])
+    if not math.isfinite(correction[0]):
+        return 1  # the Python step refuses it
+    # every check passed: from here on the step happens
+    comp[3] = apply_from  # the seen pair: the same value, possibly with a later apply_from
+    inc = np.empty((2, 3))
+    for i in range(6):
+        inc[i // 3, i % 3] = inputs[i]
     if steps < n_align:  # fine alignment (the phase stays the same)
         hist = align_steps(q, v, pos, inc[0:1], inc[1:2], step, gyro_comp, accel_comp, table_view1(table, 8),
                            table_view2(table, 9), table_view1(table, 10), io[_INS_FILTER + 1])
         table_view2(table, 11)[int(steps - n_coarse)] = hist[0]
         row = held_row(q, pos)
     else:
-        row = nav_steps(q, v, pos, inc[0:1], inc[1:2], step, gyro_comp, accel_comp, np.full(1, comp[2]))[0]
+        row = nav_steps(q, v, pos, inc[0:1], inc[1:2], step, gyro_comp, accel_comp, correction)[0]
     count[0] = steps + 1
     for i in range(9):
         buf[int(io[_INS_NAV + i])] = row[i]
@@ -301,12 +334,12 @@ def _ins_step(table, buf, t, h):
     for i in range(4):
         buf[int(io[_INS_EST + i])] = est[i]
     nav_time = (steps + 1) * step - io[2]
-    temp_z = buf[int(io[_INS_IN + 7])]
     buf[int(io[_INS_TEMP])] = nav_time
     buf[int(io[_INS_TEMP + 1])] = temp_z
     if steps + 1 < n_align or abs(nav_time) < 0.5 * step:
         buf[int(io[_INS_TEMP + 3])] = temp_z
         buf[int(io[_INS_TEMP + 4])] = temp_z - buf[int(io[_INS_TEMP + 2])]
+    buf[int(io[_INS_TEMP + 5])] = io[1] + (steps + 1) * step  # solution_time
     return 0
 
 

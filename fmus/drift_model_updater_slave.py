@@ -5,8 +5,8 @@ import math
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
-                                discard_on_error, guarded, same_time)
+from fmus.slave_support import (INPUT, NO_TAG, OUTPUT, PARAMETER, ParameterError, TaggedHistory, check_finite,
+                                check_step, declare, discard_on_error, guarded, same_time)
 from sarins_fmu.identify.axial import APPLY_LATENCY
 from sarins_fmu.identify.online import OnlineDriftUpdater, UpdaterSettings, prior_covariance
 from sarins_fmu.identify.rls import ForgettingRLS, RLSSettings
@@ -14,6 +14,8 @@ from sarins_fmu.kalman import StopFilterSettings
 from sarins_fmu.units import DAY, DEG_TO_RAD, DPH_TO_RPS
 
 NAVIGATE = 2  # StrapdownINS 'phase' output value in navigation
+P_UNITS = {"p_aa": "1/degC4", "p_ab": "1/degC3", "p_ac": "1/degC2", "p_bb": "1/degC2", "p_bc": "1/degC", "p_cc": "1"}
+P_INDEX = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)]
 
 
 class DriftModelUpdater(Fmi2Slave):
@@ -21,20 +23,34 @@ class DriftModelUpdater(Fmi2Slave):
     author = "sarins-fmu"
     description = (
         "Online update of the azimuth gyro drift model eps(T) = a T^2 + b T + c (seed 002, Fig. 2). "
-        "Contract (standard FMI timing, time-tagged): the INS inputs are tagged nav_time; each doStep processes "
-        "the row whose tag follows the last one processed by one step (a repeated tag, e.g. Jacobi's first "
-        "step, is skipped; a skipped row is an error), whatever the master's scheme. The updater's clock is "
-        "start_day + nav_time. The vehicle is stopped while vehicle_speed < speed_threshold and ins_phase = 2 "
-        "(navigating); at the start of a stop a static Kalman filter (velocity = 0 measurement, states "
+        "Contract (standard FMI timing, time-tagged, any master scheme): the INS inputs are one row of the INS's "
+        "outputs, tagged solution_time (the simulation time they refer to; if solution_time is not connected, "
+        "nav_time orders the rows); each doStep processes the row whose tag follows the last one processed by "
+        "one step (a repeated tag, e.g. Jacobi's first steps, or the INS's initial outputs at the start time are "
+        "skipped; a skipped row is an error). vehicle_speed tagged speed_time (the vehicle's time tag) is paired "
+        "with the INS row of the same time: the updater keeps the last 8 speeds, so a speed that arrives before "
+        "the row (Jacobi: two links ahead) is found; a row without its speed is an error (fmi2Error with the "
+        "tags). If speed_time is not connected, vehicle_speed is taken as it is at each doStep. The updater's "
+        "clock is start_day + nav_time of the row. The vehicle is stopped while vehicle_speed < speed_threshold "
+        "and the INS navigates (ins_phase = 2 and nav_time >= 0: the phase input may be held at 2, the row's "
+        "nav_time tells); at the start of a stop a static Kalman filter (velocity = 0 measurement, states "
         "attitude, velocity, gyro drifts incl. the azimuth drift, accelerometer biases, north position) is "
         "reset and a timer starts; when the vehicle moves off, a stop of at least time_threshold updates the "
         "model by forgetting-factor RLS (lambda^(dt/m)) with the pair (mean gyro temperature, estimated "
-        "drift); a shorter stop is discarded. Output compensation_drift = current model at temp_gyro_z of the "
-        "row, to be subtracted by the INS (axial_drift_correction) from nav time apply_from = row nav_time + "
-        "latency on (axial_drift_apply_from; latency a few steps, long enough for any scheme). All outputs are "
-        "state outputs (no direct feedthrough). The initial model is a0, b0, c0 with prior_points "
-        "equivalent calibration points spread over prior_t_min..prior_t_max. Held between steps: the model "
-        "and its RLS information, the filter, the stop timer.")
+        "drift); a shorter stop is discarded. Outputs: the current model drift_a, drift_b, drift_c (connect to "
+        "StrapdownINS axial_drift_correction_a, _b and axial_drift_correction: the INS evaluates it at each "
+        "interval's temperature) and compensation_drift = the model at temp_gyro_z of the row (for an INS "
+        "taking a constant), both to be applied from nav time apply_from = row nav_time + latency on "
+        "(axial_drift_apply_from; at initialisation -1e9 s: the initial model applies from the start). One step "
+        "of latency is enough for any scheme (under Jacobi the INS reads the updater's output of the row before "
+        "the interval it integrates). All outputs are state outputs (no direct feedthrough). The initial model "
+        "is a0, b0, c0 with prior_points equivalent calibration points spread over prior_t_min..prior_t_max, or "
+        "the RLS state in model_file (JSON/npz of sarins_fmu.identify.rls.ForgettingRLS.save; its forgetting "
+        "settings must equal forgetting_factor and forgetting_time_scale); the outputs p_aa..p_cc (its inverse "
+        "information) and model_time (the time of its last update) with drift_a/b/c give the state back, so a "
+        "next run can continue from it. last_stop_* describe the last finished stop (last_stop_used 1: it "
+        "updated the model). Held between steps: the model and its RLS information, the filter, the stop "
+        "timer, the last speeds.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=6 * 3600.0, step_size=1.0)
 
     def __init__(self, **kwargs):
@@ -86,9 +102,31 @@ class DriftModelUpdater(Fmi2Slave):
         declare(self, "integer", "stopped", OUTPUT, "1 while a stop is being estimated [1]", 0)
         declare(self, "integer", "n_updates", OUTPUT, "model updates so far [1]", 0)
         declare(self, "integer", "n_resets", OUTPUT, "stops discarded as too short [1]", 0)
+        declare(self, "string", "model_file", PARAMETER,
+                "initial RLS state (ForgettingRLS JSON/npz); empty: a0, b0, c0 and prior_*", "")
+        declare(self, "real", "solution_time", INPUT, "time tag of the INS inputs: INS solution_time [s]", NO_TAG)
+        declare(self, "real", "speed_time", INPUT, "time tag of vehicle_speed [s]", NO_TAG)
+        declare(self, "real", "row_time", OUTPUT, "tag (solution_time, else nav_time) of the last row processed [s]",
+                NO_TAG)
+        for name, unit in P_UNITS.items():
+            declare(self, "real", name, OUTPUT, f"RLS inverse information {name[2:]} [{unit}]", 0.0)
+        declare(self, "real", "model_time", OUTPUT, "clock time of the model's last update or initialisation [s]",
+                0.0)
+        for name, unit, text in (("last_stop_time", "s", "clock time at which it ended"),
+                                 ("last_stop_duration", "s", "its estimation time"),
+                                 ("last_stop_temp", "degC", "its mean gyro temperature"),
+                                 ("last_stop_drift", "rad/s; deg/h", "its azimuth drift estimate"),
+                                 ("last_stop_drift_std", "rad/s; deg/h", "its filter standard deviation")):
+            declare(self, "real", name, OUTPUT, f"last finished stop: {text} [{unit}]", 0.0)
+        declare(self, "integer", "last_stop_used", OUTPUT, "last finished stop updated the model (1) or not [1]", 0)
         self._core = None
         self._step = None
         self._last_tag = None
+        self._speeds = TaggedHistory("vehicle_speed", "speed_time")
+        self._start_time = 0.0
+
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._start_time = float(start_time)
 
     def _make_core(self, dt=1.0):
         names = ["a0", "b0", "c0", "prior_points", "prior_t_min", "prior_t_max", "start_day", "forgetting_factor",
@@ -101,9 +139,8 @@ class DriftModelUpdater(Fmi2Slave):
         if not self.prior_t_max > self.prior_t_min:
             raise ParameterError("prior_t_max must exceed prior_t_min")
         try:
-            p0 = prior_covariance(self.prior_points, self.prior_t_min, self.prior_t_max)
             settings = RLSSettings(self.forgetting_factor, self.forgetting_time_scale)
-            rls = ForgettingRLS([self.a0, self.b0, self.c0], p0, 0.0, settings)
+            rls = self._initial_model(settings)
             kf = StopFilterSettings(arw=self.kf_arw, vrw=self.kf_vrw, velocity_meas_std=self.kf_velocity_meas_std,
                                     heading0_std=self.kf_heading0_std)
             upd = UpdaterSettings(self.time_threshold, self.speed_threshold)
@@ -111,11 +148,33 @@ class DriftModelUpdater(Fmi2Slave):
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
 
+    def _initial_model(self, settings: RLSSettings) -> ForgettingRLS:
+        """The RLS state of model_file, else a0, b0, c0 worth prior_points calibration points."""
+        if not self.model_file:
+            p0 = prior_covariance(self.prior_points, self.prior_t_min, self.prior_t_max)
+            return ForgettingRLS([self.a0, self.b0, self.c0], p0, 0.0, settings)
+        rls = ForgettingRLS.load(self.model_file)
+        if rls.settings != settings:
+            raise ParameterError(f"model_file {self.model_file} has forgetting factor "
+                                 f"{rls.settings.forgetting_factor} per {rls.settings.time_scale} s; the parameters "
+                                 f"say {settings.forgetting_factor} per {settings.time_scale} s")
+        return rls
+
+    def enter_initialization_mode(self):
+        try:  # the initial outputs, for a host that reads them in Initialization Mode
+            self._core = self._make_core()
+            self._publish(float(self._core.compensation(self.temp_gyro_z)), NO_TAG)
+        except ValueError:  # a bad parameter is reported at exit_initialization_mode
+            self._core = None
+
     @guarded
     def exit_initialization_mode(self):
         self._core = self._make_core()
         self._last_tag = None
-        self._publish(float(self._core.compensation(self.temp_gyro_z)), self.nav_time)
+        self._speeds = TaggedHistory("vehicle_speed", "speed_time")
+        if self.speed_time != NO_TAG:
+            self._speeds.push(self.speed_time, float(self.vehicle_speed))
+        self._publish(float(self._core.compensation(self.temp_gyro_z)), NO_TAG)
 
     @guarded
     def do_step(self, current_time, step_size):
@@ -128,28 +187,57 @@ class DriftModelUpdater(Fmi2Slave):
                       self.lat, self.nav_time]
             if not all(math.isfinite(x) for x in inputs):
                 raise ValueError("an input (velocity, attitude, temperature, speed or nav_time) is NaN or infinite")
-            tag = float(self.nav_time)
-            if self._last_tag is not None:
-                if same_time(tag, self._last_tag, step_size):
-                    return True  # no new INS row (Jacobi's first step)
-                if not same_time(tag, self._last_tag + step_size, step_size):
-                    raise ValueError(f"INS row tagged nav_time={tag:.9g} s after {self._last_tag:.9g} s: rows "
-                                     "must follow each other one step apart (none skipped or repeated)")
+            speed = self._vehicle_speed(step_size)
+            tag = self._row_tag(step_size)
+            if tag is None:
+                return True  # no new INS row
             self._last_tag = tag
-            time = self.start_day * DAY + tag
-            comp = self._core.step([time], [self.vehicle_speed], [[self.v_e, self.v_n]],
+            speed = speed(tag)
+            time = self.start_day * DAY + float(self.nav_time)
+            comp = self._core.step([time], [speed], [[self.v_e, self.v_n]],
                                    [[self.yaw, self.pitch, self.roll]], [self.temp_gyro_z], [self.lat],
-                                   [int(self.ins_phase) == NAVIGATE])
+                                   [int(self.ins_phase) == NAVIGATE and self.nav_time >= 0.0])
         except ValueError as exc:
             return discard_on_error(self, exc)
-        self._publish(float(comp[0]), tag)
+        self.row_time = tag
+        self._publish(float(comp[0]), float(self.nav_time) + self.latency)
         return True
 
-    def _publish(self, compensation, tag):
+    def _vehicle_speed(self, step):
+        """Keep the speed just read; returns the speed of a row tag (tag -> m/s)."""
+        if self.speed_time == NO_TAG:
+            return lambda tag: float(self.vehicle_speed)
+        if self.solution_time == NO_TAG:
+            raise ValueError("vehicle_speed is tagged (speed_time is connected) but the INS rows are not: "
+                             "connect the INS's solution_time to pair each row with the speed of its time")
+        self._speeds.push(self.speed_time, float(self.vehicle_speed), step)
+        return lambda tag: self._speeds.at(tag, step)
+
+    def _row_tag(self, step):
+        """Tag of the INS row to process now, or None if it is no new row."""
+        tagged = self.solution_time != NO_TAG
+        tag = float(self.solution_time if tagged else self.nav_time)
+        last = self._last_tag
+        if tagged and tag <= self._start_time + 1e-6 * step:
+            return None  # the INS's initial outputs: no interval integrated yet
+        if last is not None and same_time(tag, last, step):
+            return None  # the same row again (Jacobi's first steps)
+        expected = (self._start_time + step) if (tagged and last is None) else (None if last is None else last + step)
+        if expected is not None and not same_time(tag, expected, step):
+            name = "solution_time" if tagged else "nav_time"
+            raise ValueError(f"INS row tagged {name}={tag:.9g} s where the row at {expected:.9g} s was due: rows "
+                             "must follow each other one step apart (none skipped or repeated)")
+        return tag
+
+    def _publish(self, compensation, apply_from):
         core = self._core
         self.drift_a, self.drift_b, self.drift_c = (float(x) for x in core.rls.parameters)
+        p = core.rls.covariance
+        for name, (i, j) in zip(P_UNITS, P_INDEX):
+            setattr(self, name, float(p[i, j]))
+        self.model_time = core.rls.time
         self.compensation_drift = compensation
-        self.apply_from = float(tag) + self.latency
+        self.apply_from = apply_from
         self.stopped = int(core.stopped)
         self.stop_timer = core.timer
         kf = core.filter
@@ -161,3 +249,8 @@ class DriftModelUpdater(Fmi2Slave):
         updates = [e for e in core.events if e[1] == "update"]
         if updates:
             self.last_update_temp, self.last_update_drift = float(updates[-1][3]), float(updates[-1][4])
+        if core.events:
+            time, kind, duration, temp, drift, std = core.events[-1]
+            self.last_stop_time, self.last_stop_duration, self.last_stop_temp = time, duration, temp
+            self.last_stop_drift, self.last_stop_drift_std = drift, std
+            self.last_stop_used = int(kind == "update")

@@ -7,8 +7,8 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus import compiled_steps
-from fmus.slave_support import (INPUT, NO_TAG, OUTPUT, PARAMETER, ParameterError, StartOfStepInputs, check_finite,
-                                check_step, declare, discard_on_error, guarded, real_slots, same_time)
+from fmus.slave_support import (INPUT, NO_TAG, OUTPUT, PARAMETER, ParameterError, StartOfStepInputs,
+                                check_finite, check_step, declare, discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import imu, imu_params
 from sarins_fmu.thermal import SENSORS, ThermalModel
 from sarins_fmu.units import DEG_TO_RAD
@@ -34,7 +34,9 @@ class IMUThermal(Fmi2Slave):
         "angle and velocity increments of [t, t + h] (coning and sculling applied, body axes at t), the six "
         "sensor temperatures at t + h and the tag increment_end_time = t + h (the start time at "
         "initialisation: no increments yet). Under Gauss-Seidel the master must pass the turntable's initial outputs "
-        "before the first step (FMI initialisation; motion_time starts at -1e9 s, no valid tag). If motion_time is "
+        "before the first step (FMI initialisation; motion_time starts at -1e9 s, no valid tag). The thermal state "
+        "starts at the ambient of the set tagged with the start time (so a Jacobi host that passes connections "
+        "only after initialisation gives the same run). If motion_time is "
         "never set (no turntable connected), the motion inputs are constants: a fixed table. So the "
         "increments are bit-identical under every scheme. All "
         "outputs are state outputs (no direct feedthrough). Held between steps: thermal state, "
@@ -157,10 +159,9 @@ class IMUThermal(Fmi2Slave):
         self._motion.prime(self.motion_time, self._read_motion())
         if self.base == "input":
             self._vehicle.prime(self.base_motion_time, self._read_vehicle())
-        self._ambient0 = float(self.ambient_temp)
         self.increment_end_time = self._start_time
         initial = ThermalModel(self._model.thermal, start=self.thermal_start)
-        initial.reset(0.0, self._ambient0)
+        initial.reset(0.0, float(self.ambient_temp))  # the initial outputs; the state starts at the first step
         for j, sensor in enumerate(SENSORS):
             setattr(self, f"temp_{sensor}", float(initial.temperature[j]))
 
@@ -181,7 +182,10 @@ class IMUThermal(Fmi2Slave):
             raise ValueError("vehicle motion inputs contain NaN or infinity")
         return values
 
-    def _start(self, step_size):
+    def _start(self, step_size, ambient0):
+        """Build the IMU at the first step; its thermal state starts at ``ambient0`` (degC), the ambient
+        of the motion set tagged with the start time (a host that passes no connected inputs during
+        initialisation delivers it with the first step)."""
         axes = self._axes if self.base == "static" else np.vstack([imu.VEHICLE_ATTITUDE_AXES, self._axes])
         try:
             self._sensor = imu.IMU(self._model, self._base, axes, output_interval=step_size,
@@ -189,7 +193,7 @@ class IMUThermal(Fmi2Slave):
                                    thermal_start=self.thermal_start, aging_days=self.aging_days)
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
-        self._sensor.reset(ambient0=self._ambient0)
+        self._sensor.reset(ambient0=ambient0)
         self._fast = compiled_steps.imu_context(self, step_size)
         self._fmi_fast_step = None if self._fast is None else self._fast.address
 
@@ -199,11 +203,6 @@ class IMUThermal(Fmi2Slave):
             return True
         try:
             self._step = check_step(self, step_size, self._step)
-            if self._sensor is None:
-                self._start(step_size)
-            if not same_time(self._sensor.time + self._start_time, current_time, step_size):
-                raise ValueError(f"doStep at t={current_time:.9g} s but the IMU stands at "
-                                 f"{self._sensor.time + self._start_time:.9g} s (steps must follow each other)")
             if self.motion_time == NO_TAG and self._motion.held_tag == NO_TAG:  # never set: fixed table
                 motion = self._read_motion()
             else:
@@ -211,6 +210,11 @@ class IMUThermal(Fmi2Slave):
             n = len(self._axes)
             angle0, rate0, accel = (motion[None, i * n:(i + 1) * n] for i in range(3))
             amb0, amb_rate = motion[3 * n], motion[3 * n + 1]
+            if self._sensor is None:
+                self._start(step_size, amb0)
+            if not same_time(self._sensor.time + self._start_time, current_time, step_size):
+                raise ValueError(f"doStep at t={current_time:.9g} s but the IMU stands at "
+                                 f"{self._sensor.time + self._start_time:.9g} s (steps must follow each other)")
             if self.base == "input":
                 vehicle = self._vehicle.select(current_time, step_size, self.base_motion_time, self._read_vehicle())
                 v_angle, v_rate, v_accel = (vehicle[None, i * 3:(i + 1) * 3] for i in range(3))

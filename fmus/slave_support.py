@@ -40,6 +40,9 @@ DISCRETE = Fmi2Variability.discrete
 CONTINUOUS = Fmi2Variability.continuous
 
 
+NO_TAG = -1.0e9  # s, start value of a time-tag input: names no communication point of a run (not connected)
+
+
 class ParameterError(ValueError):
     """A parameter value the FMU cannot run with."""
 
@@ -165,8 +168,6 @@ def guarded(method):
 
 
 TAG_TOL = 1e-6  # of a step: two time tags closer than this name the same communication point
-NO_TAG = -1.0e9  # s, start value of a time-tag input: names no communication point of a run
-
 
 def same_time(a: float, b: float, step: float) -> bool:
     """True if two time tags name the same communication point (to TAG_TOL of a step)."""
@@ -224,3 +225,43 @@ class StartOfStepInputs:
                 "(Jacobi) or at t + h (Gauss-Seidel, upstream stepped first)")
         self._keep(tag, values)
         return chosen
+
+
+class TaggedHistory:
+    """The last ``size`` sets of a time-tagged input, to pair them by tag with another input stream.
+
+    A consumer of two upstream output sets (e.g. the INS's solution and the
+    vehicle's speed) receives them with different lags under different
+    schemes (Jacobi: one step per link; Gauss-Seidel: none).  It keeps the
+    sets of one stream by their tag (the time they refer to) and takes the one
+    whose tag equals the other stream's; a tag that was never received or
+    has dropped out of the history is an error, never a silent mismatch.
+    """
+
+    def __init__(self, what: str, tag_name: str, size: int = 8):
+        self.what, self.tag_name, self.size = what, tag_name, int(size)
+        self._sets: list[tuple[float, object]] = []
+
+    def push(self, tag: float, values, step: float | None = None) -> None:
+        """Keep ``values`` tagged ``tag`` (a repeated tag, e.g. Jacobi's first step, is ignored)."""
+        tag = float(tag)
+        if not math.isfinite(tag):
+            raise ValueError(f"{self.tag_name} is not finite")
+        if self._sets:
+            last = self._sets[-1][0]
+            if same_time(tag, last, step or 1.0):
+                return
+            if tag < last:
+                raise ValueError(f"{self.tag_name} went back from {last:.9g} s to {tag:.9g} s")
+        self._sets.append((tag, values))
+        del self._sets[:-self.size]
+
+    def at(self, tag: float, step: float):
+        """The set tagged ``tag``."""
+        for held, values in reversed(self._sets):
+            if same_time(held, tag, step):
+                return values
+        kept = f"{self._sets[0][0]:.9g} .. {self._sets[-1][0]:.9g} s" if self._sets else "none"
+        raise ValueError(f"no {self.what} tagged {self.tag_name}={tag:.9g} s to pair with (kept: {kept}; the "
+                         f"{self.what} must arrive no later than, and at most {self.size - 1} steps before, the "
+                         "input it is paired with)")

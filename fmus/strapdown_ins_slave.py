@@ -11,6 +11,8 @@ from fmus import compiled_steps
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
                                 discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import ins
+from sarins_fmu.drift_model import drift_model_value
+from sarins_fmu.rotations import euler_to_mat
 from sarins_fmu.site import SITE_LAT
 
 PHASES = {"coarse": 0, "fine": 1, "navigate": 2}
@@ -23,19 +25,24 @@ class StrapdownINS(Fmi2Slave):
 
     author = "sarins-fmu"
     description = (
-        "Two-speed strapdown INS (ENU) on a known static start. Contract (standard FMI timing, explicit "
+        "Two-speed strapdown INS (ENU) on a known static start (align_time > 0), or started navigating at once "
+        "from a given attitude yaw0, pitch0, roll0 at rest (align_time = 0). Contract (standard FMI timing, explicit "
         "time-tagged latency): the inputs are the IMU's increments of the interval ending at "
         "increment_end_time with the azimuth gyro temperature there. Each doStep integrates the interval the "
         "tag names, exactly once and in order: the next interval of the grid (one major-loop update); a tag "
         "equal to the start time (no increments yet, Jacobi's first step) waits; a repeated or skipped interval "
         "is an error (fmi2Error logged, step discarded). Under Gauss-Seidel (IMU stepped first) the solution "
         "after doStep(t, h) is at t + h; under Jacobi it lags one step: compare at the same nav_time, the tag of "
-        "every output (time since navigation started, negative while aligning). Phases: coarse alignment "
+        "every output (time since navigation started, negative while aligning), or at the same solution_time "
+        "(the simulation time the outputs refer to: the end of the last interval integrated, the start time "
+        "before the first). Phases: coarse alignment "
         "(coarse_time), Kalman fine alignment with a zero-velocity measurement until align_time, then free "
         "navigation from the known start with the alignment's horizontal drift and accelerometer-bias "
-        "estimates compensated. The azimuth drift compensation axial_drift_correction (rad/s) is subtracted "
-        "from the z gyro in every navigation interval starting at nav time >= axial_drift_apply_from (the "
-        "previous value before); a new compensation that arrives after its apply_from was passed is an error. "
+        "estimates compensated. The azimuth drift compensation (rad/s) c + (a T + b) T, c = "
+        "axial_drift_correction, b = axial_drift_correction_b, a = axial_drift_correction_a (a temperature "
+        "model; a = b = 0: a constant), T = temp_gyro_z of the interval, is subtracted from the z gyro in every "
+        "navigation interval starting at nav time >= axial_drift_apply_from (the previous set before); a new "
+        "set that arrives after its apply_from was passed is an error. "
         "The step must stay constant. All outputs are state outputs (no direct feedthrough). Held between "
         "steps: attitude, velocity, position, filter state, estimates, the compensation in force.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
@@ -83,6 +90,14 @@ class StrapdownINS(Fmi2Slave):
                                  ("temp_azimuth_gyro", "degC", "azimuth gyro temperature at nav_time")):
             declare(self, "real", name, OUTPUT, f"{text} [{unit}]", 0.0)
         declare(self, "integer", "phase", OUTPUT, "0 coarse alignment, 1 fine alignment, 2 navigation [1]", 0)
+        for name, text in (("yaw0", "yaw, CCW from north"), ("pitch0", "pitch"), ("roll0", "roll")):
+            declare(self, "real", name, PARAMETER, f"align_time = 0: initial {text} [rad; deg]", 0.0)
+        declare(self, "real", "axial_drift_correction_b", INPUT,
+                "linear temperature coefficient b of the azimuth drift correction [rad/s/degC]", 0.0)
+        declare(self, "real", "axial_drift_correction_a", INPUT,
+                "quadratic temperature coefficient a of the azimuth drift correction [rad/s/degC2]", 0.0)
+        declare(self, "real", "solution_time", OUTPUT,
+                "time tag: simulation time the navigation outputs refer to [s]", 0.0)
         self._ins = None
         self._step = None
         self._config = None
@@ -112,16 +127,36 @@ class StrapdownINS(Fmi2Slave):
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
 
+    def enter_initialization_mode(self):
+        self._publish_start()  # the initial outputs, for a host that reads them in Initialization Mode
+
     @guarded
     def exit_initialization_mode(self):
-        if self.align_time <= 0:
-            raise ParameterError("align_time must be positive (the FMU aligns on its static start)")
+        check_finite(self, ["yaw0", "pitch0", "roll0"])
         self._make_config(1.0)  # validate parameters before the first step
-        self.lat, self.lon, self.height = self.lat0, self.lon0, self.height0
-        self.nav_time = -self.align_time
+        self._publish_start()
         self.temp_align_start = self.temp_gyro_z
         self.temp_azimuth_gyro = self.temp_gyro_z
-        self._compensation = Compensation(float(self.axial_drift_correction), float(self.axial_drift_apply_from))
+        self._compensation = Compensation(self._correction_inputs(), float(self.axial_drift_apply_from))
+
+    def _publish_start(self):
+        self.lat, self.lon, self.height = self.lat0, self.lon0, self.height0
+        self.nav_time = -self.align_time
+        self.solution_time = self._start_time
+        if self.align_time == 0:  # navigating from the given attitude
+            self.yaw, self.pitch, self.roll = self.yaw0, self.pitch0, self.roll0
+            self.phase = PHASES["navigate"]
+
+    def _correction_inputs(self) -> tuple:
+        """The azimuth drift correction set (c, b, a) of the inputs, rad/s per degC^n."""
+        return (float(self.axial_drift_correction), float(self.axial_drift_correction_b),
+                float(self.axial_drift_correction_a))
+
+    def _new_ins(self, step):
+        self._config = self._make_config(step)
+        if self.align_time > 0:
+            return ins.StrapdownINS(self._config)
+        return ins.StrapdownINS(self._config, initial_attitude=euler_to_mat(self.yaw0, self.pitch0, self.roll0))
 
     @guarded
     def do_step(self, current_time, step_size):
@@ -130,8 +165,7 @@ class StrapdownINS(Fmi2Slave):
         try:
             self._step = check_step(self, step_size, self._step)
             if self._ins is None:
-                self._config = self._make_config(step_size)
-                self._ins = ins.StrapdownINS(self._config)
+                self._ins = self._new_ins(step_size)
                 self._fast = compiled_steps.ins_context(self)
                 self._fmi_fast_step = None if self._fast is None else self._fast.address
             increments = self._fmi_buffer[self._in_slots][None, :]
@@ -146,8 +180,9 @@ class StrapdownINS(Fmi2Slave):
                 raise ValueError(f"increments tagged increment_end_time={tag:.9g} s {what}: the INS has integrated "
                                  f"up to {done:.9g} s and needs the interval ending at {done + step_size:.9g} s")
             nav_start = self._ins.steps * step_size - self._config.align_time  # nav time of the interval start
-            correction = self._compensation.value_at(nav_start, float(self.axial_drift_correction),
-                                                     float(self.axial_drift_apply_from), step_size)
+            c, b, a = self._compensation.value_at(nav_start, self._correction_inputs(),
+                                                  float(self.axial_drift_apply_from), step_size)
+            correction = drift_model_value((a, b, c), float(self.temp_gyro_z))
             if self._ins.steps == 0:
                 self.temp_align_start = float(self.temp_gyro_z)  # at the end of the first interval
             out = self._ins.step(increments[:, :3], increments[:, 3:], correction)
@@ -166,6 +201,7 @@ class StrapdownINS(Fmi2Slave):
         buffer[self._err_slots] = err
         self.phase = PHASES[state.phase]
         self.nav_time = state.time - self._config.align_time
+        self.solution_time = self._start_time + state.time
         est = self._est
         est[:2] = state.gyro_comp[:2]
         est[2:] = state.accel_comp[:2]
@@ -177,42 +213,72 @@ class StrapdownINS(Fmi2Slave):
 
 
 class Compensation:
-    """The azimuth drift compensation in force and the pending ones (value rad/s, apply_from nav time s).
+    """The azimuth drift compensation in force and the pending ones (value: a tuple of
+    coefficients, rad/s per degC^n; apply_from: nav time, s).
 
     An input pair that differs from the last one seen is queued; it takes
     over for the intervals that start at or after its apply_from (a sender
     whose value changes every step, tagged with increasing apply_from,
     queues one pair per step; a pair replaces the queued ones that would
-    start at or after its own apply_from).  A pair whose apply_from lies
+    start at or after its own apply_from).  A pair whose value equals the one
+    it would follow (the last queued, else the one in force) is not queued:
+    it would change nothing (a sender that repeats its value with a later
+    apply_from every step queues nothing).  A pair whose apply_from lies
     before the interval about to be integrated arrived too late: an error,
     never a silent shift of the compensation.
+
+    ``state`` (for the compiled step, :mod:`fmus.compiled_steps`) holds the
+    seen pair (value..., apply_from), the value in force, and the apply_from
+    of the first and of the last queued pair (inf and -inf: none queued).  The
+    seen pair lives there only: a compiled step records a repeated value with
+    a later apply_from by writing it; every other change it leaves to
+    :meth:`value_at`.  The value of the last queued pair (else the one in
+    force) always equals the seen value.
     """
 
-    def __init__(self, value: float, apply_from: float):
-        self.current = 0.0
+    def __init__(self, value: tuple, apply_from: float):
+        n = len(value)
+        self.state = np.zeros(2 * n + 3)
+        self._n = n
+        self.current = tuple(0.0 for _ in value)
         self.pending = collections.deque([(value, apply_from)])
         self.seen = (value, apply_from)
         self.started = False
-        self.state = np.zeros(4)  # seen value, seen apply_from, current, next apply_from (for a compiled step)
         self._publish()
 
-    def _publish(self) -> None:
-        self.state[:] = (*self.seen, self.current, self.pending[0][1] if self.pending else math.inf)
+    @property
+    def seen(self) -> tuple:
+        """The last input pair (value, apply_from)."""
+        n = self._n
+        return tuple(float(x) for x in self.state[:n]), float(self.state[n])
 
-    def value_at(self, nav_start: float, value: float, apply_from: float, step: float) -> float:
+    @seen.setter
+    def seen(self, pair) -> None:
+        n = self._n
+        self.state[:n] = pair[0]
+        self.state[n] = pair[1]
+
+    def _publish(self) -> None:
+        n, pending = self._n, self.pending
+        self.state[n + 1:2 * n + 1] = self.current
+        self.state[2 * n + 1] = pending[0][1] if pending else math.inf
+        self.state[2 * n + 2] = pending[-1][1] if pending else -math.inf
+
+    def value_at(self, nav_start: float, value: tuple, apply_from: float, step: float) -> tuple:
         """Compensation for the interval starting at nav time ``nav_start`` given the current inputs."""
-        if not (math.isfinite(value) and math.isfinite(apply_from)):
-            raise ValueError("axial_drift_correction or axial_drift_apply_from is not finite")
+        if not (all(math.isfinite(v) for v in value) and math.isfinite(apply_from)):
+            raise ValueError("an axial_drift_correction input or axial_drift_apply_from is not finite")
         tol = 1e-6 * step
         if (value, apply_from) != self.seen:
             if self.started and apply_from < nav_start - tol:
-                raise ValueError(f"axial drift compensation {value:.6g} rad/s to apply from nav time "
+                raise ValueError(f"axial drift compensation {value[0]:.6g} rad/s to apply from nav time "
                                  f"{apply_from:.9g} s arrived when the INS integrates the interval starting at "
                                  f"{nav_start:.9g} s (make the sender's latency longer)")
             while self.pending and self.pending[-1][1] >= apply_from - tol:
                 self.pending.pop()
             self.seen = (value, apply_from)
-            self.pending.append(self.seen)
+            if value != (self.pending[-1][0] if self.pending else self.current):
+                self.pending.append((value, apply_from))
         self.started = True
         while self.pending and nav_start >= self.pending[0][1] - tol:
             self.current = self.pending.popleft()[0]

@@ -92,8 +92,17 @@ class VehicleMotion(Fmi2Slave):
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._start_time = float(start_time)
 
+    def enter_initialization_mode(self):
+        try:  # outputs during initialisation (a host may read them then); a bad parameter is reported at exit
+            self._build()
+        except ParameterError:
+            self._trajectory = None
+
     @guarded
     def exit_initialization_mode(self):
+        self._build()
+
+    def _build(self):
         check_finite(self, ["lat0", "lon0", "heading0", "lead_time", "grid", "sway_pitch", "sway_roll", "sway_period",
                             "vibration", "reference_speed"], positive=["grid", "sway_period", "reference_speed"],
                      non_negative=["lead_time", "sway_pitch", "sway_roll", "vibration"])
@@ -112,7 +121,7 @@ class VehicleMotion(Fmi2Slave):
         k = int(round((time - self._start_time) / tr.step))
         if not same_time(k * tr.step + self._start_time, time, tr.step):
             raise ValueError(f"time {time:.9g} s is not on the vehicle's grid of {tr.step} s")
-        if k > tr.n_steps - 1 and tr.speed[-1] != 0.0:
+        if k > tr.n_steps and tr.speed[-1] != 0.0:  # (the state at the drive's end is published, not a step after)
             raise ValueError(f"time {time:.9g} s is beyond the drive and the legs do not end with a stop")
         k_motion = min(k, tr.n_steps - 1)  # after the last leg: parked (the last step is at rest)
         angle, rate, accel = (x[0] for x in tr.schedule.state(min(k, tr.n_steps) * tr.step))

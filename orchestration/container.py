@@ -8,11 +8,23 @@ system's connections.  Its variables are ``time`` (independent, value
 reference 0, which the container binary expects) and, named
 ``component.variable``: every
 output of every component, every start value of the system (as a parameter
-whose start is applied by the container), and every unconnected input.
+whose start the container applies when it is instantiated, String values
+included: the binary sets them with ``fmi2SetString``), and every
+unconnected input.
 
-The container's ``doStep`` first copies every connection (output to input)
-and then steps all components: a **Jacobi** scheme, to be compared with
-``Master(..., scheme='jacobi')``.
+Coupling (FMPy's container binary): at ``fmi2ExitInitializationMode`` it
+copies every connection while all components are still in Initialization
+Mode, then lets them exit; each ``doStep`` steps all components and then
+copies every connection.  That is a **Jacobi** scheme (compare with
+``Master(..., scheme='jacobi')``) whose first step uses the outputs the
+components had in Initialization Mode: a component whose outputs feed
+another must compute them there (in ``fmi2EnterInitializationMode``), not
+only when it leaves it.
+
+Start values given in another unit (SSP ``ssv:Real unit``) are converted
+to the variable's unit here, like the master does.  Refused (with the
+connection named): connections that need a unit conversion or a linear
+transformation (the binary copies values as they are).
 """
 from __future__ import annotations
 
@@ -26,7 +38,7 @@ from .errors import ImporterUnavailableError, SystemDescriptionError
 from .master import coerce_value
 from .ssp_reader import parse_literal, read_system
 from .system import System
-from .unit_links import refuse_conversions
+from .unit_links import refuse_conversions, start_in_variable_unit
 
 __all__ = ["build_container_fmu", "CONTAINER_FMI_VERSION"]
 
@@ -160,12 +172,16 @@ def _exposed_variables(system: System, components, variables, checked) -> dict:
         for var in variables[i].values():
             exposed = var.causality == "output" or var.name in component.parameters or \
                 (var.causality == "input" and (i, var.name) not in fed)
-            if not exposed or value_type(var) == "String":
+            if not exposed:
                 continue
             start = None
             if var.name in component.parameters:
                 start = coerce_value(var, component.parameters[var.name],
                                      component=component.name, file=None)
+                if var.name in component.parameter_units:  # the container applies starts as they are
+                    start = start_in_variable_unit(start, component.parameter_units[var.name], var,
+                                                   components[i].modelDescription, system.units,
+                                                   file=None, component=component.name)
             elif var.causality == "input" and var.start is not None:
                 start = parse_literal(value_type(var), var.start, component=component.name,
                                       variable=var.name)

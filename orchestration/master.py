@@ -55,8 +55,7 @@ from .recorder import Recorder, ResultArray, select_variables
 from .schedule import StepSpec, make_schedule
 from .ssp_reader import ANNOTATION_TYPE, read_system
 from .system import StartValue, System
-from .unit_links import connection_maps
-from .units import Unit, conversion, units_of_description, variable_unit
+from .unit_links import connection_maps, start_in_variable_unit
 
 __all__ = ["Master", "simulate_system", "SCHEMES", "StepCallback"]
 
@@ -196,20 +195,8 @@ class Master:
 
     def _convert_start(self, i: int, var, value: float, unit_name: str) -> float:
         """Convert a start value given in ``unit_name`` to the variable's unit."""
-        target_name = variable_unit(var)
-        if target_name is None or var.type != "Real":
-            return value
-        units = self.system.units
-        source = units.get(unit_name, Unit(unit_name))
-        target = units_of_description(self.units[i].description).get(
-            target_name, units.get(target_name, Unit(target_name)))
-        mapping = conversion(source, target)
-        if mapping is None:
-            raise StartValueError(f"start value in unit '{unit_name}' ({source.describe()}) "
-                                  f"cannot be converted to the variable's unit '{target_name}' "
-                                  f"({target.describe()})", file=self.system._file,
-                                  component=self.names[i], variable=var.name)
-        return mapping[0] * value + mapping[1] if mapping != (1.0, 0.0) else value
+        return start_in_variable_unit(value, unit_name, var, self.units[i].description, self.system.units,
+                                      file=self.system._file, component=self.names[i])
 
     # public helpers -----------------------------------------------------------
     def _resolve(self, qualified: str):

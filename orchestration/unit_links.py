@@ -13,11 +13,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from .errors import IncompatibleConnectionError
+from .errors import IncompatibleConnectionError, StartValueError
 from .system import Hop
 from .units import IDENTITY, Unit, compose, conversion, units_of_description, variable_unit
 
-__all__ = ["connection_maps", "refuse_conversions"]
+__all__ = ["connection_maps", "refuse_conversions", "start_in_variable_unit"]
 
 _PLAIN = (Hop(),)
 
@@ -118,3 +118,24 @@ def refuse_conversions(system, checked, descriptions: Sequence, files: Sequence[
                 f"{mapping[1]!r}: units or a linear transformation), which {tool} does not "
                 "do; run it with the master", file=file, component=c.end_component,
                 variable=c.end_variable)
+
+
+def start_in_variable_unit(value: float, unit_name: str, variable, description, system_units: dict, *,
+                           file: str | None, component: str) -> float:
+    """A Real start value given in ``unit_name`` (SSP ``ssv:Real unit``), in the variable's own unit.
+
+    ``description`` is the FMU's model description (its ``UnitDefinitions``);
+    ``system_units`` the system's.  Raises StartValueError naming the file,
+    component and variable if the units are incompatible.
+    """
+    target_name = variable_unit(variable)
+    if target_name is None or variable.type != "Real":
+        return value
+    source = system_units.get(unit_name, Unit(unit_name))
+    target = units_of_description(description).get(target_name, system_units.get(target_name, Unit(target_name)))
+    mapping = conversion(source, target)
+    if mapping is None:
+        raise StartValueError(f"start value in unit '{unit_name}' ({source.describe()}) cannot be converted to "
+                              f"the variable's unit '{target_name}' ({target.describe()})", file=file,
+                              component=component, variable=variable.name)
+    return mapping[0] * value + mapping[1] if mapping != (1.0, 0.0) else value

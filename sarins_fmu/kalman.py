@@ -187,6 +187,11 @@ def stop_filter_steps(x, p, velocity_en, attitude, lat, dt, q_diag, r_var):
     return out
 
 
+def _running_sum(total: float, values: np.ndarray) -> float:
+    """``total + values[0] + values[1] + ...``, added in that order."""
+    return float(np.cumsum(np.concatenate(([total], values)))[-1])
+
+
 class StopKalmanFilter:
     """The stop filter of seed 002 (eqs 4-6) on the outputs of a free INS.
 
@@ -269,10 +274,12 @@ class StopKalmanFilter:
         if room > 0:  # bounded: a parked vehicle's stop may last months
             self.history.append(out[:room].copy())
             self._history_rows += min(room, n)
-        self.elapsed += n * self.dt
-        self._correction_sum += float(np.sum(corr))
-        self._temperature_sum += float(np.sum(temp))
+        # running sums added row by row (np.cumsum is sequential): a stop fed in blocks or one row at a
+        # time (the FMU) gives the same sums bit for bit
+        self._correction_sum = _running_sum(self._correction_sum, corr)
+        self._temperature_sum = _running_sum(self._temperature_sum, temp)
         self._n += n
+        self.elapsed = self._n * self.dt
         return out
 
     @property

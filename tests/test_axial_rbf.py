@@ -174,9 +174,14 @@ def test_quick_campaign_identifies_and_compensates(tmp_path):
     assert check["max_diff_m"] <= 1e-9 * check["max_error_m"]
     report = write_report(summary, tmp_path / "report")
     text = report.read_text()
-    for heading in ("Table 2", "Table 3", "Table 4", "Table 5", "closed_form", "kalman"):
+    for heading in ("Table 2", "Table 3", "Table 4", "Table 5", "closed_form", "kalman", "Multi-temperature",
+                    "paper's 6 rows", "Fig. 1: the sign of the longitude error"):
         assert heading in text
     assert len(list((tmp_path / "report").glob("fig*.png"))) == 4
+    cold = summary["comparison"]["cold"]
+    assert {"mt_hot", "mt_hot_mt", "mt_cold_mt", "cold6_1", "cold6_2"} <= set(cold)
+    for t, mt in zip(summary["test"]["cold"], cold["mt_hot_mt"]):  # the same held-out runs, with the table
+        assert mt["error_dph"] == pytest.approx(t["mt_total_hot_mt_dph"] - t["drift_dph"])
 
 
 def test_killed_campaign_resumes_without_redoing_finished_experiments(tmp_path):
@@ -205,12 +210,14 @@ def test_killed_campaign_resumes_without_redoing_finished_experiments(tmp_path):
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
     before = {p.name: p.stat().st_mtime_ns for p in runs.glob("*.npz")}
-    assert 2 <= len(before) < 7
+    # calibration + Fig. 1 check, 5 training runs raw and 5 with the multi-temperature table, 2 held-out
+    assert 2 <= len(before) < 14
     summary = execute(out=out, workers=2, progress=False, **kwargs)
     after = {p.name: p.stat().st_mtime_ns for p in runs.glob("*.npz")}
     assert all(after[name] == stamp for name, stamp in before.items())  # not redone
-    assert len(after) == 7 and len(summary["test"]["hot"]) == 1
-    name = sorted(before)[0]
+    assert len(after) == 14 and len(summary["test"]["hot"]) == 1
+    raw = [n for n in sorted(before) if n.endswith("-inprocess.npz")]  # a raw training run, kept from before
+    name = (raw or [n for n in sorted(after) if n.endswith("-inprocess.npz")])[0]
     stored = load_result(runs / name)
     exp = {k: stored[k] for k in s0.Experiment.__dataclass_fields__}
     fresh = train_task(exp)

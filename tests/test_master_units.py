@@ -161,10 +161,23 @@ def test_start_value_in_another_unit_is_converted(folder):
     with pytest.warns(UserWarning, match="feed.u"):
         result = simulate_system(folder, 0.25, 0.25, record=["feed.angle"])
     assert_allclose(result["feed.angle"], math.pi, rtol=1e-15)
+    packed = _container_run(folder, "feed.angle")  # the container applies the converted start too
+    assert_allclose(packed["feed.angle"], math.pi, rtol=1e-15)
     (folder / "SystemStructure.ssd").write_text(ssd.replace('unit="deg"', 'unit="degC"'))
     with pytest.raises(StartValueError, match=r"'degC' \(K\) cannot be converted to the "
                                               r"variable's unit 'rad'"):
         Master(folder)
+    with pytest.raises(StartValueError, match="cannot be converted"):
+        _container_run(folder, "feed.angle")
+
+
+def _container_run(folder, name):
+    from fmpy import simulate_fmu
+
+    from orchestration.container import build_container_fmu
+
+    fmu = build_container_fmu(read_system(folder / "SystemStructure.ssd"), folder / "packed.fmu", step_size=0.25)
+    return simulate_fmu(str(fmu), stop_time=0.25, output_interval=0.25, output=[name])
 
 
 def feed_copy(source, target, step: str):

@@ -113,3 +113,68 @@ def test_no_python_found_gives_null_with_a_reason(host, unzipped, tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "STATUS fmi2Instantiate NULL" in proc.stdout
     assert "no CPython 3.99 runtime found" in proc.stdout and "SARINS_FMU_PYTHON" in proc.stdout
+
+
+def _unzip(fmu: Path, out: Path):
+    folder = out / fmu.stem
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+    return folder, read_model_description(str(fmu))
+
+
+def _final_values(proc) -> dict[int, float]:
+    return {int(vr): float(v) for _, vr, v in (line.split() for line in proc.stdout.splitlines()
+                                              if line.startswith("VALUE "))}
+
+
+def test_the_standard_system_as_one_container_fmu_runs_in_a_c_host(host, fmu_dir, tmp_path):
+    """FMPy's container binary loads our three FMUs in a process with no Python
+    in it; after 1000 steps its INS output equals the master's Jacobi run."""
+    from orchestration import simulate_system
+    from orchestration.container import build_container_fmu
+    from sarins.systems import standard_static
+
+    for name in ("Turntable", "IMUThermal", "StrapdownINS"):
+        shutil.copy2(fmu_dir / f"{name}.fmu", tmp_path / f"{name}.fmu")
+    system = standard_static(tmp_path, hours=0.5, turntable=dict(align_time=600.0),
+                             imu=dict(internal_rate=10.0), ins=dict(align_time=600.0))
+    fmu = build_container_fmu(system, tmp_path / "System.fmu", step_size=1.0)
+    folder, md = _unzip(fmu, tmp_path / "unzipped")
+    outputs = ["ins.lat_error", "ins.position_error", "ins.nav_time"]
+    vrs = {v.name: v.valueReference for v in md.modelVariables}
+    proc = run_host(host, folder, md, 1000, *(f"final-real={vrs[n]}" for n in outputs))
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "STATUS" not in proc.stdout, proc.stdout
+    assert proc.stdout.rstrip().endswith("DONE 1000"), proc.stdout
+    values = _final_values(proc)
+    # the host ran the plain-Python kernels, this process may run numba's: equal to rounding
+    ours = simulate_system(system, 1000.0, 1.0, scheme="jacobi", record=outputs, progress=False)
+    assert ours["ins.nav_time"][-1] == values[vrs["ins.nav_time"]] > 0
+    for name in outputs:
+        expected = ours[name][-1]
+        assert abs(values[vrs[name]] - expected) <= 1e-9 * max(abs(expected), 1e-30), name
+
+
+def test_the_imu_log_fmu_plays_a_log_in_a_c_host(host, tmp_path):
+    """The HIL path's player (IMULog) in a native host, reading a simulated log."""
+    import numpy as np
+
+    from fmus.build import build_fmus
+    from sarins_fmu.experiments.static_run import run_static
+    from sarins_fmu.imu_log import write_log
+
+    chunks = []
+    run_static(imu="mems", align_hours=900 / 3600, nav_hours=200 / 3600, seed=3,
+               on_increments=lambda *c: chunks.append(c))
+    cols = [np.concatenate([c[j] for c in chunks]) for j in range(4)]
+    log = write_log(tmp_path / "run.npz", *cols[:3], temps=cols[3], lat_deg=28.222)
+    (fmu,) = build_fmus(tmp_path / "fmus", ["IMULog"])
+    folder, md = _unzip(fmu, tmp_path / "unzipped")
+    vrs = {v.name: v.valueReference for v in md.modelVariables}
+    proc = run_host(host, folder, md, 1000, *set_ops(md, {"log_file": str(log)}),
+                    f"final-real={vrs['dtheta_x']}", f"final-real={vrs['increment_end_time']}")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "STATUS" not in proc.stdout, proc.stdout
+    values = _final_values(proc)
+    assert values[vrs["increment_end_time"]] == 1000.0
+    assert values[vrs["dtheta_x"]] == cols[1][999, 0]

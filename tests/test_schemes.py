@@ -18,7 +18,7 @@ import pytest
 import sarins_fmu.identify.axial  # noqa: F401 - the FMUs' shared library copy must outlive each run's unpacking
 from fmu_fixtures.thirdparty import ensure_libtbb, has_module
 from fmus.build import build_fmus, fix_fmu_description
-from sarins.systems import standard_static, standard_static_identified, vehicle_rins
+from sarins.systems import standard_static, standard_static_identified, vehicle_rins, vehicle_rins_online
 from orchestration import simulate_system, write_ssp
 
 SHORT_TT = dict(align_time=600.0)
@@ -29,7 +29,7 @@ NAV = ["ins.lat_error", "ins.lon_error", "ins.position_error", "ins.yaw", "ins.v
 @pytest.fixture(scope="module")
 def fmu_dir(tmp_path_factory):
     out = tmp_path_factory.mktemp("schemes")
-    build_fmus(out, ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "VehicleMotion"])
+    build_fmus(out, ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "VehicleMotion", "DriftModelUpdater"])
     return out
 
 
@@ -48,7 +48,18 @@ def _vehicle(fmu_dir, hours):
                                      lead_time=300.0))
 
 
-SYSTEMS = [_standard, _identified, _vehicle]
+def _vehicle_online(fmu_dir, hours):
+    """The online system with a 5-min stop that counts (time_threshold 240 s), so the model is updated
+    within the run and the INS applies it."""
+    return vehicle_rins_online(fmu_dir, hours=hours, imu=dict(seed=4), ins=dict(coarse_time=120.0),
+                               vehicle=dict(legs="drive 120 10; turn 90; drive 60 12; stop 300; drive 60 8; stop 300",
+                                            lead_time=300.0),
+                               updater=dict(time_threshold=240.0))
+
+
+SYSTEMS = [_standard, _identified, _vehicle, _vehicle_online]
+IDS = ["standard", "identified", "vehicle", "vehicle_online"]
+ONLINE = NAV + ["updater.drift_c", "updater.n_updates"]
 
 
 def by_nav_time(result, names=NAV, prefix=""):
@@ -73,7 +84,7 @@ def _master(system, stop, scheme, names=NAV):
         return simulate_system(system, stop, 1.0, scheme=scheme, record=names + ["ins.nav_time"], progress=False)
 
 
-@pytest.mark.parametrize("make", SYSTEMS, ids=["standard", "identified", "vehicle"])
+@pytest.mark.parametrize("make", SYSTEMS, ids=IDS)
 def test_gauss_seidel_and_jacobi_give_the_same_solution_at_the_same_nav_time(fmu_dir, make):
     stop = 1200.0
     system = make(fmu_dir, stop / 3600)
@@ -94,6 +105,23 @@ def test_identified_drift_is_applied_from_its_apply_from_under_both_schemes(fmu_
         assert run["identifier.apply_from"][-1] == 310.0  # trigger 300 s + the default latency 10 s
         assert run["identifier.axial_drift"][-1] != 0.0
     assert runs[0]["identifier.axial_drift"][-1] == runs[1]["identifier.axial_drift"][-1]
+
+
+def test_online_update_is_applied_at_the_same_nav_time_under_both_schemes(fmu_dir):
+    """The updater pairs each INS row with the vehicle speed of its time, so the stop, the update
+    and the model the INS applies are the same under Gauss-Seidel and Jacobi."""
+    stop = 1200.0
+    system = _vehicle_online(fmu_dir, stop / 3600)
+    names = NAV + ["updater.drift_c", "updater.n_updates", "updater.n_resets", "updater.row_time",
+                   "updater.apply_from"]
+    gs, jac = (_master(system, stop, scheme, names) for scheme in ("gauss-seidel", "jacobi"))
+    for run in (gs, jac):
+        assert run["updater.n_updates"][-1] == 1
+        assert run["updater.drift_c"][-1] != run["updater.drift_c"][0]
+    assert gs["updater.drift_c"][-1] == jac["updater.drift_c"][-1]
+    # Jacobi's updater reads the INS row one step later and the vehicle's speed two steps earlier
+    assert gs["updater.row_time"][-1] == stop and jac["updater.row_time"][-1] == stop - 2.0
+    assert np.array_equal(gs["updater.apply_from"][10:-2], jac["updater.apply_from"][12:])
 
 
 def test_ecos_gives_the_same_solution_at_the_same_nav_time(fmu_dir, tmp_path):
@@ -132,11 +160,11 @@ def test_container_fmu_gives_the_same_solution_at_the_same_nav_time(fmu_dir, tmp
     from orchestration.container import build_container_fmu
 
     stop = 900.0
-    for name in ("Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier"):
+    for name in ("Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "VehicleMotion", "DriftModelUpdater"):
         shutil.copy2(fmu_dir / f"{name}.fmu", tmp_path / f"{name}.fmu")
-    # not the vehicle system: the container (orchestration/container.py over FMPy's) applies no String start
-    # values, so IMUThermal's base = "input" and VehicleMotion's legs would be lost
-    for make in (_standard, _identified):
+    # the vehicle systems' String start values (IMUThermal base = "input", VehicleMotion legs) are applied by
+    # the container binary (fmi2SetString at instantiation)
+    for make in SYSTEMS:
         system = make(tmp_path, stop / 3600)
         fmu = build_container_fmu(system, tmp_path / f"{system.name}.fmu", step_size=1.0)
         fix_fmu_description(fmu, [(c.name, c.source) for c in system.components])

@@ -10,8 +10,7 @@ from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
 
 from fmu_fixtures.thirdparty import ensure_libtbb, has_module
-from sarins.systems import build_system_fmu
-from sarins.systems import standard_static
+from sarins.systems import SYSTEMS, build_system_fmu, standard_static
 from orchestration import simulate_system, write_ssp
 from sarins_fmu.experiments import run_static
 
@@ -108,10 +107,29 @@ def test_imu_initialises_from_the_tables_start_temperature(fmu_dir, scheme):
     assert runs[35.0]["imu.temp_gyro_z"][0] - runs[20.0]["imu.temp_gyro_z"][0] == pytest.approx(15.0, abs=1e-6)
 
 
-@pytest.mark.parametrize("name", ["standard_static", "standard_static_identified", "vehicle_rins"])
+@pytest.mark.parametrize("name", list(SYSTEMS))
 def test_shipped_systems_run_without_any_warning(fmu_dir, name, recwarn):
-    """No input left unconnected by accident, no algebraic loop: the master has nothing to warn about."""
-    from sarins.systems import SYSTEMS
-
-    simulate_system(SYSTEMS[name](fmu_dir, hours=0.01), 5.0, 1.0, progress=False)
+    """No input left unconnected by accident, no algebraic loop: the master has nothing to warn about
+    (every shipped system, under both schemes)."""
+    for scheme in ("gauss-seidel", "jacobi"):
+        simulate_system(SYSTEMS[name](fmu_dir, hours=0.01), 5.0, 1.0, scheme=scheme, progress=False)
     assert [str(w.message) for w in recwarn] == []
+
+
+@pytest.mark.parametrize("name", list(SYSTEMS))
+def test_shipped_ssd_is_the_system_function(name):
+    """sarins/systems/<name>/SystemStructure.ssd is what ``SYSTEMS[name]`` writes (rewrite it with
+    ``sarins.systems.write_shipped_ssds()`` after changing a system)."""
+    from pathlib import Path
+
+    from orchestration.ssp_reader import read_system
+    from sarins.systems import SHIPPED
+
+    shipped = read_system(SHIPPED / name / "SystemStructure.ssd")
+    made = SYSTEMS[name](Path("resources"))
+    assert [(c.name, Path(c.source).name, c.parameters) for c in shipped.components] == \
+        [(c.name, Path(c.source).name, c.parameters) for c in made.components]
+    key = lambda c: (c.start_component, c.start_variable, c.end_component, c.end_variable)  # noqa: E731
+    assert sorted(map(key, shipped.connections)) == sorted(map(key, made.connections))
+    assert (shipped.start_time, shipped.stop_time, shipped.step_size) == (made.start_time, made.stop_time,
+                                                                          made.step_size)

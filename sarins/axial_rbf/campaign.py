@@ -1,12 +1,18 @@
 """``sarins campaign axial-rbf``: seed 000's hot/cold identification campaign.
 
-Phase 1 runs the training experiments (4 h alignment + 12 h navigation),
-phase 2 trains the hot model (latitude error) and the cold model (latitude
-error, temperature, temperature change), phase 3 runs the held-out
-experiments (uncompensated, compensated re-runs, the paper's true drift and
-the live align -> 12 h -> identify -> compensate -> 72 h run), then the
-report (Markdown + PNG) is written to ``<out>/report``.  Every experiment's
-result is stored as it finishes (``<out>/runs``); rerunning skips them.
+Phase 0 calibrates the unit's axial drift at multiple temperature points
+(seed 000 sec. 2.3) and checks Fig. 1's errors against the closed forms;
+phase 1 runs the training experiments (4 h alignment + 12 h navigation),
+raw and with the multi-temperature table compensating the z gyro; phase 2
+trains the hot model (latitude error), the cold model (latitude error,
+temperature, temperature change), both again on the compensated rows, and
+cold models on the paper's 6 rows; phase 3 runs the held-out experiments
+(uncompensated, compensated re-runs, the paper's true drift, cold starts
+with the table, and the live align -> 12 h -> identify -> compensate ->
+72 h run).  ``--sweep`` adds the noise-scale x latitude sweep
+(:mod:`sarins.axial_rbf.sweep`).  The report (Markdown + PNG) is written
+to ``<out>/report``.  Every experiment's result is stored as it finishes
+(``<out>/runs``); rerunning skips them.
 """
 
 from __future__ import annotations
@@ -20,9 +26,15 @@ HELP = "seed 000: RBF axial-drift identification, hot and cold start (Tables 2-5
 
 PROFILES = {  # (hot train, hot test, cold train, cold test)
     "quick": (8, 3, 16, 2),
-    "paper": (16, 6, 24, 4),
+    "paper": (16, 6, 24, 8),
 }
 DEFAULT_ENGINE = {"quick": "inprocess", "paper": "cosim"}
+# the multi-temperature calibration (seed 000 sec. 2.3, ref. [15]): z-gyro temperature points and holds
+# (0..70 degC covers the gyro temperatures of every hot and cold experiment)
+MULTITEMP = {"points_c": [float(t) for t in range(0, 71, 10)], "settle_hours": 20.0, "average_hours": 4.0,
+             "ramp_hours": 0.5}
+PAPER_COLD_ROWS = 6  # the paper's Table 4 trains the cold network on 6 rows
+SWEEPS = ("none", "quick", "full")
 
 
 def add_arguments(parser) -> None:
@@ -39,6 +51,11 @@ def add_arguments(parser) -> None:
                              "(drift minimising the 72 h position error of a re-run)")
     parser.add_argument("--no-live", action="store_true",
                         help="skip the live identified 88 h run of each held-out experiment")
+    parser.add_argument("--sweep", choices=SWEEPS, default="none",
+                        help="also sweep the hot-start identification error over gyro noise scale and latitude "
+                             "(quick: 2 x 2 points, 3 runs each; full: 6 x 6 points, 20 runs each; default none)")
+    parser.add_argument("--sweep-only", action="store_true",
+                        help="run only the sweep (needs --sweep quick or full)")
 
 
 def _digest(path: Path) -> str:
@@ -47,25 +64,55 @@ def _digest(path: Path) -> str:
 
 def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0, out, workers=None,
             scheduler=None, progress: bool = True, truth: str = "simulated", live: bool | None = None,
-            sizes=None, nav_hours: float | None = None) -> dict:
+            sizes=None, nav_hours: float | None = None, sweep: str = "none", sweep_only: bool = False,
+            multitemp: dict | None = None) -> dict:
     """Run the campaign; returns the summary dict the report is written from.
 
     sizes : (hot train, hot test, cold train, cold test), default the profile's;
     nav_hours : evaluation window of the held-out runs (default 72 h; shorter
-    only to test the campaign machinery quickly)."""
-    from sarins.campaign import Task, atomic_output, build_artifacts, code_hash, run_campaign
+    only to test the campaign machinery quickly); sweep : grid of
+    :mod:`sarins.axial_rbf.sweep` ('none', 'quick', 'full'), ``sweep_only``
+    runs nothing else; multitemp : calibration settings (default
+    :data:`MULTITEMP`)."""
+    from sarins.campaign import run_campaign
 
-    from sarins_fmu.experiments import axial_rbf as s0
-    from . import runs
+    from . import sweep as sweep_mod
 
     if profile not in PROFILES:
         raise ValueError(f"profile must be one of {list(PROFILES)}")
+    if sweep not in SWEEPS:
+        raise ValueError(f"sweep must be one of {SWEEPS}, got {sweep!r}")
+    if sweep_only and sweep == "none":
+        raise ValueError("--sweep-only needs --sweep quick or --sweep full")
+    t_start = time.perf_counter()
+    out = Path(out)
+    run_dir = out / "runs"
+    common = dict(workers=workers, scheduler=scheduler, progress=progress)
+    swept = None
+    if sweep != "none":
+        grid_tasks = sweep_mod.tasks(sweep, seed)
+        swept = sweep_mod.summarise(sweep, seed, run_campaign(grid_tasks, run_dir, description="axial-rbf sweep",
+                                                              **common))
+    if sweep_only:
+        return {"profile": profile, "seed": seed, "sweep": swept, "sweep_only": True,
+                "wall_seconds": time.perf_counter() - t_start, "workers": workers, "scheduler": scheduler}
+    summary = _main(profile=profile, engine=engine, seed=seed, out=out, common=common, truth=truth, live=live,
+                    sizes=sizes, nav_hours=nav_hours, multitemp=dict(MULTITEMP, **(multitemp or {})))
+    summary.update(sweep=swept, sweep_only=False, wall_seconds=time.perf_counter() - t_start)
+    return summary
+
+
+def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, multitemp) -> dict:
+    """Calibration, training runs, models, held-out runs (see the module docstring)."""
+    from sarins.campaign import Task, build_artifacts, code_hash, run_campaign
+
+    from sarins_fmu.experiments import axial_rbf as s0
+    from . import fig1, runs
+
     engine = engine or DEFAULT_ENGINE[profile]
     live = (profile == "paper") if live is None else live
     n_ht, n_hv, n_ct, n_cv = sizes or PROFILES[profile]
-    out = Path(out)
     run_dir = out / "runs"
-    t_start = time.perf_counter()
     fmu_dir = None
     if engine == "cosim" or profile == "quick":
         from fmus.build import DEFAULT_NAMES, build_fmus
@@ -74,46 +121,110 @@ def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0,
         fmu_dir = str(build_artifacts(out / "fmus", [f"{n}.fmu" for n in DEFAULT_NAMES], build_fmus,
                                       code_hash())[0].parent)
     exps = {"hot": s0.generate("hot", n_ht, n_hv, seed), "cold": s0.generate("cold", n_ct, n_cv, seed)}
-    common = dict(workers=workers, scheduler=scheduler, progress=progress)
+    # phase 0: the multi-temperature calibration (one short task, run here: no pool to start)
+    cal_task = Task(f"s{seed}-multitemp-calibration", runs.calibration_task, {"seed": seed, **multitemp},
+                    finite=("temp_c", "drift_dph"))
+    calibration = run_campaign([cal_task], run_dir, description="axial-rbf calibration", workers=1,
+                               progress=common["progress"])[cal_task.id]
+    table = {"temp_c": [float(x) for x in calibration["temp_c"]],
+             "drift_dph": [float(x) for x in calibration["drift_dph"]]}
+    # phase 1: training runs, raw (engine) and with the table (in process), and Fig. 1's closed-form check
+    fig1_task = Task("fig1-closed-form-check", runs.fig1_check_task, {"cases": FIG1_CASES})
     tr = "" if truth == "simulated" else "-ptruth"
     train_tasks = [Task(f"s{seed}-{e.name}-{engine}{tr}", runs.train_task,
                         {"exp": e.to_dict(), "engine": engine, "fmu_dir": fmu_dir, "paper_truth": truth == "paper"},
                         volatile=("fmu_dir",), finite=("drift_dph", "lat_error_deg"))
                    for k in exps for e in exps[k] if e.role == "train"]
-    train = run_campaign(train_tasks, run_dir, description="axial-rbf training runs", **common)
+    mt_tasks = [Task(f"s{seed}-{e.name}-mt", runs.train_task, {"exp": e.to_dict(), "table": table},
+                     finite=("residual_drift_dph", "lat_error_deg"))
+                for k in exps for e in exps[k] if e.role == "train"]
+    train = run_campaign(train_tasks + mt_tasks + [fig1_task], run_dir, description="axial-rbf training runs",
+                         **common)
+    fig1_check = train[fig1_task.id]
     rows = {k: [train[t.id] for t in train_tasks if t.kwargs["exp"]["start"] == k] for k in exps}
+    mt_rows = {k: [train[t.id] for t in mt_tasks if t.kwargs["exp"]["start"] == k] for k in exps}
+    # phase 2: the networks
     target = "drift_dph" if truth == "simulated" else "paper_truth_dph"
-    model_dir = out / "models"
-    model_dir.mkdir(parents=True, exist_ok=True)
-    nets = {}
-    for kind, inputs in (("hot", s0.HOT_INPUTS), ("cold", s0.COLD_INPUTS)):
-        with atomic_output(model_dir / f"{kind}.json", keep_suffix=True) as tmp:  # a kill never leaves half a model
-            nets[kind] = s0.train_rbf(rows[kind], inputs, tmp, target=target)
-    models = {k: str(model_dir / f"{k}.json") for k in nets}
-    digests = {k: _digest(model_dir / f"{k}.json") for k in nets}
-    tag = digests["hot"] + digests["cold"]
+    nets = _train_models(out / "models", {"hot": (rows["hot"], s0.HOT_INPUTS, target),
+                                          "cold": (rows["cold"], s0.COLD_INPUTS, target),
+                                          "hot_mt": (mt_rows["hot"], s0.HOT_INPUTS, "residual_drift_dph"),
+                                          "cold_mt": (mt_rows["cold"], s0.COLD_INPUTS, "residual_drift_dph")})
+    six = _train_models(out / "models", {f"cold6_{i // PAPER_COLD_ROWS + 1}": (rows["cold"][i:i + PAPER_COLD_ROWS],
+                                                                             s0.COLD_INPUTS, target)
+                                         for i in range(0, len(rows["cold"]) - PAPER_COLD_ROWS + 1, PAPER_COLD_ROWS)})
+    models = {k: str(out / "models" / f"{k}.json") for k in nets}
+    digests = {k: _digest(v) for k, v in models.items()}
+    tag = hashlib.sha256(json.dumps(digests, sort_keys=True).encode()).hexdigest()[:12]
+    # phase 3: held-out experiments
     nav = s0.NAV_HOURS if nav_hours is None else float(nav_hours)
     exact = profile == "paper"
     test_tasks = [Task(f"s{seed}-{e.name}-{engine}-{'live' if live else 'nolive'}-{nav:g}h-{int(exact)}-{tag}",
                        runs.test_task, {"exp": e.to_dict(), "models": models, "engine": engine, "fmu_dir": fmu_dir,
-                                        "live": live, "rerun_all": exact, "nav_hours": nav},
+                                        "live": live, "rerun_all": exact, "nav_hours": nav, "table": table},
                        volatile=("models", "fmu_dir"), identity={"models": digests})
                   for k in exps for e in exps[k] if e.role == "test"]
     if profile == "quick":
-        first = exps["hot"][n_ht]
+        probe = exps["hot"][n_ht]
         test_tasks.append(Task(f"s{seed}-cosim-check-{tag}", runs.cosim_check_task,
-                               {"exp": first.to_dict(), "model_file": models["hot"], "fmu_dir": fmu_dir},
+                               {"exp": probe.to_dict(), "model_file": models["hot"], "fmu_dir": fmu_dir},
                                volatile=("model_file", "fmu_dir"), identity={"model": digests["hot"]}))
     tests = run_campaign(test_tasks, run_dir, description="axial-rbf held-out runs", **common)
     check = tests.pop(test_tasks[-1].id) if profile == "quick" else None
     tested = {k: [tests[t.id] for t in test_tasks if t.id in tests and t.kwargs["exp"]["start"] == k]
               for k in exps}
-    summary = {"profile": profile, "engine": engine, "seed": seed, "truth": truth, "live": live,
-               "train": rows, "test": tested, "nets": nets, "models": models, "cosim_check": check,
-               "comparison": _comparisons(rows, tested),
-               "wall_seconds": time.perf_counter() - t_start,
-               "workers": workers, "scheduler": scheduler}
-    return summary
+    comparison = _comparisons(rows, tested)
+    if tested["cold"]:
+        comparison["cold"].update(_cold_extras(tested["cold"], six))
+    uncompensated = [r for k in exps for r in rows[k] + tested[k]]  # cosim rows have no heading error
+    return {"profile": profile, "engine": engine, "seed": seed, "truth": truth, "live": live,
+            "train": rows, "train_mt": mt_rows, "test": tested, "nets": nets, "six": six, "models": models,
+            "cosim_check": check, "comparison": comparison, "multitemp": {"settings": multitemp, **calibration},
+            "fig1": {"check": fig1_check, "signs": fig1.sign_analysis(uncompensated)},
+            "workers": common["workers"], "scheduler": common["scheduler"]}
+
+
+# Fig. 1 closed-form check: (azimuth drift deg/h, heading error arcsec) of ideal-IMU runs
+FIG1_CASES = [[0.001, 0.0], [-0.001, 0.0], [0.0, 10.0], [0.0005, 20.0], [-0.0005, -20.0]]
+
+
+def _train_models(folder: Path, specs: dict) -> dict:
+    """Fit and save (atomically) one network per {name: (rows, inputs, target)}."""
+    from sarins.campaign import atomic_output
+    from sarins_fmu.experiments import axial_rbf as s0
+
+    folder.mkdir(parents=True, exist_ok=True)
+    nets = {}
+    for name, (rows, inputs, target) in specs.items():
+        with atomic_output(folder / f"{name}.json", keep_suffix=True) as tmp:  # a kill never leaves half a model
+            nets[name] = s0.train_rbf(rows, inputs, tmp, target=target)
+    return nets
+
+
+def _entries(tests, drifts, max_nmi) -> list:
+    return [{"drift_dph": float(d), "error_dph": float(d - t["drift_dph"]), "max_nmi": float(m)}
+            for d, m, t in zip(drifts, max_nmi, tests)]
+
+
+def _cold_extras(tests: list, six: dict) -> dict:
+    """Cold-start identifiers beyond the paper's two networks, on the same
+    held-out runs: after the multi-temperature compensation (mt_*: drift
+    removed = table mean + identified residual; nmi/72h of the compensated
+    re-runs) and the cold network trained on the paper's 6 rows (each
+    disjoint 6-row subset of the training rows; nmi/72h from the affine map)."""
+    import numpy as np
+
+    from sarins_fmu.experiments import axial_rbf as s0
+    from .runs import MULTITEMP_MODELS
+
+    out = {}
+    for kind in MULTITEMP_MODELS:
+        key = f"mt_total_{kind}_dph"
+        if all(key in t for t in tests):
+            out[f"mt_{kind}"] = _entries(tests, [t[key] for t in tests], [t[f"mt_max_{kind}_nmi"] for t in tests])
+    for name, net in six.items():
+        drift = net.predict(np.array([[t[n] for n in s0.COLD_INPUTS] for t in tests]))
+        out[name] = _entries(tests, drift, [s0.compensated_max_nmi(t, d) for d, t in zip(drift, tests)])
+    return out
 
 
 def _comparisons(rows: dict, tested: dict) -> dict:
@@ -128,29 +239,38 @@ def _comparisons(rows: dict, tested: dict) -> dict:
             continue
         lin = s0.linear_regression(rows[kind], inputs)(tests)
         methods = {"rbf": [t["ident_dph"] for t in tests],
-                   "closed_form": [float(s0.closed_form_drift_dph(t["lat_error_deg"])) for t in tests],
+                   "closed_form": [float(s0.closed_form_drift_dph(t["lat_error_deg"], lat_deg=t["lat_deg"]))
+                                   for t in tests],
                    "linear": list(map(float, lin)),
                    "kalman": [s0.kalman_drift_dph(t["time_h"], t["lat_error_series_deg"]) for t in tests]}
         if kind == "cold":
             methods["rbf_hot_model"] = [t["ident_hot_dph"] for t in tests]
-        table = {}
-        for name, est in methods.items():
-            table[name] = [{"drift_dph": float(d), "error_dph": float(d - t["drift_dph"]),
-                            "max_nmi": s0.compensated_max_nmi(t, d)} for d, t in zip(est, tests)]
-        out[kind] = table
+        out[kind] = {name: _entries(tests, est, [s0.compensated_max_nmi(t, d) for d, t in zip(est, tests)])
+                     for name, est in methods.items()}
     return out
 
 
 def run(args) -> int:
     from .report import write_report
 
+    if args.sweep_only and args.sweep == "none":
+        raise ValueError("--sweep-only needs --sweep quick or --sweep full")
     summary = execute(profile=args.profile, engine=args.engine, seed=args.seed, out=args.out,
                       workers=args.workers, scheduler=args.scheduler, progress=not args.no_progress,
-                      truth=args.truth, live=False if args.no_live else None)
+                      truth=args.truth, live=False if args.no_live else None, sweep=args.sweep,
+                      sweep_only=args.sweep_only)
     report = write_report(summary, Path(args.out) / "report")
     print(f"sarins campaign axial-rbf: report written to {report}")
-    hot = [abs(t["ident_dph"] - t["drift_dph"]) for t in summary["test"]["hot"]]
-    print(f"  hot start: max identification error {max(hot):.5f} deg/h over {len(hot)} held-out experiments; "
-          f"wall time {summary['wall_seconds']:.0f} s")
-    print(json.dumps({"hot_max_error_dph": max(hot)}))
+    result = {}
+    if not summary["sweep_only"]:
+        hot = [abs(t["ident_dph"] - t["drift_dph"]) for t in summary["test"]["hot"]]
+        print(f"  hot start: max identification error {max(hot):.5f} deg/h over {len(hot)} held-out experiments")
+        result["hot_max_error_dph"] = max(hot)
+    if summary["sweep"] is not None:
+        points = summary["sweep"]["points"]
+        held = sum(p["holds"] for p in points)
+        print(f"  sweep ({summary['sweep']['grid']}): 0.0003 deg/h held on {held} of {len(points)} grid points")
+        result["sweep_points_holding"] = held
+    print(f"  wall time {summary['wall_seconds']:.0f} s")
+    print(json.dumps(result))
     return 0

@@ -14,6 +14,8 @@ import numpy as np
 
 from sarins_fmu.experiments import axial_rbf as s0
 
+from .report_additions import cold6_section, fig1_section, multitemp_section, sweep_section
+
 
 def _md(headers, rows) -> str:
     lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
@@ -27,7 +29,7 @@ def _rng(lo, hi) -> str:
 
 def table2(rows) -> str:
     """Hot-start training samples (Table 2 analogue)."""
-    body = [(i + 1, f"{s0.SITE_LAT_DEG + r['lat_error_deg']:.4f}", f"{r['lat_error_deg']:+.4f}",
+    body = [(i + 1, f"{r['lat_deg'] + r['lat_error_deg']:.4f}", f"{r['lat_error_deg']:+.4f}",
              _rng(r["temp_align_min"], r["temp_align_max"]), f"{r['drift_dph']:+.5f}",
              "" if not np.isfinite(r.get("paper_truth_dph", np.nan)) else f"{r['paper_truth_dph']:+.5f}")
             for i, r in enumerate(rows)]
@@ -35,15 +37,27 @@ def table2(rows) -> str:
                 "paper's truth (deg/h)"], body)
 
 
-def table4(rows, hot_net) -> str:
-    """Cold-start training samples with the hot model's result (Table 4 analogue)."""
+def table4(rows, hot_net, mt_rows=None, hot_mt_net=None) -> str:
+    """Cold-start training samples with the hot model's result (Table 4 analogue); with the
+    compensated rows, also the paper's column: multi-temperature compensation + hot network
+    (drift removed over 72 h = table mean + identified residual)."""
     hot = hot_net.predict(np.array([[r["lat_error_deg"]] for r in rows]))
-    body = [(i + 1, _rng(r["temp_align_min"], r["temp_align_max"]), f"{r['temp_change_c']:.1f}",
-             _rng(r["temp_calib_min"], r["temp_calib_max"]), f"{r['temp_calib_max'] - r['temp_calib_min']:.1f}",
-             f"{s0.SITE_LAT_DEG + r['lat_error_deg']:.4f}", f"{r['drift_dph']:+.5f}", f"{h:+.5f}")
-            for i, (r, h) in enumerate(zip(rows, hot))]
-    return _md(["#", "alignment temp. (degC)", "diff", "calibration temp. (degC)", "diff", "latitude (deg)",
-                "true drift (deg/h)", "hot RBF (deg/h)"], body)
+    heads = ["#", "alignment temp. (degC)", "diff", "calibration temp. (degC)", "diff", "latitude (deg)",
+             "true drift (deg/h)", "hot RBF (deg/h)"]
+    extra = [""] * len(rows)
+    if mt_rows and hot_mt_net is not None:
+        if [r["name"] for r in mt_rows] != [r["name"] for r in rows]:
+            raise ValueError("compensated and raw cold rows are not the same experiments")
+        pred = hot_mt_net.predict(np.array([[r["lat_error_deg"]] for r in mt_rows]))
+        extra = [f"{p + r['table_mean_dph']:+.5f}" for p, r in zip(pred, mt_rows)]
+        heads.append("compensation + hot RBF (deg/h)")
+    body = []
+    for i, (r, h, x) in enumerate(zip(rows, hot, extra)):
+        row = [i + 1, _rng(r["temp_align_min"], r["temp_align_max"]), f"{r['temp_change_c']:.1f}",
+               _rng(r["temp_calib_min"], r["temp_calib_max"]), f"{r['temp_calib_max'] - r['temp_calib_min']:.1f}",
+               f"{r['lat_deg'] + r['lat_error_deg']:.4f}", f"{r['drift_dph']:+.5f}", f"{h:+.5f}"]
+        body.append(row + ([x] if x else []))
+    return _md(heads, body)
 
 
 def table3(tests, live: bool) -> str:
@@ -55,7 +69,7 @@ def table3(tests, live: bool) -> str:
         heads += ["live: FMU drift (deg/h)", "live: max 12-84 h (nmi)"]
     body = []
     for i, t in enumerate(tests):
-        row = [i + 1, f"{s0.SITE_LAT_DEG + t['lat_error_deg']:.4f}", f"{t['drift_dph']:+.5f}",
+        row = [i + 1, f"{t['lat_deg'] + t['lat_error_deg']:.4f}", f"{t['drift_dph']:+.5f}",
                f"{t['paper_truth_dph']:+.5f}", f"{t['ident_dph']:+.5f}", f"{t['ident_dph'] - t['drift_dph']:+.5f}",
                f"{t['ident_dph'] - t['paper_truth_dph']:+.5f}", f"{t['max_uncomp_nmi']:.2f}",
                f"{t['max_comp_nmi']:.2f}", f"{t['paper_truth_max_nmi']:.2f}"]
@@ -102,9 +116,10 @@ def verdict(comp: dict) -> str:
                "which no mapping of the same input removes (the closed form needs no training at all). On a "
                "cold start the drift keeps changing with temperature after the 12 h window, which the latitude "
                "error alone cannot see: the closed form, the Kalman filter and the hot network share that "
-               "bias, and only the models fed with temperature and its change (cold RBF, linear regression) "
-               "remove it. The relation is close to linear in those inputs, so the linear fit matches or beats "
-               "the RBF network on a few dozen training runs; the RBF network's advantage would need a "
+               "bias, and only the models fed with temperature and its change (cold RBF, linear regression) or "
+               "compensated by the multi-temperature table (mt_*) remove it. The relation is close to linear "
+               "in those inputs, so the linear fit matches or beats the RBF network on a few dozen training "
+               "runs; the RBF network's advantage would need a "
                "nonlinear drift-temperature law and more data.")
     return "\n\n".join(out)
 
@@ -175,6 +190,14 @@ def write_report(summary: dict, folder) -> Path:
     """Write report.md + PNGs into ``folder``; returns the Markdown path."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    if summary.get("sweep_only"):
+        lines, figs = sweep_section(summary["sweep"], folder)
+        head = ["# Seed 000: identification error over gyro noise and latitude", "",
+                f"Sweep only; wall time of the invocation that wrote this report {summary['wall_seconds']:.0f} s "
+                f"(workers: {summary['workers'] or 'all cores'}).", ""]
+        path = folder / "report.md"
+        path.write_text("\n".join(head + lines + ["## Figures", ""] + [f"![{n}]({n})" for n in figs] + [""]))
+        return path
     figs = _figures(summary, folder)
     hot, cold = summary["test"]["hot"], summary["test"]["cold"]
     herr = np.array([t["ident_dph"] - t["drift_dph"] for t in hot])
@@ -221,15 +244,23 @@ def write_report(summary: dict, folder) -> Path:
     lines += ["## Table 2 analogue: hot-start training samples", "", table2(summary["train"]["hot"]), "",
               "## Table 3 analogue: hot-start held-out experiments", "", table3(hot, summary["live"]), "",
               "## Table 4 analogue: cold-start training samples", "",
-              table4(summary["train"]["cold"], nets["hot"]), ""]
+              table4(summary["train"]["cold"], nets["hot"], summary.get("train_mt", {}).get("cold"),
+                     nets.get("hot_mt")), ""]
     if cold:
         lines += ["## Table 5 analogue: cold start, hot model vs cold model", "", table5(cold), ""]
     lines += ["## Beyond the paper: other identifiers on the same held-out experiments", "",
               "closed_form: Table 1 inverted from the 12 h latitude error; linear: least-squares affine fit on "
               "the same training rows; kalman: filter over the 12 h latitude-error series "
               "(`sarins_fmu/identify/latitude_kf.py`); rbf: the network (cold: rbf_hot_model is the hot "
-              "network applied to cold starts). nmi/72h from the affine error map of each experiment.", "",
+              "network applied to cold starts; mt_*: after the multi-temperature compensation, see below; "
+              "cold6_*: cold network on 6 rows, see below). nmi/72h from the affine error map of each experiment "
+              "(mt_*: of the compensated re-runs).", "",
               comparison_table(summary["comparison"]), "", verdict(summary["comparison"]), ""]
+    lines += multitemp_section(summary) + cold6_section(summary) + fig1_section(summary)
+    if summary.get("sweep"):
+        sweep_lines, sweep_figs = sweep_section(summary["sweep"], folder)
+        lines += sweep_lines
+        figs += sweep_figs
     lines += ["## Figures", ""] + [f"![{n}]({n})" for n in figs] + [""]
     path = folder / "report.md"
     path.write_text("\n".join(lines))

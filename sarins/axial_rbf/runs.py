@@ -20,6 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from sarins_fmu.identify.axial import APPLY_LATENCY, DriftIdentifier
+from sarins_fmu.identify.multitemp import MultiTemperatureTable, calibrate_axial_drift
+from sarins_fmu.static_errors import azimuth_drift_errors, heading_error_errors
 from sarins_fmu.units import DEG_TO_RAD, DPH_TO_RPS, HOUR, NM, RAD_TO_DEG
 from sarins_fmu.experiments import axial_rbf as s0
 from sarins_fmu.experiments.static_run import run_static
@@ -36,31 +38,39 @@ def _exp(exp) -> s0.Experiment:
 
 # ------------------------------------------------------------------ in process
 def run_inprocess(exp, nav_hours: float, *, correction_dph: float = 0.0, correction_from_hours: float = 0.0,
-                  align_hours: float = s0.ALIGN_HOURS) -> dict:
+                  align_hours: float = s0.ALIGN_HOURS, table: dict | None = None) -> dict:
     """One run of the experiment in process; navigation series every SAMPLE s.
+
+    table : multi-temperature table (``MultiTemperatureTable.to_dict()``)
+        compensating the z gyro in real time from switch-on, or None.
 
     Returns dict: time_h (K,), lat_error, lon_error (rad), north_error,
     east_error (m), temp_z (K,) degC at the same times, temp_change_align
-    (degC, over the alignment), temp_align (min, max) degC.
+    (degC, over the alignment), temp_align (min, max) degC,
+    align_heading_error (rad, U component of the attitude error at the end
+    of the alignment).
     """
     exp = _exp(exp)
-    r = run_static(lat_deg=s0.SITE_LAT_DEG, align_hours=align_hours, nav_hours=nav_hours,
+    axial_table = None if table is None else MultiTemperatureTable.from_dict(table)
+    r = run_static(lat_deg=exp.lat_deg, align_hours=align_hours, nav_hours=nav_hours,
                    model=s0.imu_model(exp), start=exp.start, ambient=s0.ambient(exp), seed=exp.seed,
-                   correction_dph=correction_dph, correction_from_hours=correction_from_hours)
+                   correction_dph=correction_dph, correction_from_hours=correction_from_hours,
+                   axial_table=axial_table)
     n_align = len(r.time_all) - len(r.time)
     k = np.arange(SAMPLE - 1, len(r.time), SAMPLE)
     temp_z = r.temperature[:, 2]
     return {"time_h": r.time[k] / HOUR, "lat_error": r.lat_error[k], "lon_error": r.lon_error[k],
             "north_error": r.north_error[k], "east_error": r.east_error[k], "temp_z": temp_z[n_align + k],
             "temp_change_align": float(temp_z[n_align - 1] - temp_z[0]),
-            "temp_align": (float(temp_z[:n_align].min()), float(temp_z[:n_align].max()))}
+            "temp_align": (float(temp_z[:n_align].min()), float(temp_z[:n_align].max())),
+            "align_heading_error": float(r.info["align_attitude_error"][2])}
 
 
 # ------------------------------------------------------------------ co-simulation
 def cosim_parameters(exp, align_hours: float = s0.ALIGN_HOURS) -> dict:
     """FMU start values (SI) reproducing :func:`run_inprocess` for the experiment."""
     exp = _exp(exp)
-    lat = s0.SITE_LAT_DEG * DEG_TO_RAD
+    lat = exp.lat_deg * DEG_TO_RAD
     align = align_hours * HOUR
     return {"turntable": {"scheme": "forward-reverse", "align_time": align, "ambient_mode": "sinusoid",
                           "ambient_mean": exp.ambient_c, "ambient_amplitude": exp.amplitude_c,
@@ -141,18 +151,22 @@ def predict(model_file: str, feats: dict) -> float:
 
 # ------------------------------------------------------------------ tasks
 def train_task(exp: dict, engine: str = "inprocess", fmu_dir: str | None = None,
-               paper_truth: bool = False) -> dict:
+               paper_truth: bool = False, table: dict | None = None) -> dict:
     """4 h alignment + 12 h navigation of a training experiment: the Table 2/4 row.
 
-    ``paper_truth`` also finds the paper's true drift (two 72 h runs in process)."""
+    ``paper_truth`` also finds the paper's true drift (two 72 h runs in process).
+    ``table``: the z gyro is compensated in real time by this
+    multi-temperature table (in process only); the row then also holds
+    ``table_mean_dph`` (what the table subtracts over the 72 h window) and
+    ``residual_drift_dph`` (the simulated truth left for the network)."""
     t0 = _time.perf_counter()
     e = _exp(exp)
-    if engine == "cosim":
-        run = run_cosim(e, s0.IDENTIFY_HOURS, fmu_dir)
-    elif engine == "inprocess":
-        run = run_inprocess(e, s0.IDENTIFY_HOURS)
-    else:
+    if engine not in ENGINES:
         raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
+    if table is not None and engine != "inprocess":
+        raise ValueError("the multi-temperature compensation runs in process only")
+    run = run_cosim(e, s0.IDENTIFY_HOURS, fmu_dir) if engine == "cosim" else \
+        run_inprocess(e, s0.IDENTIFY_HOURS, table=table)
     feats = run_features(run)
     truth = float("nan")
     if paper_truth:
@@ -160,16 +174,23 @@ def train_task(exp: dict, engine: str = "inprocess", fmu_dir: str | None = None,
         err0 = window(run_inprocess(e, s0.NAV_HOURS), 0.0, s0.NAV_HOURS)
         err1 = window(run_inprocess(e, s0.NAV_HOURS, correction_dph=probe), 0.0, s0.NAV_HOURS)
         truth = s0.paper_true_drift(err0, err1, probe)[0]
-    return {**e.to_dict(), **feats, "engine": engine, "paper_truth_dph": truth,
-            "temp_align_min": run["temp_align"][0], "temp_align_max": run["temp_align"][1],
-            "temp_calib_min": float(run["temp_z"].min()), "temp_calib_max": float(run["temp_z"].max()),
-            "time_h": run["time_h"], "lat_error_series_deg": run["lat_error"] * RAD_TO_DEG,
-            "lon_error_series_deg": run["lon_error"] * RAD_TO_DEG,
-            "wall_seconds": _time.perf_counter() - t0}
+    out = {**e.to_dict(), **feats, "engine": engine, "paper_truth_dph": truth,
+           "lon_error_deg": at_hours(run, "lon_error", s0.IDENTIFY_HOURS) * RAD_TO_DEG,
+           "align_heading_error": run.get("align_heading_error", float("nan")),
+           "temp_align_min": run["temp_align"][0], "temp_align_max": run["temp_align"][1],
+           "temp_calib_min": float(run["temp_z"].min()), "temp_calib_max": float(run["temp_z"].max()),
+           "time_h": run["time_h"], "lat_error_series_deg": run["lat_error"] * RAD_TO_DEG,
+           "lon_error_series_deg": run["lon_error"] * RAD_TO_DEG}
+    if table is not None:
+        out["table_mean_dph"] = s0.window_mean_table_dph(e, MultiTemperatureTable.from_dict(table))
+        out["residual_drift_dph"] = e.drift_dph - out["table_mean_dph"]
+    out["wall_seconds"] = _time.perf_counter() - t0
+    return out
 
 
 def test_task(exp: dict, models: dict, engine: str = "inprocess", fmu_dir: str | None = None,
-              live: bool = True, rerun_all: bool = True, nav_hours: float = s0.NAV_HOURS) -> dict:
+              live: bool = True, rerun_all: bool = True, nav_hours: float = s0.NAV_HOURS,
+              table: dict | None = None) -> dict:
     """A held-out experiment: uncompensated run, identification, compensated re-run(s),
     the paper's true drift and (``live``) the single align -> 12 h -> identify
     -> compensate -> 72 h run (through the FMUs with the cosim engine).
@@ -179,6 +200,9 @@ def test_task(exp: dict, models: dict, engine: str = "inprocess", fmu_dir: str |
         otherwise its errors come from the affine error map of the two runs
         (uncompensated, compensated with the cold model).
     nav_hours : evaluation window (72 h; shorter only for tests of the machinery)
+    table : multi-temperature table (dict); on a cold start the experiment is
+        also run with it and identified by the networks of
+        :data:`MULTITEMP_MODELS` in ``models`` (keys ``mt_*``)
     """
     t0 = _time.perf_counter()
     e = _exp(exp)
@@ -217,9 +241,43 @@ def test_task(exp: dict, models: dict, engine: str = "inprocess", fmu_dir: str |
         out[f"max_{kind}_nmi"] = max_error_nmi(err1)
     out["ident_dph"], out["max_comp_nmi"] = drifts[own], out[f"max_{own}_nmi"]
     out["paper_truth_dph"], out["paper_truth_max_nmi"] = s0.paper_true_drift(err0, err_p, probe)
+    out["lon_error_deg"] = at_hours(r0, "lon_error", min(s0.IDENTIFY_HOURS, nav)) * RAD_TO_DEG
+    out["align_heading_error"] = r0["align_heading_error"]
+    if table is not None and e.start == "cold":
+        out.update(_multitemp(e, models, table, nav, out["slope_ne"], rerun_all))
     if live:
         out.update(_live(e, models[own], feats, engine, fmu_dir))
     out["wall_seconds"] = _time.perf_counter() - t0
+    return out
+
+
+MULTITEMP_MODELS = ("hot", "hot_mt", "cold_mt")  # networks applied after the multi-temperature compensation
+
+
+def _multitemp(e, models, table, nav, slope, rerun_all) -> dict:
+    """Cold start with the multi-temperature compensation in real time from
+    switch-on (seed 000 sec. 2.3), then identification by the networks of
+    :data:`MULTITEMP_MODELS` present in ``models`` ('hot': trained on raw hot
+    runs; '*_mt': trained on compensated runs).  ``mt_total_<kind>_dph`` is
+    the drift removed over the 72 h window, table mean + identified
+    residual, to compare with the true drift like the other identifiers."""
+    tab = MultiTemperatureTable.from_dict(table)
+    run = run_inprocess(e, nav, table=table)
+    feats = run_features(run, min(s0.IDENTIFY_HOURS, nav))
+    err_a = window(run, 0.0, nav)
+    mean_table = s0.window_mean_table_dph(e, tab, 0.0, nav)
+    out = {"mt_table_mean_dph": mean_table, "mt_residual_drift_dph": e.drift_dph - mean_table,
+           "mt_lat_error_deg": feats["lat_error_deg"], "mt_max_uncomp_nmi": max_error_nmi(err_a)}
+    for kind in (k for k in MULTITEMP_MODELS if k in models):
+        drift = predict(models[kind], feats)
+        if rerun_all:
+            err1 = window(run_inprocess(e, nav, correction_dph=drift, table=table), 0.0, nav)
+        else:  # the error is affine in the subtracted drift with the slope of the uncompensated runs
+            err1 = err_a + drift * slope
+        out[f"mt_ident_{kind}_dph"] = drift
+        out[f"mt_total_{kind}_dph"] = drift + mean_table
+        out[f"mt_pos_{kind}_nmi"] = np.hypot(err1[:, 0], err1[:, 1]) / NM
+        out[f"mt_max_{kind}_nmi"] = max_error_nmi(err1)
     return out
 
 
@@ -258,3 +316,44 @@ def cosim_check_task(exp: dict, model_file: str, fmu_dir: str, align_hours: floa
     diff = max(float(np.max(np.abs(fmu[k] - ref[k]))) for k in ("north_error", "east_error"))
     return {"fmu_drift_dph": fmu["identified_drift_dph"], "inprocess_drift_dph": expected,
             "max_diff_m": diff, "max_error_m": float(np.max(np.abs(ref["north_error"])))}
+
+
+def calibration_task(seed: int, points_c, settle_hours: float = 20.0, average_hours: float = 4.0,
+                     ramp_hours: float = 0.5, noise_scale: float = s0.GYRO_NOISE_SCALE,
+                     lat_deg: float = s0.SITE_LAT_DEG) -> dict:
+    """The multi-temperature calibration of the campaign's unit
+    (:func:`calibrate_axial_drift` on :func:`s0.calibration_unit`).
+
+    Returns the table (temp_c, drift_dph) and the unit's steady drift law at
+    the measured temperatures (law_dph), deg/h."""
+    t0 = _time.perf_counter()
+    unit = s0.calibration_unit(seed, noise_scale)
+    tab = calibrate_axial_drift(s0.imu_model(unit), points_c=points_c, lat_deg=lat_deg, settle_hours=settle_hours,
+                                average_hours=average_hours, ramp_hours=ramp_hours, seed=unit.seed)
+    temp = np.asarray(tab.temp_c)
+    return {"temp_c": temp, "drift_dph": np.asarray(tab.drift_dph), "law_dph": s0.steady_drift_dph(0.0, temp),
+            "wall_seconds": _time.perf_counter() - t0}
+
+
+def fig1_check_task(cases, hours: float = s0.IDENTIFY_HOURS, lat_deg: float = s0.SITE_LAT_DEG) -> dict:
+    """Latitude and longitude errors at ``hours`` of navigation of an ideal
+    IMU started with the true attitude, for (azimuth drift deg/h, heading
+    error arcsec) cases, beside the closed forms of :mod:`sarins_fmu.static_errors`.
+
+    Returns arrays (one entry per case): drift_dph, heading_arcsec,
+    sim/closed lat and lon errors at ``hours`` (deg)."""
+    lat = lat_deg * DEG_TO_RAD
+    rows = {k: [] for k in ("drift_dph", "heading_arcsec", "sim_lat_deg", "sim_lon_deg", "cf_lat_deg", "cf_lon_deg")}
+    for drift, heading in cases:
+        phi = float(heading) * DEG_TO_RAD / 3600.0
+        r = run_static(lat_deg=lat_deg, nav_hours=hours, imu="ideal", axial_drift_dph=float(drift),
+                       aligned_start=True, initial_attitude_error=[0.0, 0.0, phi])
+        t = hours * HOUR
+        d_lat, d_lon = azimuth_drift_errors(t, float(drift) * DPH_TO_RPS, lat)
+        h_lat, h_lon = heading_error_errors(t, phi, lat)
+        for key, value in (("drift_dph", drift), ("heading_arcsec", heading),
+                           ("sim_lat_deg", r.at_hours("lat_error", hours) * RAD_TO_DEG),
+                           ("sim_lon_deg", r.at_hours("lon_error", hours) * RAD_TO_DEG),
+                           ("cf_lat_deg", (d_lat + h_lat) * RAD_TO_DEG), ("cf_lon_deg", (d_lon + h_lon) * RAD_TO_DEG)):
+            rows[key].append(float(value))
+    return {k: np.array(v) for k, v in rows.items()}

@@ -5,7 +5,9 @@ Tasks (each one campaign task, stored as it finishes, resumable):
 * ``stop-<unit>-<seed>``: one 30-minute stop filter run (convergence, error);
 * ``mc-<ageing>-<unit>-<estimate>-<seed>``: one 300-day model-update run;
 * ``veh-<ageing>-<unit>-<seed>``: one vehicle test (a year of online
-  updates, then a 6 h drive with the initial and the updated model).
+  updates, then a 6 h drive with the initial and the updated model), in
+  process or (``--engine cosim``) with its sessions and drive through the
+  FMUs of the ``vehicle_rins_online`` SSP system: the same numbers.
 
 The headline configuration is ``mc-markov-premise-filter`` (eq. 20 as the
 library's ageing, the premise unit, every stop simulated); the others are
@@ -67,19 +69,28 @@ def add_arguments(parser) -> None:
     parser.add_argument("--lambda", dest="forgetting_factor", type=forgetting, default=0.8,
                         help=f"forgetting factor of FF-RLS per month, {MIN_LAMBDA} .. 1 (default 0.8, the paper's; "
                              "a smaller one forgets a month's data within a day)")
+    parser.add_argument("--engine", choices=("inprocess", "cosim"), default="inprocess",
+                        help="run the vehicle test's drives in process or through the FMUs (the vehicle_rins_online "
+                             "SSP system under the master; the same numbers, slower); default inprocess")
     parser.add_argument("--seed", type=seed_value, default=0,
                         help="base random seed of the campaign: run k of each study uses seed + k "
                              "(0 .. 2**31-1 minus the runs; default 0)")
 
 
-def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0):
+def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0, engine: str = "inprocess",
+                fmu_dir: str | None = None):
     """The campaign's tasks for ``profile`` ('quick' or 'paper'); run k of
-    each study uses the random seed ``seed + k``."""
+    each study uses the random seed ``seed + k``; the vehicle tests run with
+    ``engine`` (``'cosim'``: through the FMUs in ``fmu_dir``)."""
     from sarins.campaign import Task
     from sarins_fmu.experiments import online_rls
 
+    from .cosim import ENGINES, vehicle_task
+
     if profile not in PROFILES:
         raise ValueError(f"unknown profile {profile!r}")
+    if engine not in ENGINES:
+        raise ValueError(f"--engine must be one of {ENGINES}, got {engine!r}")
     if not (MIN_LAMBDA <= forgetting_factor <= 1.0):
         raise ValueError(f"--lambda must be in [{MIN_LAMBDA}, 1], got {forgetting_factor}")
     p = PROFILES[profile]
@@ -101,9 +112,10 @@ def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0):
                   for s in range(n)]
     for ageing, unit, n, *scale in p["vehicle"]:
         x = scale[0] if scale else 1.0
-        tasks += [Task(f"veh-{ageing}{_scale_tag(x)}-{unit}-{s:03d}", online_rls.vehicle_test,
+        tasks += [Task(f"veh-{ageing}{_scale_tag(x)}-{unit}-{s:03d}", vehicle_task,
                        {"seed": seed + s, "unit": unit, "ageing": ageing, "forgetting_factor": forgetting_factor,
-                        "ageing_scale": x, **p["vehicle_kwargs"]}, finite=("cep_initial", "cep_updated"))
+                        "ageing_scale": x, **p["vehicle_kwargs"], "engine": engine, "fmu_dir": fmu_dir},
+                       volatile=("fmu_dir",), finite=("cep_initial", "cep_updated"))
                   for s in range(n)]
     return tasks
 
@@ -113,8 +125,19 @@ def run(args) -> int:
 
     from .report import write_report
 
-    tasks = build_tasks(args.profile, args.forgetting_factor, args.seed)
     out = Path(args.out)
+    fmu_dir = None
+    if args.engine == "cosim":
+        from fmus.build import build_fmus
+
+        from sarins.campaign import build_artifacts, code_hash
+
+        from .cosim import FMUS
+
+        # built in a temporary folder and moved into place; rebuilt when the code changes
+        fmu_dir = str(build_artifacts(out / "fmus", [f"{n}.fmu" for n in FMUS],
+                                      lambda folder: build_fmus(folder, list(FMUS)), code_hash())[0].parent)
+    tasks = build_tasks(args.profile, args.forgetting_factor, args.seed, args.engine, fmu_dir)
     start = time.perf_counter()
     results = run_campaign(tasks, out / "runs", workers=args.workers, scheduler=args.scheduler,
                            progress=not args.no_progress, description="online-rls")

@@ -176,7 +176,8 @@ def write_report(results: dict, out_dir, *, profile: str, wall_time: float, work
     out.mkdir(parents=True, exist_ok=True)
     stops, mc, veh = stop_summary(results), mc_summary(results), vehicle_summary(results)
     veh_configs = _configs(results, "veh")
-    summary = {"profile": profile, "runs": len(results), "computed": computed, "wall_time_s": wall_time,
+    engines = sorted({str(results[k].get("engine", "inprocess")) for k in results if k.startswith("veh-")})
+    summary = {"profile": profile, "vehicle_engine": engines, "runs": len(results), "computed": computed, "wall_time_s": wall_time,
                "workers": workers,
                "forgetting_factor": forgetting_factor, "stop_filter": stops, "monte_carlo": mc, "vehicle": veh}
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
@@ -184,7 +185,9 @@ def write_report(results: dict, out_dir, *, profile: str, wall_time: float, work
     lines = [f"# Seed 002 campaign ({profile} profile)", "",
              f"{len(results)} runs ({len(results) if computed is None else computed} computed in this call), "
              f"wall time {wall_time:.0f} s, workers {workers or 'all cores'}, "
-             f"FF-RLS λ = {forgetting_factor} per month (m = 30 days).", "",
+             f"FF-RLS λ = {forgetting_factor} per month (m = 30 days)"
+             + (f"; vehicle tests run {' and '.join(engines)} (cosim: through the FMUs of the vehicle_rins_online "
+                "SSP system)." if engines else "."), "",
              "## Stop Kalman filter: 30-minute azimuth-drift estimate", "",
              "| unit | runs | rms error (°/h) | mean error | max abs error | mean filter 1σ | within 0.002 °/h |",
              "|---|---|---|---|---|---|---|"]

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from fmus.imu_thermal_slave import NO_TAG
+from fmus.slave_support import NO_TAG
 from orchestration import Component, Connection, System, write_ssd, write_ssp
 
 GIMBAL_LINKS = [f"{q}_{j}" for j in (1, 2, 3) for q in ("angle", "rate", "accel")] + [
@@ -61,7 +61,7 @@ def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: floa
     Jacobi.  Default stop: 4 h alignment + 84 h.
     """
     base = standard_static(fmu_dir, hours=hours, turntable=turntable, imu=imu, ins=ins)
-    for name in NO_CORRECTION:  # fed by the identifier here
+    for name in IDENTIFIED_CORRECTION:  # fed by the identifier here
         base.components[2].parameters.pop(name, None)
     identifier_fmu = Component("identifier", Path(fmu_dir) / "RBFIdentifier.fmu", dict(identifier or {}))
     loop = [Connection("ins", "lat_error", "identifier", "lat_error"),
@@ -83,7 +83,9 @@ VEHICLE_LINKS = [f"vehicle_{a}{q}" for q in ("", "_rate", "_accel") for a in ("y
 # static systems hold them at their declared start values explicitly, so no input is left
 # unconnected by accident (and the master has nothing to warn about).
 # Without an identifier the INS's axial-drift correction inputs are held at zero explicitly.
-NO_CORRECTION = {"axial_drift_correction": 0.0, "axial_drift_apply_from": 0.0}
+NO_CORRECTION = {"axial_drift_correction": 0.0, "axial_drift_apply_from": 0.0, "axial_drift_correction_b": 0.0,
+                 "axial_drift_correction_a": 0.0}
+IDENTIFIED_CORRECTION = ("axial_drift_correction", "axial_drift_apply_from")  # the RBFIdentifier sends a constant
 STATIC_BASE_HELD = {name: (NO_TAG if name == "base_motion_time" else 0.0) for name in VEHICLE_LINKS}
 
 
@@ -113,8 +115,52 @@ def vehicle_rins(fmu_dir: Path | str = "resources", *, hours: float = 2.0, vehic
                   start_time=0.0, stop_time=hours * 3600.0, step_size=1.0)
 
 
+# DriftModelUpdater <-> StrapdownINS (seed 002's online update): the INS row it reads (all tagged
+# solution_time), the vehicle's speed (tagged base_motion_time) and the model it sends back (tagged apply_from)
+INS_TO_UPDATER = [("v_e", "v_e"), ("v_n", "v_n"), ("yaw", "yaw"), ("pitch", "pitch"), ("roll", "roll"), ("lat", "lat"),
+                  ("temp_azimuth_gyro", "temp_gyro_z"), ("nav_time", "nav_time"), ("solution_time", "solution_time")]
+# the updater's ins_phase input is held at 2 (navigating): the row's nav_time (>= 0 in navigation) tells the
+# phase, and an Integer connection is one libcosimpy 0.0.6 cannot make
+UPDATER_HELD = {"ins_phase": 2}
+VEHICLE_TO_UPDATER = [("speed", "vehicle_speed"), ("base_motion_time", "speed_time")]
+UPDATER_TO_INS = [("drift_a", "axial_drift_correction_a"), ("drift_b", "axial_drift_correction_b"),
+                  ("drift_c", "axial_drift_correction"), ("apply_from", "axial_drift_apply_from")]
+ONLINE_LEGS = "drive 300 10; turn 90; drive 300 12; stop 1920; drive 180 10; stop 60"  # a stop long enough to update
+
+
+def vehicle_rins_online(fmu_dir: Path | str = "resources", *, hours: float = 1.25, vehicle=None, turntable=None,
+                        imu=None, ins=None, updater=None) -> System:
+    """Seed 002's vehicle test: ``vehicle_rins`` with the DriftModelUpdater closing the loop.
+
+    VehicleMotion -> IMUThermal <- Turntable, IMUThermal -> StrapdownINS ->
+    DriftModelUpdater (stop Kalman filter at the vehicle's stops, FF-RLS
+    update of the azimuth drift model when it moves off after at least 30
+    min) -> (the model a, b, c from ``apply_from``) StrapdownINS, which
+    evaluates it at each interval's gyro temperature.  The updater pairs each
+    INS row (``solution_time``) with the vehicle's speed of the same time
+    (``speed_time``) and sends the model with one step of latency
+    (``latency`` = 1 s), the least any scheme allows, so the run is the same
+    under Gauss-Seidel and Jacobi.  Default legs: a 32-min stop after 15 min
+    of alignment and 10 min of driving, which updates the model once.
+    """
+    fmu_dir = Path(fmu_dir)
+    base = vehicle_rins(fmu_dir, hours=hours, vehicle={"legs": ONLINE_LEGS, **dict(vehicle or {})},
+                        turntable=turntable, imu=imu, ins=ins)
+    ins_component = base.components[3]
+    for name in NO_CORRECTION:  # fed by the updater here
+        ins_component.parameters.pop(name, None)
+    component = Component("updater", fmu_dir / "DriftModelUpdater.fmu",
+                          {"latency": 1.0, **UPDATER_HELD, **dict(updater or {})})
+    loop = [Connection("ins", a, "updater", b) for a, b in INS_TO_UPDATER]
+    loop += [Connection("vehicle", a, "updater", b) for a, b in VEHICLE_TO_UPDATER]
+    loop += [Connection("updater", a, "ins", b) for a, b in UPDATER_TO_INS]
+    return System(name="vehicle_rins_online", components=[*base.components, component],
+                  connections=[*base.connections, *loop], start_time=base.start_time, stop_time=base.stop_time,
+                  step_size=base.step_size)
+
+
 SYSTEMS = {"standard_static": standard_static, "standard_static_identified": standard_static_identified,
-           "vehicle_rins": vehicle_rins}
+           "vehicle_rins": vehicle_rins, "vehicle_rins_online": vehicle_rins_online}
 
 
 def write_systems(fmu_dir: Path | str) -> list[Path]:
@@ -156,20 +202,27 @@ def build_system_fmu(fmu_dir: Path | str) -> Path:
 
 def compensated_chain(fmu_dir: str | Path, compensator_fmu: str | Path, *, turntable=None, imu=None, ins=None,
                       step: float = 0.05, stop: float = 3600.0):
-    """System Turntable -> IMUThermal -> IMUCompensator -> StrapdownINS (Gauss-Seidel order).
+    """System Turntable -> IMUThermal -> IMUCompensator -> StrapdownINS.
 
     ``fmu_dir`` holds Turntable.fmu, IMUThermal.fmu and StrapdownINS.fmu;
-    the INS reads the compensated increments and the IMU's z-gyro temperature.
+    the compensator takes the IMU's raw increments with their tag and
+    temperatures, the INS reads the compensated increments with the same tag
+    and the z-gyro temperature of their interval (all from the compensator),
+    so the chain gives the same solution at the same nav_time under any
+    scheme.  The IMU stands on a static base and the INS gets no axial-drift
+    correction (both held at their start values explicitly).
     """
     fmu_dir = Path(fmu_dir)
     components = [Component("turntable", fmu_dir / "Turntable.fmu", dict(turntable or {})),
-                  Component("imu", fmu_dir / "IMUThermal.fmu", dict(imu or {})),
+                  Component("imu", fmu_dir / "IMUThermal.fmu", {**STATIC_BASE_HELD, **dict(imu or {})}),
                   Component("comp", Path(compensator_fmu), {}),
-                  Component("ins", fmu_dir / "StrapdownINS.fmu", dict(ins or {}))]
+                  Component("ins", fmu_dir / "StrapdownINS.fmu", {**NO_CORRECTION, **dict(ins or {})})]
     connections = [Connection("turntable", v, "imu", v) for v in GIMBAL_LINKS]
     connections += [Connection("imu", a, "comp", b) for a, b in RAW_LINKS]
     connections += [Connection("imu", t, "comp", t) for t in TEMPS]
+    connections += [Connection("imu", "increment_end_time", "comp", "raw_increment_end_time")]
     connections += [Connection("comp", v, "ins", v) for v, _ in RAW_LINKS]
-    connections += [Connection("imu", "temp_gyro_z", "ins", "temp_gyro_z")]
+    connections += [Connection("comp", "increment_end_time", "ins", "increment_end_time"),
+                    Connection("comp", "temp_azimuth_gyro", "ins", "temp_gyro_z")]
     return System(name="compensated_chain", components=components, connections=connections, start_time=0.0,
                   stop_time=stop, step_size=step)

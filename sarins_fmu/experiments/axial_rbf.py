@@ -22,10 +22,18 @@ Experiment model (our choice, stated in ``docs/axial-rbf.md``)
       experiment so that the true drift over the 72 h after identification
       is uniform in +-0.0035 deg/h (the range of Table 2).
     * Gyro white noise and bias instability are 0.4 x the ``nav-rlg``
-      preset's (ARW 0.0002 deg/sqrt(h)): with the preset's 0.0005 deg/sqrt(h)
-      the 12 h latitude error alone scatters the identified drift by about
-      0.0003 deg/h (1 sigma), the paper's whole error budget.  The other
-      sensor errors are the preset's; every run is seeded.
+      preset's (ARW 0.0002 deg/sqrt(h); ``Experiment.noise_scale``, swept by
+      the campaign's ``--sweep`` with the site latitude ``lat_deg``): with the
+      preset's 0.0005 deg/sqrt(h) the 12 h latitude error alone scatters the
+      identified drift by about 0.0003 deg/h (1 sigma), the paper's whole
+      error budget.  The other sensor errors are the preset's; every run is
+      seeded.
+
+Multi-temperature compensation (sec. 2.3, :mod:`sarins_fmu.identify.multitemp`)
+    The unit is calibrated at steady temperature points
+    (:func:`calibration_unit`); with the table compensating the z gyro, the
+    drift left for the network is the *residual truth*
+    ``drift_dph - window_mean_table_dph`` over the same 72 h window.
 
 True drift
     *Simulated truth*: the time mean of the deterministic drift eps(T(t))
@@ -64,6 +72,7 @@ K2_DPH_PER_C2 = 2.0e-6  # quadratic coefficient, deg/h/degC^2
 DTDT_DPH_PER_CPH = 1.0e-4  # drift per temperature rate, deg/h per degC/h
 GYRO_NOISE_SCALE = 0.4  # the unit's gyro noise / bias instability relative to nav-rlg (see docs/axial-rbf.md)
 TAU_Z = 5.0 * HOUR  # warm-up time constant of the azimuth gyro, s
+HOT_HEATING_C = 16.0  # self-heating of the azimuth gyro on hot starts (in equilibrium), degC
 TRUTH_GRID = 60.0  # s, grid of the simulated-truth integral
 STARTS = ("hot", "cold")
 
@@ -75,7 +84,9 @@ class Experiment:
     drift_dph is the simulated true drift over the 72 h evaluation window
     (deg/h); eps0_dph the turn-on constant that produces it; ambient_c,
     amplitude_c the ambient mean and daily amplitude (degC); heating_c the
-    self-heating of the azimuth gyro (degC); seed the noise seed.
+    self-heating of the azimuth gyro (degC); seed the noise seed; lat_deg
+    the site latitude (deg); noise_scale the gyro white noise and bias
+    instability relative to the ``nav-rlg`` preset's.
     """
 
     name: str
@@ -87,6 +98,8 @@ class Experiment:
     ambient_c: float
     amplitude_c: float
     heating_c: float
+    lat_deg: float = SITE_LAT_DEG
+    noise_scale: float = GYRO_NOISE_SCALE
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -120,8 +133,8 @@ def imu_overrides(exp: Experiment) -> dict:
     base = imu_mod.preset("nav-rlg").gyro
     noise = {}
     for i, ax in enumerate("xyz"):
-        noise[f"gyro_random_walk_{ax}"] = float(base.random_walk[i] * GYRO_NOISE_SCALE)
-        noise[f"gyro_bias_instability_{ax}"] = float(base.bias_instability[i] * GYRO_NOISE_SCALE)
+        noise[f"gyro_random_walk_{ax}"] = float(base.random_walk[i] * exp.noise_scale)
+        noise[f"gyro_bias_instability_{ax}"] = float(base.bias_instability[i] * exp.noise_scale)
     return {**thermal_overrides(exp.heating_c), **drift_overrides(exp.eps0_dph), **noise}
 
 
@@ -144,42 +157,78 @@ def drift_series_dph(exp_or_eps0, temperature: np.ndarray, dt: float) -> np.ndar
     """Deterministic azimuth drift eps(T) + d dT/dt, deg/h, of a temperature
     series (degC) on a grid of ``dt`` s (the rate by central differences)."""
     eps0 = exp_or_eps0.eps0_dph if isinstance(exp_or_eps0, Experiment) else float(exp_or_eps0)
-    dev = temperature - T_CENTRE_C
     rate_cph = np.gradient(temperature, dt) * HOUR
-    return eps0 + K1_DPH_PER_C * dev + K2_DPH_PER_C2 * dev**2 + DTDT_DPH_PER_CPH * rate_cph
+    return steady_drift_dph(eps0, temperature) + DTDT_DPH_PER_CPH * rate_cph
+
+
+def steady_drift_dph(eps0_dph: float, temperature) -> np.ndarray:
+    """The drift law at a steady temperature (degC): eps0 + k1 (T - 40) + k2 (T - 40)^2, deg/h."""
+    dev = np.asarray(temperature, float) - T_CENTRE_C
+    return eps0_dph + K1_DPH_PER_C * dev + K2_DPH_PER_C2 * dev**2
+
+
+def window_temperature(exp: Experiment, start_h: float, end_h: float):
+    """z-gyro temperature (degC) on the TRUTH_GRID from the run start to just
+    past ``end_h`` h of navigation, and the selection of ``[start_h, end_h]``."""
+    t0 = (ALIGN_HOURS + start_h) * HOUR
+    times = np.arange(TRUTH_GRID, (ALIGN_HOURS + end_h) * HOUR + 2 * TRUTH_GRID, TRUTH_GRID)
+    sel = (times >= t0) & (times <= (ALIGN_HOURS + end_h) * HOUR)
+    return gyro_z_temperature(exp, times), sel
 
 
 def window_mean_drift_dph(exp: Experiment, start_h: float, end_h: float) -> float:
     """Simulated true drift: time mean of the deterministic drift (deg/h)
     over ``[start_h, end_h]`` hours of navigation."""
-    t0 = (ALIGN_HOURS + start_h) * HOUR
-    times = np.arange(TRUTH_GRID, (ALIGN_HOURS + end_h) * HOUR + 2 * TRUTH_GRID, TRUTH_GRID)
-    eps = drift_series_dph(exp, gyro_z_temperature(exp, times), TRUTH_GRID)
-    sel = (times >= t0) & (times <= (ALIGN_HOURS + end_h) * HOUR)
-    return float(np.mean(eps[sel]))
+    temp, sel = window_temperature(exp, start_h, end_h)
+    return float(np.mean(drift_series_dph(exp, temp, TRUTH_GRID)[sel]))
 
 
-def generate(start: str, n_train: int, n_test: int, seed: int) -> list[Experiment]:
+def window_mean_table_dph(exp: Experiment, table, start_h: float = 0.0, end_h: float = NAV_HOURS) -> float:
+    """Time mean (deg/h) of what a multi-temperature table (``drift_at(temp_c)``,
+    :mod:`sarins_fmu.identify.multitemp`) subtracts over ``[start_h, end_h]``
+    hours of navigation; the drift left for the network is
+    ``window_mean_drift_dph - window_mean_table_dph`` (the residual truth)."""
+    temp, sel = window_temperature(exp, start_h, end_h)
+    return float(np.mean(table.drift_at(temp)[sel]))
+
+
+def calibration_unit(seed: int, noise_scale: float = GYRO_NOISE_SCALE) -> Experiment:
+    """The unit as it stands in the multi-temperature calibration: the
+    campaign's drift law with turn-on constant 0, the hot-start self-heating,
+    its own noise seed (:func:`sarins_fmu.identify.multitemp.calibrate_axial_drift`)."""
+    return Experiment("calibration", "hot", "calibration", int(seed), 0.0, 0.0, 20.0, 0.0, HOT_HEATING_C,
+                      SITE_LAT_DEG, float(noise_scale))
+
+
+def generate(start: str, n_train: int, n_test: int, seed: int, *, lat_deg: float = SITE_LAT_DEG,
+             noise_scale: float = GYRO_NOISE_SCALE) -> list[Experiment]:
     """Seeded training and held-out experiments of one start kind.
 
     The true drift (72 h mean from the start of navigation) is uniform in
     +-DRIFT_RANGE_DPH; ambient and heating per the hot/cold definitions.
+    ``lat_deg`` (site, deg) and ``noise_scale`` (gyro noise relative to
+    nav-rlg) do not enter the draws: the same seed gives the same drifts,
+    temperatures and noise seeds at every latitude and noise scale.
     """
     if start not in STARTS:
         raise ValueError(f"start must be 'hot' or 'cold', got {start!r}")
     if n_train < 2 or n_test < 1:
         raise ValueError("need at least 2 training and 1 test experiments")
+    if not (np.isfinite(lat_deg) and abs(lat_deg) <= 80.0):
+        raise ValueError(f"site latitude must be within +-80 deg, got {lat_deg}")
+    if not (np.isfinite(noise_scale) and noise_scale >= 0.0):
+        raise ValueError(f"gyro noise scale must be a non-negative number, got {noise_scale}")
     rng = np.random.default_rng([int(seed), STARTS.index(start)])
     out = []
     for i in range(n_train + n_test):
         role = "train" if i < n_train else "test"
         drift = float(rng.uniform(-DRIFT_RANGE_DPH, DRIFT_RANGE_DPH))
         if start == "hot":
-            amb, amp, heat = float(rng.uniform(0.0, 45.0)), float(rng.uniform(0.0, 1.0)), 16.0
+            amb, amp, heat = float(rng.uniform(0.0, 45.0)), float(rng.uniform(0.0, 1.0)), HOT_HEATING_C
         else:
             amb, amp, heat = float(rng.uniform(0.0, 30.0)), 0.0, float(rng.uniform(18.0, 40.0))
         proto = Experiment(f"{start}-{role}-{i:03d}", start, role, int(rng.integers(0, 2**31 - 1)),
-                           drift, 0.0, amb, amp, heat)
+                           drift, 0.0, amb, amp, heat, float(lat_deg), float(noise_scale))
         offset = window_mean_drift_dph(proto, 0.0, NAV_HOURS)  # drift of the unit with eps0 = 0
         out.append(Experiment(**{**proto.to_dict(), "eps0_dph": drift - offset}))
     return out
@@ -195,6 +244,18 @@ def features(lat_error_12h: float, temp_12h: float, temp_change_align: float) ->
 
 HOT_INPUTS = ("lat_error_deg",)
 COLD_INPUTS = ("lat_error_deg", "temp_c", "temp_change_c")
+
+
+def deterministic_errors(exp: Experiment, hours: float = IDENTIFY_HOURS) -> tuple[float, float]:
+    """Latitude and longitude errors (rad) after ``hours`` of navigation that
+    the experiment's deterministic azimuth drift alone causes (closed form,
+    :func:`sarins_fmu.static_errors.drift_history_errors`)."""
+    from ..static_errors import drift_history_errors
+
+    temp, sel = window_temperature(exp, 0.0, hours)
+    eps = drift_series_dph(exp, temp, TRUTH_GRID)[sel] * DPH_TO_RPS
+    tau = np.arange(eps.size) * TRUTH_GRID
+    return drift_history_errors(hours * HOUR, tau, eps, exp.lat_deg * DEG_TO_RAD)
 
 
 def closed_form_drift_dph(lat_error_deg: np.ndarray, hours: float = IDENTIFY_HOURS,
@@ -232,6 +293,9 @@ def paper_true_drift(err0: np.ndarray, err1: np.ndarray, drift1_dph: float,
 
 
 # ---------------------------------------------------------------- training and comparisons
+# what a model trained by this protocol expects of the runs it identifies (stored in its metadata;
+# ``sarins replay --identify`` checks a log against it)
+PROTOCOL = {"align_hours": ALIGN_HOURS, "identify_hours": IDENTIFY_HOURS, "step_s": 1.0}
 SPREADS = (1.0, 2.0, 4.0, 8.0)  # SPREAD candidates (standardised inputs), chosen by leave-one-out
 RBF_GOAL = 0.0003**2  # (deg/h)^2: the paper's 0.0003 deg/h training error as an RMS
 
@@ -250,7 +314,8 @@ def loo_errors(X: np.ndarray, y: np.ndarray, spread: float, goal: float = RBF_GO
 
 def train_rbf(rows: list[dict], inputs: tuple, path, *, spread: float | None = None, goal: float = RBF_GOAL,
               target: str = "drift_dph"):
-    """Fit and save the RBF network on training rows (dicts of features + target).
+    """Fit the RBF network on training rows (dicts of features + target) and
+    save it to ``path`` (None: not saved).
 
     ``spread`` None: the SPREAD of :data:`SPREADS` with the smallest
     leave-one-out RMS error on the training rows (2 below 4 rows; the paper's SPREAD = 2 is
@@ -268,10 +333,14 @@ def train_rbf(rows: list[dict], inputs: tuple, path, *, spread: float | None = N
     if spread is None:
         cv = {str(s): float(np.sqrt(np.mean(loo_errors(X, y, s, goal) ** 2))) for s in SPREADS}
         spread = float(min(SPREADS, key=lambda s: cv[str(s)]))
+    lats = {float(r.get("lat_deg", SITE_LAT_DEG)) for r in rows}
+    if len(lats) != 1:
+        raise ValueError(f"training rows from several sites {sorted(lats)}: one model per site latitude")
     net = RBFNetwork(spread=spread, goal=goal).fit(X, y, input_names=list(inputs), target_name="drift_dph")
-    net.metadata = {"local_lat_deg": SITE_LAT_DEG, "n_samples": int(len(y)), "source": "sarins campaign axial-rbf",
-                    "target": target, "loo_rms_dph": cv}
-    net.save(path)
+    net.metadata = {"local_lat_deg": lats.pop(), "n_samples": int(len(y)), "source": "sarins campaign axial-rbf",
+                    "target": target, "loo_rms_dph": cv, **PROTOCOL}
+    if path is not None:
+        net.save(path)
     return net
 
 

@@ -23,7 +23,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from .. import earth
 from .. import imu as imu_mod
 from .. import turntable
 from ..identify.rls import ForgettingRLS, RLSSettings, fit_quadratic_temperature_model
@@ -31,16 +30,17 @@ from ..imu import IMU, ImuModel, StaticBase
 from ..ins import InsConfig, StrapdownINS
 from ..identify.online import OnlineDriftUpdater
 from ..kalman import StopFilterSettings, StopKalmanFilter
-from ..rotations import rotvec_to_mat
+from ..rotations import euler_to_mat, mat_to_euler, rotvec_to_mat
 from ..thermal import Ambient
-from ..vehicle import VehicleTrajectory, random_legs
+from ..vehicle import random_legs
 from ..units import ARCSEC_TO_RAD, DAY, DEG_TO_RAD, DPH_TO_RPS, DPSH_TO_RPSS, RPS_TO_DPH, UG_TO_MPS2
+from .online_rls_vehicle import GYRO_Z, InProcessEngine, VehicleRun, position_errors, reference_navigation
 
-GYRO_Z = 2  # index of the azimuth gyro in the IMU's temperature vector
 TEMPERATURE_RANGE = (0.0, 50.0)  # degC, seed 002's stop temperatures and S-metric range
 N_STOPS = 20  # seed 002: stops in the 300-day simulation
 SIM_DAYS = 300.0  # seed 002: simulated days
 MONTE_CARLO_RUNS = 100  # seed 002, Fig. 6 / Table 2
+DRIVE_ALIGN_TIME = 900.0  # s, the test drive's alignment at rest before it moves (our choice)
 
 
 def premise_model() -> ImuModel:
@@ -297,82 +297,21 @@ def model_update_run(*, seed: int = 0, unit: str = "premise", days: float = SIM_
 # the vehicle test analogue (Table 4, Figs 7-8, Table 5)
 # --------------------------------------------------------------------------
 
-def _state_blocks(moving: np.ndarray):
-    """(k0, k1) row ranges of constant moving/stopped state."""
-    edges = np.flatnonzero(np.diff(moving.astype(np.int8))) + 1
-    return list(zip(np.concatenate([[0], edges]), np.concatenate([edges, [moving.size]])))
-
-
-def _session(updater, model, coef, *, day, temperature, stop_seconds, lat, seed, step=1.0,
-             internal_rate=50.0):
-    """One drive with a stop of ``stop_seconds`` on ``day``: IMU with the aged
-    coefficients ``coef`` -> INS compensated by the updater's current model ->
-    the updater (Fig. 2) on the INS outputs.  Returns the number of rows."""
+def _session_run(model, coef, *, day, temperature, stop_seconds, lat, seed, step=1.0,
+                 internal_rate=50.0) -> VehicleRun:
+    """One drive with a stop of ``stop_seconds`` on ``day`` (random legs, heading and INS
+    attitude error from ``seed``), the IMU carrying the day's true coefficients ``coef``."""
     rng = np.random.default_rng([seed, 40])
-    legs = [("drive", 300.0, float(rng.uniform(8, 15))), ("turn", float(rng.choice([-90.0, 90.0]))),
+    legs = (("drive", 300.0, float(rng.uniform(8, 15))), ("turn", float(rng.choice([-90.0, 90.0]))),
             ("drive", 300.0, float(rng.uniform(8, 15))), ("stop", float(stop_seconds)),
-            ("drive", 180.0, 10.0)]
-    traj = VehicleTrajectory(legs, lat, 0.0, float(rng.uniform(-math.pi, math.pi)), step=step)
+            ("drive", 180.0, 10.0))
+    heading = float(rng.uniform(-math.pi, math.pi))
     unit = replace(model, axial_drift_poly=np.asarray(coef, float), aging_sigma=np.zeros(3))
-    ambient = Ambient(mean=temperature - unit.thermal.self_heating[GYRO_Z])
-    sensor = IMU(unit, traj, traj.schedule.axes, output_interval=step, internal_rate=internal_rate, seed=seed,
-                 thermal_start="hot", ambient=ambient)
+    run = VehicleRun(legs, lat, 0.0, heading, unit, temperature - unit.thermal.self_heating[GYRO_Z], seed,
+                     start_day=day, step=step, internal_rate=internal_rate)
     phi0 = rng.standard_normal(3) * np.array([10 * ARCSEC_TO_RAD, 10 * ARCSEC_TO_RAD, 0.05 * DEG_TO_RAD])
-    ins = StrapdownINS(InsConfig(lat=lat, align_time=0.0, step=step),
-                       initial_attitude=_perturbed_attitude(traj.mat_nb(0), phi0))
-    t0 = day * DAY
-    moving = traj.moving()[1:]
-    for k0, k1 in _state_blocks(moving):
-        angle, rate, accel = traj.schedule.state(traj.time[k0:k1])
-        dtheta, dv, temps = sensor.step(angle, rate, accel)
-        if moving[k0]:  # first block after a stop: the update applies from its first row
-            updater.finish_stop(t0 + traj.time[k0 + 1])
-        out = ins.step(dtheta, dv, updater.compensation(temps[:, GYRO_Z]))
-        updater.step(t0 + traj.time[k0 + 1:k1 + 1], traj.speed[k0 + 1:k1 + 1], out[:, 3:5], out[:, 6:9],
-                     temps[:, GYRO_Z], out[:, 0])
-    updater.finish_stop(t0 + traj.time[-1])
-    return traj.n_steps
-
-
-def _navigate_drive(traj, unit, models, *, temperature, seed, align_time=900.0, step=1.0, internal_rate=50.0):
-    """6 h drive: align, then navigate once per model in ``models`` (azimuth
-    compensation ε(T) with each [a, b, c], rad/s per °C^n, or None) on the
-    same increments; errors against an ideal-sensor INS on the same motion.
-
-    Returns east and north errors, (M, K) m each, and the navigation times (K,) s.
-    """
-    ambient = Ambient(mean=temperature - unit.thermal.self_heating[GYRO_Z])
-    sensor = IMU(unit, traj, traj.schedule.axes, output_interval=step, internal_rate=internal_rate, seed=seed,
-                 thermal_start="hot", ambient=ambient)
-    ideal = IMU(ImuModel(), traj, traj.schedule.axes, output_interval=step, internal_rate=internal_rate, seed=seed)
-    n_align = int(round(align_time / step))
-    lat0, lon0 = traj.lat[0], traj.lon[0]
-    navs = [StrapdownINS(InsConfig(lat=lat0, lon=lon0, align_time=align_time, step=step)) for _ in models]
-    ref = StrapdownINS(InsConfig(lat=lat0, lon=lon0, align_time=0.0, step=step), initial_attitude=traj.mat_nb(n_align))
-    outs = [[] for _ in models]
-    ref_out = []
-    chunk = 3600
-    for k0 in range(0, traj.n_steps, chunk):
-        k1 = min(traj.n_steps, k0 + chunk)
-        angle, rate, accel = traj.schedule.state(traj.time[k0:k1])
-        dtheta, dv, temps = sensor.step(angle, rate, accel)
-        d_ideal, v_ideal, _ = ideal.step(angle, rate, accel)
-        for ins, coef, out in zip(navs, models, outs):
-            comp = np.zeros(k1 - k0) if coef is None else np.polyval(coef, temps[:, GYRO_Z])
-            comp[: max(0, n_align - k0)] = 0.0
-            out.append(ins.step(dtheta, dv, comp))
-        a = max(k0, n_align)
-        if a < k1:
-            ref_out.append(ref.step(d_ideal[a - k0:], v_ideal[a - k0:]))
-    ref_nav = np.concatenate(ref_out)
-    east, north = [], []
-    r_m, r_n = earth.radii(lat0)
-    for out in outs:
-        nav = np.concatenate(out)[n_align:]
-        north.append((nav[:, 0] - ref_nav[:, 0]) * r_m)
-        east.append((nav[:, 1] - ref_nav[:, 1]) * r_n * np.cos(ref_nav[:, 0]))
-    time = np.arange(1, ref_nav.shape[0] + 1) * step
-    return np.array(east), np.array(north), time
+    mat_true = euler_to_mat(heading, 0.0, 0.0)  # the vehicle at rest, level, table at zero
+    return replace(run, attitude0=tuple(float(x) for x in mat_to_euler(_perturbed_attitude(mat_true, phi0))))
 
 
 def cep(radial: np.ndarray) -> float:
@@ -383,7 +322,8 @@ def cep(radial: np.ndarray) -> float:
 def vehicle_test(*, seed: int = 0, unit: str = "premise", n_sessions: int = 20, year_days: float = 318.0,
                  test_day: float = 368.0, drive_hours: float = 6.0, lat_deg: float = 40.0,
                  stop_minutes=(15.0, 60.0), ageing: str = "markov", forgetting_factor: float = 0.8,
-                 calibration_points: int = 11, internal_rate: float = 50.0, ageing_scale: float = 1.0) -> dict:
+                 calibration_points: int = 11, internal_rate: float = 50.0, ageing_scale: float = 1.0,
+                 engine=None) -> dict:
     """The vehicle test analogue: a year of online updates, then a 6 h drive.
 
     Day 0: calibration (quadratic fit of stop-filter estimates at
@@ -397,7 +337,16 @@ def vehicle_test(*, seed: int = 0, unit: str = "premise", n_sessions: int = 20, 
     initial and with the updated model (Fig. 8); CEP and maximum radial
     error (Table 5) against an ideal-sensor INS on the same motion.
     ``ageing_scale`` multiplies the unit's ageing standard deviations.
+
+    ``engine`` runs the sessions and the drive's navigations (default
+    :class:`~sarins_fmu.experiments.online_rls_vehicle.InProcessEngine`; the
+    FMU system: :class:`sarins.online_rls.cosim.CosimEngine`).  The day-0
+    calibration (static stop-filter runs), the true coefficients and the
+    ideal-sensor reference are computed here for every engine.  A model
+    update applies from the interval starting one step (``UPDATE_LATENCY``)
+    after the INS row that triggered it.
     """
+    engine = InProcessEngine() if engine is None else engine
     model = _scaled_ageing(imu_unit(unit), ageing_scale)
     lat = lat_deg * DEG_TO_RAD
     rng = np.random.default_rng([seed, 50])
@@ -412,16 +361,22 @@ def vehicle_test(*, seed: int = 0, unit: str = "premise", n_sessions: int = 20, 
     stops = rng.uniform(*stop_minutes, size=n_sessions) * 60.0
     truth_at_stop = np.empty(n_sessions)
     for i, (day, temp, stop) in enumerate(zip(days, temps, stops)):
-        _session(updater, model, truth[int(day)], day=day, temperature=float(temp), stop_seconds=float(stop),
-                 lat=lat, seed=seed * 1000 + i, internal_rate=internal_rate)
+        run = _session_run(model, truth[int(day)], day=day, temperature=float(temp), stop_seconds=float(stop),
+                           lat=lat, seed=seed * 1000 + i, internal_rate=internal_rate)
+        engine.session(run, updater)
         truth_at_stop[i] = model_drift(replace(model, axial_drift_poly=truth[int(day)]), temp)
+    rls = updater.rls  # (an engine may hand back a new RLS state)
     events = updater.event_table()
-    legs = random_legs(drive_hours * 3600.0, seed + 777, n_stops=2, stop_range=(300.0, 900.0))
-    traj = VehicleTrajectory(legs, lat, 0.0, float(rng.uniform(-math.pi, math.pi)), lead_time=900.0)
+    legs = tuple(random_legs(drive_hours * 3600.0, seed + 777, n_stops=2, stop_range=(300.0, 900.0)))
+    heading = float(rng.uniform(-math.pi, math.pi))
     test_temp = float(rng.uniform(10.0, 40.0))
     test_unit = replace(model, axial_drift_poly=truth[-1], aging_sigma=np.zeros(3))
-    east, north, time = _navigate_drive(traj, test_unit, [fit.coefficients, rls.parameters],
-                                        temperature=test_temp, seed=seed * 1000 + 999, internal_rate=internal_rate)
+    drive = VehicleRun(legs, lat, 0.0, heading, test_unit, test_temp - test_unit.thermal.self_heating[GYRO_Z],
+                       seed * 1000 + 999, lead_time=DRIVE_ALIGN_TIME, align_time=DRIVE_ALIGN_TIME,
+                       start_day=test_day, internal_rate=internal_rate)
+    navs = engine.drive(drive, [fit.coefficients, rls.parameters])
+    east, north = position_errors(navs, reference_navigation(drive), lat)
+    time = np.arange(1, east.shape[1] + 1) * drive.step
     radial = np.hypot(east, north)
     final_c = truth[-1] + np.array([0.0, 0.0, model.gyro.bias[GYRO_Z]])
     return {

@@ -7,9 +7,11 @@ frame, then the zero-velocity Kalman filter) from the log's start position,
 then free navigation to the end of the log.  Optionally a trained IMU
 compensator (seed 003, :mod:`sarins_fmu.identify.compensators`) corrects
 the increments first; it sees the mean rates and the mean of the six
-temperatures, as the IMUCompensator FMU does.  Errors are taken against
-the log's reference position when it has one, else against the static
-start.  The INS is stepped in the chunks ``run_static`` uses, so a log
+temperatures, as the IMUCompensator FMU does.  Optionally seed 000's RBF
+axial-drift identifier runs after the model's alignment + navigation time
+and its drift is subtracted over the rest of the log.  Errors are taken
+against the log's reference position when it has one, else against the
+static start.  The INS is stepped in the chunks ``run_static`` uses, so a log
 written from a simulated run replays to the same numbers, bit for bit.
 """
 
@@ -22,7 +24,8 @@ import numpy as np
 from .. import earth
 from ..imu_log import ImuLog, LogError
 from ..ins import InsConfig, StrapdownINS
-from ..units import HOUR
+from ..identify.axial import APPLY_LATENCY
+from ..units import DPH_TO_RPS, HOUR
 from .static_run import CHUNK, StaticRunResult
 
 
@@ -37,42 +40,56 @@ def compensate(log: ImuLog, compensator) -> tuple[np.ndarray, np.ndarray]:
 
 
 def replay(log: ImuLog, *, align_hours: float = 4.0, coarse_seconds: float = 300.0,
-           compensator=None) -> StaticRunResult:
+           compensator=None, identifier=None, compensate_drift: bool = True) -> StaticRunResult:
     """Align on the first ``align_hours`` of the log and navigate over the rest.
 
+    identifier : optional :class:`sarins_fmu.identify.axial.DriftIdentifier`
+        (seed 000's RBF network).  After ``identify_hours`` of navigation (the
+        model's protocol) it identifies the axial drift from the latitude
+        error there (and, for a cold model, the z-gyro temperature then and
+        its change over the alignment), as the RBFIdentifier FMU does; with
+        ``compensate_drift`` the INS subtracts it from APPLY_LATENCY s later
+        to the end of the log, exactly as ``run_static(correction_dph=drift,
+        correction_from_hours=identify_hours + latency/3600)``.
+        :func:`check_identifier_fit` refuses a log the model does not fit.
+
     Returns a :class:`StaticRunResult` (navigation phase; ``time`` since
-    the end of alignment).  Raises ValueError when the log is shorter than
-    the alignment or the alignment is not a whole number of samples.
+    the end of alignment); with an identifier its info holds
+    ``identified_drift_dph``, the features and ``compensation_from_s``.
+    Raises ValueError when the log is shorter than the alignment or the
+    alignment is not a whole number of samples.
     """
     h = log.step
-    if not (math.isfinite(align_hours) and align_hours > 0):
-        raise ValueError(f"alignment must last a positive time, got {align_hours} h")
-    n_align = round(align_hours * HOUR / h)
-    if abs(n_align * h - align_hours * HOUR) > 1e-6 * h:
-        raise ValueError(f"alignment of {align_hours} h is not a whole number of {h:g} s samples")
+    n_align = _alignment_samples(log, align_hours)
     n_total = len(log.time)
-    if n_total <= n_align:
-        raise ValueError(f"the log ({n_total * h / HOUR:.4g} h) is not longer than the {align_hours:g} h alignment")
+    n_id = n_corr = None
+    if identifier is not None:
+        n_id, n_corr = check_identifier_fit(log, identifier, align_hours)
     dtheta, dv = (log.dtheta, log.dv) if compensator is None else compensate(log, compensator)
     config = InsConfig(lat=log.lat, lon=log.lon, height=log.height, align_time=n_align * h,
                        coarse_time=coarse_seconds, step=h)
     ins = StrapdownINS(config)
     out = np.empty((n_total, 9))
-    for k0 in range(0, n_total, CHUNK):
-        k1 = min(n_total, k0 + CHUNK)
-        if k0 < n_align <= k1:
-            out[k0:n_align] = ins.step(dtheta[k0:n_align], dv[k0:n_align])
-            out[n_align:k1] = ins.step(dtheta[n_align:k1], dv[n_align:k1])
-        else:
-            out[k0:k1] = ins.step(dtheta[k0:k1], dv[k0:k1])
-    nav = out[n_align:]
-    if log.ref is None:
-        err = ins.position_error(nav)
+    corr = np.zeros(n_total)
+    info = {}
+    if identifier is None:
+        _navigate(ins, dtheta, dv, corr, out, 0, n_total, n_align)
     else:
-        ref = log.ref[n_align:]
-        r_m, r_n = earth.radii(log.lat)
-        dlat, dlon = nav[:, 0] - ref[:, 0], nav[:, 1] - ref[:, 1]
-        err = np.column_stack([dlat, dlon, dlat * (r_m + log.height), dlon * (r_n + log.height) * np.cos(ref[:, 0])])
+        _navigate(ins, dtheta, dv, corr, out, 0, n_id, n_align)
+        err_id = _errors(log, ins, out[n_id - 1:n_id], n_id - 1)
+        temps_z = log.temps[:, 2] if log.temps is not None else None
+        temp_c = float(temps_z[n_id - 1]) if temps_z is not None else float("nan")
+        change_c = float(temps_z[n_align - 1] - temps_z[0]) if temps_z is not None else float("nan")
+        drift_dph = identifier.drift_dph(float(err_id[0, 0]), temp_c, change_c)
+        if compensate_drift:
+            corr[n_corr:] = drift_dph * DPH_TO_RPS
+        _navigate(ins, dtheta, dv, corr, out, n_id, n_total, n_align)
+        info = {"identified_drift_dph": drift_dph, "identify_at_s": (n_id - n_align) * h,
+                "identify_lat_error_deg": math.degrees(float(err_id[0, 0])), "identify_temp_c": temp_c,
+                "identify_temp_change_c": change_c, "identifier_model": str(identifier.path),
+                "compensation_from_s": (n_corr - n_align) * h if compensate_drift else None}
+    nav = out[n_align:]
+    err = _errors(log, ins, nav, n_align)
     n_nav = n_total - n_align
     temps = log.temps if log.temps is not None else np.full((n_total, 6), np.nan)
     return StaticRunResult(
@@ -81,5 +98,89 @@ def replay(log: ImuLog, *, align_hours: float = 4.0, coarse_seconds: float = 300
         attitude=nav[:, 6:9], time_all=np.arange(1, n_total + 1) * h - n_align * h, temperature=temps,
         info={"lat_deg": math.degrees(log.lat), "align_hours": n_align * h / HOUR, "nav_hours": n_nav * h / HOUR,
               "source": "log", "quantity": log.quantity, "compensated": compensator is not None,
-              "gyro_comp_dph": (ins.gyro_comp / (math.pi / 180 / 3600)).tolist(),
-              "accel_comp": ins.accel_comp.tolist()})
+              "gyro_comp_dph": (ins.gyro_comp / DPH_TO_RPS).tolist(),
+              "accel_comp": ins.accel_comp.tolist(), **info})
+
+
+def _alignment_samples(log: ImuLog, align_hours: float) -> int:
+    h = log.step
+    if not (math.isfinite(align_hours) and align_hours > 0):
+        raise ValueError(f"alignment must last a positive time, got {align_hours} h")
+    n_align = round(align_hours * HOUR / h)
+    if abs(n_align * h - align_hours * HOUR) > 1e-6 * h:
+        raise ValueError(f"alignment of {align_hours} h is not a whole number of {h:g} s samples")
+    if len(log.time) <= n_align:
+        raise ValueError(f"the log ({len(log.time) * h / HOUR:.4g} h) is not longer than the {align_hours:g} h "
+                         "alignment")
+    return n_align
+
+
+class ModelFitError(LogError):
+    """A log that the drift model does not fit (the message does not name the file: the caller does)."""
+
+
+MAX_SITE_OFFSET_DEG = 1.0  # a model identifies at its training site: the latitude error's gain is cos L
+
+
+def check_identifier_fit(log: ImuLog, identifier, align_hours: float) -> tuple[int, int]:
+    """Refuse (:class:`ModelFitError`, one line) a log the drift model does not fit.
+
+    The model's protocol (``identifier.protocol``: alignment, navigation
+    before identification, INS step) must be the log's: the same
+    alignment, the log's sample interval equal to the model's step, the
+    log long enough to reach the identification and the compensation's
+    start, its start latitude within MAX_SITE_OFFSET_DEG of the model's
+    site, and the temperature columns present if the model reads them.
+    Returns (samples to the identification, sample from which the drift is
+    compensated), counted from the start of the log.
+    """
+    proto = identifier.protocol
+    h = log.step
+    if abs(align_hours - proto["align_hours"]) > 1e-9:
+        raise ModelFitError(f"the drift model expects {proto['align_hours']:g} h of alignment, the replay "
+                            f"aligns for {align_hours:g} h")
+    if abs(h - proto["step_s"]) > 1e-9 * proto["step_s"]:
+        raise ModelFitError(f"the drift model was trained on {proto['step_s']:g} s INS steps, the log's sample "
+                            f"interval is {h:g} s (resample the log or train a model at its rate)")
+    n_id = round((align_hours + proto["identify_hours"]) * HOUR / h)
+    n_corr = n_id + round(APPLY_LATENCY / h)
+    if abs(n_id * h - (align_hours + proto["identify_hours"]) * HOUR) > 1e-6 * h or \
+            abs((n_corr - n_id) * h - APPLY_LATENCY) > 1e-6 * h:
+        raise ModelFitError(f"the identification at {proto['identify_hours']:g} h (and the compensation "
+                            f"{APPLY_LATENCY:g} s later) does not fall on the log's {h:g} s samples")
+    need_h = n_corr * h / HOUR
+    if len(log.time) <= n_corr:
+        raise ModelFitError(f"the log lasts {len(log.time) * h / HOUR:.4g} h; the drift model identifies after "
+                            f"{proto['align_hours']:g} h alignment + {proto['identify_hours']:g} h navigation and "
+                            f"compensates from {need_h:.4g} h on, so the log must be longer than that")
+    offset = abs(math.degrees(log.lat) - identifier.local_lat_deg)
+    if offset > MAX_SITE_OFFSET_DEG:
+        raise ModelFitError(f"the drift model was trained at {identifier.local_lat_deg:g} deg latitude, the log "
+                            f"starts at {math.degrees(log.lat):.4g} deg (more than {MAX_SITE_OFFSET_DEG:g} deg apart)")
+    if log.temps is None and {"temp_c", "temp_change_c"} & set(identifier.input_names):
+        raise ModelFitError("the drift model reads the gyro temperature, and the log has no temperature "
+                            "columns")
+    return n_id, n_corr
+
+
+def _navigate(ins, dtheta, dv, corr, out, start: int, stop: int, n_align: int) -> None:
+    """Step the INS over samples [start, stop) in the chunks of ``run_static``
+    (split at the end of the alignment), writing ``out`` rows."""
+    for c0 in range(start - start % CHUNK, stop, CHUNK):
+        k0, k1 = max(c0, start), min(stop, c0 + CHUNK)
+        if k0 < n_align < k1:
+            out[k0:n_align] = ins.step(dtheta[k0:n_align], dv[k0:n_align], corr[k0:n_align])
+            k0 = n_align
+        out[k0:k1] = ins.step(dtheta[k0:k1], dv[k0:k1], corr[k0:k1])
+
+
+def _errors(log: ImuLog, ins, nav: np.ndarray, first: int) -> np.ndarray:
+    """(K, 4) latitude, longitude (rad), north, east (m) errors of navigation
+    rows ``nav`` (log samples ``first`` on) against the log's reference or the
+    static start."""
+    if log.ref is None:
+        return ins.position_error(nav)
+    ref = log.ref[first:first + len(nav)]
+    r_m, r_n = earth.radii(log.lat)
+    dlat, dlon = nav[:, 0] - ref[:, 0], nav[:, 1] - ref[:, 1]
+    return np.column_stack([dlat, dlon, dlat * (r_m + log.height), dlon * (r_n + log.height) * np.cos(ref[:, 0])])

@@ -16,7 +16,7 @@ import numpy as np
 from .. import imu as imu_mod
 from .. import turntable
 from ..imu import IMU, StaticBase
-from ..rotations import small_angle_error
+from ..rotations import rotvec_to_mat, small_angle_error
 from ..ins import InsConfig, StrapdownINS
 from ..thermal import Ambient
 from ..site import SITE_LAT_DEG
@@ -88,7 +88,8 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
                start: str = "hot", ambient: Ambient | None = None, seed: int = 0, step: float = 1.0,
                internal_rate: float = 200.0, base_yaw_deg: float = 0.0,
                correction_dph: float = 0.0, correction_from_hours: float = 0.0,
-               aligned_start: bool = False, on_increments=None) -> StaticRunResult:
+               aligned_start: bool = False, initial_attitude_error=None, axial_table=None,
+               on_increments=None) -> StaticRunResult:
     """Run turntable -> IMU -> INS on a static base.
 
     Parameters
@@ -105,6 +106,15 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
         ``correction_from_hours`` into navigation on, deg/h.
     aligned_start : skip alignment and start navigation from the true
         attitude (closed-form checks); then align_hours is ignored.
+    initial_attitude_error : (3,) E, N, U rad, with ``aligned_start`` only:
+        the navigation starts from mat_nb = (I - [phi x]) mat_nb_true (the
+        convention of ``info['align_attitude_error']``; closed-form checks).
+    axial_table : real-time compensation of the z gyro by the reported
+        z-gyro temperature, from the first sample on (alignment included): an
+        object with ``correction(temp_c) -> rad/s`` such as
+        :class:`sarins_fmu.identify.multitemp.MultiTemperatureTable`;
+        ``correction * step`` is subtracted from each z angle increment
+        before the INS sees it (``on_increments`` sees the raw output).
     on_increments : callable(time (K,) s, dtheta (K, 3), dv (K, 3), temps (K, 6)),
         called with each chunk of IMU output (e.g. to write a log,
         :mod:`sarins_fmu.imu_log`); time is the end of each interval.
@@ -137,6 +147,10 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
     if aligned_start:
         angle, _, _ = table.state(0.0)
         initial = base.mat_nt @ turntable.chain_matrix(table.axes, angle[0])
+        if initial_attitude_error is not None:
+            initial = rotvec_to_mat(-np.asarray(initial_attitude_error, float)) @ initial
+    elif initial_attitude_error is not None:
+        raise ValueError("initial_attitude_error needs aligned_start (an alignment finds its own attitude)")
     ins = StrapdownINS(config, initial_attitude=initial)
     align_error = np.zeros(3)
     nav_out = np.empty((n_total, 9))
@@ -148,6 +162,8 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
         dtheta, dv, temps[k0:k1] = sensor.step(angle, rate, accel)
         if on_increments is not None:
             on_increments(np.arange(k0 + 1, k1 + 1) * step, dtheta, dv, temps[k0:k1])
+        if axial_table is not None:
+            dtheta[:, 2] -= np.asarray(axial_table.correction(temps[k0:k1, 2]), float) * step
         corr = np.where(np.arange(k0, k1) >= corr_start, correction_dph * DPH_TO_RPS, 0.0)
         if k0 < n_align <= k1:  # attitude error at the end of alignment vs the table truth
             nav_out[k0:n_align] = ins.step(dtheta[:n_align - k0], dv[:n_align - k0], corr[:n_align - k0])

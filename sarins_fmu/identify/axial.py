@@ -43,6 +43,25 @@ def default_model_path(kind: str) -> Path:
         raise ValueError(f"model kind must be 'hot' or 'cold', got {kind!r}") from None
 
 
+# what a model expects of the run it identifies when its metadata does not say (seed 000's protocol,
+# which made the shipped models): alignment and navigation before identification (h), INS step (s)
+DEFAULT_PROTOCOL = {"align_hours": 4.0, "identify_hours": 12.0, "step_s": 1.0}
+
+
+def model_protocol(metadata: dict, path) -> dict:
+    """The run a model was trained on: ``align_hours``, ``identify_hours``
+    (h) and ``step_s`` (s) from its metadata, :data:`DEFAULT_PROTOCOL` for
+    absent keys; :class:`ModelFileError` if one is not a positive number."""
+    meta = metadata if isinstance(metadata, dict) else {}
+    out = {}
+    for key, default in DEFAULT_PROTOCOL.items():
+        value = meta.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 1e6:
+            raise ModelFileError(path, f"{key!r} must be a positive number, got {value!r}")
+        out[key] = float(value)
+    return out
+
+
 def site_latitude_deg(metadata: dict, path) -> float:
     """The model's site latitude (deg; default the paper's site when absent),
     checked: a number within +-90 deg, else :class:`ModelFileError`."""
@@ -59,6 +78,9 @@ class DriftIdentifier:
     ----------
     path : model file written by ``RBFNetwork.save`` with ``input_names``
         among :data:`KNOWN_INPUTS` and a target in deg/h.
+
+    Attributes: ``input_names``, ``local_lat_deg`` (the training site, deg)
+    and ``protocol`` (:func:`model_protocol`).
 
     Raises
     ------
@@ -77,6 +99,7 @@ class DriftIdentifier:
             raise ModelFileError(self.path, f"unsupported model input(s) {unknown}; known: {KNOWN_INPUTS}")
         self.input_names = tuple(names)
         self.local_lat_deg = site_latitude_deg(self.network.metadata, self.path)
+        self.protocol = model_protocol(self.network.metadata, self.path)
 
     def inputs(self, lat_error: float, temp_c: float = np.nan, temp_change_c: float = np.nan) -> np.ndarray:
         """Model input row (1, d) from the latitude error (rad) and temperatures (degC)."""

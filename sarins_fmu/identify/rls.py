@@ -58,6 +58,7 @@ from pathlib import Path
 import numpy as np
 from scipy.linalg import solve_triangular
 
+from ..drift_model import drift_model_value
 from .modelfile import get_array, load_model_file, save_model_file
 
 __all__ = [
@@ -67,6 +68,7 @@ __all__ = [
     "QuadraticFit",
     "ForgettingRLS",
     "quadratic_regressors",
+    "drift_model_value",
     "time_scaled_factor",
     "rls_update",
     "weighted_least_squares",
@@ -142,8 +144,7 @@ def _as_1d(values: object, name: str) -> np.ndarray:
 
 
 def _evaluate(x: np.ndarray, temperature: object) -> np.ndarray:
-    t = np.asarray(temperature, dtype=float)
-    return (x[0] * t + x[1]) * t + x[2]
+    return drift_model_value(x, np.asarray(temperature, dtype=float))
 
 
 def quadratic_regressors(temperature: object) -> np.ndarray:

@@ -3,6 +3,9 @@
  * usage: host UNZIPPED_DIR MODEL_IDENTIFIER GUID STEPS [STEP_SIZE] [ops...]
  *   ops before initialisation:  rVR=VALUE  iVR=VALUE  sVR=TEXT
  *   probes after initialisation: probe-real=VR  probe-int=VR (get with that vr/type)
+ *   after the last step:         final-real=VR (prints "VALUE VR %.17g")
+ *   time-tagged Real input:      tagVR=OFFSET (set to t + OFFSET before every doStep(t, h))
+ *   timestamp:                   time-at=K (prints "STAMP K <unix time, s>" after the K-th doStep)
  *
  * Runs instantiate -> setupExperiment -> set -> enter/exit initialisation ->
  * STEPS doSteps -> terminate -> free, prints "<function> <status>" for every
@@ -14,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "fmi2Functions.h"
 
@@ -35,6 +39,29 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
         fprintf(stderr, "missing symbol %s\n", #name);                              \
         return 2;                                                                  \
     }
+
+static int is_op(const char *op, const char *prefix) { return strncmp(op, prefix, strlen(prefix)) == 0; }
+
+static void stamp(long k) {
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    printf("STAMP %ld %.6f\n", k, (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec);
+    fflush(stdout);
+}
+
+/* Before doStep(t, h): every tagVR=OFFSET input gets t + OFFSET. */
+static fmi2Status set_tags(fmi2SetRealTYPE *set_real, fmi2Component c, int argc, char **argv, int first_op,
+                           double t) {
+    for (int k = first_op; k < argc; k++) {
+        char *eq = strchr(argv[k], '=');
+        if (!is_op(argv[k], "tag") || !eq) continue;
+        fmi2ValueReference vr = (fmi2ValueReference)strtoul(argv[k] + 3, NULL, 10);
+        fmi2Real v = t + atof(eq + 1);
+        fmi2Status st = set_real(c, &vr, 1, &v);
+        if (st != fmi2OK) return st;
+    }
+    return fmi2OK;
+}
 
 static int report(const char *fn, fmi2Status st) {
     if (st != fmi2OK) printf("STATUS %s %d\n", fn, (int)st);
@@ -75,7 +102,7 @@ int main(int argc, char **argv) {
     report("fmi2SetupExperiment", fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
     for (int k = first_op; k < argc; k++) {
         char *op = argv[k], *eq = strchr(op, '=');
-        if (!eq || strncmp(op, "probe-", 6) == 0) continue;
+        if (!eq || strncmp(op, "probe-", 6) == 0 || strncmp(op, "final-", 6) == 0) continue;
         fmi2ValueReference vr = (fmi2ValueReference)strtoul(op + 1, NULL, 10);
         if (op[0] == 'r') {
             fmi2Real v = atof(eq + 1);
@@ -103,8 +130,19 @@ int main(int argc, char **argv) {
         }
     }
     long done = 0;
-    for (long n = 0; ok && n < steps; n++, done++)
-        ok = report("fmi2DoStep", fmi2DoStep(c, n * h, h, fmi2True)) == fmi2OK;
+    for (long n = 0; ok && n < steps; n++, done++) {
+        ok = report("fmi2SetReal", set_tags(fmi2SetReal, c, argc, argv, first_op, n * h)) == fmi2OK;
+        ok = ok && report("fmi2DoStep", fmi2DoStep(c, n * h, h, fmi2True)) == fmi2OK;
+        for (int k = first_op; ok && k < argc; k++)
+            if (is_op(argv[k], "time-at=") && atol(argv[k] + 8) == n + 1) stamp(n + 1);
+    }
+    for (int k = first_op; ok && k < argc; k++) {
+        if (strncmp(argv[k], "final-real=", 11) != 0) continue;
+        fmi2ValueReference vr = (fmi2ValueReference)strtoul(argv[k] + 11, NULL, 10);
+        fmi2Real v;
+        ok = report("fmi2GetReal", fmi2GetReal(c, &vr, 1, &v)) == fmi2OK;
+        if (ok) printf("VALUE %u %.17g\n", (unsigned)vr, v);
+    }
     if (ok) report("fmi2Terminate", fmi2Terminate(c));
     fmi2FreeInstance(c);
     printf("DONE %ld\n", done);

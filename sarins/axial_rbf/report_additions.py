@@ -1,0 +1,326 @@
+"""Report sections for seed 000's missing steps: the multi-temperature
+compensation before the hot network, the cold network on the paper's 6
+rows, the Fig. 1 longitude-sign question, and the noise x latitude sweep.
+
+Every number printed here comes from the campaign summary
+(:func:`sarins.axial_rbf.campaign.execute`); each function returns Markdown
+lines (and writes its figure, if any, into the report folder).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from sarins_fmu.experiments import axial_rbf as s0
+
+from .fig1 import ratio_lon_to_lat, sign_analysis
+from .sweep import CLAIM_DPH
+
+
+def _md(headers, rows) -> str:
+    lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
+    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def _rms(entries) -> float:
+    return float(np.sqrt(np.mean([e["error_dph"] ** 2 for e in entries])))
+
+
+def _stats(entries) -> tuple:
+    err = np.array([e["error_dph"] for e in entries])
+    nm = np.array([e["max_nmi"] for e in entries])
+    return (f"{np.sqrt(np.mean(err ** 2)):.5f}", f"{np.max(np.abs(err)):.5f}", f"{np.mean(nm):.2f}",
+            f"{np.max(nm):.2f}")
+
+
+# ---------------------------------------------------------------- multi-temperature compensation
+MT_METHODS = [("rbf_hot_model", "hot network, no compensation (Table 4's setting without [15])"),
+              ("mt_hot", "compensation + hot network trained on raw hot runs"),
+              ("mt_hot_mt", "compensation + hot network trained on compensated hot runs (the paper's step)"),
+              ("rbf", "cold network (24 rows), no compensation"),
+              ("mt_cold_mt", "compensation + cold network trained on compensated cold runs")]
+
+
+def multitemp_section(summary: dict) -> list[str]:
+    """Calibration table and the cold held-out runs with and without the compensation."""
+    mt = summary["multitemp"]
+    cold = summary["comparison"].get("cold", {})
+    set_ = mt["settings"]
+    lines = ["## Multi-temperature compensation before the hot network (cold start)", "",
+             "Seed 000 sec. 2.3: \"轴向陀螺漂移经过多温度点补偿后[15]，利用热态 RBF 神经网络进行辨识\" -- the axial "
+             "drift is first compensated at multiple temperature points (its ref. [15]) and then identified with "
+             "the hot network. Implemented in `sarins_fmu/identify/multitemp.py`: a simulated chamber calibration "
+             f"of the unit (still, z up, one session, turn-on constant 0, seed {summary['seed']}) holds each "
+             f"point {set_['settle_hours']:g} h to settle and averages the z-gyro rate minus W sin L over the next "
+             f"{set_['average_hours']:g} h; the table (linear between points, held outside) is subtracted from the z "
+             "gyro in real time from switch-on. The calibration costs "
+             f"{mt['wall_seconds']:.0f} s of simulation.", "",
+             _md(["point", "z-gyro temp. (degC)", "measured drift (deg/h)", "unit's steady law (deg/h)",
+                  "calibration error (deg/h)"],
+                 [(i + 1, f"{t:.2f}", f"{d:+.5f}", f"{w:+.5f}", f"{d - w:+.5f}")
+                  for i, (t, d, w) in enumerate(zip(mt["temp_c"], mt["drift_dph"], mt["law_dph"]))]), ""]
+    err = np.asarray(mt["drift_dph"]) - np.asarray(mt["law_dph"])
+    lines += [f"Calibration error RMS {np.sqrt(np.mean(err ** 2)):.5f} deg/h (white noise and bias instability "
+              "over the averaging window, plus the z gyro's misalignment to the horizontal Earth rate, a constant "
+              "the identification absorbs).", ""]
+    present = [(k, label) for k, label in MT_METHODS if k in cold]
+    if not present:
+        return lines
+    tests = summary["test"]["cold"]
+    rows = []
+    for i, t in enumerate(tests):
+        row = [i + 1, f"{t['drift_dph']:+.5f}"]
+        row += [f"{cold[k][i]['error_dph']:+.5f} / {cold[k][i]['max_nmi']:.2f}" for k, _ in present]
+        rows.append(row)
+    lines += ["Same held-out cold starts, identification error (deg/h) / 72 h position error (nmi), with and "
+              "without the compensation. With the compensation the drift removed over the 72 h is the table's "
+              "mean along the run's temperature plus the identified residual.", "",
+              _md(["#", "true drift (deg/h)"] + [k for k, _ in present], rows), "",
+              _md(["method", "what", "RMS error (deg/h)", "max error (deg/h)", "mean nmi/72h", "max nmi/72h"],
+                  [(k, label, *_stats(cold[k])) for k, label in present]), ""]
+    lines.append(_multitemp_verdict(cold, present))
+    return lines + [""]
+
+
+def _multitemp_verdict(cold: dict, present) -> str:
+    rms = {k: _rms(cold[k]) for k, _ in present}
+    text = "RMS identification error: " + ", ".join(f"{k} {rms[k]:.5f}" for k, _ in present) + " deg/h."
+    if "mt_hot_mt" in rms and "rbf_hot_model" in rms:
+        text += (f" The compensation before the hot network takes its RMS error from {rms['rbf_hot_model']:.5f} to "
+                 f"{rms['mt_hot_mt']:.5f} deg/h (x{rms['mt_hot_mt'] / rms['rbf_hot_model']:.2f}).")
+        if "rbf" in rms:
+            side = "below" if rms["mt_hot_mt"] < rms["rbf"] else "above"
+            text += (f" Compensation + hot network ends {side} the uncompensated cold network "
+                     f"({rms['mt_hot_mt']:.5f} vs {rms['rbf']:.5f} deg/h).")
+        text += " The paper found 0.0005-0.0015 deg/h after compensation + hot network."
+        if rms["mt_hot_mt"] < 0.0005:
+            text += (" Here it is lower, because this unit's drift law is a static function of the temperature "
+                     "plus a small rate term (1e-4 deg/h per degC/h): a table measured at steady points removes the "
+                     "static part, and what is left (rate term, calibration error, turn-on constant) is mostly "
+                     "constant over the run. The paper's unit, whose cold-start drift it found \"hard to remove by "
+                     "temperature compensation\", evidently depends on more than the temperature (gradients, "
+                     "history), which this unit does not model.")
+    return text
+
+
+# ---------------------------------------------------------------- 6 rows vs 24 rows
+def cold6_section(summary: dict) -> list[str]:
+    """The cold network trained on the paper's 6 rows beside the 24-row one."""
+    cold = summary["comparison"].get("cold", {})
+    six = summary.get("six", {})
+    if not six or "rbf" not in cold:
+        return []
+    nets = summary["nets"]
+    body = [("rbf (all rows)", nets["cold"].metadata.get("n_samples"), f"{nets['cold'].settings.spread:g}",
+             nets["cold"].n_neurons, *_stats(cold["rbf"]))]
+    for name, net in six.items():
+        first = (int(name.rsplit("_", 1)[1]) - 1) * 6
+        body.append((f"{name} (rows {first + 1}-{first + 6})", net.metadata.get("n_samples"),
+                     f"{net.settings.spread:g}", net.n_neurons, *_stats(cold[name])))
+    rms6 = [_rms(cold[name]) for name in six]
+    tests = summary["test"]["cold"]
+    per = [(i + 1, f"{t['drift_dph']:+.5f}", f"{cold['rbf'][i]['error_dph']:+.5f}",
+            *(f"{cold[name][i]['error_dph']:+.5f}" for name in six)) for i, t in enumerate(tests)]
+    return ["## Cold network: the paper's 6 rows beside all training rows", "",
+            "The paper trained its cold network on the 6 rows of its Table 4. Here the cold network is also "
+            "trained on each disjoint 6-row block of the training rows (generation order; block 1 is the "
+            "paper-sized model), same inputs, goal and SPREAD selection (leave-one-out), evaluated on the same "
+            "held-out cold starts (nmi/72h from the affine error map).", "",
+            _md(["model", "rows", "SPREAD", "neurons", "RMS error (deg/h)", "max error (deg/h)", "mean nmi/72h",
+                 "max nmi/72h"], body), "",
+            _md(["#", "true drift (deg/h)", "all rows error (deg/h)"] + [f"{n} error (deg/h)" for n in six], per),
+            "",
+            f"RMS error with all {nets['cold'].metadata.get('n_samples')} rows {_rms(cold['rbf']):.5f} deg/h; with "
+            f"6 rows {min(rms6):.5f} .. {max(rms6):.5f} deg/h over the {len(six)} blocks (mean "
+            f"{np.mean(rms6):.5f}).", ""]
+
+
+# ---------------------------------------------------------------- Fig. 1 longitude sign
+def fig1_section(summary: dict) -> list[str]:
+    """The closed-form check and the sign statistics of the simulated runs."""
+    fig = summary["fig1"]
+    c = fig["check"]
+    rows = [(f"{d:+.4f}", f"{h:+.0f}", f"{sl:+.6f}", f"{cl:+.6f}", f"{so:+.6f}", f"{co:+.6f}")
+            for d, h, sl, cl, so, co in zip(c["drift_dph"], c["heading_arcsec"], c["sim_lat_deg"], c["cf_lat_deg"],
+                                            c["sim_lon_deg"], c["cf_lon_deg"])]
+    ratio = ratio_lon_to_lat(s0.SITE_LAT_DEG)
+    lines = ["## Fig. 1: the sign of the longitude error", "",
+             "The paper (sec. 2.1): at 12 h, \"纬度误差输出为正时，经度误差时正时负\" -- with a positive latitude "
+             "error the longitude error is sometimes positive, sometimes negative -- so it uses the latitude "
+             "error only. Closed form on a static base (Titterton & Weston sec. 12.3, Savage ch. 12; "
+             "`sarins_fmu/static_errors.py`): a constant azimuth drift e gives dL = (cos L/W)(1 - cos Wt) e and "
+             "dlon = sin L (t - sin Wt / W) e, the same sign at every t > 0 (at 12 h dlon/dL = tan L (Wt - sin Wt)/"
+             f"(1 - cos Wt) = {ratio:.3f} at 28.222 deg); an initial heading error phi_U gives dL = -cos L sin(Wt) "
+             "phi_U, which vanishes at 12 h (the paper's reason for 12 h), and dlon = -sin L (1 - cos Wt) phi_U, "
+             "largest at 12 h (-2 sin L phi_U).", "",
+             "Ideal IMU started on the true attitude (with the heading error given), 12 h at 28.222 deg, "
+             "simulation against the closed form (deg):", "",
+             _md(["drift (deg/h)", "heading error (arcsec)", "sim. dL", "closed form dL", "sim. dlon",
+                  "closed form dlon"], rows), ""]
+    lines += _sign_lines("Campaign runs (nav-rlg unit, 4 h alignment, hot and cold, training and held-out)",
+                         fig["signs"])
+    sweep = summary.get("sweep")
+    if sweep:
+        lines += _sweep_sign_lines(sweep)
+    lines.append(_fig1_verdict(fig["signs"], ratio))
+    return lines + [""]
+
+
+def _sign_lines(what: str, s: dict) -> list[str]:
+    lines = [f"{what}: {s['n']} runs; {s['lat_pos']} with a positive 12 h latitude error, "
+             f"{s['lat_pos_lon_neg']} of them with a negative longitude error; signs differ on {s['differ']} of "
+             f"{s['n']}."]
+    if "n_decomposed" in s:
+        lines[-1] += (f" On the {s['n_decomposed']} in-process runs (alignment heading error known, RMS "
+                      f"{s['heading_rms_arcsec']:.1f} arcsec): RMS longitude error {s['rms_lon_deg']:.5f} deg; "
+                      f"after subtracting the closed form of the run's own deterministic drift "
+                      f"{s['rms_minus_drift_deg']:.5f} deg; after subtracting the heading-error term too "
+                      f"{s['rms_minus_both_deg']:.5f} deg. The drift alone predicts differing signs on "
+                      f"{s['drift_only_differ']} runs; of the {s['differ_decomposed']} runs with differing signs, "
+                      f"drift + heading closed form predicts {s['differ_predicted']}.")
+    return lines + [""]
+
+
+def _sweep_sign_lines(sweep: dict) -> list[str]:
+    body = []
+    scales = sorted({p["noise_scale"] for p in sweep["points"]})
+    scale = min(scales, key=lambda v: abs(v - s0.GYRO_NOISE_SCALE))
+    for lat in sorted({p["lat_deg"] for p in sweep["points"]}):
+        rows = [r for r in sweep["rows"] if r["lat_deg"] == lat and r["noise_scale"] == scale]
+        s = sign_analysis(rows)
+        body.append((f"{lat:g}", s["n"], s["lat_pos"], s["lat_pos_lon_neg"], s["differ"],
+                     f"{s['heading_rms_arcsec']:.1f}", f"{s['rms_minus_drift_deg']:.5f}",
+                     f"{s['rms_minus_both_deg']:.5f}", f"{s['differ_predicted']} / {s['differ_decomposed']}"))
+    return [f"Sweep runs (hot starts, noise scale {scale:g}) by latitude (at the equator sin L = 0 takes both the "
+            "drift and the heading term out of the longitude error, so its sign is anyone's):", "",
+            _md(["latitude (deg)", "runs", "dL > 0", "of which dlon < 0", "signs differ", "heading error RMS (arcsec)",
+                 "dlon - drift term RMS (deg)", "dlon - drift - heading RMS (deg)", "differing signs predicted"],
+                body), ""]
+
+
+def _fig1_verdict(s: dict, ratio: float) -> str:
+    text = (f"**Finding.** In the campaign's runs the paper's observation is rare: {s['lat_pos_lon_neg']} of "
+            f"{s['lat_pos']} runs with a positive latitude error have a negative longitude error (all signs: "
+            f"{s['differ']} of {s['n']} differ). The azimuth drift alone "
+            f"gives the longitude error the sign of the latitude error ({ratio:.2f} of it at 12 h)")
+    if "n_decomposed" in s:
+        text += (f" (the drift closed form predicts differing signs on {s['drift_only_differ']} of the "
+                 f"{s['n_decomposed']} decomposed runs). The heading error the alignment leaves "
+                 f"({s['heading_rms_arcsec']:.1f} arcsec RMS) reaches the longitude error at 12 h with its largest "
+                 "weight, -2 sin L phi_U, while it cancels from the latitude error: adding it to the closed form "
+                 f"takes the longitude residual from {s['rms_minus_drift_deg']:.5f} to {s['rms_minus_both_deg']:.5f} "
+                 f"deg and predicts {s['differ_predicted']} of the {s['differ_decomposed']} differing signs. A "
+                 "sign flip needs |drift| (t - sin Wt/W) < (1 - cos Wt) |phi_U|, i.e. below "
+                 f"{s['flip_threshold_dph']:.5f} deg/h for the RMS heading error; {s['below_threshold']} of the "
+                 f"{s['n_decomposed']} decomposed runs have a drift that small, and it flips only where the heading "
+                 f"error has the opposite sign (the drifts are uniform in +-{s0.DRIFT_RANGE_DPH} deg/h). The paper's "
+                 "mixed signs thus point to drifts below such a threshold, larger heading errors than here, or "
+                 "longitude-error sources this unit does not have")
+    return text + (". The longitude error at 12 h thus mixes the drift with the heading error and cannot give the "
+                   "drift alone (the paper's \"singular solution\"); the latitude error holds the drift and almost "
+                   "none of the heading error.")
+
+
+# ---------------------------------------------------------------- sweep
+def sweep_section(sweep: dict, folder: Path) -> tuple[list[str], list[str]]:
+    """Table and figure of the noise x latitude sweep; returns (lines, figure names)."""
+    pts = sweep["points"]
+    scales = sorted({p["noise_scale"] for p in pts})
+    lats = sorted({p["lat_deg"] for p in pts})
+    at = {(p["noise_scale"], p["lat_deg"]): p for p in pts}
+
+    def cell(p):
+        mark = "**yes**" if p["holds"] else "no"
+        return f"{p['rbf_rms_dph']:.5f} / {p['rbf_max_dph']:.5f} / {p['floor_dph']:.5f} {mark}"
+
+    body = [(f"{s:g}", *(cell(at[(s, lat)]) for lat in lats)) for s in scales]
+    n = pts[0]
+    cf = [(f"{s:g}", *(f"{at[(s, lat)]['closed_rms_dph']:.5f} ({at[(s, lat)]['closed_within'] * 100:.0f} %)"
+                       for lat in lats)) for s in scales]
+    held = [p for p in pts if p["holds"]]
+    lines = ["## Identification error over gyro noise and latitude (sweep)", "",
+             f"Grid **{sweep['grid']}**, seed {sweep['seed']}: hot starts, {n['n_train']} training and "
+             f"{n['n_test']} held-out experiments per point, the same experiments (drifts, temperatures, noise "
+             "seeds) at every point; only the gyro white noise and bias instability (scale s times the nav-rlg "
+             "preset's; the campaign's unit is s = 0.4) and the site latitude change. Each point trains its own hot "
+             "network (SPREAD by leave-one-out). Cells: RBF RMS / max error on the held-out rows / analytic 1-sigma "
+             "floor sqrt(3/2 (N^2 + 2 sigma_b^2 tau) t) / (cos L (1 - cos Wt)/W) (`sarins_fmu/static_errors.py`), "
+             f"deg/h; **yes** where every held-out error is below the paper's {CLAIM_DPH} deg/h.", "",
+             _md(["noise scale \\ latitude (deg)"] + [f"{lat:g}" for lat in lats], body), "",
+             "Closed-form inversion of Table 1 on all rows of each point (no training): RMS error, deg/h (share of "
+             f"rows within {CLAIM_DPH} deg/h):", "",
+             _md(["noise scale \\ latitude (deg)"] + [f"{lat:g}" for lat in lats], cf), "",
+             _sweep_verdict(pts, held), ""]
+    return lines, [_sweep_figure(pts, scales, lats, folder)]
+
+
+def _sweep_verdict(pts, held) -> str:
+    ratio = np.array([p["closed_rms_dph"] / p["floor_dph"] for p in pts if p["floor_dph"] > 0])
+    floor_ok = [p for p in pts if p["floor_holds"]]
+    text = (f"**Where 0.0003 deg/h holds.** Every held-out error of the point's RBF network was below it at "
+            f"{len(held)} of {len(pts)} points ({_where(held)}). The analytic floor puts 2 sigma (95 % of "
+            f"identifications) below it at {len(floor_ok)} points ({_where(floor_ok)}). The closed-form RMS over "
+            f"all rows is {ratio.min():.2f} .. {ratio.max():.2f} times the analytic floor (median "
+            f"{np.median(ratio):.2f}): the error is the gyro noise in the 12 h latitude error, growing with the "
+            "noise scale and as 1/cos L with latitude (the latitude error's sensitivity to the drift is "
+            "cos L (1 - cos Wt)/W while its noise does not depend on latitude).")
+    gap = max(p["truth_gap_rms_dph"] for p in pts)
+    low = min(pts, key=lambda p: p["noise_scale"])["noise_scale"]
+    low_cf = [p["closed_rms_dph"] for p in pts if p["noise_scale"] == low]
+    text += (f" Below the noise sits a deterministic part: the 12 h latitude error weighs the drift's history over "
+             "the first 12 h, the truth is its 72 h mean, and on these hot starts (daily ambient swing up to 1 degC, "
+             f"drift slope {s0.K1_DPH_PER_C:g} deg/h per degC) the two differ by up to {gap:.5f} deg/h RMS (mean "
+             f"{np.mean([p['truth_gap_mean_dph'] for p in pts]):+.5f}): the closed form levels off there at "
+             f"s = {low:g} ({min(low_cf):.5f} .. {max(low_cf):.5f} deg/h), while a trained network can absorb the "
+             "mean offset.")
+    here = min(pts, key=lambda p: abs(p["noise_scale"] - s0.GYRO_NOISE_SCALE) + abs(p["lat_deg"] - s0.SITE_LAT_DEG))
+    text += (f" The held-out rows are the same experiments at every point, and their noise happens to be "
+             f"{'smaller' if here['closed_test_rms_dph'] < here['closed_train_rms_dph'] else 'larger'} than the "
+             f"training rows' (closed form at s = {here['noise_scale']:g}, {here['lat_deg']:g} deg: RMS "
+             f"{here['closed_test_rms_dph']:.5f} on them against {here['closed_train_rms_dph']:.5f} deg/h on the "
+             "training rows), so the per-point RBF figures share that draw; the floor is the sample-free "
+             "statement.")
+    odd = [p for p in pts if p["spread"] != 8.0]
+    if odd:
+        text += (" Leave-one-out chose a SPREAD other than 8 at " + ", ".join(
+            f"s = {p['noise_scale']:g}, {p['lat_deg']:g} deg (SPREAD {p['spread']:g}, max error "
+            f"{p['rbf_max_dph']:.4f} deg/h)" for p in odd)
+                 + ": narrow Gaussians fitted to noisy rows do not extrapolate to held-out inputs outside the "
+                   "training ones, where the closed form (no training) stays at the floor.")
+    return text
+
+
+def _where(points) -> str:
+    by_lat = {}
+    for p in points:
+        by_lat.setdefault(p["lat_deg"], []).append(p["noise_scale"])
+    return "; ".join(f"{lat:g} deg: s = {', '.join(f'{v:g}' for v in sorted(vals))}"
+                     for lat, vals in sorted(by_lat.items())) or "nowhere"
+
+
+def _sweep_figure(pts, scales, lats, folder: Path) -> str:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for i, lat in enumerate(lats):
+        row = [next(p for p in pts if p["noise_scale"] == s and p["lat_deg"] == lat) for s in scales]
+        color = f"C{i}"
+        ax.loglog(scales, [p["closed_rms_dph"] for p in row], "o-", color=color, label=f"{lat:g} deg")
+        ax.loglog(scales, [p["rbf_rms_dph"] for p in row], "x", color=color, ms=7)
+        ax.loglog(scales, [p["floor_dph"] for p in row], "--", color=color, lw=1)
+    ax.axhline(CLAIM_DPH, color="k", ls=":", label="0.0003 deg/h (paper)")
+    ax.set_xlabel("gyro noise scale (x nav-rlg ARW and bias instability)")
+    ax.set_ylabel("identification error RMS (deg/h)")
+    ax.set_title("Hot start: closed form, all rows (o-); RBF, held-out (x); analytic floor (--)", fontsize=9)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    name = "fig5_sweep.png"
+    fig.savefig(Path(folder) / name, dpi=90)
+    plt.close(fig)
+    return name

@@ -1,0 +1,82 @@
+"""The benchmarks' FMU helpers run (no timing asserted): the start-up feeds make the
+time-tagged FMUs compute from their first step in both hosts (FMPy and the C host),
+and the out-of-process prototype gives the slaves' in-process outputs bit for bit.
+Plain-Python kernels (SARINS_NO_NUMBA=1) and a few steps keep it quick."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
+sys.path.insert(0, str(BENCH))
+
+import fmu_runs  # noqa: E402
+
+# after five fed steps: an output that shows the FMU computed (an untagged INS only waits, an
+# identifier whose trigger is not met stays at 0, an updater without rows runs no stop filter)
+TAGGED = {"StrapdownINS": ("nav_time", 1.0),  # coarse 2 s, fine 2 s, one navigation step
+          "RBFIdentifier": ("apply_from", None),  # trigger_time 0 + latency once fired
+          "DriftModelUpdater": ("stop_timer", None),  # the stop filter's time, parked and navigating
+          "IMUThermal": ("increment_end_time", 5.0)}
+
+
+@pytest.fixture(scope="module")
+def c_host(tmp_path_factory):
+    try:
+        return fmu_runs.build_c_host(tmp_path_factory.mktemp("bench_host") / "host")
+    except RuntimeError as exc:
+        pytest.skip(str(exc))
+
+
+@pytest.mark.parametrize("name, host", [(name, "c") for name in TAGGED] + [("StrapdownINS", "fmpy")])
+def test_start_up_feed_runs_five_real_steps(fmu_dir, c_host, tmp_path, name, host):
+    feed = fmu_runs.feeds()[name]
+    if name == "IMUThermal":  # plain-Python minor loop: keep it short
+        feed = fmu_runs.Feed(values={**feed.values, "internal_rate": 10.0}, tags=feed.tags)
+    fmu = fmu_dir / f"{name}.fmu"
+    env = fmu_runs.host_env(os.environ, SARINS_NO_NUMBA="1", SARINS_FMU_CACHE=str(tmp_path / "cache"))
+    if host == "fmpy":
+        argv = fmu_runs.fmpy_command(fmu, feed, 5, stamps=(1, 5), printed=[TAGGED[name][0]])
+    else:
+        argv = fmu_runs.c_host_command(c_host, fmu_runs.unzip(fmu, tmp_path / name), fmu, feed, 5, stamps=(1, 5),
+                                       printed=[TAGGED[name][0]])
+    stamps, values = fmu_runs.run_host(argv, env, time.time())  # raises on any status other than OK
+    assert sorted(stamps) == [1, 5]
+    [value] = values.values()
+    output, expected = TAGGED[name]
+    assert value == expected if expected is not None else value > 0, (output, value)
+
+
+def test_out_of_process_slaves_give_the_in_process_outputs(tmp_path):
+    """Direct slave calls vs servers (one round trip per call, and batched): identical rows, servers exit 0."""
+    code = f"""
+import json, sys
+sys.path.insert(0, {str(BENCH)!r})
+import bench_out_of_process as oop
+params = {{"Turntable": {{"align_time": 20.0}}, "IMUThermal": {{"internal_rate": 10.0}},
+          "StrapdownINS": {{"align_time": 20.0, "coarse_time": 10.0}}}}
+rows, codes = {{}}, {{}}
+for label, kind, method in (("direct", "direct", "run_per_call"), ("per_call", "remote", "run_per_call"),
+                            ("batched", "remote", "run_batched")):
+    chain = oop.Chain(kind, params=params)
+    rows[label] = [[float(x) for x in r] for r in getattr(chain, method)(30)]
+    codes[label] = chain.free()
+print(json.dumps({{"rows": rows, "codes": codes}}))
+"""
+    env = {**os.environ, "SARINS_NO_NUMBA": "1"}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300,
+                          cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    out = json.loads(proc.stdout.splitlines()[-1])
+    assert out["rows"]["per_call"] == out["rows"]["direct"]
+    assert out["rows"]["batched"] == out["rows"]["direct"]
+    assert out["codes"]["per_call"] == [0, 0, 0] and out["codes"]["batched"] == [0, 0, 0]
+    nav_time = [row[-1] for row in out["rows"]["direct"]]
+    assert nav_time[-1] == 10.0 and out["rows"]["direct"][-1][2] > 0  # navigating, with a position error
