@@ -170,8 +170,8 @@ class StrapdownINS(Fmi2Slave):
                 self._fmi_fast_step = None if self._fast is None else self._fast.address
             increments = self._fmi_buffer[self._in_slots][None, :]
             tag = float(self.increment_end_time)
-            if not (np.isfinite(increments).all() and math.isfinite(tag)):
-                raise ValueError("increments or increment_end_time contain NaN or infinity")
+            if not (np.isfinite(increments).all() and math.isfinite(tag) and math.isfinite(self.temp_gyro_z)):
+                raise ValueError("increments, increment_end_time or temp_gyro_z contain NaN or infinity")
             done = self._start_time + self._ins.steps * step_size  # end of the last interval integrated
             if same_time(tag, done, step_size) and self._ins.steps == 0:
                 return True  # no increments yet (Jacobi's first step): nothing to integrate

@@ -34,27 +34,37 @@ def _outputs(slave):
     return names
 
 
+def constant_correction(k):
+    """INS inputs before step k: a new constant compensation well before its apply_from."""
+    if k == ALIGN + 600:
+        return dict(axial_drift_correction=CORRECTION, axial_drift_apply_from=CORRECTION_FROM)
+    return None
+
+
 class Chain:
     """Turntable -> IMUThermal -> StrapdownINS through FMPy, Gauss-Seidel, 1 s steps."""
 
-    def __init__(self, fmu_dir):
+    def __init__(self, fmu_dir, ins_params=None):
         self.tt = Slave(fmu_dir / "Turntable.fmu", "turntable")
         self.imu = Slave(fmu_dir / "IMUThermal.fmu", "imu")
         self.ins = Slave(fmu_dir / "StrapdownINS.fmu", "ins")
         self.tt.set(align_time=ALIGN)
-        self.ins.set(align_time=ALIGN)
+        self.ins.set(**{"align_time": ALIGN, **dict(ins_params or {})})
         for s in (self.tt, self.imu, self.ins):
             s.fmu.enterInitializationMode()
         self.link()
         for s in (self.tt, self.imu, self.ins):
             s.fmu.exitInitializationMode()
         self.k = 0
+        self.names = [f"{label}.{n}" for label, s in (("ins", self.ins), ("imu", self.imu), ("tt", self.tt))
+                      for n in _outputs(s)] + ["ins.phase"]
 
     def link(self):
         self.imu.fmu.setReal([self.imu.vr[n] for n in TT_TO_IMU], self.tt.get(*TT_TO_IMU))
         self.ins.fmu.setReal([self.ins.vr[n] for n in IMU_TO_INS], self.imu.get(*IMU_TO_INS))
 
-    def step(self, n, correction=True):
+    def step(self, n, ins_inputs=constant_correction):
+        """n steps; ``ins_inputs(k)``: INS inputs to set before step k (a dict or None)."""
         rows = []
         for _ in range(n):
             t = float(self.k)
@@ -62,13 +72,17 @@ class Chain:
             self.imu.fmu.setReal([self.imu.vr[n] for n in TT_TO_IMU], self.tt.get(*TT_TO_IMU))
             self.imu.fmu.doStep(t, 1.0)
             self.ins.fmu.setReal([self.ins.vr[n] for n in IMU_TO_INS], self.imu.get(*IMU_TO_INS))
-            if correction and t == ALIGN + 600.0:  # a new compensation, well before its apply_from
-                self.ins.set(axial_drift_correction=CORRECTION, axial_drift_apply_from=CORRECTION_FROM)
+            inputs = ins_inputs(self.k) if ins_inputs is not None else None
+            if inputs:
+                self.ins.set(**inputs)
             self.ins.fmu.doStep(t, 1.0)
             rows.append([x for s in (self.ins, self.imu, self.tt) for x in s.get(*_outputs(s))]
                         + [self.ins.fmu.getInteger([self.ins.vr["phase"]])[0]])
             self.k += 1
         return np.array(rows)
+
+    def column(self, rows, name):
+        return rows[:, self.names.index(name)]
 
     def free(self):
         for s in (self.ins, self.imu, self.tt):
@@ -95,12 +109,30 @@ def _count_python_steps(monkeypatch):
     return counts
 
 
-def _run(fmu_dir, n):
-    chain = Chain(fmu_dir)
+def _run(fmu_dir, n, ins_params=None, ins_inputs=constant_correction):
+    chain = Chain(fmu_dir, ins_params)
     try:
-        return chain.step(n)
+        return chain.step(n, ins_inputs)
     finally:
         chain.free()
+
+
+def _three_ways(fmu_dir, monkeypatch, n, **run):
+    """The runs with the compiled steps from C, through do_step and without them, and the
+    Python do_step calls of the first two (by class)."""
+    _run(fmu_dir, 2)  # loads the shipped slave modules
+    counts = _count_python_steps(monkeypatch)
+    fast = _run(fmu_dir, n, **run)
+    python_steps = dict(counts)
+    monkeypatch.setenv("SARINS_FMU_NO_FAST_STEP", "1")
+    counts.clear()
+    via_do_step = _run(fmu_dir, n, **run)
+    do_step_calls = dict(counts)
+    monkeypatch.setenv("SARINS_FMU_NO_COMPILED_STEP", "1")
+    python = _run(fmu_dir, n, **run)
+    monkeypatch.delenv("SARINS_FMU_NO_FAST_STEP")
+    monkeypatch.delenv("SARINS_FMU_NO_COMPILED_STEP")
+    return fast, via_do_step, python, python_steps, do_step_calls
 
 
 def test_fmu_chain_compiled_equals_python_and_in_process_bit_for_bit(fmu_dir, monkeypatch):
@@ -109,16 +141,7 @@ def test_fmu_chain_compiled_equals_python_and_in_process_bit_for_bit(fmu_dir, mo
     compiled steps called from C, through do_step, and without them; and the
     in-process run."""
     n = 5400
-    _run(fmu_dir, 2)  # loads the shipped slave modules
-    counts = _count_python_steps(monkeypatch)
-    fast = _run(fmu_dir, n)
-    python_steps = dict(counts)
-    monkeypatch.setenv("SARINS_FMU_NO_FAST_STEP", "1")
-    counts.clear()
-    via_do_step = _run(fmu_dir, n)
-    do_step_calls = dict(counts)
-    monkeypatch.setenv("SARINS_FMU_NO_COMPILED_STEP", "1")
-    python = _run(fmu_dir, n)
+    fast, via_do_step, python, python_steps, do_step_calls = _three_ways(fmu_dir, monkeypatch, n)
     ref = run_static(align_hours=ALIGN / 3600, nav_hours=(n - ALIGN) / 3600, seed=0,
                      correction_dph=0.01, correction_from_hours=CORRECTION_FROM / 3600)
     nav = int(ALIGN)
@@ -134,15 +157,99 @@ def test_fmu_chain_compiled_equals_python_and_in_process_bit_for_bit(fmu_dir, mo
     assert do_step_calls["IMUThermal"] == n  # with SARINS_FMU_NO_FAST_STEP every step enters Python
 
 
+MODEL = (2e-5 * DPH_TO_RPS, -4e-4 * DPH_TO_RPS, 0.01 * DPH_TO_RPS)  # a, b, c of c + (a T + b) T, rad/s/degC^n
+MODEL_2 = (-1e-5 * DPH_TO_RPS, 3e-4 * DPH_TO_RPS, 0.004 * DPH_TO_RPS)
+SENDER_FROM, SENDER_CHANGE = 3600, 4000  # steps: a sender tags its set apply_from = nav start + 1 s from here
+
+
+def model_correction(k):
+    """INS inputs before step k: a temperature model from nav time CORRECTION_FROM on, then a sender
+    (like the DriftModelUpdater) that repeats its set with apply_from one step ahead, every step, and
+    changes it once."""
+    a, b, c = MODEL if k < SENDER_CHANGE else MODEL_2
+    model = dict(axial_drift_correction=c, axial_drift_correction_b=b, axial_drift_correction_a=a)
+    if k == ALIGN + 600:
+        return dict(model, axial_drift_apply_from=CORRECTION_FROM)
+    if k >= SENDER_FROM:
+        return dict(model, axial_drift_apply_from=k - ALIGN + 1.0)
+    return None
+
+
+def _in_process_ins(chain, rows, fmu_dir):
+    """The library's INS (sarins_fmu.ins) on the chain's increments in one batch, with the model in force
+    of each interval (model_correction's rules) evaluated at its temp_gyro_z: the expected navigation
+    rows."""
+    from dataclasses import fields
+
+    from sarins_fmu import ins
+    from sarins_fmu.drift_model import drift_model_value
+    from sarins_fmu.ins import InsConfig, StrapdownINS
+
+    k = np.arange(rows.shape[0])
+    temp = chain.column(rows, "imu.temp_gyro_z")
+    coef = np.where(((k - ALIGN >= CORRECTION_FROM) & (k < SENDER_CHANGE + 1))[:, None], MODEL, 0.0)
+    coef[k >= SENDER_CHANGE + 1] = MODEL_2
+    correction = drift_model_value(coef.T, temp)
+    dtheta, dv = (np.column_stack([chain.column(rows, f"imu.{q}_{a}") for a in "xyz"]) for q in ("dtheta", "dv"))
+    slave = Slave(fmu_dir / "StrapdownINS.fmu", "start values")  # the FMU's parameter defaults
+    try:
+        names = ["lat0", "lon0", "height0", "coarse_time"] + [f"kf_{f.name}" for f in fields(ins.AlignmentFilter)]
+        values = dict(zip(names, slave.get(*names)))
+    finally:
+        slave.free()
+    filt = ins.AlignmentFilter(**{n[3:]: v for n, v in values.items() if n.startswith("kf_")})
+    config = InsConfig(lat=values["lat0"], lon=values["lon0"], height=values["height0"], align_time=ALIGN,
+                       coarse_time=values["coarse_time"], step=1.0, filter=filt)
+    return StrapdownINS(config).step(dtheta, dv, correction)
+
+
+def test_temperature_model_correction_compiled_equals_python_and_the_library(fmu_dir, monkeypatch):
+    """The correction c + (a T + b) T through the compiled INS step: every output bit for bit as the
+    Python do_step, the navigation rows those of the library's INS with the model evaluated at each
+    interval's temperature, solution_time = t + h; a sender repeating its set every step with a later
+    apply_from keeps the steps compiled."""
+    n = 4300
+    fast, via_do_step, python, python_steps, _ = _three_ways(fmu_dir, monkeypatch, n,
+                                                            ins_inputs=model_correction)
+    assert np.array_equal(fast, python)
+    assert np.array_equal(via_do_step, python)
+    chain = Chain(fmu_dir)
+    chain.free()
+    nav = ["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll"]
+    expected = _in_process_ins(chain, fast, fmu_dir)  # one batch: its alignment rows hold the batch's end
+    got = np.column_stack([chain.column(fast, f"ins.{v}") for v in nav])
+    assert np.array_equal(got[int(ALIGN):], expected[int(ALIGN):])
+    assert np.array_equal(chain.column(fast, "ins.solution_time"), np.arange(1.0, n + 1.0))
+    # the model (and its change) turned the heading: the same run without any correction differs
+    assert not np.array_equal(chain.column(fast, "ins.yaw")[-100:],
+                              chain.column(_run(fmu_dir, n, ins_inputs=None), "ins.yaw")[-100:])
+    # Python steps: the coarse alignment (300), the first and the end of the fine alignment, the new
+    # model and its taking over, the change and its taking over
+    assert python_steps["StrapdownINS"] <= 300 + 6, python_steps
+
+
+def test_immediate_navigation_compiled_equals_python(fmu_dir, monkeypatch):
+    """align_time = 0 (navigation from yaw0, pitch0, roll0 at once): compiled from the second step on,
+    every output as the Python do_step."""
+    start = dict(align_time=0.0, yaw0=0.2, pitch0=0.001, roll0=-0.002)
+    fast, via_do_step, python, python_steps, _ = _three_ways(fmu_dir, monkeypatch, 1500, ins_params=start)
+    assert np.array_equal(fast, python)
+    assert np.array_equal(via_do_step, python)
+    assert python_steps["StrapdownINS"] <= 2, python_steps
+    assert (fast[:, -1] == 2).all()  # navigating from the first step
+
+
 @pytest.mark.parametrize("fault, slave, message", [
     (dict(increment_end_time=10.0), "ins", "would skip an interval"),
+    (dict(temp_gyro_z=float("nan")), "ins", "temp_gyro_z"),
+    (dict(axial_drift_correction_a=float("inf")), "ins", "not finite"),
     (dict(motion_time=-5.0), "imu", "no turntable motion"),
     (dict(angle_1=float("nan")), "imu", "NaN"),
 ])
 def test_errors_are_reported_at_the_call_while_steps_run_compiled(fmu_dir, fault, slave, message):
     chain = Chain(fmu_dir)
     try:
-        chain.step(1300, correction=False)  # navigating: every step compiled
+        chain.step(1300, None)  # navigating: every step compiled
         if "motion_time" in fault:  # a wrong tag passes once (the set kept from the last step is tagged t)
             t = float(chain.k)
             chain.tt.fmu.doStep(t, 1.0)
@@ -155,9 +262,10 @@ def test_errors_are_reported_at_the_call_while_steps_run_compiled(fmu_dir, fault
         chain.tt.fmu.doStep(t, 1.0)
         chain.link()
         target = getattr(chain, slave)
-        target.set(**fault)
-        if slave == "ins":
+        if slave == "ins":  # the INS gets the increments of this step, then the fault
             chain.imu.fmu.doStep(t, 1.0)
+            chain.link()
+        target.set(**fault)
         with pytest.raises(FMICallException, match="status 3"):
             target.fmu.doStep(t, 1.0)
         errors = [text for status, _, text in target.log if status == 3]
@@ -224,3 +332,45 @@ def test_vehicle_system_compiled_equals_python_bit_for_bit(fmu_dir, monkeypatch)
         assert fast.dtype.names == python.dtype.names
         for name in fast.dtype.names:
             assert np.array_equal(fast[name], python[name]), (scheme, name)
+
+
+
+def _queue_every_pair(inputs, step):
+    """The compensation in force per interval when every new input pair is queued (the rule without
+    dropping repeated values), written out as the reference."""
+    import collections
+
+    current, pending, seen, out = (0.0,), collections.deque([inputs[0]]), inputs[0], []
+    for k, (value, apply_from) in enumerate(inputs):
+        if (value, apply_from) != seen:
+            while pending and pending[-1][1] >= apply_from - 1e-6 * step:
+                pending.pop()
+            seen = (value, apply_from)
+            pending.append(seen)
+        while pending and k * step >= pending[0][1] - 1e-6 * step:
+            current = pending.popleft()[0]
+        out.append(current)
+    return out
+
+
+def test_compensation_drops_repeated_values_without_changing_what_is_in_force():
+    """Compensation does not queue a pair whose value equals the one it would follow; the value in
+    force at every interval is that of queueing every pair (random senders: repeated values, apply_from
+    moving on, back, or staying)."""
+    from fmus.strapdown_ins_slave import Compensation
+
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        n, values = 60, [(0.0,), (1.0,), (2.0,)]
+        inputs, apply_from = [], 0.0
+        for k in range(n):
+            apply_from = max(k + 0.0, apply_from + float(rng.choice([-3.0, 0.0, 1.0, 1.0, 4.0])))
+            inputs.append((values[int(rng.integers(3))] if rng.random() < 0.3 or not inputs else inputs[-1][0],
+                           apply_from))
+        comp = Compensation(*inputs[0])
+        got = [comp.value_at(float(k), value, a, 1.0) for k, (value, a) in enumerate(inputs)]
+        assert got == _queue_every_pair(inputs, 1.0)
+    comp = Compensation((1.0,), 1.0)  # a sender repeating its value one step ahead: nothing more queued
+    for k in range(20):
+        assert comp.value_at(float(k), (1.0,), k + 1.0, 1.0) == ((0.0,) if k < 1 else (1.0,))
+        assert len(comp.pending) == (1 if k < 1 else 0)
