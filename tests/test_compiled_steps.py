@@ -307,32 +307,64 @@ def test_ins_filter_history_is_the_same_stepped_one_by_one_or_in_one_batch():
     assert np.array_equal(batch.q, single.q) and batch.steps == single.steps == 900
 
 
-def test_vehicle_system_compiled_equals_python_bit_for_bit(fmu_dir, monkeypatch):
-    """IMUThermal on a moving base (base = input) and StrapdownINS, every output, both schemes."""
+def _system_runs(system, record, monkeypatch, schemes=("gauss-seidel", "jacobi")):
+    """{(compiled, scheme): result} of the master's runs with and without the compiled steps, and the
+    Python do_step calls of the compiled runs {scheme: {class: calls}}."""
     import warnings
 
     from orchestration import simulate_system
-    from sarins.systems import vehicle_rins
 
-    legs = "drive 60 10; turn 90; drive 60 12; stop 30"
-    system = vehicle_rins(fmu_dir, hours=0.3, vehicle=dict(legs=legs, lead_time=300.0),
-                          ins=dict(coarse_time=120.0), imu=dict(seed=3))
-    record = ["ins.*", "imu.*"]
-    runs = {}
+    runs, calls = {}, {}
     for compiled in (True, False):
         if not compiled:
             monkeypatch.setenv("SARINS_FMU_NO_COMPILED_STEP", "1")
-        for scheme in ("gauss-seidel", "jacobi"):
+        for scheme in schemes:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                runs[compiled, scheme] = simulate_system(system, 900.0, 1.0, scheme=scheme, record=record,
-                                                         progress=False)
-    for scheme in ("gauss-seidel", "jacobi"):
-        fast, python = runs[True, scheme], runs[False, scheme]
-        assert fast.dtype.names == python.dtype.names
-        for name in fast.dtype.names:
-            assert np.array_equal(fast[name], python[name]), (scheme, name)
+                if compiled:  # loads the shipped slave modules, then counts their Python steps
+                    simulate_system(system, 2.0, 1.0, scheme=scheme, record=record[:1], progress=False)
+                    counts = _count_python_steps(monkeypatch)
+                runs[compiled, scheme] = simulate_system(system, system.stop_time, 1.0, scheme=scheme,
+                                                         record=record, progress=False)
+                if compiled:
+                    calls[scheme] = dict(counts)
+                    monkeypatch.undo()
+    return runs, calls
 
+
+def _assert_same_runs(runs):
+    for (compiled, scheme), fast in runs.items():
+        if compiled:
+            python = runs[False, scheme]
+            assert fast.dtype.names == python.dtype.names
+            for name in fast.dtype.names:
+                assert np.array_equal(fast[name], python[name]), (scheme, name)
+
+
+def test_vehicle_system_compiled_equals_python_bit_for_bit(fmu_dir, monkeypatch):
+    """IMUThermal on a moving base (base = input) and StrapdownINS, every output, both schemes."""
+    from sarins.systems import vehicle_rins
+
+    legs = "drive 60 10; turn 90; drive 60 12; stop 30"
+    system = vehicle_rins(fmu_dir, hours=0.25, vehicle=dict(legs=legs, lead_time=300.0),
+                          ins=dict(coarse_time=120.0), imu=dict(seed=3))
+    runs, _ = _system_runs(system, ["ins.*", "imu.*"], monkeypatch)
+    _assert_same_runs(runs)
+
+
+def test_online_vehicle_system_compiled_equals_python_and_stays_compiled(fmu_dir, monkeypatch):
+    """vehicle_rins_online (the updater sends its model a, b, c every step, tagged one step ahead, and
+    updates it once): every INS and updater output as without the compiled steps, both schemes; the
+    INS runs Python steps only in the coarse alignment, at the end of the fine one and when the
+    updated model arrives and takes over."""
+    from sarins.systems import vehicle_rins_online
+
+    system = vehicle_rins_online(fmu_dir)
+    runs, calls = _system_runs(system, ["ins.*", "updater.*"], monkeypatch)
+    _assert_same_runs(runs)
+    for scheme, counts in calls.items():
+        assert runs[True, scheme]["updater.n_updates"][-1] == 1
+        assert counts["StrapdownINS"] <= 300 + 3, (scheme, counts)  # coarse_time 300 s
 
 
 def _queue_every_pair(inputs, step):
