@@ -7,7 +7,8 @@ tags, runs the library's kernels (the same ones the in-process runs use) and
 writes the outputs back to the buffer.  It returns 0 when it did the step,
 and 1 *without having changed any state* when it cannot (the first step,
 alignment phase changes, a block of random numbers to draw, a new drift
-compensation, any input or tag the Python ``do_step`` would refuse): the
+compensation value or a queued one taking over, any input or tag the Python
+``do_step`` would refuse): the
 Python ``do_step`` then runs as before and stays the one place that raises
 the error messages.
 
@@ -239,7 +240,8 @@ _INS_IO = _INS_FILTER + 2
 
 
 def ins_context(slave):
-    """The StrapdownINS slave's compiled step (fine alignment, navigation), or None (see :func:`enabled`)."""
+    """The StrapdownINS slave's compiled step (fine alignment, navigation with a constant or temperature-model
+    drift correction), or None (see :func:`enabled`)."""
     if not enabled():
         return None
     from sarins_fmu import earth
