@@ -1,24 +1,32 @@
 """One 88 h run through the three FMUs under the master vs the same run in process.
 
-Reports, in one process:
+Reports, in one process, same seed:
 
+* wall time of the identical in-process run (``run_static`` as the library
+  runs it by default, numba's threads in use; the single-thread figure
+  beside it for context: one FMU step is one interval and runs serially);
 * wall time of the co-simulation (Turntable -> IMUThermal -> StrapdownINS,
-  Gauss-Seidel, 1 s step, nav-rlg, recording three outputs) and of the
-  identical in-process run (``run_static``), and their ratio;
-* where a co-simulation step goes: the slaves' own Python work per step
-  (their ``do_step`` called directly, no FMI), the FMI layer (FMPy + native layer), and
-  the master's own overhead (master minus a bare FMPy loop that does the same
-  get/set/doStep calls).
+  Gauss-Seidel, 1 s step, nav-rlg, recording three outputs) as
+  ``N.Nx the in-process run``; the results must be bit-identical (asserted);
+* the same co-simulation with the slaves' compiled steps called through
+  their Python ``do_step`` instead of from C (``SARINS_FMU_NO_FAST_STEP=1``);
+* where a co-simulation step goes: the slaves' compiled steps alone (their
+  jitted step functions, minus the cost of a call that returns at once), the
+  FMI layer (ctypes + the native layer: a bare loop doing the master's
+  get/set/doStep/record calls through the same ctypes pointers, minus the
+  slave work), and the master's own work (master minus the bare loop).
 
 Usage: ``python benchmarks/bench_cosim.py [--hours 88]``
 """
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import tempfile
 import time
 import warnings
+from ctypes import c_double
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -26,43 +34,137 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
 import numpy as np  # noqa: E402
 
-from fmu_driver import run_chain  # noqa: E402
+from fmu_driver import IMU_TO_INS, TT_TO_IMU, Slave  # noqa: E402
 from fmus.build import build_fmus  # noqa: E402
+from orchestration import rawcalls, simulate_system  # noqa: E402
 from sarins.systems import standard_static  # noqa: E402
-from orchestration import simulate_system  # noqa: E402
 from sarins_fmu.experiments import run_static  # noqa: E402
 
+RECORD = ["ins.lat_error", "ins.lon_error", "ins.position_error"]
 
-def slave_work_per_step(n: int = 3000) -> dict:
-    """Microseconds per step of each slave's do_step called directly (no FMI)."""
+
+def in_process(hours: float, align: float, threads: int | None = None):
+    """(result, seconds) of run_static; ``threads`` limits numba's threads for the run."""
+    import numba
+
+    before = numba.get_num_threads()
+    if threads is not None:
+        numba.set_num_threads(threads)
+    try:
+        t0 = time.perf_counter()
+        ref = run_static(align_hours=align, nav_hours=hours - align, seed=0)
+        return ref, time.perf_counter() - t0
+    finally:
+        numba.set_num_threads(before)
+
+
+def cosimulate(system, hours: float, fast: bool):
+    """(result, seconds) of the master's run; ``fast=False`` keeps the native layer off the compiled steps."""
+    saved = os.environ.pop("SARINS_FMU_NO_FAST_STEP", None)
+    if not fast:
+        os.environ["SARINS_FMU_NO_FAST_STEP"] = "1"
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            t0 = time.perf_counter()
+            res = simulate_system(system, hours * 3600.0, 1.0, progress=False, record=RECORD)
+            return res, time.perf_counter() - t0
+    finally:
+        os.environ.pop("SARINS_FMU_NO_FAST_STEP", None)
+        if saved is not None:
+            os.environ["SARINS_FMU_NO_FAST_STEP"] = saved
+
+
+def bare_loop(fmu_dir: Path, n: int, align_s: float) -> float:
+    """Seconds per step of the master's FMI calls alone (same ctypes pointers, no master)."""
+    tt = Slave(fmu_dir / "Turntable.fmu", "turntable")
+    imu = Slave(fmu_dir / "IMUThermal.fmu", "imu")
+    ins = Slave(fmu_dir / "StrapdownINS.fmu", "ins")
+    slaves = (tt, imu, ins)
+    try:
+        tt.set(align_time=align_s)
+        ins.set(align_time=align_s)
+        for s in slaves:
+            s.fmu.enterInitializationMode()
+        links = []
+        for src, dst, names in ((tt, imu, TT_TO_IMU), (imu, ins, IMU_TO_INS)):
+            buffer = rawcalls.value_buffer("Real", len(names))
+            links.append((rawcalls.getter(src.fmu, "Real"), rawcalls.handle(src.fmu),
+                          rawcalls.vr_array(src.vr[v] for v in names), rawcalls.count(len(names)), buffer,
+                          rawcalls.setter(dst.fmu, "Real"), rawcalls.handle(dst.fmu),
+                          rawcalls.vr_array(dst.vr[v] for v in names)))
+        for get, sc, svr, m, buf, set_, dc, dvr in links:
+            get(sc, svr, m, buf)
+            set_(dc, dvr, m, buf)
+        for s in slaves:
+            s.fmu.exitInitializationMode()
+        steps = [(rawcalls.do_step(s.fmu), rawcalls.handle(s.fmu)) for s in slaves]
+        names = ["lat_error", "lon_error", "position_error"]
+        rec_get = rawcalls.getter(ins.fmu, "Real")
+        rec_vr, rec_buf = rawcalls.vr_array(ins.vr[v] for v in names), rawcalls.value_buffer("Real", 3)
+        rec_n = rawcalls.count(3)
+        (step_tt, c_tt), (step_imu, c_imu), (step_ins, c_ins) = steps
+        (g1, s1c, v1, m1, b1, p1, d1c, w1), (g2, s2c, v2, m2, b2, p2, d2c, w2) = links
+        one, no_prior = c_double(1.0), rawcalls.NO_SET_PRIOR
+        t0 = time.perf_counter()
+        for k in range(n):
+            t = c_double(k)
+            step_tt(c_tt, t, one, no_prior)
+            g1(s1c, v1, m1, b1)
+            p1(d1c, w1, m1, b1)
+            step_imu(c_imu, t, one, no_prior)
+            g2(s2c, v2, m2, b2)
+            p2(d2c, w2, m2, b2)
+            step_ins(c_ins, t, one, no_prior)
+            rec_get(c_ins, rec_vr, rec_n, rec_buf)
+        return (time.perf_counter() - t0) / n
+    finally:
+        for s in reversed(slaves):
+            s.free()
+
+
+def slave_work_per_step(n: int = 5000, skip: int = 1300) -> dict:
+    """Microseconds per step of each slave's compiled step alone (navigation phase).
+
+    The slaves are stepped in Python as a chain (values copied between them);
+    each compiled step is timed on its own, minus the cost of calling it with
+    a step it declines at once (so what remains is the step's own work).
+    """
     from fmus.imu_thermal_slave import IMUThermal
     from fmus.strapdown_ins_slave import StrapdownINS
     from fmus.turntable_slave import Turntable
 
     tt, imu, ins = Turntable(instance_name="t"), IMUThermal(instance_name="i"), StrapdownINS(instance_name="n")
-    tt.enter_initialization_mode()
-    tt.exit_initialization_mode()
-    imu.exit_initialization_mode()
+    chain = (("Turntable", tt), ("IMUThermal", imu), ("StrapdownINS", ins))
+    tt.align_time, ins.align_time = 1200.0, 1200.0
+    for _, s in chain:
+        s.setup_experiment(0.0)
+        s.enter_initialization_mode()
+    for src, dst, names in ((tt, imu, TT_TO_IMU), (imu, ins, IMU_TO_INS)):
+        src.exit_initialization_mode()
+        for v in names:
+            setattr(dst, v, getattr(src, v))
     ins.exit_initialization_mode()
-    cost = {"Turntable": 0.0, "IMUThermal": 0.0, "StrapdownINS": 0.0}
-    for k in range(n + 400):
+    cost = dict.fromkeys([name for name, _ in chain], 0.0)
+    clock = time.perf_counter
+    for k in range(n + skip):
         t = float(k)
-        c0 = time.perf_counter()
-        tt.do_step(t, 1.0)
-        c1 = time.perf_counter()
-        imu.angle_1, imu.rate_1, imu.ambient_temp = tt.angle_1, tt.rate_1, tt.ambient_temp
-        imu.do_step(t, 1.0)
-        c2 = time.perf_counter()
-        for a in "xyz":
-            setattr(ins, f"dtheta_{a}", getattr(imu, f"dtheta_{a}"))
-            setattr(ins, f"dv_{a}", getattr(imu, f"dv_{a}"))
-        ins.do_step(t, 1.0)
-        c3 = time.perf_counter()
-        if k >= 400:  # after the coarse alignment
-            cost["Turntable"] += c1 - c0
-            cost["IMUThermal"] += c2 - c1
-            cost["StrapdownINS"] += c3 - c2
-    return {k: v / n * 1e6 for k, v in cost.items()}
+        for (name, s), names in zip(chain, (TT_TO_IMU, IMU_TO_INS, ())):
+            fast = s._fast
+            if fast is not None:
+                c0 = clock()
+                done = fast._step(fast.table, s._fmi_buffer, t, 1.0) == 0
+                c1 = clock()
+                if k >= skip:
+                    c2 = clock()
+                    fast._step(fast.table, s._fmi_buffer, t, 2.0)  # declined at its first check
+                    cost[name] += (c1 - c0) - (clock() - c2)
+            if fast is None or not done:
+                assert s.do_step(t, 1.0)
+            target = imu if s is tt else ins
+            for v in names:
+                setattr(target, v, getattr(s, v))
+    return {key: value / n * 1e6 for key, value in cost.items()}
 
 
 def main():
@@ -70,7 +172,7 @@ def main():
     parser.add_argument("--hours", type=float, default=88.0)
     args = parser.parse_args()
     hours = args.hours
-    steps = int(hours * 3600)
+    steps = int(round(hours * 3600))
     align = min(4.0, hours / 4)
     with tempfile.TemporaryDirectory() as tmp:
         fmu_dir = Path(tmp)
@@ -78,32 +180,33 @@ def main():
         system = standard_static(fmu_dir, hours=hours, turntable=dict(align_time=align * 3600),
                                  ins=dict(align_time=align * 3600))
         run_static(align_hours=align, nav_hours=0.1)  # compile / load caches first
-        t0 = time.perf_counter()
-        ref = run_static(align_hours=align, nav_hours=hours - align, seed=0)
-        t_inproc = time.perf_counter() - t0
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            t0 = time.perf_counter()
-            res = simulate_system(system, hours * 3600.0, 1.0, progress=False,
-                                  record=["ins.lat_error", "ins.lon_error", "ins.position_error"])
-            t_cosim = time.perf_counter() - t0
-        lat = res["ins.lat_error"][1:][int(align * 3600):]
-        diff = np.max(np.abs(lat - ref.lat_error)) / np.max(np.abs(ref.lat_error))
-        n_raw = min(steps, 20000)
-        t0 = time.perf_counter()
-        run_chain(fmu_dir, n_raw, tt_params=dict(align_time=align * 3600), ins_params=dict(align_time=align * 3600))
-        t_raw = (time.perf_counter() - t0) / n_raw
+        cosimulate(system, 0.2, True)  # the FMUs' caches too
+        ref, t_inproc = in_process(hours, align)
+        _, t_serial = in_process(hours, align, threads=1)
+        res, t_cosim = cosimulate(system, hours, True)
+        res_py, t_cosim_py = cosimulate(system, hours, False)
+        n_raw = min(steps, 30000)
+        t_raw = bare_loop(fmu_dir, n_raw, align * 3600)
+    nav = int(round(align * 3600)) + 1
+    for name, out in (("compiled steps from C", res), ("compiled steps through do_step", res_py)):
+        for field, series in (("lat_error", ref.lat_error), ("position_error", ref.position_error)):
+            got = out[f"ins.{field}"][nav:]
+            assert len(got) == len(series) and np.array_equal(got, series), f"{name}: ins.{field} differs"
     work = slave_work_per_step()
-    per_step = t_cosim / steps * 1e6
-    print(f"{hours:g} h, {steps} steps of 1 s")
-    print(f"in process     : {t_inproc:7.2f} s  ({hours * 3600 / t_inproc:,.0f}x real time)")
-    print(f"co-simulation  : {t_cosim:7.2f} s  ({hours * 3600 / t_cosim:,.0f}x real time), "
-          f"{t_cosim / t_inproc:.1f}x the in-process run; max relative difference {diff:.1e}")
-    print(f"per step       : master {per_step:.0f} us; bare FMPy loop doing the same calls "
-          f"{t_raw * 1e6:.0f} us -> master's own overhead {per_step - t_raw * 1e6:.0f} us")
-    print("slave work (do_step in Python, no FMI), us/step: "
-          + ", ".join(f"{k} {v:.0f}" for k, v in work.items())
-          + f"; sum {sum(work.values()):.0f} us -> FMI layer (FMPy + native layer) ~{t_raw * 1e6 - sum(work.values()):.0f} us")
+    load = os.getloadavg()
+    us = 1e6 / steps
+    per_step, work_sum, raw = t_cosim * us, sum(work.values()), t_raw * 1e6
+    print(f"{hours:g} h, {steps} steps of 1 s (load average {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f})")
+    print(f"in process     : {t_inproc:7.2f} s = {t_inproc * us:5.1f} us/step (run_static, numba threads); "
+          f"single thread {t_serial:.2f} s = {t_serial * us:.1f} us/step")
+    print(f"co-simulation  : {t_cosim:7.2f} s = {per_step:5.1f} us/step, {t_cosim / t_inproc:.1f}x the in-process "
+          f"run ({t_cosim / t_serial:.1f}x the single-thread one); results bit-identical")
+    print(f"  same, compiled steps through the Python do_step (SARINS_FMU_NO_FAST_STEP=1): {t_cosim_py:.2f} s = "
+          f"{t_cosim_py * us:.1f} us/step, {t_cosim_py / t_inproc:.1f}x")
+    print(f"per step       : slave work {work_sum:5.1f} us ("
+          + ", ".join(f"{k} {v:.1f}" for k, v in work.items())
+          + f"); FMI layer (ctypes + native layer, 8 calls) {raw - work_sum:.1f} us; "
+          f"master's own work {per_step - raw:.1f} us (bare loop of the same calls {raw:.1f} us)")
 
 
 if __name__ == "__main__":

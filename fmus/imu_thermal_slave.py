@@ -6,6 +6,7 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
+from fmus import compiled_steps
 from fmus.slave_support import (INPUT, NO_TAG, OUTPUT, PARAMETER, ParameterError, StartOfStepInputs,
                                 check_finite, check_step, declare, discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import imu, imu_params
@@ -48,6 +49,8 @@ class IMUThermal(Fmi2Slave):
         "at the vehicle (omega_ie + omega_en) and the specific force resolved in it, both held over the step. "
         "IMU parameters: 'preset' chooses the model; any coefficient parameter that is set overrides it.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
+    VEHICLE_INPUTS = ([f"vehicle_{a}{q}" for q in ("", "_rate", "_accel") for a in ("yaw", "pitch", "roll")]
+                      + [f"base_{kind}_{ax}" for kind in ("rate", "force") for ax in "enu"])  # the flat vehicle set
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -101,8 +104,9 @@ class IMUThermal(Fmi2Slave):
         declare(self, "real", "increment_end_time", OUTPUT,
                 "time tag: end of the interval of the increments [s]", 0.0)
         self._sensor = None
-        self._motion = StartOfStepInputs("turntable motion", "motion_time")
-        self._vehicle = StartOfStepInputs("vehicle motion", "base_motion_time")
+        self._motion = None  # StartOfStepInputs, made when the gimbal count is known
+        self._vehicle = StartOfStepInputs("vehicle motion", "base_motion_time", 15)
+        self._fast = None  # the compiled step's context (fmus.compiled_steps)
         self._start_time = 0.0
         self._model = None
         self._step = None
@@ -151,6 +155,7 @@ class IMUThermal(Fmi2Slave):
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
         self._axes = np.array([GIMBAL_AXES[g] for g in names])
+        self._motion = StartOfStepInputs("turntable motion", "motion_time", 3 * len(names) + 2)
         self._motion.prime(self.motion_time, self._read_motion())
         if self.base == "input":
             self._vehicle.prime(self.base_motion_time, self._read_vehicle())
@@ -161,24 +166,21 @@ class IMUThermal(Fmi2Slave):
             setattr(self, f"temp_{sensor}", float(initial.temperature[j]))
 
     def _read_motion(self):
-        """The motion inputs as arrays (angle, rate, accel (1, A)) and the ambient (value, slope)."""
+        """The motion inputs as one flat set: angles, rates, accelerations (A each), ambient and its slope."""
         n = len(self._axes)
-        angle, rate, accel = (np.array([[getattr(self, f"{q}_{j + 1}") for j in range(n)]])
-                              for q in ("angle", "rate", "accel"))
-        ambient = (float(self.ambient_temp), float(self.ambient_temp_rate))
-        if not all(np.isfinite(x).all() for x in (angle, rate, accel, ambient)):
+        values = np.array([getattr(self, f"{q}_{j + 1}") for q in ("angle", "rate", "accel") for j in range(n)]
+                          + [self.ambient_temp, self.ambient_temp_rate])
+        if not np.isfinite(values).all():
             raise ValueError("motion or ambient inputs contain NaN or infinity")
-        return angle, rate, accel, ambient
+        return values
 
     def _read_vehicle(self):
-        """The vehicle inputs: attitude angle, rate, accel (1, 3) each, base rate and force (3,) each."""
-        angle, rate, accel = (np.array([[getattr(self, f"vehicle_{a}{q}") for a in ("yaw", "pitch", "roll")]])
-                              for q in ("", "_rate", "_accel"))
-        w_t = np.array([getattr(self, f"base_rate_{ax}") for ax in "enu"])
-        f_t = np.array([getattr(self, f"base_force_{ax}") for ax in "enu"])
-        if not all(np.isfinite(x).all() for x in (angle, rate, accel, w_t, f_t)):
+        """The vehicle inputs as one flat set: attitude angles, rates, accelerations (yaw, pitch, roll each),
+        base rate and specific force (e, n, u each)."""
+        values = np.array([getattr(self, name) for name in self.VEHICLE_INPUTS])
+        if not np.isfinite(values).all():
             raise ValueError("vehicle motion inputs contain NaN or infinity")
-        return angle, rate, accel, w_t, f_t
+        return values
 
     def _start(self, step_size, ambient0):
         """Build the IMU at the first step; its thermal state starts at ``ambient0`` (degC), the ambient
@@ -192,25 +194,31 @@ class IMUThermal(Fmi2Slave):
         except ValueError as exc:
             raise ParameterError(str(exc)) from None
         self._sensor.reset(ambient0=ambient0)
+        self._fast = compiled_steps.imu_context(self, step_size)
+        self._fmi_fast_step = None if self._fast is None else self._fast.address
 
     @guarded
     def do_step(self, current_time, step_size):
+        if self._fast is not None and self._fast.step(self._fmi_buffer, current_time, step_size):
+            return True
         try:
             self._step = check_step(self, step_size, self._step)
             if self.motion_time == NO_TAG and self._motion.held_tag == NO_TAG:  # never set: fixed table
-                angle0, rate0, accel, (amb0, amb_rate) = self._read_motion()
+                motion = self._read_motion()
             else:
-                angle0, rate0, accel, (amb0, amb_rate) = self._motion.select(
-                    current_time, step_size, self.motion_time, self._read_motion())
+                motion = self._motion.select(current_time, step_size, self.motion_time, self._read_motion())
+            n = len(self._axes)
+            angle0, rate0, accel = (motion[None, i * n:(i + 1) * n] for i in range(3))
+            amb0, amb_rate = motion[3 * n], motion[3 * n + 1]
             if self._sensor is None:
                 self._start(step_size, amb0)
             if not same_time(self._sensor.time + self._start_time, current_time, step_size):
                 raise ValueError(f"doStep at t={current_time:.9g} s but the IMU stands at "
                                  f"{self._sensor.time + self._start_time:.9g} s (steps must follow each other)")
             if self.base == "input":
-                v_angle, v_rate, v_accel, w_t, f_t = self._vehicle.select(
-                    current_time, step_size, self.base_motion_time, self._read_vehicle())
-                self._base.hold(w_t, f_t)
+                vehicle = self._vehicle.select(current_time, step_size, self.base_motion_time, self._read_vehicle())
+                v_angle, v_rate, v_accel = (vehicle[None, i * 3:(i + 1) * 3] for i in range(3))
+                self._base.hold(vehicle[9:12], vehicle[12:15])
                 angle0, rate0, accel = (np.hstack(pair) for pair in ((v_angle, angle0), (v_rate, rate0),
                                                                        (v_accel, accel)))
             dtheta, dv, temps = self._sensor.step(angle0, rate0, accel, ambient=[amb0 + amb_rate * step_size])

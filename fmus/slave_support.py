@@ -167,9 +167,11 @@ def guarded(method):
     return wrapper
 
 
+TAG_TOL = 1e-6  # of a step: two time tags closer than this name the same communication point
+
 def same_time(a: float, b: float, step: float) -> bool:
-    """True if two time tags name the same communication point (to 1e-6 of a step)."""
-    return abs(a - b) <= 1e-6 * step
+    """True if two time tags name the same communication point (to TAG_TOL of a step)."""
+    return abs(a - b) <= TAG_TOL * step
 
 
 class StartOfStepInputs:
@@ -181,38 +183,47 @@ class StartOfStepInputs:
     FMU was stepped first).  The slave keeps the set it read at its previous
     step (or at initialisation) and uses whichever of the two is tagged t;
     any other tag is an error, never a silent shift of the motion.
+
+    A set is a flat float64 array of ``size`` values.  The kept set lives in
+    ``store`` (``[kept (0/1), tag, values...]``), a fixed array that a
+    compiled step may read and update in place.
     """
 
-    def __init__(self, what: str, tag_name: str):
+    def __init__(self, what: str, tag_name: str, size: int):
         self.what, self.tag_name = what, tag_name
-        self._held = None
+        self.store = np.zeros(2 + int(size))
 
     @property
     def held_tag(self):
         """Tag of the set kept from the previous step (None before initialisation)."""
-        return None if self._held is None else self._held[0]
+        return float(self.store[1]) if self.store[0] else None
+
+    def _keep(self, tag: float, values) -> None:
+        self.store[2:] = values
+        self.store[1] = tag
+        self.store[0] = 1.0
 
     def prime(self, tag: float, values) -> None:
         """Keep the set read at initialisation."""
-        self._held = (float(tag), values)
+        self._keep(float(tag), values)
 
     def select(self, time: float, step: float, tag: float, values):
-        """The set tagged ``time`` among the current one and the held one."""
+        """The set tagged ``time`` among the current one and the held one (a copy)."""
         tag = float(tag)
-        held = self._held
+        held = self.held_tag
         if not math.isfinite(tag):
             raise ValueError(f"{self.tag_name} is not finite")
         if same_time(tag, time, step):
-            chosen = values
-        elif held is not None and same_time(held[0], time, step):
-            chosen = held[1]
+            chosen = np.array(values, dtype=float)
+        elif held is not None and same_time(held, time, step):
+            chosen = self.store[2:].copy()
         else:
-            before = "none" if held is None else f"{held[0]:.9g} s"
+            before = "none" if held is None else f"{held:.9g} s"
             raise ValueError(
                 f"no {self.what} for the step starting at t={time:.9g} s: the input {self.tag_name} is "
                 f"{tag:.9g} s and the previous set was tagged {before}; the inputs must be the values at t "
                 "(Jacobi) or at t + h (Gauss-Seidel, upstream stepped first)")
-        self._held = (tag, values)
+        self._keep(tag, values)
         return chosen
 
 

@@ -7,6 +7,7 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
+from fmus import compiled_steps
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
                                 discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import ins
@@ -110,6 +111,7 @@ class StrapdownINS(Fmi2Slave):
         self._est = np.zeros(4)
         self._start_time = 0.0
         self._compensation = None
+        self._fast = None  # the compiled step's context (fmus.compiled_steps)
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._start_time = float(start_time)
@@ -158,14 +160,18 @@ class StrapdownINS(Fmi2Slave):
 
     @guarded
     def do_step(self, current_time, step_size):
+        if self._fast is not None and self._fast.step(self._fmi_buffer, current_time, step_size):
+            return True
         try:
             self._step = check_step(self, step_size, self._step)
             if self._ins is None:
                 self._ins = self._new_ins(step_size)
+                self._fast = compiled_steps.ins_context(self)
+                self._fmi_fast_step = None if self._fast is None else self._fast.address
             increments = self._fmi_buffer[self._in_slots][None, :]
             tag = float(self.increment_end_time)
-            if not (np.isfinite(increments).all() and math.isfinite(tag)):
-                raise ValueError("increments or increment_end_time contain NaN or infinity")
+            if not (np.isfinite(increments).all() and math.isfinite(tag) and math.isfinite(self.temp_gyro_z)):
+                raise ValueError("increments, increment_end_time or temp_gyro_z contain NaN or infinity")
             done = self._start_time + self._ins.steps * step_size  # end of the last interval integrated
             if same_time(tag, done, step_size) and self._ins.steps == 0:
                 return True  # no increments yet (Jacobi's first step): nothing to integrate
@@ -191,7 +197,7 @@ class StrapdownINS(Fmi2Slave):
         buffer[self._nav_slots] = row
         err = self._err
         err[:4] = state.position_error(row[None, :])[0]
-        err[4] = math.hypot(err[2], err[3])
+        err[4] = np.hypot(err[2], err[3])  # libm's, as the in-process runs and the compiled step
         buffer[self._err_slots] = err
         self.phase = PHASES[state.phase]
         self.nav_time = state.time - self._config.align_time
@@ -214,16 +220,49 @@ class Compensation:
     over for the intervals that start at or after its apply_from (a sender
     whose value changes every step, tagged with increasing apply_from,
     queues one pair per step; a pair replaces the queued ones that would
-    start at or after its own apply_from).  A pair whose apply_from lies
+    start at or after its own apply_from).  A pair whose value equals the one
+    it would follow (the last queued, else the one in force) is not queued:
+    it would change nothing (a sender that repeats its value with a later
+    apply_from every step queues nothing).  A pair whose apply_from lies
     before the interval about to be integrated arrived too late: an error,
     never a silent shift of the compensation.
+
+    ``state`` (for the compiled step, :mod:`fmus.compiled_steps`) holds the
+    seen pair (value..., apply_from), the value in force, and the apply_from
+    of the first and of the last queued pair (inf and -inf: none queued).  The
+    seen pair lives there only: a compiled step records a repeated value with
+    a later apply_from by writing it; every other change it leaves to
+    :meth:`value_at`.  The value of the last queued pair (else the one in
+    force) always equals the seen value.
     """
 
     def __init__(self, value: tuple, apply_from: float):
+        n = len(value)
+        self.state = np.zeros(2 * n + 3)
+        self._n = n
         self.current = tuple(0.0 for _ in value)
         self.pending = collections.deque([(value, apply_from)])
         self.seen = (value, apply_from)
         self.started = False
+        self._publish()
+
+    @property
+    def seen(self) -> tuple:
+        """The last input pair (value, apply_from)."""
+        n = self._n
+        return tuple(float(x) for x in self.state[:n]), float(self.state[n])
+
+    @seen.setter
+    def seen(self, pair) -> None:
+        n = self._n
+        self.state[:n] = pair[0]
+        self.state[n] = pair[1]
+
+    def _publish(self) -> None:
+        n, pending = self._n, self.pending
+        self.state[n + 1:2 * n + 1] = self.current
+        self.state[2 * n + 1] = pending[0][1] if pending else math.inf
+        self.state[2 * n + 2] = pending[-1][1] if pending else -math.inf
 
     def value_at(self, nav_start: float, value: tuple, apply_from: float, step: float) -> tuple:
         """Compensation for the interval starting at nav time ``nav_start`` given the current inputs."""
@@ -238,8 +277,10 @@ class Compensation:
             while self.pending and self.pending[-1][1] >= apply_from - tol:
                 self.pending.pop()
             self.seen = (value, apply_from)
-            self.pending.append(self.seen)
+            if value != (self.pending[-1][0] if self.pending else self.current):
+                self.pending.append((value, apply_from))
         self.started = True
         while self.pending and nav_start >= self.pending[0][1] - tol:
             self.current = self.pending.popleft()[0]
+        self._publish()
         return self.current

@@ -5,6 +5,7 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
+from fmus import compiled_steps
 from fmus.slave_support import (OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
                                 discard_on_error, guarded, real_slots)
 from sarins_fmu import thermal, turntable
@@ -86,6 +87,7 @@ class Turntable(Fmi2Slave):
         self._out = np.zeros(9)
         self._out_slots = real_slots(self, [f"{q}_{j}" for q in ("angle", "rate", "accel") for j in (1, 2, 3)])
         self._start_time = 0.0
+        self._fast = None  # the compiled step's context (fmus.compiled_steps)
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._start_time = float(start_time)
@@ -146,6 +148,8 @@ class Turntable(Fmi2Slave):
 
     @guarded
     def do_step(self, current_time, step_size):
+        if self._fast is not None and self._fast.step(self._fmi_buffer, current_time, step_size):
+            return True
         try:
             if self._step is None:
                 self._schedule.check_grid(step_size)
@@ -153,4 +157,7 @@ class Turntable(Fmi2Slave):
             self._publish(current_time + step_size)
         except ValueError as exc:
             return discard_on_error(self, exc)
+        if self._fast is None:
+            self._fast = compiled_steps.turntable_context(self)
+            self._fmi_fast_step = None if self._fast is None else self._fast.address
         return True

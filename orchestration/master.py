@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from ctypes import c_double
 from pathlib import Path
 
 import warnings
@@ -49,7 +50,7 @@ from .errors import (DefaultStepWarning, OrchestrationError, ScheduleError, Star
                      UnknownComponentError)
 from .fmu import FMUInstance, UnpackedFMU
 from .pacing import Progress, RealTimePacer
-from .rawcalls import FMI_WARNING, do_step, getter, setter, value_buffer, vr_array
+from .rawcalls import FMI_WARNING, NO_SET_PRIOR, count, do_step, getter, handle, setter, value_buffer, vr_array
 from .recorder import Recorder, ResultArray, select_variables
 from .schedule import StepSpec, make_schedule
 from .ssp_reader import ANNOTATION_TYPE, read_system
@@ -393,23 +394,24 @@ class Master:
             self._transfer(self._incoming[index], start)
             self.instances[index].call("exitInitializationMode")
             self.instances[index].mark_initialized()
-        for transfers, _ in self._plan:
-            self._transfer(transfers, start)
+        for gets, sets, _ in self._plan:
+            self._transfer((gets, sets), start)
         self.time = start
 
     def _build_plan(self) -> None:
         """Prepare function pointers, buffers and conversions for the inner loop.
 
-        ``self._plan`` is a list of stages ``(transfers, steps)``: every
-        transfer of a stage is read (``fmi2Get*``, then converted) before any
-        is written (``fmi2Set*``), then the stage's components are stepped.
-        Gauss-Seidel has one stage per component in stepping order; Jacobi
-        one stage with every transfer and every component.
+        ``self._plan`` is a list of stages ``(gets, sets, steps)``: every get
+        of a stage is made (``fmi2Get*``, then converted) before any set
+        (``fmi2Set*``), then the stage's components are stepped.  Gauss-Seidel
+        has one stage per component in stepping order; Jacobi one stage with
+        every transfer and every component.  The calls' arguments are ctypes
+        objects made here (:mod:`orchestration.rawcalls`).
         """
         slaves = [inst.slave for inst in self.instances]
-        self._incoming = {i: [] for i in range(len(slaves))}
+        handles = [handle(s) for s in slaves]
+        self._incoming = {i: ([], []) for i in range(len(slaves))}
         for link in self.links:
-            src, dst = slaves[link.source], slaves[link.target]
             n = len(link.source_vrs)
             buffer = value_buffer(link.kind, n)
             convert = None
@@ -418,31 +420,43 @@ class Master:
                 factors = np.array([m[0] for m in link.maps])
                 offsets = np.array([m[1] for m in link.maps])
                 convert = (view, factors, offsets)
-            self._incoming[link.target].append(
-                (getter(src, link.kind), src.component, vr_array(link.source_vrs), n, buffer,
-                 setter(dst, link.kind), dst.component, vr_array(link.target_vrs), link,
-                 convert))
-        steps = [(do_step(s), s.component, i) for i, s in enumerate(slaves)]
+            gets, sets = self._incoming[link.target]
+            gets.append((getter(slaves[link.source], link.kind), handles[link.source], vr_array(link.source_vrs),
+                         count(n), buffer, convert, link.source, f"fmi2Get{link.kind}"))
+            sets.append((setter(slaves[link.target], link.kind), handles[link.target], vr_array(link.target_vrs),
+                         count(n), buffer, link.target, f"fmi2Set{link.kind}"))
+        steps = [(do_step(s), handles[i], i) for i, s in enumerate(slaves)]
         if self.scheme == "gauss-seidel":
-            self._plan = [(self._incoming[i], [steps[i]]) for i in self.order]
+            self._plan = [(*self._incoming[i], [steps[i]]) for i in self.order]
         else:
-            everything = [t for i in self.order for t in self._incoming[i]]
-            self._plan = [(everything, [steps[i] for i in self.order])]
+            gets = [g for i in self.order for g in self._incoming[i][0]]
+            sets = [s for i in self.order for s in self._incoming[i][1]]
+            self._plan = [(gets, sets, [steps[i] for i in self.order])]
+        # the inner loop's calls in order, each (function, arguments, component, call name, conversion);
+        # doStep's time and step are the c_doubles self._c_t and self._c_h, updated by the loop
+        self._c_t, self._c_h = c_double(), c_double()
+        self._ops = []
+        for gets, sets, stage_steps in self._plan:
+            self._ops += [(get, (src, vrs, n, buffer), index, call, convert)
+                          for get, src, vrs, n, buffer, convert, index, call in gets]
+            self._ops += [(set_, (dst, vrs, n, buffer), index, call, None)
+                          for set_, dst, vrs, n, buffer, index, call in sets]
+            self._ops += [(step, (component, self._c_t, self._c_h, NO_SET_PRIOR), index, "fmi2DoStep", None)
+                          for step, component, index in stage_steps]
 
     def _transfer(self, transfers, time: float) -> None:
-        """Read every transfer's source values (and convert them), then set them all."""
-        for get, src, src_vrs, n, buffer, _, _, _, link, convert in transfers:
-            status = get(src, src_vrs, n, buffer)
-            if status > FMI_WARNING:
-                self._fail(link.source, f"fmi2Get{link.kind}", status, time)
+        """Make every get of ``transfers = (gets, sets)`` (and convert), then every set."""
+        gets, sets = transfers[0], transfers[1]
+        for get, src, vrs, n, buffer, convert, index, call in gets:
+            if (status := get(src, vrs, n, buffer)) > FMI_WARNING:
+                self._fail(index, call, status, time)
             if convert is not None:
                 view, factors, offsets = convert
                 np.multiply(view, factors, out=view)
                 np.add(view, offsets, out=view)
-        for _, _, _, n, buffer, set_, dst, dst_vrs, link, _ in transfers:
-            status = set_(dst, dst_vrs, n, buffer)
-            if status > FMI_WARNING:
-                self._fail(link.target, f"fmi2Set{link.kind}", status, time)
+        for set_, dst, vrs, n, buffer, index, call in sets:
+            if (status := set_(dst, vrs, n, buffer)) > FMI_WARNING:
+                self._fail(index, call, status, time)
 
     def _fail(self, index: int, call: str, status: int, time: float) -> None:
         instance = self.instances[index]
@@ -457,32 +471,28 @@ class Master:
 
     def _loop(self, segments, total: int, recorder: Recorder, every: int, bar: Progress,
               pacer: RealTimePacer | None, callback: StepCallback | None) -> int:
-        plan, fail, sample = self._plan, self._fail, recorder.sample
+        ops, fail, sample = self._ops, self._fail, recorder.sample
+        c_t, c_h = self._c_t, self._c_h
         multiply, add = np.multiply, np.add
         pending = interrupt.PENDING
         done = 0
         next_record = min(every, total)
         next_tick = bar.next_tick
         for segment in segments:
-            begin, h, count = segment.begin, segment.step, segment.count
-            for j in range(count):
+            begin, h, count_ = segment.begin, segment.step, segment.count
+            c_h.value = h
+            for j in range(count_):
                 t = begin + j * h
-                for transfers, steps in plan:
-                    # every source value of the stage is read before any input is set
-                    for get, src, src_vrs, n, buffer, _, _, _, link, convert in transfers:
-                        if (status := get(src, src_vrs, n, buffer)) > FMI_WARNING:
-                            fail(link.source, f"fmi2Get{link.kind}", status, t)
-                        if convert is not None:
-                            multiply(convert[0], convert[1], out=convert[0])
-                            add(convert[0], convert[2], out=convert[0])
-                    for _, _, _, n, buffer, set_, dst, dst_vrs, link, _ in transfers:
-                        if (status := set_(dst, dst_vrs, n, buffer)) > FMI_WARNING:
-                            fail(link.target, f"fmi2Set{link.kind}", status, t)
-                    for step, component, index in steps:
-                        if (status := step(component, t, h, 1)) > FMI_WARNING:
-                            fail(index, "fmi2DoStep", status, t)
+                c_t.value = t
+                # the plan's calls in order: in each stage every get (and conversion) before any set
+                for function, args, index, call, convert in ops:
+                    if (status := function(*args)) > FMI_WARNING:
+                        fail(index, call, status, t)
+                    if convert is not None:
+                        multiply(convert[0], convert[1], out=convert[0])
+                        add(convert[0], convert[2], out=convert[0])
                 done += 1
-                t_end = segment.end if j == count - 1 else begin + (j + 1) * h
+                t_end = segment.end if j == count_ - 1 else begin + (j + 1) * h
                 self.time = t_end
                 if done == next_record:
                     if sample(t_end) >= 0:
@@ -510,6 +520,7 @@ class Master:
             instance.release()
         self.instances = []
         self._plan = []
+        self._ops = []
 
     def close(self) -> None:
         """Release instances and delete the extracted FMUs (idempotent)."""

@@ -18,7 +18,7 @@ import numpy as np
 
 from .coupling import VALUE_TYPES
 from .errors import UnknownVariableError
-from .rawcalls import C_TYPES, getter, value_buffer, vr_array
+from .rawcalls import C_TYPES, count, getter, handle, value_buffer, vr_array
 
 __all__ = ["ResultArray", "Recorder", "select_variables", "write_csv", "NUMPY_TYPES"]
 
@@ -116,7 +116,7 @@ class Recorder:
         self.count = 0
         self.columns: list[tuple[str, str, int, int]] = []  # (field, kind, block, column)
         self.storage = []  # keeps the C arrays alive
-        self.blocks = []  # (get, component ptr, vr array, n, address, row bytes, data, i, kind)
+        self.blocks = []  # (get, component handle, vr array, n, address, row bytes, data, i, kind, pointer)
         groups: dict[tuple[int, str], list] = {}
         for i, var in selection:
             groups.setdefault((i, VALUE_TYPES[var.type]), []).append(var)
@@ -125,10 +125,16 @@ class Recorder:
             storage = value_buffer(kind, rows * n)  # fmi2Get* writes rows in place
             data = np.ctypeslib.as_array(storage).reshape(rows, n)
             self.storage.append(storage)
-            self.blocks.append((getter(slaves[i], kind, to_address=True), slaves[i].component,
-                                vr_array(v.valueReference for v in members), n,
+            self.blocks.append((getter(slaves[i], kind), handle(slaves[i]),
+                                vr_array(v.valueReference for v in members), count(n),
                                 ctypes.addressof(storage),
-                                n * ctypes.sizeof(C_TYPES[kind]), data, i, kind))
+                                n * ctypes.sizeof(C_TYPES[kind]), data, i, kind, ctypes.c_void_p()))
+        # per block: (function, its arguments (the last one the row's address), that c_void_p,
+        # the storage address, bytes per row, block index)
+        self._calls = [(get, (component, vrs, n, pointer), pointer, address, row_bytes, b)
+                       for b, (get, component, vrs, n, address, row_bytes, _, _, _, pointer)
+                       in enumerate(self.blocks)]
+        self._times = memoryview(self.time)  # item assignment without numpy's overhead
         position = {(block[7], v.name): (b, k) for b, block in enumerate(self.blocks)
                     for k, v in enumerate(groups[(block[7], block[8])])}
         for i, var in selection:
@@ -142,9 +148,10 @@ class Recorder:
         status (the row is then not kept), or -1 on success.
         """
         row = self.count
-        self.time[row] = time
-        for b, (get, component, vrs, n, address, row_bytes, _, _, _) in enumerate(self.blocks):
-            if get(component, vrs, n, address + row * row_bytes) > 1:
+        self._times[row] = time
+        for get, args, pointer, address, row_bytes, b in self._calls:
+            pointer.value = address + row * row_bytes
+            if get(*args) > 1:
                 return b
         self.count = row + 1
         return -1

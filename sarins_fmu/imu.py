@@ -40,13 +40,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from . import earth
-from ._jit import jit
 from .imu_correlated import CorrelatedErrors
+from . import imu_step
 from .imu_kernel import increments as _increments_kernel
-from .thermal import Ambient, ThermalModel, ThermalParams
+from .imu_step import T_REF
+from .thermal import Ambient, ThermalModel, ThermalParams, _check_temperature
 from .units import ARCSEC_TO_RAD, DAY, DEG_TO_RAD, DPH_TO_RPS, DPSH_TO_RPSS, PPM, UG_TO_MPS2
 
-T_REF = 25.0  # reference temperature of the linear/quadratic coefficients, degC
 
 
 def _vec3(value, name):
@@ -414,11 +414,18 @@ class IMU:
     seed : int, seeds the noise and bias-instability streams
     thermal_start : 'hot' or 'cold'; ambient : callable T_amb(t) degC
     aging_days : float, age of the drift model since calibration (days)
+    block_rows : int, intervals of random numbers drawn at once per stream
+        (any value gives the same results; see :mod:`sarins_fmu.imu_step`)
+
+    The state a step changes lives in the arrays of :mod:`sarins_fmu.imu_step`
+    (``thermal`` gives the parameters, the ambient function and the initial
+    condition; the reported temperatures are :attr:`temperature`).
     """
 
     def __init__(self, model: ImuModel, base: StaticBase, gimbal_axes=((0.0, 0.0, 1.0),), *,
                  output_interval: float = 1.0, internal_rate: float = 200.0, seed: int = 0,
-                 thermal_start: str = "hot", ambient=Ambient(), aging_days: float = 0.0, t0: float = 0.0):
+                 thermal_start: str = "hot", ambient=Ambient(), aging_days: float = 0.0, t0: float = 0.0,
+                 block_rows: int = 4096):
         if not (output_interval > 0 and math.isfinite(output_interval)):
             raise ValueError(f"output interval must be positive, got {output_interval}")
         if not (internal_rate > 0 and math.isfinite(internal_rate)):
@@ -439,29 +446,85 @@ class IMU:
             poly = aged_drift_poly(model, [aging_days], seed=self.seed + 7919)[0]
         self.drift_poly = poly
         self._correlated = CorrelatedErrors(model, self.h, self.seed)
+        self._allocate(block_rows)
         self.reset()
+
+    def _allocate(self, block_rows: int) -> None:
+        """The state tuple of :mod:`sarins_fmu.imu_step` (constants filled here, state in :meth:`reset`)."""
+        m, corr = self.model, self._correlated
+        if not (isinstance(block_rows, int) and block_rows >= 1):
+            raise ValueError(f"block_rows must be a positive integer, got {block_rows!r}")
+        self._block_rows = block_rows
+        tau_gm = np.concatenate([m.gyro.bias_corr_time, m.accel.bias_corr_time])
+        gm_std = np.concatenate([m.gyro.bias_instability, m.accel.bias_instability])
+        consts = np.array([self.t0, self.h, m.axial_drift_dtdt, float(corr.die_lag), float(corr.active),
+                           float(self.n_sub), float(block_rows), 0.0])
+        sensor_par = np.vstack([self.thermal._heat, self.thermal._tau, np.exp(-self.h / tau_gm), gm_std])
+        coef = np.array([row for t in (m.gyro, m.accel)
+                         for row in (t.bias, t.bias_tc1, t.bias_tc2, t.scale_factor, t.scale_factor_tc)])
+        triad = np.vstack([self.drift_poly, m.gyro.quadratic, m.lowrate_gain, m.lowrate_width, m.accel.quadratic,
+                           m.gyro.random_walk, m.accel.random_walk])
+        mats = np.vstack([m.gyro.misalignment, m.g_sensitivity, m.accel.misalignment])
+        base = np.zeros((2, 3))
+        if isinstance(self.base, StaticBase):
+            base[0], base[1] = self.base.inertial_rate_t(), self.base.specific_force_t()
+        corr_rows = block_rows if corr.active else 0
+        self._state = (consts, np.zeros(3), sensor_par, np.zeros((2, 6)), coef, triad, mats,
+                       np.ascontiguousarray(self.axes), base, np.zeros((block_rows, 6)), np.zeros((block_rows, 6)),
+                       corr.par, corr.state, corr.phi, corr.q, corr.x_flicker, np.zeros((corr_rows, corr.columns)))
 
     def reset(self, ambient0: float | None = None) -> None:
         """Return to the state at construction (time, temperatures, random
         streams); ``ambient0`` (degC) overrides the ambient function at t0."""
-        self.time = self.t0
         self.thermal.reset(self.t0, ambient0)
         seq = np.random.SeedSequence(self.seed)
         self._rng_noise, self._rng_gm = (np.random.default_rng(s) for s in seq.spawn(2))
-        m = self.model
-        self._gm_std = np.concatenate([m.gyro.bias_instability, m.accel.bias_instability])
-        tau = np.concatenate([m.gyro.bias_corr_time, m.accel.bias_corr_time])
-        self._gm_phi = np.exp(-self.h / tau)
-        self._gm = self._rng_gm.standard_normal(6) * self._gm_std  # stationary start
-        self._coef = self._coefficients()
-        self.temperature = self.thermal.temperature.copy()
-        self._correlated.reset(self.temperature)
+        s = self._state
+        clock, state = s[imu_step.CLOCK], s[imu_step.STATE]
+        clock[:] = (0.0, self.thermal._ambient_now, self._block_rows)  # random blocks empty
+        state[0] = self.thermal.temperature
+        state[1] = self._rng_gm.standard_normal(6) * s[imu_step.SENSOR_PAR][3]  # GM: stationary start
+        self._correlated.reset(state[0])
 
-    def _coefficients(self):
-        """Per-triad coefficient table (2, 5, 3): bias, tc1, tc2, sf, sf_tc."""
-        m = self.model
-        return np.array([[t.bias, t.bias_tc1, t.bias_tc2, t.scale_factor, t.scale_factor_tc]
-                         for t in (m.gyro, m.accel)])
+    @property
+    def time(self) -> float:
+        """End of the last interval produced, s."""
+        return self.t0 + self._state[imu_step.CLOCK][0] * self.h
+
+    @property
+    def temperature(self) -> np.ndarray:
+        """Reported sensor temperatures at :attr:`time`, degC (6,)."""
+        return self._state[imu_step.STATE][0].copy()
+
+    def state_arrays(self) -> tuple:
+        """The arrays of :mod:`sarins_fmu.imu_step` (updated in place by every step; keep them alive)."""
+        return self._state
+
+    def _refill(self, n: int) -> None:
+        """Make the random blocks hold at least n unused rows (n <= block rows).
+
+        Unused rows move to the top; the rest is drawn from each stream in
+        order, so the sequence each stream delivers is the one it would
+        deliver interval by interval.
+        """
+        s = self._state
+        clock = s[imu_step.CLOCK]
+        pos = int(clock[2])
+        rows = self._block_rows
+        if rows - pos >= n:
+            return
+        keep = rows - pos
+        for block, draw in ((s[imu_step.GM_BLOCK], self._rng_gm.standard_normal),
+                            (s[imu_step.WHITE_BLOCK], self._rng_noise.standard_normal),
+                            (s[imu_step.CORR_BLOCK], None)):
+            if block.shape[0] == 0:
+                continue
+            block[:keep] = block[pos:]
+            if draw is None:
+                self._correlated.draw(block[keep:])
+            else:
+                block[keep:] = draw((pos, block.shape[1]))
+        clock[2] = 0.0
 
     def step(self, angle0, rate0, accel, ambient=None):
         """Produce the increments of the next K output intervals.
@@ -486,25 +549,23 @@ class IMU:
             raise ValueError("gimbal state contains NaN or infinity")
         n = angle0.shape[0]
         t_end = self._times(n)
-        t_prev = self.thermal.temperature.copy()
-        temps = self.thermal.advance(t_end, ambient)
-        m = self.model
-        gm_noise = self._rng_gm.standard_normal((n, 6))
-        die0, die = self._correlated.die_temperatures(t_prev, temps)  # the errors follow the die
-        g_bias, g_sf, a_bias, a_sf = _interval_terms(
-            die0, die, self.h, self._coef, self.drift_poly, m.axial_drift_dtdt,
-            self._gm, self._gm_phi, self._gm_std, gm_noise)
-        self._correlated.add_terms(die0, die, g_bias, g_sf, a_bias, a_sf)
+        amb_end = np.empty(n)
+        amb_end[:] = self.thermal.ambient(t_end) if ambient is None else ambient
+        _check_temperature(amb_end)
         w_t, f_t = self.base.base_motion(t_end - self.h, self.h)
-        dtheta, dv = _increments_kernel(
-            self.axes, angle0, rate0, accel, w_t, f_t, self.h, self.n_sub,
-            g_sf, m.gyro.misalignment, g_bias, m.gyro.quadratic, m.lowrate_gain, m.lowrate_width,
-            m.g_sensitivity, a_sf, m.accel.misalignment, a_bias, m.accel.quadratic)
-        noise = self._rng_noise.standard_normal((n, 6)) * math.sqrt(self.h)
-        dtheta += noise[:, :3] * m.gyro.random_walk
-        dv += noise[:, 3:] * m.accel.random_walk
-        self.time = float(t_end[-1])
-        self.temperature = temps[-1].copy()
+        w_t, f_t = (np.ascontiguousarray(x, dtype=float) for x in (w_t, f_t))
+        dtheta, dv, temps = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 6))
+        s = self._state
+        g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad, g_mis = imu_step.increments_args(s)
+        for k0 in range(0, n, self._block_rows):
+            k1 = min(n, k0 + self._block_rows)
+            self._refill(k1 - k0)
+            g_bias, g_sf, a_bias, a_sf = (np.empty((k1 - k0, 3)) for _ in range(4))
+            imu_step.advance(s, amb_end[k0:k1], temps[k0:k1], g_bias, g_sf, a_bias, a_sf)
+            dtheta[k0:k1], dv[k0:k1] = _increments_kernel(
+                s[imu_step.AXES], angle0[k0:k1], rate0[k0:k1], accel[k0:k1], w_t[k0:k1], f_t[k0:k1], self.h,
+                self.n_sub, g_sf, g_mis, g_bias, g_quad, g_lowrate, g_width, g_sens, a_sf, a_mis, a_bias, a_quad)
+            imu_step.white_noise(s, dtheta[k0:k1], dv[k0:k1])
         return dtheta, dv, temps
 
     def _times(self, n):
@@ -513,52 +574,11 @@ class IMU:
         return self.t0 + (k0 + np.arange(1, n + 1)) * self.h
 
 
-
-@jit
-def _interval_terms(temp0, temps, h, coef, drift_poly, drift_dtdt, gm, gm_phi, gm_std, gm_noise):
-    """Biases and scale-factor errors held over each of K intervals.
-
-    Temperatures at interval midpoints (mean of the ends) and their rates
-    enter the models of the module docstring; the Gauss-Markov bias
-    instability advances one exact step per interval,
-    x_k = phi x_{k-1} + std sqrt(1 - phi^2) w_k  (``gm`` updated in place).
-    Returns g_bias, g_sf, a_bias, a_sf, each (K, 3).
-    """
-    n = temps.shape[0]
-    g_bias = np.empty((n, 3))
-    a_bias = np.empty((n, 3))
-    g_sf = np.empty((n, 3))
-    a_sf = np.empty((n, 3))
-    prev = temp0.copy()
-    for k in range(n):
-        for j in range(6):
-            gm[j] = gm_phi[j] * gm[j] + gm_std[j] * math.sqrt(1.0 - gm_phi[j] ** 2) * gm_noise[k, j]
-        for t in range(2):
-            for i in range(3):
-                s = 3 * t + i
-                mid = 0.5 * (prev[s] + temps[k, s])
-                d = mid - T_REF
-                bias = coef[t, 0, i] + coef[t, 1, i] * d + coef[t, 2, i] * d * d + gm[s]
-                sf = coef[t, 3, i] + coef[t, 4, i] * d
-                if t == 0:
-                    if i == 2:  # azimuth drift model eps(T) + d dT/dt
-                        bias += (drift_poly[0] * mid + drift_poly[1]) * mid + drift_poly[2]
-                        bias += drift_dtdt * (temps[k, s] - prev[s]) / h
-                    g_bias[k, i] = bias
-                    g_sf[k, i] = sf
-                else:
-                    a_bias[k, i] = bias
-                    a_sf[k, i] = sf
-        for s in range(6):
-            prev[s] = temps[k, s]
-    return g_bias, g_sf, a_bias, a_sf
-
-
 def deterministic_axial_drift(model: ImuModel, temperature, dt: float) -> np.ndarray:
     """Deterministic z-gyro drift (rad/s) along a temperature series.
 
     eps_z = b + b1 (T - T_REF) + b2 (T - T_REF)^2 + a T^2 + b T + c + d dT/dt
-    (the z-gyro terms of :func:`_interval_terms` without the Gauss-Markov
+    (the z-gyro terms of :func:`sarins_fmu.imu_step.interval_terms` without the Gauss-Markov
     bias instability and the white noise; ageing as in ``model``).
 
     Parameters

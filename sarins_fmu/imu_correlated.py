@@ -59,7 +59,6 @@ import math
 import numpy as np
 
 from ._jit import jit
-from .thermal import die_temperatures
 
 TERMS_PER_DECADE = 3
 _STREAM_TURN_ON, _STREAM_PROCESS = 2, 3  # spawn keys beside the IMU's noise (0) and GM (1) streams
@@ -92,7 +91,14 @@ def turn_on_bias(model, seed: int) -> np.ndarray:
 
 
 class CorrelatedErrors:
-    """State of the time-correlated terms of one IMU (see the module docstring).
+    """Parameters and state of the time-correlated terms of one IMU (see the module docstring).
+
+    The arrays are allocated once and updated in place (the IMU's compiled
+    step reads them, see :mod:`sarins_fmu.imu_step`): ``par`` (7, 6) die
+    time constant, c_grad, s_grad, c_hyst, w_hyst, rrw, turn-on bias (drawn
+    at :meth:`reset`); ``state`` (3, 6) die temperature, play operator,
+    rate random walk; ``phi`` (F,), ``q`` (F, 6) and ``x_flicker`` (F, 6)
+    of the F flicker terms.
 
     Parameters
     ----------
@@ -103,53 +109,36 @@ class CorrelatedErrors:
 
     def __init__(self, model, h: float, seed: int):
         self.h, self.seed = float(h), int(seed)
-        self.tau_die = np.asarray(model.thermal.die_time_constant, float)
-        self.c_grad, self.s_grad = _stack(model, "bias_dtdt"), _stack(model, "scale_factor_dtdt")
-        self.c_hyst, self.w_hyst = _stack(model, "hysteresis"), _stack(model, "hysteresis_width")
-        self.flicker, self.rrw = _stack(model, "flicker"), _stack(model, "rate_random_walk")
+        tau_die = np.asarray(model.thermal.die_time_constant, float)
+        c_grad, s_grad = _stack(model, "bias_dtdt"), _stack(model, "scale_factor_dtdt")
+        c_hyst, w_hyst = _stack(model, "hysteresis"), _stack(model, "hysteresis_width")
+        flicker, rrw = _stack(model, "flicker"), _stack(model, "rate_random_walk")
         self.turn_on_std = _stack(model, "turn_on_bias")
         taus = flicker_taus(model.flicker_tau_min, model.flicker_tau_max)
         self.phi = np.exp(-self.h / taus)
-        self.q = np.outer(np.full(len(taus), flicker_term_std(1.0, taus)), self.flicker)  # (n_terms, 6)
-        self.die_lag = bool(np.any(self.tau_die > 0))
+        self.q = np.ascontiguousarray(np.outer(np.full(len(taus), flicker_term_std(1.0, taus)), flicker))  # (F, 6)
+        self.par = np.vstack([tau_die, c_grad, s_grad, c_hyst, w_hyst, rrw, np.zeros(6)])
+        self.state = np.zeros((3, 6))
+        self.x_flicker = np.zeros(self.q.shape)
+        self.columns = self.q.size + 6  # driving noise per interval
+        self.die_lag = bool(np.any(tau_die > 0))
         self.active = self.die_lag or any(np.any(x != 0) for x in (
-            self.c_grad, self.s_grad, self.c_hyst, self.flicker, self.rrw, self.turn_on_std))
-        self._random = bool(np.any(self.flicker > 0) or np.any(self.rrw > 0))
+            c_grad, s_grad, c_hyst, flicker, rrw, self.turn_on_std))
+        self.random = bool(np.any(flicker > 0) or np.any(rrw > 0))
 
     def reset(self, temperature) -> None:
         """Initial state: die at ``temperature`` (6,) degC, play relaxed,
         flicker terms stationary, RRW at 0, a new turn-on bias for the seed."""
-        self.die = np.array(temperature, float)
-        self.play = self.die.copy()
+        self.state[0] = temperature
+        self.state[1] = temperature
+        self.state[2] = 0.0
         self._rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(_STREAM_PROCESS,)))
-        self.turn_on = _turn_on(self.seed, self.turn_on_std)
-        self.x_flicker = self._rng.standard_normal(self.q.shape) * self.q if self._random else np.zeros(self.q.shape)
-        self.x_rrw = np.zeros(6)
+        self.par[6] = _turn_on(self.seed, self.turn_on_std)
+        self.x_flicker[:] = self._rng.standard_normal(self.q.shape) * self.q if self.random else 0.0
 
-    def die_temperatures(self, reported0, reported):
-        """(die at the start, die at each interval end (K, 6)); the reported
-        temperatures themselves when no sensor has a die lag (bit for bit)."""
-        if not self.die_lag:
-            return reported0, reported
-        start = self.die.copy()
-        return start, die_temperatures(np.asarray(reported0, float), np.ascontiguousarray(reported), self.h,
-                                       self.tau_die, self.die)
-
-    def add_terms(self, die0, die, g_bias, g_sf, a_bias, a_sf) -> None:
-        """Add the terms of K intervals to the (K, 3) bias and scale-factor arrays, in place."""
-        if not self.active:
-            return
-        n = die.shape[0]
-        cols = self.q.size + 6
-        noise = self._rng.standard_normal((n, cols)) if self._random else np.zeros((n, cols))
-        bias = np.empty((n, 6))
-        sf = np.empty((n, 6))
-        _terms(np.asarray(die0, float), die, self.h, self.c_grad, self.s_grad, self.c_hyst, self.w_hyst,
-               self.play, self.phi, self.q, self.x_flicker, self.rrw, self.x_rrw, self.turn_on, noise, bias, sf)
-        g_bias += bias[:, :3]
-        a_bias += bias[:, 3:]
-        g_sf += sf[:, :3]
-        a_sf += sf[:, 3:]
+    def draw(self, out) -> None:
+        """Fill ``out`` (rows, columns) with the next driving noise (zeros when no term is random)."""
+        out[:] = self._rng.standard_normal(out.shape) if self.random else 0.0
 
 
 @jit
@@ -174,3 +163,24 @@ def _terms(die0, die, h, c_grad, s_grad, c_hyst, w_hyst, play, phi, q, x_flicker
                           + flick + x_rrw[j] + turn_on[j])
             sf[k, j] = s_grad[j] * rate
             prev = die[k, j]
+
+
+@jit
+def correlated_terms(die0, die, h, corr_par, corr_state, phi, q, x_flicker, noise, g_bias, g_sf, a_bias, a_sf):
+    """Add the terms of K intervals to the (K, 3) bias and scale-factor arrays, in place.
+
+    ``corr_par`` (7, 6): die time constant, c_grad, s_grad, c_hyst, w_hyst,
+    rrw, turn-on bias; ``corr_state`` (3, 6): die, play, x_rrw; ``noise``
+    (K, F * 6 + 6) the driving noise (zeros when no term is random).
+    """
+    n = die.shape[0]
+    bias = np.empty((n, 6))
+    sf = np.empty((n, 6))
+    _terms(die0, die, h, corr_par[1], corr_par[2], corr_par[3], corr_par[4], corr_state[1], phi, q, x_flicker,
+           corr_par[5], corr_state[2], corr_par[6], noise, bias, sf)
+    for k in range(n):
+        for i in range(3):
+            g_bias[k, i] += bias[k, i]
+            a_bias[k, i] += bias[k, 3 + i]
+            g_sf[k, i] += sf[k, i]
+            a_sf[k, i] += sf[k, 3 + i]

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import earth
-from .ins_kernel import align_steps, coarse_steps, nav_steps
+from .ins_kernel import align_steps, coarse_steps, held_row, nav_steps
 from .rotations import mat_to_quat, quat_to_mat, rotvec_to_quat
 from .units import DEG_TO_RAD, DPH_TO_RPS, DPSH_TO_RPSS, UG_TO_MPS2
 
@@ -140,8 +140,7 @@ class StrapdownINS:
     def reset(self) -> None:
         """Return to the initial state."""
         c = self.config
-        self.time = 0.0
-        self.steps = 0
+        self._count = np.zeros(1)  # major-loop steps done (a compiled step advances it in place)
         self.pos = np.array([c.lat, c.lon, c.height])
         self.v = np.zeros(3)
         self.q = np.array([1.0, 0.0, 0.0, 0.0]) if self._initial_attitude is None else mat_to_quat(self._initial_attitude)
@@ -157,10 +156,11 @@ class StrapdownINS:
         self._q_b0b = np.array([1.0, 0.0, 0.0, 0.0])
         self._v_b0 = np.zeros(3)
         self._v_b0_half = None
-        self.p_history = []
         n_coarse = round(c.coarse_time / c.step) if c.align_time > 0 else 0
         self._n_coarse = n_coarse
         self._n_align = round(c.align_time / c.step)
+        # diagonal of P after each fine-alignment step (filled as the steps are made)
+        self.p_history = np.full((max(self._n_align - n_coarse, 0), 9), np.nan)
 
     @property
     def phase(self) -> str:
@@ -208,7 +208,8 @@ class StrapdownINS:
                 hist = align_steps(self.q, self.v, self.pos, dtheta[k:k + m], dv[k:k + m], self.config.step,
                                    self.gyro_comp, self.accel_comp, self.x, self.p, self.q_diag,
                                    self.config.filter.velocity_meas_std ** 2)
-                self.p_history.append(hist)
+                row = self.steps - self._n_coarse
+                self.p_history[row:row + m] = hist
                 out[k:k + m] = self._held_row()
                 if self.steps + m == self._n_align:
                     self.v[:] = 0.0  # known static start for navigation
@@ -216,20 +217,32 @@ class StrapdownINS:
                 m = n - k
                 out[k:] = nav_steps(self.q, self.v, self.pos, dtheta[k:], dv[k:], self.config.step,
                                     self.gyro_comp, self.accel_comp, corr[k:])
-            self.steps += m
+            self._count[0] += m
             k += m
-        self.time = self.steps * self.config.step
         return out
 
+    @property
+    def steps(self) -> int:
+        """Major-loop steps integrated so far."""
+        return int(self._count[0])
+
+    @property
+    def time(self) -> float:
+        """Time since the start, s (steps x step)."""
+        return self.steps * self.config.step
+
+    def state_arrays(self) -> tuple:
+        """(q, v, pos, gyro_comp, accel_comp, steps, x, P, q_diag, p_history): the arrays a step
+        reads and updates in place (valid until :meth:`reset`)."""
+        return (self.q, self.v, self.pos, self.gyro_comp, self.accel_comp, self._count, self.x, self.p,
+                self.q_diag, self.p_history)
+
     def _held_row(self):
-        yaw, pitch, roll = self.attitude_euler()
-        return np.array([*self.pos, 0.0, 0.0, 0.0, yaw, pitch, roll])
+        return held_row(self.q, self.pos)
 
     def attitude_euler(self):
         """(yaw, pitch, roll) in rad of the current mat_nb."""
-        c = quat_to_mat(self.q)
-        return (math.atan2(-c[0, 1], c[1, 1]), math.asin(max(-1.0, min(1.0, c[2, 1]))),
-                math.atan2(-c[2, 0], c[2, 2]))
+        return tuple(float(x) for x in held_row(self.q, self.pos)[6:9])
 
     @property
     def mat_nb(self):
@@ -256,7 +269,7 @@ class StrapdownINS:
         zeta = earth.earth_rate_n(c.lat) * t_end
         mat_nn0 = quat_to_mat(rotvec_to_quat(-zeta))
         mat_nb = mat_nn0 @ mat_n0b0 @ quat_to_mat(self._q_b0b)
-        self.q = mat_to_quat(mat_nb)
+        self.q[:] = mat_to_quat(mat_nb)
 
     def position_error(self, out):
         """Errors of output rows wrt the known start: (K, 4) dlat, dlon (rad),

@@ -96,6 +96,14 @@ def _record(out, k, q, v, pos):
 
 
 @jit
+def held_row(q, pos):
+    """Output row of the alignment phases: the held start position, zero velocity, the attitude of q."""
+    out = np.empty((1, 9))
+    _record(out, 0, q, np.zeros(3), pos)
+    return out[0]
+
+
+@jit
 def align_steps(q, v, pos, dtheta, dv, h, gyro_comp, accel_comp, x, p, q_diag, r_var):
     """Fine alignment on a static base: mechanization + 9-state Kalman filter.
 

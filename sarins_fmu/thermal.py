@@ -199,21 +199,49 @@ def _linear_recurrence(a, b, x0):
 
 
 @jit
+def _exact_step(x, amb0, amb1, dt, heat, tau):
+    """One exact step of dT/dt = (A(t) + dT - T)/tau with A linear from amb0 to amb1
+    over dt: with s the ambient slope,
+    T <- e T + (amb0 + dT - s tau)(1 - e) + s dt,  e = exp(-dt/tau)."""
+    slope = (amb1 - amb0) / dt if dt > 0 else 0.0
+    decay = math.exp(-dt / tau)
+    return decay * x + (amb0 + heat - slope * tau) * (1.0 - decay) + slope * dt
+
+
+@jit
 def _exact_steps(h, amb, heat, tau, temp0):
-    """Exact steps of dT_j/dt = (A(t) + dT_j - T_j)/tau_j with A linear on each
-    step: with s the ambient slope over a step of length h,
-    T_{k+1} = e T_k + (A_k + dT_j - s tau_j)(1 - e) + s h,  e = exp(-h/tau_j).
-    Returns (K, 6) temperatures at the step ends."""
+    """Exact steps of lengths h (K,) with ambient amb (K + 1,) at the step ends
+    (:func:`_exact_step`).  Returns (K, 6) temperatures at the step ends."""
     n = h.shape[0]
     out = np.empty((n, heat.shape[0]))
     for j in range(heat.shape[0]):
         x = temp0[j]
         for k in range(n):
-            slope = (amb[k + 1] - amb[k]) / h[k] if h[k] > 0 else 0.0
-            decay = math.exp(-h[k] / tau[j])
-            x = decay * x + (amb[k] + heat[j] - slope * tau[j]) * (1.0 - decay) + slope * h[k]
+            x = _exact_step(x, amb[k], amb[k + 1], h[k], heat[j], tau[j])
             out[k, j] = x
     return out
+
+
+@jit
+def thermal_steps(t0, h, k0, amb0, amb_end, heat, tau, temperature, out):
+    """Exact steps over K intervals of the grid t0 + k h, from interval k0 on.
+
+    The interval ends are t0 + (k0 + k + 1) h (the step lengths are their
+    differences, as :meth:`ThermalModel.advance` takes them); the ambient is
+    amb0 at the start and amb_end (K,) at the ends.  ``temperature`` (6,) is
+    advanced in place; ``out`` (K, 6) receives the temperatures at the ends.
+    """
+    for j in range(heat.shape[0]):
+        x = temperature[j]
+        a_prev = amb0
+        t_prev = t0 + k0 * h
+        for k in range(amb_end.shape[0]):
+            t_k = t0 + (k0 + k + 1) * h
+            x = _exact_step(x, a_prev, amb_end[k], t_k - t_prev, heat[j], tau[j])
+            out[k, j] = x
+            a_prev = amb_end[k]
+            t_prev = t_k
+        temperature[j] = x
 
 
 @jit

@@ -90,6 +90,10 @@ class GimbalSchedule:
             raise ValueError("time must be finite")
         return _state_kernel(t, self.times, self._angle_bp, self._rate_bp, self.accel, self.angle0, self.rate0)
 
+    def tables(self) -> tuple:
+        """(times, angle_bp, rate_bp, accel, angle0, rate0): the arrays :func:`state_into` reads."""
+        return self.times, self._angle_bp, self._rate_bp, self.accel, self.angle0, self.rate0
+
     def check_grid(self, step: float, start: float = 0.0, tol: float = 1e-9) -> None:
         """Raise ValueError unless every breakpoint lies on start + n*step."""
         if not (step > 0 and math.isfinite(step)):
@@ -107,10 +111,19 @@ class GimbalSchedule:
 def _state_kernel(t, times, angle_bp, rate_bp, accel, angle0, rate0):
     """Exact gimbal state at times t (see GimbalSchedule.state)."""
     n, n_axes = t.shape[0], angle_bp.shape[1]
-    last = times.shape[0] - 1
     angle = np.empty((n, n_axes))
     rate = np.empty((n, n_axes))
     acc = np.zeros((n, n_axes))
+    state_into(t, times, angle_bp, rate_bp, accel, angle0, rate0, angle, rate, acc)
+    return angle, rate, acc
+
+
+@jit
+def state_into(t, times, angle_bp, rate_bp, accel, angle0, rate0, angle, rate, acc):
+    """:meth:`GimbalSchedule.state` at times t (K,) written to angle, rate, acc (K, A)
+    (acc must be zero on entry); the schedule's arrays are its breakpoint tables."""
+    n, n_axes = t.shape[0], angle_bp.shape[1]
+    last = times.shape[0] - 1
     seg = np.searchsorted(times, t, side="right") - 1
     for k in range(n):
         if seg[k] < 0:  # before the schedule: hold the initial state
@@ -125,7 +138,6 @@ def _state_kernel(t, times, angle_bp, rate_bp, accel, angle0, rate0):
             acc[k, j] = a
             rate[k, j] = rate_bp[s, j] + a * tau
             angle[k, j] = angle_bp[s, j] + rate_bp[s, j] * tau + 0.5 * a * tau * tau
-    return angle, rate, acc
 
 
 def axis_rotation(axis, angle: float) -> np.ndarray:
