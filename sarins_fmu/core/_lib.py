@@ -1,0 +1,56 @@
+"""The compiled physics core, loaded with ctypes.
+
+``pip install`` builds ``sarins_fmu/core/*.c`` into one shared library beside
+this file (``setup.py``).  :data:`LIB` is that library; component modules
+declare the prototypes they use with :func:`function`.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import importlib.machinery
+from pathlib import Path
+
+ABI = 1  # SARINS_CORE_ABI in sarins_core.h
+
+HERE = Path(__file__).resolve().parent
+NAME = "_sarins_core"
+
+c_double_p = ctypes.POINTER(ctypes.c_double)
+c_int64_p = ctypes.POINTER(ctypes.c_int64)
+
+
+class CoreNotBuilt(ImportError):
+    """The shared library is missing or of another ABI."""
+
+
+def library_path() -> Path:
+    """The built library beside this file (any of this interpreter's extension suffixes)."""
+    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+        candidate = HERE / (NAME + suffix)
+        if candidate.is_file():
+            return candidate
+    raise CoreNotBuilt(f"the C physics core is not built ({HERE / NAME}*.so missing): run "
+                       "'python3 -m pip install -e .' in the project folder (it needs a C compiler)")
+
+
+def _load() -> ctypes.CDLL:
+    lib = ctypes.CDLL(str(library_path()))
+    lib.sarins_core_abi.restype = ctypes.c_int
+    lib.sarins_core_abi.argtypes = []
+    abi = lib.sarins_core_abi()
+    if abi != ABI:
+        raise CoreNotBuilt(f"the C physics core at {library_path()} has ABI {abi}, this package expects {ABI}: "
+                           "rebuild it with 'python3 -m pip install -e .'")
+    return lib
+
+
+LIB = _load()
+
+
+def function(name: str, restype, *argtypes):
+    """The library's function ``name`` with its prototype set."""
+    fn = getattr(LIB, name)
+    fn.restype = restype
+    fn.argtypes = list(argtypes)
+    return fn

@@ -1,0 +1,23 @@
+/* sarins_core: the C physics core of sarins-fmu.
+ *
+ * Plain C11 + libm.  No globals, no heap allocation inside the step
+ * functions, reentrant: every function works on the arrays or the state
+ * struct it is given.  Units are SI (rad, rad/s, m, m/s, s; temperatures in
+ * degC where stated); frames follow the Python library: navigation frame
+ * ENU, body frame right-front-up, mat_nb projects body onto navigation
+ * axes, quaternions are [w x y z].
+ *
+ * Component headers are included from here; the Python binding is
+ * sarins_fmu/core/_lib.py (ctypes).
+ */
+#ifndef SARINS_CORE_H
+#define SARINS_CORE_H
+
+#include <stdint.h>
+
+/* ABI version of the library; the binding refuses a library of another one. */
+#define SARINS_CORE_ABI 1
+
+int sarins_core_abi(void);
+
+#endif

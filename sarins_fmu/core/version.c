@@ -1,0 +1,3 @@
+#include "sarins_core.h"
+
+int sarins_core_abi(void) { return SARINS_CORE_ABI; }

@@ -1,0 +1,44 @@
+"""Build step of the C physics core (``sarins_fmu/core/*.c``).
+
+pyproject.toml holds the project's metadata; this file only declares the
+core as one shared library, built by ``pip install`` (regular or editable).
+The library is plain C11 + libm, loaded with ctypes
+(:mod:`sarins_fmu.core._lib`), so it exports no Python module init function.
+"""
+
+import sys
+from pathlib import Path
+
+from setuptools import Extension, setup
+from setuptools.command.build_ext import build_ext
+from setuptools.errors import CCompilerError, CompileError, ExecError, LinkError, PlatformError
+
+CORE = Path("sarins_fmu") / "core"
+UNIX_FLAGS = ["-std=c11", "-O2", "-fPIC", "-Wall", "-Wextra", "-Werror", "-fno-fast-math", "-ffp-contract=off"]
+
+
+class BuildCore(build_ext):
+    """build_ext for a ctypes library: strict C flags, no PyInit export, a clear message without a compiler."""
+
+    def build_extension(self, ext):
+        if self.compiler.compiler_type == "msvc":
+            ext.extra_compile_args = ["/std:c11", "/O2", "/W4", "/WX", "/fp:precise"]
+        else:
+            ext.extra_compile_args = list(UNIX_FLAGS)
+            ext.extra_link_args = ["-lm"]
+        try:
+            super().build_extension(ext)
+        except (CCompilerError, CompileError, ExecError, LinkError, PlatformError) as exc:
+            sys.exit(f"sarins-fmu: cannot build the C physics core ({exc}). "
+                     "It needs a C11 compiler: install gcc or clang (Debian: apt-get install build-essential; "
+                     "Windows: the MSVC build tools) and run pip install again.")
+
+    def get_export_symbols(self, ext):
+        return []  # a plain C library: no PyInit_ function to export
+
+
+setup(
+    ext_modules=[Extension("sarins_fmu.core._sarins_core", sources=sorted(str(p) for p in CORE.glob("*.c")),
+                           include_dirs=[str(CORE)], depends=sorted(str(p) for p in CORE.glob("*.h")))],
+    cmdclass={"build_ext": BuildCore},
+)
