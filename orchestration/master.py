@@ -291,7 +291,7 @@ class Master:
         total = sum(s.count for s in segments)
         meta = self._meta(start, segments, total, output_every, realtime)
         meta["step_source"] = step_source
-        pacer = None if realtime is None else RealTimePacer(realtime, start)
+        pacer = None if realtime is None else RealTimePacer(realtime, start, capacity=total)
         bar = Progress(total, progress, description=self.system.name)
         try:
             self._initialize(start)
