@@ -13,7 +13,15 @@ from pathlib import Path
 import numpy as np
 
 
-HEAD_VEHICLE = "veh-markov-premise"  # configuration shown in Figs 7-8 and Table 4
+HEAD_VEHICLE = "veh-markov-nav-rlg"  # configuration shown in Figs 7-8 and Table 4
+HEAD_MC = "mc-markov-nav-rlg-filter"  # configuration shown in Figs 4-6 and Table 1
+HEAD_STOP = "stop-nav-rlg"  # the stop filter's headline unit
+# seed 002's headline numbers: sec. 2 (stop filter), Table 2 (mean S), Table 5 (vehicle)
+PAPER_STOP_DPH = 0.002
+PAPER_S_FF = 0.066
+PAPER_FF_OVER_NONE = 0.5
+PAPER_CEP_CHANGE_PCT = -47.0
+PAPER_MAX_RADIAL_CHANGE_PCT = -78.0
 
 
 def _group(results: dict, prefix: str) -> list:
@@ -142,6 +150,30 @@ def stop_bound_lines(units=("nav-rlg", "premise")) -> list:
     return lines
 
 
+def comparison_claims(results: dict) -> list:
+    """Seed 002's headline claims against the headline configurations' runs (:mod:`sarins.comparison`)."""
+    from sarins.comparison import Claim
+
+    stops = _group(results, HEAD_STOP + "-")
+    mc = _group(results, HEAD_MC + "-")
+    veh = _group(results, HEAD_VEHICLE + "-")
+    pct = lambda a, b: 100.0 * (np.asarray(a, float) / np.asarray(b, float) - 1.0)  # noqa: E731
+    return [
+        Claim("30-min stop: abs. azimuth-drift error (°/h), nav-rlg", PAPER_STOP_DPH,
+              [abs(r["error_dph"]) for r in stops], paper_text="< 0.002", note="no nav-rlg stops run"),
+        Claim("mean S after FF-RLS (°/h·°C), Table 2", PAPER_S_FF, [r["s_ff"] for r in mc],
+              note="no nav-rlg Monte Carlo run"),
+        Claim("S after FF-RLS / S without update, Table 2", PAPER_FF_OVER_NONE,
+              [r["s_ff"] / r["s_none"] for r in mc], paper_text="< 0.5 (of the means)",
+              note="no nav-rlg Monte Carlo run"),
+        Claim("vehicle CEP, updated vs initial model (%), Table 5", PAPER_CEP_CHANGE_PCT,
+              [pct(r["cep_updated"], r["cep_initial"]) for r in veh], note="no nav-rlg vehicle test run", digits=3),
+        Claim("vehicle max radial error, updated vs initial (%), Table 5", PAPER_MAX_RADIAL_CHANGE_PCT,
+              [pct(r["max_radial_updated"], r["max_radial_initial"]) for r in veh],
+              note="no nav-rlg vehicle test run", digits=3),
+    ]
+
+
 def _plots(results: dict, out: Path) -> list:
     import matplotlib
 
@@ -172,7 +204,7 @@ def _plots(results: dict, out: Path) -> list:
             ax.legend(fontsize=7)
         save(fig, "stop_convergence.png")
     mc = _configs(results, "mc")
-    head = "mc-markov-premise-filter" if "mc-markov-premise-filter" in mc else (mc[0] if mc else None)
+    head = HEAD_MC if HEAD_MC in mc else (mc[0] if mc else None)
     if head:
         r = results[head + "-000"]
         fig, axes = plt.subplots(3, 1, figsize=(7, 6), sharex=True)
@@ -236,6 +268,8 @@ def _fmt(x, nd=4):
 def write_report(results: dict, out_dir, *, profile: str, wall_time: float, workers=None,
                  forgetting_factor: float = 0.8, computed: int | None = None) -> Path:
     """Write report.md, summary.json and the PNG figures; returns the report path."""
+    from sarins.comparison import comparison_lines
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     stops, mc, veh = stop_summary(results), mc_summary(results), vehicle_summary(results)
@@ -252,6 +286,8 @@ def write_report(results: dict, out_dir, *, profile: str, wall_time: float, work
              f"FF-RLS λ = {forgetting_factor} per month (m = 30 days)"
              + (f"; vehicle tests run {' and '.join(engines)} (cosim: through the FMUs of the vehicle_rins_online "
                 "SSP system)." if engines else "."), "",
+             *comparison_lines(comparison_claims(results), profile=profile,
+                               title="## The paper against our runs (nav-rlg, the headline unit)"),
              "## Stop Kalman filter: 30-minute azimuth-drift estimate", "",
              "| unit | runs | rms error (°/h) | mean error | max abs error | mean filter 1σ | within 0.002 °/h |",
              "|---|---|---|---|---|---|---|"]
@@ -273,10 +309,10 @@ def write_report(results: dict, out_dir, *, profile: str, wall_time: float, work
                   "|---|" + "---|" * len(lams)]
         for cfg, s in mc.items():
             lines.append(f"| {cfg} | " + " | ".join(_fmt(v) for v in s["mean_s_lambda"]) + " |")
-    head = "mc-markov-premise-filter-000"
+    head = HEAD_MC + "-000"
     if head in results:
         r = results[head]
-        lines += ["", "### One run (Table 1 shape, run 0 of markov-premise-filter)", "",
+        lines += ["", f"### One run (Table 1 shape, run 0 of {HEAD_MC[3:]})", "",
                   "| model | S (°/h·°C) |", "|---|---|",
                   f"| no update | {_fmt(r['s_none'])} |", f"| RLS | {_fmt(r['s_rls'])} |",
                   f"| FF-RLS | {_fmt(r['s_ff'])} |"]
