@@ -224,6 +224,10 @@ def _predict(args: argparse.Namespace) -> None:
     elif not np.isfinite(lat) or abs(lat) > 90.0:
         raise _UsageError(f"--local-lat-deg must be within [-90, 90], got {lat}")
     table = read_table(args.data)
+    converts = any(n in ("lat_deg", "lat_error_deg") and n not in table for n in net.input_names)
+    if args.local_lat_deg is not None and not converts:
+        raise _UsageError(f"--local-lat-deg does not apply: {args.data} has the model's inputs "
+                          f"({', '.join(net.input_names)}) as they are, no latitude to convert")
     x = _input_matrix(table, list(net.input_names), lat, args.data)
     pred = net.predict(x)
     target = net.target_name or "prediction"
