@@ -302,3 +302,35 @@ def test_a_signalled_campaign_stops_cleanly(tmp_path, signum, status):
     assert err.strip().splitlines() == [f"sarins campaign online-rls: {'terminated' if status == 143 else 'interrupted'}"]
     assert _wait(lambda: not any(_alive(k) for k in kids), timeout=10)
     assert load_result(tmp_path / "runs" / "quick.npz")["y"] == 1
+
+
+def _ignore_sigint():
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # as a background job of a non-interactive shell starts
+
+
+def test_a_campaign_started_with_sigint_ignored_still_stops_on_sigint(tmp_path):
+    """A campaign that inherited SIGINT ignored (``cmd &`` in a script) still
+    stops on SIGINT with 130 and one line: ``sarins`` installs its own
+    handler whatever the inherited disposition (issue 21)."""
+    proc = _python(f"""
+        import signal, sys
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN  # inherited, as the test means
+        import sarins.online_rls.campaign as camp
+        from campaign_tasks import sleeper, square
+        from sarins.campaign import Task
+        from sarins.cli import main
+        camp.build_tasks = lambda *a, **k: [Task("quick", square, {{"x": 1}})] + [
+            Task(f"s{{i}}", sleeper, {{"x": i, "seconds": 600.0}}) for i in range(4)]
+        sys.exit(main(["campaign", "online-rls", "--out", {str(tmp_path)!r}, "--workers", "2", "--no-progress"]))
+    """, stderr=subprocess.PIPE, text=True, preexec_fn=_ignore_sigint)
+    try:
+        # the campaign is running (a result stored, its two workers busy): SIGINT now must stop it
+        assert _wait(lambda: (tmp_path / "runs" / "quick.npz").exists() and len(_children(proc.pid)) >= 3, 300)
+        kids = _children(proc.pid)
+        os.kill(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=120)  # on the old code it never ends: the timeout fails the test
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    assert err.strip().splitlines() == ["sarins campaign online-rls: interrupted"]
+    assert _wait(lambda: not any(_alive(k) for k in kids), timeout=30)
