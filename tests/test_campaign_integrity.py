@@ -334,3 +334,78 @@ def test_a_campaign_started_with_sigint_ignored_still_stops_on_sigint(tmp_path):
     assert proc.returncode == 130, err
     assert err.strip().splitlines() == ["sarins campaign online-rls: interrupted"]
     assert _wait(lambda: not any(_alive(k) for k in kids), timeout=30)
+
+
+# ---- a stored result whose record is intact but one of whose arrays is not what the run gives (issue 21)
+def _square_schema(kwargs):
+    from sarins.campaign import Field
+
+    return {"x": Field((), "iu"), "y": Field((), "iu"), "series": Field((5,), "iu"), "label": Field((), "U")}
+
+
+def _rewrite(path, edit):
+    """Rewrite the stored arrays with ``edit`` applied, keeping every other member as it was
+    (record, its hash, key list and manifest): the record stays intact."""
+    with np.load(path) as data:
+        members = {k: data[k] for k in data.files}
+    edit(members)
+    with open(path, "wb") as fh:
+        np.savez(fh, **members)
+
+
+@pytest.mark.parametrize("name, edit, reason", [
+    ("series cut to 2", lambda m: m.update(series=m["series"][:2]), "'series' has another shape than written"),
+    ("series as float", lambda m: m.update(series=m["series"].astype(float)), "'series' has another dtype"),
+    ("y rewritten", lambda m: m.update(y=np.array(5)), "'y' has another content than written"),
+])
+def test_an_array_changed_under_an_intact_record_is_recomputed(tmp_path, name, edit, reason):
+    notes = []
+    tasks = [Task("run", square, {"x": 2})]
+    _run(tasks, tmp_path, notes)
+    _rewrite(tmp_path / "run.npz", edit)
+    out = _run(tasks, tmp_path, notes)
+    assert out.computed == ["run"] and out["run"]["series"].shape == (5,) and out["run"]["y"] == 4
+    assert len(notes) == 1 and reason in notes[0] and str(tmp_path / "run.npz") in notes[0], notes
+
+
+@pytest.mark.parametrize("name, edit, reason", [
+    ("series cut to 2", lambda r: r.update(series=r["series"][:2]), "'series' has shape (2,), the task gives (5,)"),
+    ("label as a number", lambda r: r.update(label=3.0), "'label' is float64, the task gives kind 'U'"),
+    ("extra key", lambda r: r.update(extra=1.0), "unexpected extra"),
+    ("y not finite", lambda r: r.update(y=np.nan), "'y' is float64"),
+])
+def test_a_result_that_does_not_match_the_declared_schema_is_recomputed(tmp_path, name, edit, reason):
+    """Even rewritten whole (record, manifest and all consistent), a result whose fields are not what
+    the task's declared schema says the run produces is recomputed with the one-line notice."""
+    notes = []
+    task = Task("run", square, {"x": 2}, schema=_square_schema({"x": 2}))
+    _run([task], tmp_path, notes)
+    from sarins.results import _read
+
+    result, record = _read(tmp_path / "run.npz")
+    edit(result)
+    save_result(tmp_path / "run.npz", result, record)
+    out = _run([task], tmp_path, notes)
+    assert out.computed == ["run"] and out["run"]["series"].shape == (5,)
+    assert len(notes) == 1 and reason in notes[0], notes
+
+
+def test_a_fresh_result_outside_its_declared_schema_fails_the_task(tmp_path):
+    from sarins.campaign import Field, TaskFailed
+
+    schema = {**_square_schema({}), "series": Field((6,), "iu")}
+    with pytest.raises(TaskFailed, match="declared schema .*'series' has shape"):
+        _run([Task("run", square, {"x": 2}, schema=schema)], tmp_path)
+    assert not (tmp_path / "run.npz").exists()
+
+
+def test_the_online_rls_stop_schema_is_what_the_run_gives():
+    """The declared schema of the stop task matches a real (short) run, and the quick profile's
+    stop tasks declare the 1800-sample curves their 1800 s stops give."""
+    from sarins.campaign import check_fields
+    from sarins.online_rls.campaign import build_tasks, stop_schema
+    from sarins_fmu.experiments.online_rls import simulate_stop
+
+    check_fields(simulate_stop(imu="premise", seed=0, temperature=5.0, duration=120.0), stop_schema({"duration": 120.0}))
+    stops = [t for t in build_tasks("quick") if t.id.startswith("stop-")]
+    assert stops and all(t.schema["time"].shape == (1800,) for t in stops)
