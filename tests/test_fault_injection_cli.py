@@ -158,9 +158,10 @@ def cases() -> list[Case]:
     out = []
     add = out.append
     # 1. options ignored without a word
-    add(Case("options", "allan --log with --rate-hz", ["allan", "--log", "{root}/good.csv", "--rate-hz", "7"], "--rate-hz"))
-    add(Case("options", "allan --log with --hours", ["allan", "--log", "{root}/good.csv", "--hours", "2"], "--hours"))
-    add(Case("options", "allan --log with --seed", ["allan", "--log", "{root}/good.csv", "--seed", "5"], "--seed"))
+    add(Case("options", "allan --log with --rate-hz", ["allan", "--log", "{root}/good.csv", "--rate-hz", "7"],
+             "--rate-hz", setup=_setup_logs))
+    add(Case("options", "allan --log with --hours", ["allan", "--log", "{root}/good.csv", "--hours", "2"], "--hours", setup=_setup_logs))
+    add(Case("options", "allan --log with --seed", ["allan", "--log", "{root}/good.csv", "--seed", "5"], "--seed", setup=_setup_logs))
     add(Case("options", "navigate --correction-from-hours alone", ["navigate", *quick, "--correction-from-hours",
                                                                    "0.005", "--json"], "--correction-from-hours"))
     add(Case("options", "demo --model with --model-file", ["demo", "--model", "cold", "--model-file", hot,
