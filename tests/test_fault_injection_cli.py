@@ -60,7 +60,7 @@ class Case:
 
 
 # ---------------------------------------------------------------- inputs
-def _static_log(path: Path, *, gyro_scale=1.0, turn=0.0, n=300) -> Path:
+def _static_log(path: Path, *, gyro_scale=1.0, turn=0.0, n=900) -> Path:
     """A 1 Hz static log (nav-rlg-like noise), optionally turning about z for its first 120 s."""
     rng = np.random.default_rng(1)
     time_s = np.arange(1.0, n + 1.0)
@@ -196,7 +196,7 @@ def cases() -> list[Case]:
             ("string NPZ column", "strings.npz", "dtheta_x_rad"),
             ("degrees, moving log", "deg_moving.csv", "degrees")]
     for name, file, needle in logs:
-        add(Case("log grammar", f"replay: {name}", ["replay", f"{{root}}/{file}", "--align-hours", "0.02", "--json"],
+        add(Case("log grammar", f"replay: {name}", ["replay", f"{{root}}/{file}", "--align-hours", "0.1", "--json"],
                  needle, setup=_setup_logs))
         add(Case("log grammar", f"allan --log: {name}", ["allan", "--log", f"{{root}}/{file}", "--json"], needle,
                  setup=_setup_logs))
