@@ -22,19 +22,24 @@ Nothing here knows what the tasks compute.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import os
 import re
+import signal
 import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-from .results import (OutputBusyError, StoredResultError, atomic_output, build_artifacts, canonical_json,  # noqa: F401
-                      code_hash, exclusive, load_result, load_valid, remove_stale_temporaries, save_result, task_record,
-                      write_text)
+from .results import (Field, OutputBusyError, StoredResultError, atomic_output, build_artifacts,  # noqa: F401
+                      canonical_json, check_fields, code_hash, exclusive, load_result, load_valid,
+                      remove_stale_temporaries, save_result, task_record, write_text)
 from .workers import DependencyError, SchedulerError, make_pool  # noqa: F401
 
 _ID = re.compile(r"^[A-Za-z0-9_.-]+$")
+# test hook: once a result is stored and the folder holds at least this many results, the campaign process
+# SIGKILLs itself (its local workers die with it): a kill at a known point, not at a time that depends on load
+KILL_AFTER_ENV = "SARINS_TEST_KILL_AFTER"
 
 
 @dataclass(frozen=True)
@@ -47,6 +52,9 @@ class Task:
         the kwargs only name); part of the record.
     finite : result keys that must be present and finite for a stored
         result to be reused.
+    schema : {key: :class:`sarins.results.Field`}, what the run produces (keys,
+        shapes derived from the kwargs, dtype kinds, finiteness); a stored result
+        is reused only if it matches, and a fresh result that does not fails the task.
     """
 
     id: str
@@ -55,6 +63,7 @@ class Task:
     volatile: tuple = ()
     identity: dict = field(default_factory=dict)
     finite: tuple = ()
+    schema: dict | None = None
 
     def __post_init__(self):
         if not _ID.match(self.id):
@@ -110,7 +119,7 @@ def run_campaign(tasks, out_dir, *, workers: int | None = None, scheduler: str |
         for task in tasks:
             path = result_path(out_dir, task.id)
             try:
-                results[task.id] = load_valid(path, records[task.id], task.finite)
+                results[task.id] = load_valid(path, records[task.id], task.finite, task.schema)
             except FileNotFoundError:
                 todo.append(task)
             except StoredResultError as exc:
@@ -143,9 +152,29 @@ def _ordered(results: CampaignResults, ids) -> CampaignResults:
 def _store(out_dir, task, result, record) -> dict:
     if not isinstance(result, dict):
         raise TypeError(f"task {task.id} returned {type(result).__name__}, not a dict")
+    if task.schema is not None:
+        try:
+            check_fields({k: v for k, v in result.items()}, task.schema)
+        except StoredResultError as exc:
+            raise TaskFailed(f"task {task.id} returned a result its declared schema does not allow: {exc}") from None
     path = result_path(out_dir, task.id)
     save_result(path, result, record)
-    return load_result(path)  # what a resume would see
+    stored = load_result(path)  # what a resume would see
+    _kill_hook(out_dir)
+    return stored
+
+
+def _kill_hook(out_dir) -> None:
+    """SIGKILL this process if ``SARINS_TEST_KILL_AFTER`` = N is set and ``out_dir`` holds >= N results."""
+    text = os.environ.get(KILL_AFTER_ENV)
+    if not text:
+        return
+    try:
+        limit = int(text)
+    except ValueError:
+        raise ValueError(f"{KILL_AFTER_ENV} must be a whole number of results, got {text!r}") from None
+    if len(list(Path(out_dir).glob("*.npz"))) >= limit:
+        os.kill(os.getpid(), signal.SIGKILL)
 
 
 def _run_parallel(todo, out_dir, workers, scheduler, bar, records, results):

@@ -5,9 +5,13 @@ carries the **record** that made it -- the task function's qualified name,
 its keyword arguments canonicalised to JSON, the campaign options that
 matter, ``sarins_fmu.__version__`` and a hash of the code (:func:`code_hash`)
 -- and the record's SHA-256.  A stored file is reused only if its record
-equals the one the campaign would write now and it loads and validates;
-anything else (other parameters, other code, a truncated, empty or garbage
-file, a missing key, a non-finite required value) is recomputed.
+equals the one the campaign would write now and it loads and validates:
+every array as the file's manifest describes it (dtype, shape and SHA-256 of
+its bytes, written with it) and, for a task that declares its result
+(:class:`Field` per key), every key, shape, dtype kind and finiteness as the
+run produces them.  Anything else (other parameters, other code, a
+truncated, empty or garbage file, a missing key, an array cut or retyped
+since, a non-finite required value) is recomputed.
 
 Writes are atomic and durable: temporary file in the same folder, fsync,
 ``os.replace``, fsync of the folder.  Derived artefacts (built FMUs, fitted
@@ -29,6 +33,7 @@ import math
 import os
 import shutil
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +41,8 @@ import numpy as np
 RECORD_KEY = "__record__"  # the canonical record (JSON text) inside a result file
 HASH_KEY = "__record_sha256__"
 KEYS_KEY = "__keys__"  # the result's own keys, to detect a file that lost some
-RESERVED = (RECORD_KEY, HASH_KEY, KEYS_KEY)
+MANIFEST_KEY = "__manifest__"  # JSON {key: [dtype, shape, sha256 of the bytes]} of every array as written
+RESERVED = (RECORD_KEY, HASH_KEY, KEYS_KEY, MANIFEST_KEY)
 LOCK_NAME = ".lock"
 
 _CODE_ROOTS = ("sarins_fmu", "fmus", "orchestration")  # the code a result can depend on
@@ -181,12 +187,37 @@ def save_result(path, result: dict, record: dict | None = None) -> None:
             raise TypeError(f"result {key!r} of {path.name} is not numeric or text")
         arrays[key] = arr
     arrays[KEYS_KEY] = np.array(sorted(result), dtype=str)
+    arrays[MANIFEST_KEY] = np.array(json.dumps({key: _describe(arr) for key, arr in arrays.items()
+                                                if key != KEYS_KEY}, sort_keys=True))
     if record is not None:
         arrays[RECORD_KEY] = np.array(canonical_json(record))
         arrays[HASH_KEY] = np.array(record_hash(record))
     with atomic_output(path) as tmp:
         with open(tmp, "wb") as fh:
             np.savez(fh, **arrays)
+
+
+def _describe(arr: np.ndarray) -> list:
+    """[dtype, shape, SHA-256 of the bytes] of an array: what the manifest promises of it."""
+    arr = np.ascontiguousarray(arr)
+    return [arr.dtype.str, list(arr.shape), hashlib.sha256(arr.tobytes()).hexdigest()]
+
+
+def _check_manifest(raw: dict, text) -> None:
+    """Every array as its manifest describes it (a file whose record is intact but one of whose
+    arrays was cut, retyped or rewritten since fails here)."""
+    try:
+        manifest = json.loads(str(text))
+    except ValueError:
+        raise StoredResultError("its manifest is not JSON") from None
+    if not isinstance(manifest, dict) or set(manifest) != set(raw):
+        raise StoredResultError("its manifest does not list its arrays")
+    for key, arr in raw.items():
+        wanted, found = manifest[key], _describe(arr)
+        if wanted != found:
+            what = ("dtype" if wanted[0] != found[0] else "shape" if wanted[1] != found[1] else "content")
+            raise StoredResultError(f"{key!r} has another {what} than written "
+                                    f"({found[0]} {tuple(found[1])}, written {wanted[0]} {tuple(wanted[1])})")
 
 
 def _read(path: Path) -> tuple[dict, dict | None]:
@@ -214,6 +245,10 @@ def _read(path: Path) -> tuple[dict, dict | None]:
         missing = sorted(set(keys) - set(raw))
         if missing:
             raise StoredResultError(f"keys missing: {', '.join(missing)}")
+    if MANIFEST_KEY in raw:
+        _check_manifest({k: v for k, v in raw.items() if k != MANIFEST_KEY}, raw.pop(MANIFEST_KEY))
+    elif record is not None:
+        raise StoredResultError("it has no manifest of its arrays (written by an older version)")
     result = {key: (arr.item() if arr.ndim == 0 else arr) for key, arr in raw.items()}
     return result, record
 
@@ -238,7 +273,52 @@ def _differences(stored: dict, wanted: dict) -> str:
     return ", ".join(diff) or "record"
 
 
-def load_valid(path, record: dict, finite=()) -> dict:
+@dataclass(frozen=True)
+class Field:
+    """What a task's result holds under one key, as the run produces it.
+
+    shape : tuple of ints (fixed, e.g. derived from the task's arguments) or names
+        (dimensions shared between fields: ``("n",)`` on two series says they have
+        one length, whatever it is); ``()`` for a scalar.
+    kind : accepted numpy dtype kinds ('f' float, 'i' signed, 'u' unsigned, 'b' bool, 'U' text).
+    finite : every value is finite (numeric kinds only).
+    """
+
+    shape: tuple = ()
+    kind: str = "f"
+    finite: bool = True
+
+
+def check_fields(result: dict, schema: dict) -> None:
+    """Raise :class:`StoredResultError` unless ``result`` has exactly the keys of ``schema``
+    ({key: Field}) with their shape, dtype kind and finiteness."""
+    missing = sorted(set(schema) - set(result))
+    extra = sorted(set(result) - set(schema))
+    if missing or extra:
+        raise StoredResultError("its keys differ from the task's: " + "; ".join(
+            part for part in (f"missing {', '.join(missing)}" if missing else "",
+                              f"unexpected {', '.join(extra)}" if extra else "") if part))
+    dims: dict = {}
+    for key, field in schema.items():
+        arr = np.asarray(result[key])
+        if arr.dtype.kind not in field.kind:
+            raise StoredResultError(f"{key!r} is {arr.dtype}, the task gives kind {field.kind!r}")
+        if arr.ndim != len(field.shape):
+            raise StoredResultError(f"{key!r} has shape {arr.shape}, the task gives {len(field.shape)} dimensions")
+        for size, want in zip(arr.shape, field.shape):
+            if isinstance(want, str):
+                want = dims.setdefault(want, size)
+            if size != want:
+                raise StoredResultError(f"{key!r} has shape {arr.shape}, the task gives {_shape_text(field, dims)}")
+        if field.finite and arr.dtype.kind in "fc" and not np.all(np.isfinite(arr)):
+            raise StoredResultError(f"{key!r} is not finite")
+
+
+def _shape_text(field: Field, dims: dict) -> str:
+    return "(" + ", ".join(str(dims.get(d, d)) for d in field.shape) + ("," if len(field.shape) == 1 else "") + ")"
+
+
+def load_valid(path, record: dict, finite=(), schema: dict | None = None) -> dict:
     """The stored result at ``path`` if it was made by ``record`` and is valid.
 
     Raises :class:`StoredResultError` with the reason otherwise (the file
@@ -262,6 +342,8 @@ def load_valid(path, record: dict, finite=()) -> dict:
             ok = False
         if not ok:
             raise StoredResultError(f"{key!r} is not finite")
+    if schema is not None:
+        check_fields(result, schema)
     return result
 
 

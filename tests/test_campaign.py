@@ -1,16 +1,16 @@
+import contextlib
 import os
 import signal
 import subprocess
 import sys
 import textwrap
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from campaign_tasks import fail, square
-from sarins.campaign import Task, load_result, run_campaign, save_result
+from sarins.campaign import KILL_AFTER_ENV, Task, load_result, run_campaign, save_result
 
 HERE = Path(__file__).resolve().parent
 
@@ -47,7 +47,9 @@ def test_bad_task_ids_and_results(tmp_path):
 def test_killed_campaign_resumes_without_losing_or_redoing_work(tmp_path):
     """Kill the process running a campaign (and its worker pool) half-way,
     rerun the same command: finished runs are kept and not redone, the rest
-    complete, and the results equal an uninterrupted campaign's."""
+    complete, and the results equal an uninterrupted campaign's.  The kill
+    comes from the runner's test hook right after the third stored result
+    (``SARINS_TEST_KILL_AFTER``), so where it lands does not depend on load."""
     markers, out = tmp_path / "markers", tmp_path / "out"
     markers.mkdir()
     script = textwrap.dedent(f"""
@@ -55,18 +57,19 @@ def test_killed_campaign_resumes_without_losing_or_redoing_work(tmp_path):
         sys.path[:0] = [{str(HERE)!r}, {str(HERE.parent)!r}]
         from campaign_tasks import square
         from sarins.campaign import Task, run_campaign
-        tasks = [Task(f"sq{{x}}", square, {{"x": x, "marker_dir": {str(markers)!r}, "delay": 0.4}},
+        tasks = [Task(f"sq{{x}}", square, {{"x": x, "marker_dir": {str(markers)!r}, "delay": 0.0}},
                       volatile=("marker_dir", "delay")) for x in range(12)]
         run_campaign(tasks, {str(out)!r}, workers=2, progress=False)
     """)
-    proc = subprocess.Popen([sys.executable, "-c", script], start_new_session=True)
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and len(list(out.glob("*.npz"))) < 3:
-        time.sleep(0.05)
-    os.killpg(proc.pid, signal.SIGKILL)  # the campaign process and its workers
-    proc.wait()
+    proc = subprocess.Popen([sys.executable, "-c", script], start_new_session=True,
+                            env={**os.environ, KILL_AFTER_ENV: "3"})
+    try:
+        assert proc.wait(timeout=600) == -signal.SIGKILL  # the hook fired (the timeout only guards a hang)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)  # anything of the group still alive
     finished = sorted(p.stem for p in out.glob("*.npz"))
-    assert 3 <= len(finished) < 12
+    assert len(finished) == 3
     for task_id in finished:  # every stored file is complete (written whole, then renamed)
         assert load_result(out / f"{task_id}.npz")["y"] == int(task_id[2:]) ** 2
     tasks = [Task(f"sq{x}", square, {"x": x, "marker_dir": str(markers), "delay": 0.0}, volatile=("marker_dir", "delay"))

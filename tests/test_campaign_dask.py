@@ -3,16 +3,18 @@ scheduler`` and two ``dask worker`` processes on 127.0.0.1, a campaign
 through ``--scheduler``, killed part-way, resumed, equal to a local run.
 Everything started here is torn down (process groups killed)."""
 
+import contextlib
 import os
 import signal
 import socket
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from sarins.campaign import KILL_AFTER_ENV
 
 pytest.importorskip("distributed", reason="Dask distributed is not installed (pip install 'sarins-fmu[distributed]')")
 
@@ -62,10 +64,10 @@ def cluster():
             _stop(proc)
 
 
-def _campaign(args, out, scheduler=None, workers=None):
+def _campaign(args, out, scheduler=None, workers=None, env=None):
     cmd = [sys.executable, "-m", "sarins", "campaign", *args, "--out", str(out), "--no-progress"]
     cmd += ["--scheduler", scheduler] if scheduler else ["--workers", str(workers or 1)]
-    return subprocess.Popen(cmd, env=ENV, cwd=str(ROOT), start_new_session=True, stdout=subprocess.PIPE,
+    return subprocess.Popen(cmd, env={**ENV, **(env or {})}, cwd=str(ROOT), start_new_session=True, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
 
 
@@ -95,15 +97,16 @@ def test_online_rls_through_dask_killed_and_resumed_equals_a_local_run(cluster, 
     first stored results, resumed; same results (bit for bit) and report
     tables as a local run; the Dask executor shuts down cleanly."""
     out, ref = tmp_path / "dask", tmp_path / "local"
-    proc = _campaign(["online-rls", "--profile", "quick"], out, scheduler=cluster)
-    end = time.monotonic() + 900
-    while time.monotonic() < end and len(list((out / "runs").glob("*.npz"))) < 3 and proc.poll() is None:
-        time.sleep(0.1)
-    assert proc.poll() is None, proc.communicate()
-    os.killpg(proc.pid, signal.SIGKILL)
-    proc.wait()
+    # the runner's test hook SIGKILLs the campaign right after its 3rd stored result
+    proc = _campaign(["online-rls", "--profile", "quick"], out, scheduler=cluster, env={KILL_AFTER_ENV: "3"})
+    try:
+        _, stderr = proc.communicate(timeout=1800)  # the timeout only guards a hang
+        assert proc.returncode == -signal.SIGKILL, stderr
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
     done = _results(out / "runs")
-    assert 3 <= len(done) < 14
+    assert len(done) == 3
     proc = _campaign(["online-rls", "--profile", "quick"], out, scheduler=cluster)
     stdout, stderr = proc.communicate(timeout=1800)
     assert proc.returncode == 0, stderr

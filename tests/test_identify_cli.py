@@ -76,10 +76,11 @@ def test_latitude_reading_converted_to_error(tmp_path):
     out = tmp_path / "p.csv"
     assert main(["identify", "predict", "--model", str(a), "--data", str(readings), "--out", str(out)]) == 0
     assert_allclose(read_table(out)["drift_dph_pred"], net_a.predict(x), rtol=1e-9, atol=1e-12)
-    # another site latitude shifts the errors
+    # another site latitude shifts the errors (within the training range; 28.3 deg would leave it)
     assert main(["identify", "predict", "--model", str(a), "--data", str(readings),
-                 "--local-lat-deg", "28.3", "--out", str(out)]) == 0
-    assert_allclose(read_table(out)["drift_dph_pred"], net_a.predict(table["lat_deg"] - 28.3), rtol=1e-9)
+                 "--local-lat-deg", "28.225", "--out", str(out)]) == 0
+    assert_allclose(read_table(out)["drift_dph_pred"], net_a.predict(table["lat_deg"] - 28.225), rtol=1e-9)
+    assert main(["identify", "predict", "--model", str(a), "--data", str(readings), "--local-lat-deg", "28.3"]) == 2
 
 
 def test_cold_start_inputs_and_name_check(tmp_path, capsys):
@@ -160,3 +161,38 @@ def test_bad_options(tmp_path, capsys):
     assert rc == 2 and "spread" in capsys.readouterr().err
     rc, _ = _train(tmp_path, "--inputs", "lat_error_deg,,temp_c")
     assert rc == 2 and "--inputs" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("value", ["1e308", "-1e308", "0.1", "-0.06"])
+def test_predict_refuses_inputs_outside_the_training_range(tmp_path, capsys, value):
+    """Table 2's latitude errors span +-0.0254 deg: a row far beyond (or simply 2-4 times beyond) is
+    refused with exit 2 naming the CSV line, not answered with an extrapolated drift (issue 21)."""
+    rc, model = _train(tmp_path, "--spread", "1", "--goal", "0", "--max-neurons", "4")
+    assert rc == 0
+    lo, hi = RBFNetwork.load(model).input_range_[:, 0]
+    assert (lo, hi) == (-0.0254, 0.0254)  # the training column's least and largest value, stored
+    data = tmp_path / "far.csv"
+    data.write_text(f"lat_error_deg\n0.01\n{value}\n")
+    capsys.readouterr()
+    assert main(["identify", "predict", "--model", str(model), "--data", str(data)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("sarins identify predict: error: ")
+    assert f"{data}: line 3: lat_error_deg" in err[0] and "outside the range the model" in err[0], err[0]
+    # just inside the widened range: answered
+    data.write_text("lat_error_deg\n0.0254\n-0.0279\n")
+    assert main(["identify", "predict", "--model", str(model), "--data", str(data)]) == 0
+
+
+def test_shipped_model_without_a_stored_range_is_bounded_from_its_scaling(tmp_path, capsys):
+    """The shipped models predate the stored range: they load, and their range is bounded by
+    Samuelson's inequality (mean +- std sqrt(n - 1)), which contains every training input."""
+    from sarins_fmu.identify.axial import default_model_path
+
+    net = RBFNetwork.load(default_model_path("hot"))
+    assert not net.input_range_exact_
+    lo, hi = net.input_range_[:, 0]
+    assert lo < -0.0254 and hi > 0.0254 and hi - lo < 0.2
+    data = tmp_path / "far.csv"
+    data.write_text("lat_error_deg\n0.01\n1e308\n")
+    assert main(["identify", "predict", "--model", str(default_model_path("hot")), "--data", str(data)]) == 2
+    assert "line 3: lat_error_deg = 1e+308 is outside the range" in capsys.readouterr().err

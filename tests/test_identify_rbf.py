@@ -5,9 +5,12 @@ import json
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
+from scipy.spatial.distance import cdist
 
 from sarins_fmu.identify.modelfile import ModelFileError
 from sarins_fmu.identify.rbf import RBFNetwork, gaussian_width, radial_basis
+
+EPS = np.finfo(float).eps  # unit roundoff u = EPS / 2; the bounds below use EPS, a factor 2 to spare
 
 
 def _gauss_by_hand(xa, xb, spread):
@@ -130,7 +133,22 @@ def test_candidate_subset_and_chunking_do_not_change_small_fits(sine_data):
     x, y = sine_data
     a = RBFNetwork(spread=0.5, goal=1e-3).fit(x, y)
     b = RBFNetwork(spread=0.5, goal=1e-3, chunk_elements=7).fit(x, y)
-    assert_allclose(a.predict(x), b.predict(x), rtol=1e-10, atol=1e-12)
+    # the fit is the same network: same centres, weights and bias, bit for bit (the design matrix is
+    # elementwise and the output layer one lstsq of the same matrix)
+    assert_array_equal(a.centers_, b.centers_)
+    assert_array_equal(a.weights_, b.weights_)
+    assert a.bias_ == b.bias_
+    # predict() sums phi @ w in row blocks of another size, so BLAS may sum in another order (and with
+    # or without FMA): each output is a (k+1)-term dot product, whose rounding error is at most
+    # gamma_(k+1) * sum_j |phi_j w_j| (+ |bias|), gamma_n = n eps / (1 - n eps) (Higham, Accuracy and
+    # Stability, 3.1), for either order; the two outputs differ by at most twice that.  The weights here
+    # reach 3e4 with cancellation down to |y| ~ 1, so the bound (~1e-10) is far above 1e-12.
+    z, zc = a.scaling_.apply(x.reshape(-1, 1)), a.scaling_.apply(a.centers_)
+    phi = radial_basis(cdist(z, zc), a.settings.spread)
+    n = a.n_neurons + 1
+    gamma = n * EPS / (1 - n * EPS)
+    bound = 2 * gamma * (np.abs(phi) @ np.abs(a.weights_) + abs(a.bias_))
+    assert np.all(np.abs(a.predict(x) - b.predict(x)) <= bound)
     c = RBFNetwork(spread=0.5, goal=0.0, max_candidates=10).fit(x, y)
     assert c.n_neurons <= 10
 
@@ -240,10 +258,28 @@ def test_multi_output_shares_centres(tmp_path, sine_data):
     # two identical outputs: same centres, same curve, same predictions per column
     double = RBFNetwork(spread=0.5, goal=1e-3).fit(x, np.column_stack([y, y]))
     assert_array_equal(double.centers_, single.centers_)
-    assert_allclose(double.training_curve_, single.training_curve_, rtol=1e-12)
+    # the curve is mean(r**2) of residuals r made by k+1 orthogonal projections r - q (q'r), each
+    # computed to within gamma_n ||t|| per element (n samples), whichever BLAS kernel (one or two
+    # columns) does it: relative error of mean(r**2) <= 2 (k+1) gamma_n ||t|| / ||r||
+    n, k = len(x), len(single.training_curve_)
+    gamma_n = n * EPS / (1 - n * EPS)
+    r_norm = np.sqrt(n * single.training_curve_)
+    rel = 2 * k * gamma_n * np.linalg.norm(y) / r_norm
+    assert np.all(np.abs(double.training_curve_ - single.training_curve_) <= rel * single.training_curve_)
     pred = double.predict(x)
     assert pred.shape == (len(x), 2)
-    assert_allclose(pred, np.column_stack([single.predict(x)] * 2), rtol=1e-9, atol=1e-12)
+    # each column is one least-squares fit of the same [Phi 1] = A (n x p) by a backward-stable solver
+    # (LAPACK gelsd: the computed w solves a problem perturbed by ||dA|| <= gamma_np ||A||_F); the fitted
+    # values then move by at most gamma_np (kappa(A) ||r|| + ||A||_F ||w|| + ||y||) to first order
+    # (Higham, Accuracy and Stability, 20.1), and the two columns by twice that.  kappa(A) ~ 1e7 here.
+    z, zc = single.scaling_.apply(x.reshape(-1, 1)), single.scaling_.apply(single.centers_)
+    a = np.hstack([radial_basis(cdist(z, zc), single.settings.spread), np.ones((n, 1))])
+    gamma_np = n * a.shape[1] * EPS / (1 - n * a.shape[1] * EPS)
+    w = np.append(single.weights_, single.bias_)
+    bound = 2 * gamma_np * (np.linalg.cond(a) * np.linalg.norm(y - a @ w) + np.linalg.norm(a) * np.linalg.norm(w)
+                            + np.linalg.norm(y))
+    for col in range(2):
+        assert np.linalg.norm(pred[:, col] - single.predict(x)) <= bound
     back = RBFNetwork.load(double.save(tmp_path / "two.json"))
     assert_array_equal(back.predict(x), pred)
 

@@ -98,7 +98,7 @@ def test_bad_logs_name_the_line(tmp_path, line, change, message):
 def test_unit_mistakes_are_caught(tmp_path):
     gyro, accel, _ = allan.static_record(imu.preset("mems"), 200.0, 1.0, seed=1)
     time = np.arange(1.0, 201.0)
-    with pytest.raises(LogError, match="lines? 6..line 65: mean specific force 1.004 m/s.2 is not gravity"):
+    with pytest.raises(LogError, match="line 6..line 205: mean specific force 1.004 m/s.2 over the log is not gravity"):
         read_log(write_log(tmp_path / "g.csv", time, gyro, accel / 9.80665, lat_deg=45.0))
     with pytest.raises(LogError, match="degrees logged as radians"):
         read_log(write_log(tmp_path / "deg.csv", time, np.degrees(gyro), accel, lat_deg=45.0))
@@ -146,3 +146,96 @@ def test_replay_command_round_trip_and_errors(tmp_path, capsys):
     assert "sarins replay: error:" in capsys.readouterr().err
     assert main(["replay", str(log), "--align-hours", "5"]) == 2
     assert "not longer than" in capsys.readouterr().err
+
+
+# ---- the grammar of docs/imu-log.md: what is not in it is refused, naming the file and line (issue 21)
+def _text_cases():
+    def insert(at, text):
+        return lambda lines: lines[:at - 1] + [text] + lines[at - 1:]
+
+    def replace(at, fn):
+        return lambda lines: lines[:at - 1] + [fn(lines[at - 1])] + lines[at:]
+
+    return [
+        ("blank data line", insert(20, ""), "line 20: blank line"),
+        ("blank metadata line", insert(3, ""), "line 3: blank line"),
+        ("whitespace-only line", insert(20, "   "), "line 20: blank line"),
+        ("long metadata line", insert(3, "# note: " + "x" * 1_000_000), "line 3: longer than 1024"),
+        ("metadata given twice", insert(3, "# lat_deg: 10"), "line 3: metadata lat_deg given twice"),
+        ("metadata key", insert(3, "# bad key!: 1"), "line 3: metadata must read"),
+        ("comment among the samples", insert(20, "# note: here"), "line 20: a '#' line among the samples"),
+        ("unknown column", replace(HEADER, lambda h: h.replace("temp_gyro_x_c", "temp_gyro_q_c")),
+         "line 5: column 'temp_gyro_q_c' is not a log column"),
+        ("column twice", replace(HEADER, lambda h: h.replace("temp_gyro_y_c", "temp_gyro_x_c")),
+         "line 5: column temp_gyro_x_c appears twice"),
+        ("time offset -1e6 s", lambda lines: lines[:HEADER] + [
+            repr(float(row.split(",")[0]) - 1e6) + row[row.index(","):] for row in lines[HEADER:]],
+         "line 6: the first timestamp is -999999 s"),
+        ("time from 1000 s", lambda lines: lines[:HEADER] + [
+            repr(float(row.split(",")[0]) + 999) + row[row.index(","):] for row in lines[HEADER:]],
+         "line 6: the first timestamp is 1000 s"),
+    ]
+
+
+@pytest.mark.parametrize("change, message", [c[1:] for c in _text_cases()], ids=[c[0] for c in _text_cases()])
+def test_what_the_grammar_does_not_allow_is_refused(tmp_path, change, message):
+    path = _static_csv(tmp_path)
+    path.write_text("\n".join(change(path.read_text().splitlines())) + "\n")
+    with pytest.raises(LogError, match=message):
+        read_log(path)
+
+
+def test_crlf_is_read_as_lf_and_mixed_line_ends_are_refused(tmp_path):
+    path = _static_csv(tmp_path)
+    lf = read_log(path)
+    text = path.read_text()
+    crlf = tmp_path / "crlf.csv"
+    crlf.write_bytes(text.replace("\n", "\r\n").encode())
+    again = read_log(crlf)
+    assert np.array_equal(again.dtheta, lf.dtheta) and again.meta == lf.meta
+    mixed = tmp_path / "mixed.csv"
+    lines = text.splitlines()
+    mixed.write_bytes(("\r\n".join(lines[:30]) + "\r\n" + "\n".join(lines[30:]) + "\n").encode())
+    with pytest.raises(LogError, match="line 31: line ends in LF, the lines before in CRLF"):
+        read_log(mixed)
+
+
+def _npz_cols(n=300, h=1.0):
+    gyro, accel, _ = allan.static_record(imu.preset("nav-rlg"), n * h, 1.0 / h, seed=1)
+    cols = {"time_s": np.arange(1, n + 1) * h}
+    cols.update({f"gyro_{a}_radps": gyro[:, i] for i, a in enumerate("xyz")})
+    cols.update({f"accel_{a}_mps2": accel[:, i] for i, a in enumerate("xyz")})
+    return cols
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda c: c.update(gyro_x_radps=c["gyro_x_radps"].astype(str)), "column gyro_x_radps holds <U"),
+    (lambda c: c.update(extra=np.zeros(300)), "member 'extra' is not a log column"),
+    (lambda c: c.update(meta=np.array(json.dumps({"lat_deg": 30.0, "note": "x" * 2000}))), "longer than 1024"),
+    (lambda c: c.update(meta=np.array(json.dumps({"lat_deg": {"deg": 30}}))), "a value must be a string or"),
+    (lambda c: c.update(meta=np.array([1.0, 2.0])), "meta must be one string"),
+    (lambda c: c.update(time_s=c["time_s"] - 1e6), "row 0: the first timestamp"),
+    (lambda c: c.update(dtheta_x_rad=c["gyro_x_radps"]), "not both"),
+])
+def test_npz_grammar(tmp_path, edit, message):
+    cols = _npz_cols()
+    cols["meta"] = np.array(json.dumps({"lat_deg": 30.0}))
+    edit(cols)
+    np.savez(tmp_path / "x.npz", **cols)
+    with pytest.raises(LogError, match=message):
+        read_log(tmp_path / "x.npz")
+
+
+def test_degrees_are_caught_on_a_log_that_starts_moving(tmp_path):
+    """The units check does not need a start at rest: a log that turns for its first two minutes
+    (0.2 rad/s about the vertical) and then rests is read in radians, and refused in degrees in its
+    first window, while it turns: the accelerometers see no tilt, so the gyros' horizontal rate must
+    be the Earth's (57 x it in degrees); in g units it is refused by the whole log's mean |f|."""
+    gyro, accel, _ = allan.static_record(imu.preset("nav-rlg"), 600.0, 1.0, seed=1)
+    gyro[:120, 2] += 0.2  # body z is up: a turn about it leaves gravity where it was
+    time = np.arange(1.0, 601.0)
+    read_log(write_log(tmp_path / "rad.csv", time, gyro, accel, lat_deg=45.0))
+    with pytest.raises(LogError, match="line 6..line 65: the gyros turn 0.00.* rad/s about a horizontal axis .*degrees"):
+        read_log(write_log(tmp_path / "deg.csv", time, np.degrees(gyro), accel, lat_deg=45.0))
+    with pytest.raises(LogError, match="over the log is not gravity"):
+        read_log(write_log(tmp_path / "g.csv", time, gyro, accel / 9.80665, lat_deg=45.0))

@@ -253,8 +253,12 @@ def _comparisons(rows: dict, tested: dict) -> dict:
 def run(args) -> int:
     from .report import write_report
 
+    from sarins.cli import refuse_unless
+
     if args.sweep_only and args.sweep == "none":
         raise ValueError("--sweep-only needs --sweep quick or --sweep full")
+    refuse_unless(args, {"engine": "--engine", "truth": "--truth", "no_live": "--no-live"}, not args.sweep_only,
+                  "does not apply with --sweep-only (the sweep trains and tests in process, nothing else runs)")
     summary = execute(profile=args.profile, engine=args.engine, seed=args.seed, out=args.out,
                       workers=args.workers, scheduler=args.scheduler, progress=not args.no_progress,
                       truth=args.truth, live=False if args.no_live else None, sweep=args.sweep,

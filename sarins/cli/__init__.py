@@ -4,7 +4,8 @@ Each sub-command lives in a module of this package with ``register(sub)``
 (adds its parser, sets ``func``) and a function that calls the library or
 the application layer and prints.  Conventions for every command: exit 0 on
 success, 2 for bad usage or input, 1 for a run that failed, 130 on Ctrl-C
-(SIGINT) and 143 on SIGTERM; every message is one line starting with the
+(SIGINT, even if the process started with SIGINT ignored) and 143 on
+SIGTERM; every message is one line starting with the
 command's name (``sarins <command>: error: ...`` or ``...: failed: ...``),
 never a traceback (``SARINS_DEBUG=1`` re-raises unexpected errors); warnings
 print as one plain line.  ``--seed`` means the same in every command: the
@@ -118,10 +119,46 @@ def positive_int(text: str) -> int:
 
 
 class Parser(argparse.ArgumentParser):
-    """argparse with one-line errors (no usage dump) and exit status 2."""
+    """argparse with one-line errors (no usage dump) and exit status 2.
+
+    The namespace it returns carries ``given``: the destinations of the
+    options written on the command line (see :func:`given`), so that a
+    command can refuse an option that does not apply instead of ignoring it.
+    """
 
     def error(self, message):
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+
+    def parse_known_args(self, args=None, namespace=None):
+        self._seen_dests = set()
+        namespace, rest = super().parse_known_args(args, namespace)
+        # a sub-command's parser ran inside and left its own options in namespace.given
+        namespace.given = frozenset(set(getattr(namespace, "given", ())) | self._seen_dests)
+        return namespace, rest
+
+    def _parse_optional(self, arg_string):
+        found = super()._parse_optional(arg_string)
+        matches = found if isinstance(found, list) else [found] if found else []  # a list from Python 3.12
+        for action, *_ in matches:
+            if action is not None and hasattr(self, "_seen_dests"):
+                self._seen_dests.add(action.dest)
+        return found
+
+
+def given(args, *dests: str) -> list[str]:
+    """Of ``dests`` (argparse destinations), those written on the command line."""
+    seen = getattr(args, "given", frozenset())
+    return [d for d in dests if d in seen]
+
+
+def refuse_unless(args, dests: dict, applies: bool, why: str) -> None:
+    """UsageError naming the first option of ``dests`` ({dest: '--option'}) that was
+    given although it does not apply (``applies`` False): ``why`` says why."""
+    if applies:
+        return
+    written = given(args, *dests)
+    if written:
+        raise UsageError(f"{dests[written[0]]} {why}")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -154,9 +191,12 @@ def main(argv=None) -> int:
         name += f" {args.campaign}"
     old_warning = warnings.showwarning
     warnings.showwarning = _plain_warning
-    old_term = None
+    old_term = old_int = None
     if threading.current_thread() is threading.main_thread():
         old_term = signal.signal(signal.SIGTERM, _raise_terminated)
+        # Python keeps SIGINT ignored if it started so (a background job of a non-interactive shell
+        # inherits SIG_IGN): install Ctrl-C -> KeyboardInterrupt whatever the inherited disposition
+        old_int = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         return int(args.func(args) or 0)
     except Terminated:
@@ -194,6 +234,8 @@ def main(argv=None) -> int:
         warnings.showwarning = old_warning
         if old_term is not None:
             signal.signal(signal.SIGTERM, old_term)
+        if old_int is not None:
+            signal.signal(signal.SIGINT, old_int)
 
 
 if __name__ == "__main__":

@@ -5,6 +5,10 @@
     sarins allan --imu mems [--hours 28] [--rate-hz 1] [--seed 0] [--plot allan.png] [--json]
     sarins allan --log static.csv [--plot allan.png] [--json]
 
+With ``--log`` the data, their sample rate and their length are the log's:
+``--imu``, ``--hours``, ``--rate-hz`` and ``--seed`` describe simulated data
+and are refused beside it (exit 2 naming the option), not ignored.
+
 Prints, per channel, the random walk N, the bias instability B and the rate
 random walk K read off the curve (IEEE Std 952 lines; 0 where the data do
 not show the term), next to the preset's spec for simulated data.
@@ -16,7 +20,7 @@ import json
 
 from sarins_fmu import imu as imu_mod
 
-from . import UsageError, finite
+from . import UsageError, finite, refuse_unless
 from .navigate import seed_value
 
 
@@ -42,6 +46,9 @@ def run(args) -> int:
         raise UsageError(f"--rate-hz must be positive, got {args.rate_hz:g}")
     if args.hours <= 0:
         raise UsageError(f"--hours must be positive, got {args.hours:g}")
+    refuse_unless(args, {"imu": "--imu", "hours": "--hours", "rate_hz": "--rate-hz", "seed": "--seed"},
+                  not args.log, "describes simulated data and does not apply with --log (the log sets the "
+                                "data, its sample rate and its length)")
     if args.log:
         from sarins_fmu.imu_log import read_log
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from . import UsageError
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("build-fmus", help="build the FMI 2.0 co-simulation FMUs")
@@ -17,8 +19,6 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    import sys
-
     from fmus.build import NEEDS_MODEL, build_fmus
     from fmus.native import HOST_REQUIREMENTS
 
@@ -31,8 +31,7 @@ def run(args) -> int:
         names = [n for n in args.only if not (n == "IMUCompensator" and args.compensator is not None)]
         for name in names:
             if name in NEEDS_MODEL:
-                print(f"sarins build-fmus: {name} needs a trained model: {NEEDS_MODEL[name]}", file=sys.stderr)
-                return 2
+                raise UsageError(f"--only {name}: it needs a trained model: {NEEDS_MODEL[name]}")
     elif args.compensator is None:
         print("IMUCompensator not built (it needs a trained model: --compensator MODEL_FILE)")
     for path in build_fmus(args.out, names) if names != [] else []:

@@ -10,7 +10,8 @@ name to it) exposing
 
 The options every campaign shares (``--profile``, ``--workers``,
 ``--scheduler``, ``--out``, ``--no-progress``) are added and checked here,
-before any work: ``--scheduler`` needs Dask installed, ``--out`` must be a
+before any work: ``--scheduler`` needs Dask installed and excludes
+``--workers``, ``--out`` must be a
 folder, and one campaign at a time holds it (a second one on the same
 ``--out`` is refused with exit status 2 and the holder's pid; it does not
 wait).  A task that fails, or an FMU call that fails, ends the campaign
@@ -25,7 +26,7 @@ import importlib
 
 from pathlib import Path
 
-from . import RunError, UsageError, bounded_int
+from . import RunError, UsageError, bounded_int, refuse_unless
 
 CAMPAIGNS = {
     "axial-rbf": "sarins.axial_rbf.campaign",  # seed 000: RBF identification of the axial drift
@@ -73,6 +74,8 @@ def run(args) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {out} exists and is not a folder")
+    refuse_unless(args, {"workers": "--workers"}, not args.scheduler,
+                  "does not apply with --scheduler (the Dask cluster's workers run the tasks)")
     if args.scheduler:
         import importlib.util
 

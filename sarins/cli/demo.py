@@ -8,7 +8,7 @@ import numpy as np
 
 from sarins_fmu.units import NM, RAD_TO_DEG
 
-from . import RunError, UsageError, finite
+from . import RunError, UsageError, finite, refuse_unless
 from .navigate import add_run_options, check_run_args
 
 
@@ -21,7 +21,7 @@ def register(sub) -> None:
                    help="navigation time at which the RBFIdentifier FMU identifies the drift, h (default 12; "
                         "the shipped models need 12)")
     p.add_argument("--model", choices=("hot", "cold"), default="hot", help="shipped identifier model (default hot)")
-    p.add_argument("--model-file", default=None, help="identifier model file (JSON), overrides --model")
+    p.add_argument("--model-file", default=None, help="identifier model file (JSON), instead of --model")
     p.add_argument("--fmu-dir", default="build/fmus", help="where the FMUs are built (default build/fmus)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
@@ -32,6 +32,8 @@ def run(args) -> int:
     from sarins.demo import run_demo
 
     check_run_args(args)
+    refuse_unless(args, {"model": "--model"}, args.model_file is None,
+                  "chooses a shipped model and does not apply with --model-file (give one of them)")
     if args.model_file is not None:  # a bad model file is refused before anything is built
         from sarins_fmu.identify.axial import DriftIdentifier
 

@@ -24,8 +24,12 @@ Goal
     squared, as MATLAB's ``newrb``. Seed 000 states a training error of
     0.0003 °/h; read as an RMS that is a goal of 9e-8 (°/h)², the default.
 
-The model file (JSON) stores the input column names, the target name and the
-site latitude; ``predict`` requires the same inputs. Predictions are written
+The model file (JSON) stores the input column names, the target name, the
+site latitude and the range of each training input; ``predict`` requires the
+same inputs and refuses (exit 2, naming the CSV line) a row whose input lies
+beyond the training range by more than 10 % of its width: the network does
+not extrapolate (older model files: the range bounded from the stored
+scaling, see :meth:`RBFNetwork.outside_training_range`). Predictions are written
 as the input table plus a column ``<target>_pred``. A bad CSV, model file or
 option gives a one-line error on stderr and exit status 2 (the ``sarins``
 convention).
@@ -42,7 +46,7 @@ import numpy as np
 
 from sarins_fmu.identify.axial import site_latitude_deg
 from sarins_fmu.identify.modelfile import ModelFileError
-from sarins_fmu.identify.rbf import RBFNetwork
+from sarins_fmu.identify.rbf import RANGE_MARGIN, RBFNetwork
 from sarins_fmu.identify.tables import SEED000_SITE_LAT_DEG, TableError, numeric_column, read_table, write_table
 
 __all__ = ["register", "run", "DEFAULT_GOAL", "DEFAULT_SPREAD"]
@@ -212,6 +216,25 @@ def _train(args: argparse.Namespace) -> None:
     )
 
 
+def _refuse_outside_training_range(net: RBFNetwork, x: np.ndarray, data: Path, model: Path) -> None:
+    """Refuse (exit 2) the first row with an input beyond the model's training range
+    (widened by ``RANGE_MARGIN`` of its width): an RBF network does not extrapolate."""
+    outside = net.outside_training_range(x)
+    if not outside.any():
+        return
+    row = int(np.argmax(outside))
+    lo, hi = net.input_range_
+    width = hi - lo
+    col = int(np.argmax((x[row] < lo - RANGE_MARGIN * width) | (x[row] > hi + RANGE_MARGIN * width)))
+    name = net.input_names[col]
+    kind = "trained on" if net.input_range_exact_ else "bounded from its scaling statistics to"
+    raise _UsageError(
+        f"{data}: line {row + 2}: {name} = {x[row, col]:.6g} is outside the range the model {model} was "
+        f"{kind}, [{lo[col]:.6g}, {hi[col]:.6g}] (+-{RANGE_MARGIN:.0%} of its width accepted); "
+        f"{int(outside.sum())} of {len(outside)} rows lie outside: an RBF network does not extrapolate"
+    )
+
+
 def _predict(args: argparse.Namespace) -> None:
     net = RBFNetwork.load(args.model)
     if net.input_names is None:
@@ -224,7 +247,12 @@ def _predict(args: argparse.Namespace) -> None:
     elif not np.isfinite(lat) or abs(lat) > 90.0:
         raise _UsageError(f"--local-lat-deg must be within [-90, 90], got {lat}")
     table = read_table(args.data)
+    converts = any(n in ("lat_deg", "lat_error_deg") and n not in table for n in net.input_names)
+    if args.local_lat_deg is not None and not converts:
+        raise _UsageError(f"--local-lat-deg does not apply: {args.data} has the model's inputs "
+                          f"({', '.join(net.input_names)}) as they are, no latitude to convert")
     x = _input_matrix(table, list(net.input_names), lat, args.data)
+    _refuse_outside_training_range(net, x, args.data, args.model)
     pred = net.predict(x)
     target = net.target_name or "prediction"
     result = dict(table)

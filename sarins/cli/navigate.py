@@ -11,7 +11,7 @@ from sarins_fmu import imu as imu_mod
 from sarins_fmu.site import SITE_LAT_DEG
 from sarins_fmu.turntable import ROTATION_SCHEMES
 
-from . import UsageError, check_size, finite, seed_value  # noqa: F401  (seed_value: reused by other commands)
+from . import UsageError, check_size, finite, given, refuse_unless, seed_value  # noqa: F401  (seed_value: reused by other commands)
 
 
 def add_run_options(p, nav_hours: float) -> None:
@@ -61,7 +61,7 @@ def register(sub) -> None:
     p.add_argument("--correction-dph", type=finite, default=0.0,
                    help="axial drift the INS subtracts from --correction-from-hours on, deg/h")
     p.add_argument("--correction-from-hours", type=finite, default=0.0,
-                   help="navigation time at which the correction starts, h")
+                   help="navigation time at which the correction starts, h (needs --correction-dph)")
     p.add_argument("--json", action="store_true", help="print one JSON object (full precision)")
     p.add_argument("--write-log", metavar="PATH", default=None,
                    help="also write the IMU output as a log (.csv or .npz, docs/imu-log.md) for sarins replay")
@@ -72,6 +72,8 @@ def run(args) -> int:
     from sarins_fmu.experiments import run_static
 
     check_run_args(args)
+    refuse_unless(args, {"correction_from_hours": "--correction-from-hours"}, bool(given(args, "correction_dph")),
+                  "needs --correction-dph (the drift the INS subtracts from that time on)")
     if args.correction_from_hours < 0 or args.correction_from_hours > args.nav_hours:
         raise UsageError("--correction-from-hours must lie within the navigation time")
     if abs(args.correction_dph) > 1e3:

@@ -96,6 +96,7 @@ def run(args) -> int:
     ablation_kinds = _name_list(args.ablation_models, [k for k in _model_names() if k != "traditional"],
                                 "ablation model")
     ablations = _ablations(args.ablation)
+    _refuse_unused(args, kinds, ablation_kinds if ablations else [], bool(ablations))
     if not ablations:
         ablation_kinds = []
     options = dict(MODEL_DEFAULTS[args.profile])
@@ -117,6 +118,20 @@ def run(args) -> int:
               f"systematic {red['sys']:6.1f} %")
     print(f"report: {summary['report']}")
     return 0
+
+
+def _refuse_unused(args, kinds, ablation_kinds, ablating: bool) -> None:
+    """Refuse (exit 2) a fitting option none of the chosen models reads, and
+    ``--ablation-models`` without an ablation: given, they would be ignored."""
+    from sarins.cli import refuse_unless
+
+    refuse_unless(args, {"ablation_models": "--ablation-models"}, ablating, "needs --ablation (no ablation is run)")
+    fitted = set(kinds) | set(ablation_kinds)
+    for dest, option, readers in (("rnn_steps", "--rnn-steps", set(RECURRENT)), ("grnn_patterns", "--grnn-patterns",
+                                  {"grnn"}), ("rbf_samples", "--rbf-samples", {"rbf"})):
+        refuse_unless(args, {dest: option}, bool(fitted & readers),
+                      f"applies to {', '.join(sorted(readers))}, none of which --models (or the ablation models) "
+                      "fits")
 
 
 def record_all(profile_name: str, out: Path, *, workers=None, scheduler=None, progress=True, seed=3,

@@ -80,6 +80,21 @@ def add_arguments(parser) -> None:
                              "(0 .. 2**31-1 minus the runs; default 0)")
 
 
+def stop_schema(kwargs: dict) -> dict:
+    """What :func:`simulate_stop` returns for ``kwargs``: five finite scalars and the stop filter's
+    convergence curves, one row per step of the stop (``round(duration / step)``)."""
+    import inspect
+
+    from sarins.campaign import Field
+    from sarins_fmu.experiments.online_rls import simulate_stop
+
+    defaults = {k: p.default for k, p in inspect.signature(simulate_stop).parameters.items()}
+    n = int(round(kwargs.get("duration", defaults["duration"]) / kwargs.get("step", defaults["step"])))
+    scalars = ("truth_dph", "estimate_dph", "error_dph", "std_dph", "mean_temperature")
+    return {**{k: Field() for k in scalars}, **{k: Field((n,)) for k in ("time", "estimate_curve_dph",
+                                                                          "std_curve_dph")}}
+
+
 def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0, engine: str = "inprocess",
                 fmu_dir: str | None = None):
     """The campaign's tasks for ``profile`` ('quick' or 'paper'); run k of
@@ -104,9 +119,10 @@ def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0, eng
                          f"got {seed}")
     tasks = []
     for unit, n in p["stops"].items():
-        tasks += [Task(f"stop-{unit}-{s:03d}", online_rls.simulate_stop,
-                       {"imu": unit, "seed": seed + s, "temperature": 5.0 + 40.0 * ((s * 0.618) % 1.0)},
-                       finite=("estimate_dph", "error_dph")) for s in range(n)]
+        for s in range(n):
+            kwargs = {"imu": unit, "seed": seed + s, "temperature": 5.0 + 40.0 * ((s * 0.618) % 1.0)}
+            tasks.append(Task(f"stop-{unit}-{s:03d}", online_rls.simulate_stop, kwargs,
+                              finite=("estimate_dph", "error_dph"), schema=stop_schema(kwargs)))
     for ageing, unit, estimate, n, *scale in p["mc"]:
         x = scale[0] if scale else 1.0
         tasks += [Task(f"mc-{ageing}{_scale_tag(x)}-{unit}-{estimate}-{s:03d}", online_rls.model_update_run,

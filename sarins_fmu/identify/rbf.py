@@ -67,6 +67,8 @@ from scipy.spatial.distance import cdist
 from .modelfile import get_array, load_model_file, save_model_file
 from .preprocessing import Scaling, check_inputs, check_targets, fit_scaling
 
+RANGE_MARGIN = 0.1  # inputs accepted up to this fraction of the training range beyond either end
+
 __all__ = ["RBFSettings", "RBFNetwork", "gaussian_width", "radial_basis"]
 
 FORMAT_TAG = "sarins_fmu.identify.rbf"
@@ -240,6 +242,8 @@ class RBFNetwork:
         self.input_names: tuple[str, ...] | None = None
         self.target_name: str | None = None
         self.metadata: dict = {}
+        self.input_range_: np.ndarray | None = None  # (2, d): least and largest training input
+        self.input_range_exact_ = True  # False: a bound from the scaling statistics (older model files)
 
     # ------------------------------------------------------------------ info
     @property
@@ -322,11 +326,36 @@ class RBFNetwork:
         self.stop_reason_ = reason
         self.input_names = input_names
         self.target_name = None if target_name is None else str(target_name)
+        self.input_range_ = np.vstack([x.min(axis=0), x.max(axis=0)])
+        self.input_range_exact_ = True
         fitted = self.predict(x)
         self.training_mse_ = float(np.mean((t - (fitted[:, None] if single else fitted)) ** 2))
         return self
 
     # ----------------------------------------------------------- prediction
+    def outside_training_range(self, X: np.ndarray, margin: float = RANGE_MARGIN) -> np.ndarray:
+        """Rows of ``X`` with an input outside the training range widened by ``margin``.
+
+        The accepted interval of input j is ``[lo_j - margin * w_j, hi_j + margin * w_j]``,
+        ``[lo_j, hi_j]`` the least and largest training value and ``w_j = hi_j - lo_j``:
+        beyond it every basis function has decayed and the output is the bias plus the
+        tails of the nearest neurons, not a drift the data support.  Models saved
+        before the range was stored bound it by Samuelson's inequality (every sample
+        lies within ``mean +- std sqrt(n - 1)``) from the stored scaling and the
+        ``n_samples`` metadata; without either, nothing is flagged.
+
+        Returns
+        -------
+        ndarray of bool, shape (n,)
+        """
+        self._check_fitted()
+        x = check_inputs(X, "X", n_features=self.n_features)
+        if self.input_range_ is None:
+            return np.zeros(x.shape[0], dtype=bool)
+        lo, hi = self.input_range_
+        width = hi - lo
+        return np.any((x < lo - margin * width) | (x > hi + margin * width), axis=1)
+
     def _check_fitted(self) -> None:
         if self.centers_ is None or self.scaling_ is None:
             raise RuntimeError("RBFNetwork is not fitted: call fit() or load() first")
@@ -381,6 +410,8 @@ class RBFNetwork:
             "scaling_scale": self.scaling_.scale,
             "training_curve": self.training_curve_,
         }
+        if self.input_range_ is not None and self.input_range_exact_:
+            arrays["input_min"], arrays["input_max"] = self.input_range_
         return meta, arrays
 
     @classmethod
@@ -431,6 +462,14 @@ class RBFNetwork:
         net.input_names = names
         net.target_name = target
         net.metadata = metadata
+        if "input_min" in arrays or "input_max" in arrays:
+            lo, hi = get_array(arrays, "input_min", (d,)), get_array(arrays, "input_max", (d,))
+            if np.any(lo > hi):
+                raise ValueError("'input_min' exceeds 'input_max'")
+            net.input_range_ = np.vstack([lo, hi])
+        else:  # written before the range was stored
+            net.input_range_ = _samuelson_range(net.scaling_, metadata.get("n_samples"), net.settings.standardize)
+            net.input_range_exact_ = False
         return net
 
     def save(self, path: str | Path) -> Path:
@@ -458,6 +497,15 @@ class RBFNetwork:
 
 
 # ---------------------------------------------------------------- internals
+def _samuelson_range(scaling: Scaling, n_samples, standardized: bool) -> np.ndarray | None:
+    """(2, d) bound of the training inputs from their mean and (population) std:
+    every one of n samples lies within mean +- std sqrt(n - 1) (Samuelson 1968)."""
+    if not standardized or isinstance(n_samples, bool) or not isinstance(n_samples, int) or n_samples < 2:
+        return None
+    half = scaling.scale * np.sqrt(n_samples - 1.0)
+    return np.vstack([scaling.mean - half, scaling.mean + half])
+
+
 def _design(z: np.ndarray, zc: np.ndarray, s: RBFSettings) -> np.ndarray:
     """Basis matrix, shape (n, k): response of each centre to each sample."""
     if zc.shape[0] == 0:
