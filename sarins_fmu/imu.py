@@ -558,19 +558,28 @@ class IMU:
         w_t, f_t = self.base.base_motion(t_end - self.h, self.h)
         w_t, f_t = (np.ascontiguousarray(x, dtype=float) for x in (w_t, f_t))
         dtheta, dv, temps = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 6))
-        s = self._state
-        triad, mats = s[imu_step.TRIAD], s[imu_step.MATS]
-        g_quad, g_lowrate, g_width, a_quad = triad[1], triad[2], triad[3], triad[4]
-        g_mis, g_sens, a_mis = mats[0:3], mats[3:6], mats[6:9]
         for k0 in range(0, n, self._block_rows):
             k1 = min(n, k0 + self._block_rows)
             self._refill(k1 - k0)
-            g_bias, g_sf, a_bias, a_sf = (np.empty((k1 - k0, 3)) for _ in range(4))
-            core_imu.advance(self._table, amb_end[k0:k1], temps[k0:k1], g_bias, g_sf, a_bias, a_sf)
-            dtheta[k0:k1], dv[k0:k1] = core_imu.increments(
-                s[imu_step.AXES], angle0[k0:k1], rate0[k0:k1], accel[k0:k1], w_t[k0:k1], f_t[k0:k1], self.h,
-                self.n_sub, g_sf, g_mis, g_bias, g_quad, g_lowrate, g_width, g_sens, a_sf, a_mis, a_bias, a_quad)
-            core_imu.white_noise(self._table, dtheta[k0:k1], dv[k0:k1])
+            dtheta[k0:k1], dv[k0:k1], temps[k0:k1] = self._block(
+                angle0[k0:k1], rate0[k0:k1], accel[k0:k1], w_t[k0:k1], f_t[k0:k1], amb_end[k0:k1])
+        return dtheta, dv, temps
+
+    def _block(self, angle0, rate0, accel, w_t, f_t, amb_end):
+        """K intervals whose random numbers the blocks hold: one C call for a few, the minor loop over the
+        thread pool for many (the same results)."""
+        n = amb_end.shape[0]
+        if n < core_imu.PARALLEL_MIN:
+            return core_imu.steps(self._table, angle0, rate0, accel, w_t, f_t, amb_end)
+        s = self._state
+        triad, mats = s[imu_step.TRIAD], s[imu_step.MATS]
+        temps = np.empty((n, 6))
+        g_bias, g_sf, a_bias, a_sf = (np.empty((n, 3)) for _ in range(4))
+        core_imu.advance(self._table, amb_end, temps, g_bias, g_sf, a_bias, a_sf)
+        dtheta, dv = core_imu.increments(
+            s[imu_step.AXES], angle0, rate0, accel, w_t, f_t, self.h, self.n_sub, g_sf, mats[0:3], g_bias,
+            triad[1], triad[2], triad[3], mats[3:6], a_sf, mats[6:9], a_bias, triad[4])
+        core_imu.white_noise(self._table, dtheta, dv)
         return dtheta, dv, temps
 
     def _times(self, n):

@@ -191,18 +191,20 @@ def test_bad_arrays_are_refused_with_a_clear_error():
     assert core_imu.fmu_step(sensor._table, np.zeros(4), 0.0, 1.0) == 1  # no io rows: nothing done
 
 
-def test_one_interval_equals_a_batch_of_one():
-    """sarins_imu_one_interval (the FMU's step) == IMU.step over one interval, on the same state."""
+def test_one_call_one_interval_and_the_threaded_path_agree(monkeypatch):
+    """sarins_imu_one_interval (the FMU's step) == sarins_imu_steps (IMU.step below PARALLEL_MIN intervals)
+    == advance + threaded minor loop + white noise (IMU.step from PARALLEL_MIN on), on the same state."""
     runs = []
-    for one in (False, True):
+    for way in ("steps", "threaded", "one_interval"):
+        monkeypatch.setattr(core_imu, "PARALLEL_MIN", 0 if way == "threaded" else 64)
         sensor = IMU(imu_mod.preset("mems"), StaticBase(0.6), [[0, 0, 1.0]], seed=4)
         sensor.step([[0.1]], [[0.2]], [[0.0]])  # draws the random blocks
-        if one:
+        if way == "one_interval":
             out = core_imu.one_interval(sensor._table, [0.3], [0.2], [0.01], 20.0)
         else:
             out = [x[0] for x in sensor.step([[0.3]], [[0.2]], [[0.01]], ambient=[20.0])]
         runs.append(np.concatenate(out))
-    assert np.array_equal(runs[0], runs[1])
+    assert np.array_equal(runs[0], runs[1]) and np.array_equal(runs[0], runs[2])
 
 
 SANITIZED_RUN = textwrap.dedent("""

@@ -327,21 +327,32 @@ int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, 
     return SARINS_IMU_OK;
 }
 
-int sarins_imu_one_interval(const int64_t *table, int64_t rows, const double *angle0, const double *rate0,
-                            const double *accel, double amb_end, double *dtheta, double *dv, double *temps) {
+int sarins_imu_steps(const int64_t *table, int64_t rows, int64_t n_steps, const double *angle0,
+                     const double *rate0, const double *accel, const double *w_t, const double *f_t,
+                     const double *amb_end, double *dtheta, double *dv, double *temps, double *work) {
     ImuView v;
     int status = imu_view(table, rows, &v);
     if (status != SARINS_IMU_OK) return status;
-    if (unused_rows(&v) < 1) return SARINS_IMU_NO_ROWS;
-    double g_bias[3], g_sf[3], a_bias[3], a_sf[3], die[6];
-    status = sarins_imu_advance(table, rows, 1, &amb_end, temps, die, g_bias, g_sf, a_bias, a_sf);
+    if (n_steps < 1 || unused_rows(&v) < n_steps) return SARINS_IMU_NO_ROWS;
+    double *g_bias = work, *g_sf = work + 3 * n_steps, *a_bias = work + 6 * n_steps, *a_sf = work + 9 * n_steps;
+    status = sarins_imu_advance(table, rows, n_steps, amb_end, temps, work + 12 * n_steps, g_bias, g_sf, a_bias,
+                                a_sf);
     if (status != SARINS_IMU_OK) return status;
     /* triad rows: drift poly, gyro quadratic, low-rate gain, low-rate width, accel quadratic, random walks;
        mats rows: gyro misalignment, g-sensitivity, accel misalignment */
-    sarins_imu_increments(0, 1, v.n_axes, v.axes, angle0, rate0, accel, v.base, v.base + 3, v.consts[1],
+    sarins_imu_increments(0, n_steps, v.n_axes, v.axes, angle0, rate0, accel, w_t, f_t, v.consts[1],
                           (int64_t)v.consts[5], g_sf, v.mats, g_bias, v.triad + 3, v.triad + 6, v.triad + 9,
                           v.mats + 9, a_sf, v.mats + 18, a_bias, v.triad + 12, dtheta, dv);
-    return sarins_imu_white_noise(table, rows, 1, dtheta, dv);
+    return sarins_imu_white_noise(table, rows, n_steps, dtheta, dv);
+}
+
+int sarins_imu_one_interval(const int64_t *table, int64_t rows, const double *angle0, const double *rate0,
+                            const double *accel, double amb_end, double *dtheta, double *dv, double *temps) {
+    double work[18];
+    const double *base = table != NULL && rows > SARINS_IMU_BASE ? table_array(table, SARINS_IMU_BASE) : NULL;
+    if (base == NULL) return SARINS_IMU_BAD_TABLE;
+    return sarins_imu_steps(table, rows, 1, angle0, rate0, accel, base, base + 3, &amb_end, dtheta, dv, temps,
+                            work);
 }
 
 /* ------------------------------------------------------ the FMU's step */

@@ -101,6 +101,14 @@ int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, cons
  * intervals' dtheta, dv (K, 3) and move the clock on by K intervals. */
 int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, double *dtheta, double *dv);
 
+/* K intervals on the calling thread: sarins_imu_advance, the minor loop over
+ * all K, sarins_imu_white_noise.  angle0, rate0, accel (K, A); w_t, f_t
+ * (K, 3); amb_end[K] (degC, checked by the caller); dtheta, dv (K, 3) and
+ * temps (K, 6) out; work (K, 18) scratch. */
+int sarins_imu_steps(const int64_t *table, int64_t rows, int64_t n_steps, const double *angle0,
+                     const double *rate0, const double *accel, const double *w_t, const double *f_t,
+                     const double *amb_end, double *dtheta, double *dv, double *temps, double *work);
+
 /* One output interval with the base motion of the table's base row:
  * angle0, rate0, accel [A]; amb_end ambient at its end (degC); dtheta[3],
  * dv[3], temps[6] out.  The random blocks must hold one unused row. */

@@ -27,11 +27,13 @@ _increments = function("sarins_imu_increments", None, _I64, _I64, _I64, _P, _P, 
                        *([_P] * 13))
 _advance = function("sarins_imu_advance", _INT, _P, _I64, _I64, *([_P] * 7))
 _white_noise = function("sarins_imu_white_noise", _INT, _P, _I64, _I64, _P, _P)
+_steps = function("sarins_imu_steps", _INT, _P, _I64, _I64, *([_P] * 10))
 _one_interval = function("sarins_imu_one_interval", _INT, _P, _I64, _P, _P, _P, _F64, _P, _P, _P)
 FMU_STEP = function("sarins_imu_fmu_step", _INT, _P, _I64, _P, _I64, _F64, _F64)
 FMU_STEP_ADDRESS = ctypes.cast(FMU_STEP, ctypes.c_void_p).value  # for the native FMI layer
 
 PARALLEL_MIN = 64  # intervals; below this a thread hand-off costs more than it saves
+_CPUS = os.cpu_count() or 1  # (os.cpu_count() takes tens of microseconds: asked once)
 _ERRORS = {1: "the IMU state table does not fit the layout of sarins_fmu.imu_step (imu.h)",
            2: "the IMU's random blocks hold fewer unused rows than intervals asked for"}
 _POOLS: dict[tuple, ThreadPoolExecutor] = {}
@@ -42,7 +44,7 @@ def thread_count() -> int:
     """Threads of a batch: ``SARINS_THREADS`` if set (a positive integer), else ``os.cpu_count()``."""
     text = os.environ.get("SARINS_THREADS", "").strip()
     if not text:
-        return os.cpu_count() or 1
+        return _CPUS
     try:
         value = int(text)
     except ValueError:
@@ -124,10 +126,11 @@ def increments(axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
                     g_sf, g_mis, g_bias, g_quad, g_lowrate, g_width, g_sens, a_sf, a_mis, a_bias, a_quad,
                     dtheta.ctypes.data, dv.ctypes.data)
 
-    workers = thread_count() if threads is None else int(threads)
-    if workers < 1:
+    if threads is not None and int(threads) < 1:
         raise ValueError(f"threads must be a positive integer, got {threads}")
-    workers = min(workers, n_int) if n_int >= PARALLEL_MIN else 1
+    workers = 1
+    if n_int >= PARALLEL_MIN:
+        workers = min(thread_count() if threads is None else int(threads), n_int)
     if workers == 1:
         run(0, n_int)
     else:
@@ -152,6 +155,24 @@ def advance(table, amb_end, temps, g_bias, g_sf, a_bias, a_sf) -> None:
     die = np.empty((n, 6))
     _check(_advance(table.ctypes.data, table.shape[0], n, amb_end.ctypes.data, temps.ctypes.data, die.ctypes.data,
                     g_bias.ctypes.data, g_sf.ctypes.data, a_bias.ctypes.data, a_sf.ctypes.data))
+
+
+def steps(table, angle0, rate0, accel, w_t, f_t, amb_end):
+    """K intervals of the IMU ``table`` in one call on this thread (``sarins_imu_steps``: advance, minor
+    loop, white noise): angle0, rate0, accel (K, A) gimbal state, w_t, f_t (K, 3) base motion, amb_end (K,)
+    ambient at the ends (degC, checked by the caller).  Returns dtheta, dv (K, 3) and temps (K, 6)."""
+    table = _arrays.table(table)
+    n = np.shape(amb_end)[0]
+    n_axes = int(table[7, 1]) if table.shape[0] > 7 else 0
+    angle0, rate0, accel = (_arrays.read(a, (n, n_axes), name) for a, name in (
+        (angle0, "angle0"), (rate0, "rate0"), (accel, "accel")))
+    w_t, f_t = _arrays.read(w_t, (n, 3), "w_t"), _arrays.read(f_t, (n, 3), "f_t")
+    amb_end = _arrays.read(amb_end, (n,), "amb_end")
+    dtheta, dv, temps, work = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 6)), np.empty((n, 18))
+    _check(_steps(table.ctypes.data, table.shape[0], n, angle0.ctypes.data, rate0.ctypes.data, accel.ctypes.data,
+                  w_t.ctypes.data, f_t.ctypes.data, amb_end.ctypes.data, dtheta.ctypes.data, dv.ctypes.data,
+                  temps.ctypes.data, work.ctypes.data))
+    return dtheta, dv, temps
 
 
 def white_noise(table, dtheta, dv) -> None:
