@@ -1,4 +1,4 @@
-"""Compiled ``doStep`` of the IMUThermal, StrapdownINS and Turntable slaves (numba only).
+"""Compiled ``doStep`` of the IMUThermal (C core), StrapdownINS and Turntable (numba) slaves.
 
 A slave's step in its usual case is one compiled call on preallocated
 state: it reads the inputs from the slave's float64 Real buffer
@@ -15,7 +15,9 @@ the error messages.
 Two ways in:
 
 * :meth:`FastStep.step`, called first by the slave's Python ``do_step``;
-* a C function (``numba.cfunc``, cached on disk) that the native FMI layer
+* a C function (IMUThermal: ``sarins_imu_fmu_step`` of the C core,
+  ``sarins_fmu/core/imu.c``; the others: a ``numba.cfunc``, cached on
+  disk) that the native FMI layer
   (``fmus/native/core.c``) calls from ``fmi2DoStep`` without entering
   Python, through ``slave._fmi_fast_step = (function address, table address,
   table rows)``; on a non-zero return it calls the Python ``do_step``.
@@ -25,9 +27,10 @@ The state reaches compiled code as an array table
 ``io`` row of slots and settings, then the slave's own state rows.  The
 Python objects own the arrays and update them in place only.
 
-Without numba (``SARINS_NO_NUMBA=1`` or not installed), or with
-``SARINS_FMU_NO_COMPILED_STEP=1``, the contexts are None and every step runs
-the Python ``do_step``, with the same results bit for bit.
+Without numba (``SARINS_NO_NUMBA=1`` or not installed) the StrapdownINS and
+Turntable contexts are None; with ``SARINS_FMU_NO_COMPILED_STEP=1`` every
+context is None.  The Python ``do_step`` then runs every step, with the same
+results bit for bit.
 """
 
 from __future__ import annotations
@@ -37,21 +40,29 @@ import os
 
 import numpy as np
 
-from fmus.slave_support import NO_TAG, TAG_TOL, real_slots
-from sarins_fmu import imu_step
+from fmus.slave_support import TAG_TOL, real_slots
+from sarins_fmu.core import imu as core_imu
 from sarins_fmu.ins_kernel import align_steps, held_row, nav_steps
 from sarins_fmu.turntable.schedule import state_into
 from sarins_fmu._jit import HAVE_NUMBA, array_table, c_buffer, c_table, fast_step_cfunc, jit, table_view1, table_view2
 
 
 
+def _allowed() -> bool:
+    return os.environ.get("SARINS_FMU_NO_COMPILED_STEP", "") not in ("1", "true", "yes")
+
+
 def enabled() -> bool:
-    """True when the slaves may use their compiled steps."""
-    return HAVE_NUMBA and os.environ.get("SARINS_FMU_NO_COMPILED_STEP", "") not in ("1", "true", "yes")
+    """True when the slaves may use their numba-compiled steps."""
+    return HAVE_NUMBA and _allowed()
 
 
 class FastStep:
-    """A slave's compiled step: the array table, the arrays it points to, the C entry point."""
+    """A slave's compiled step: the array table, the arrays it points to, the C entry point.
+
+    ``step(table, buffer, t, h)`` runs it from Python; ``body`` is the
+    numba cfunc's body, or the address (int) of a C function of the core.
+    """
 
     def __init__(self, step, body, arrays):
         self.arrays = tuple(arrays)  # keeps every array the table points to alive
@@ -67,6 +78,8 @@ class FastStep:
     def address(self):
         """(C function address, table address, table rows) for the native FMI layer, or None
         when the C function cannot be made (the Python do_step then calls :meth:`step`)."""
+        if isinstance(self._body, int):
+            return (self._body, self.table.ctypes.data, self.table.shape[0])
         try:
             return (_cfunc(self._body).address, self.table.ctypes.data, self.table.shape[0])
         except Exception:  # pragma: no cover - numba cannot compile a cfunc here
@@ -95,13 +108,13 @@ def _same_time(a, b, step):
 # increment_end_time; moving base (1/0), slots of base_motion_time and of the 15 vehicle inputs
 # (yaw, pitch, roll; their rates; their accelerations; base rate e, n, u; base force e, n, u)
 _IMU_OUT, _IMU_VEHICLE = 15, 28
-_IMU_IO = _IMU_VEHICLE + 17
-VEHICLE_SET = 15  # values in the vehicle input set
+_IMU_IO = _IMU_VEHICLE + 17  # as IO_SIZE in sarins_fmu/core/imu.c
 
 
 def imu_context(slave, step: float):
-    """The IMUThermal slave's compiled step, or None (see :func:`enabled`)."""
-    if not enabled():
+    """The IMUThermal slave's compiled step (the C core's ``sarins_imu_fmu_step``), or None with
+    ``SARINS_FMU_NO_COMPILED_STEP=1``."""
+    if not _allowed():
         return None
     n = len(slave._axes)
     io = np.zeros(_IMU_IO)
@@ -114,7 +127,7 @@ def imu_context(slave, step: float):
     io[_IMU_VEHICLE] = slave.base == "input"
     io[_IMU_VEHICLE + 1:] = real_slots(slave, ["base_motion_time"] + slave.VEHICLE_INPUTS)
     arrays = slave._sensor.state_arrays() + (io, slave._motion.store, slave._vehicle.store)
-    return FastStep(_imu_step, _imu_c_step, arrays)
+    return FastStep(core_imu.fmu_step, core_imu.FMU_STEP_ADDRESS, arrays)
 
 
 @jit
@@ -125,96 +138,6 @@ def _read(buf, slots, out):
         if not math.isfinite(out[i]):
             return False
     return True
-
-
-@jit
-def _choose(held, current, tag, t, h):
-    """The set tagged t among the current one and the held one (fmus.slave_support.StartOfStepInputs),
-    or an empty array when neither is."""
-    if _same_time(tag, t, h):
-        return current
-    if held[0] != 0.0 and _same_time(held[1], t, h):
-        return held[2:2 + current.shape[0]].copy()
-    return current[0:0]
-
-
-@jit
-def _keep(held, current, tag):
-    held[2:2 + current.shape[0]] = current
-    held[1] = tag
-    held[0] = 1.0
-
-
-@jit
-def _imu_step(table, buf, t, h):
-    """One IMUThermal step: see the slave's do_step for the contract."""
-    s = imu_step.from_table(table)
-    io = table_view1(table, imu_step.N_STATE_ARRAYS)
-    held = table_view1(table, imu_step.N_STATE_ARRAYS + 1)
-    consts, clock = s[imu_step.CONSTS], s[imu_step.CLOCK]
-    if not abs(h - io[0]) <= 1e-9 * io[0]:
-        return 1
-    if clock[2] >= consts[6]:  # random blocks used up: the Python step draws the next ones
-        return 1
-    if not _same_time(consts[0] + clock[0] * consts[1] + io[1], t, h):
-        return 1
-    n = int(io[2])
-    current = np.empty(3 * n + 2)
-    slots = np.empty(3 * n + 2)
-    for k in range(3):
-        slots[k * n:(k + 1) * n] = io[6 + 3 * k:6 + 3 * k + n]
-    slots[3 * n:] = io[4:6]
-    tag = buf[int(io[3])]
-    if not (_read(buf, slots, current) and math.isfinite(tag)):
-        return 1
-    fixed = tag == NO_TAG and held[0] != 0.0 and held[1] == NO_TAG  # no turntable connected
-    chosen = current if fixed else _choose(held, current, tag, t, h)
-    if chosen.shape[0] == 0:
-        return 1
-    moving = io[_IMU_VEHICLE] != 0.0
-    vehicle = np.empty(VEHICLE_SET)
-    v_tag = buf[int(io[_IMU_VEHICLE + 1])]
-    v_chosen = vehicle
-    if moving:
-        v_held = table_view1(table, imu_step.N_STATE_ARRAYS + 2)
-        if not (_read(buf, io[_IMU_VEHICLE + 2:], vehicle) and math.isfinite(v_tag)):
-            return 1
-        v_chosen = _choose(v_held, vehicle, v_tag, t, h)
-        if v_chosen.shape[0] == 0:
-            return 1
-    amb_end = np.empty(1)
-    amb_end[0] = chosen[3 * n] + chosen[3 * n + 1] * h
-    if not (math.isfinite(amb_end[0]) and amb_end[0] >= -273.15):
-        return 1
-    # every check passed: from here on the step happens
-    if not fixed:
-        _keep(held, current, tag)
-    m = n + 3 if moving else n  # the vehicle's attitude gimbals carry the table's
-    motion = np.empty((3, m))
-    for k in range(3):
-        if moving:
-            motion[k, 0:3] = v_chosen[3 * k:3 * k + 3]
-        motion[k, m - n:] = chosen[k * n:(k + 1) * n]
-    if moving:
-        _keep(table_view1(table, imu_step.N_STATE_ARRAYS + 2), vehicle, v_tag)
-        base = s[imu_step.BASE]
-        base[0] = v_chosen[9:12]
-        base[1] = v_chosen[12:15]
-    dtheta = np.empty((1, 3))
-    dv = np.empty((1, 3))
-    temps = np.empty((1, 6))
-    imu_step.one_interval(s, motion[0:1], motion[1:2], motion[2:3], amb_end, dtheta, dv, temps)
-    for i in range(3):
-        buf[int(io[_IMU_OUT + i])] = dtheta[0, i]
-        buf[int(io[_IMU_OUT + 3 + i])] = dv[0, i]
-    for i in range(6):
-        buf[int(io[_IMU_OUT + 6 + i])] = temps[0, i]
-    buf[int(io[27])] = t + h
-    return 0
-
-
-def _imu_c_step(table, rows, buffer, n, t, h):
-    return _imu_step(c_table(table, rows), c_buffer(buffer, n), t, h)
 
 
 # ---------------------------------------------------------------- StrapdownINS

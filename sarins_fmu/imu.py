@@ -1,7 +1,8 @@
 """IMU error models, presets and the increment-output IMU.
 
 Sensor model of one triad (gyro: rad/s; accelerometer: m/s^2), applied to
-every minor-step increment at the internal rate (see :mod:`imu_kernel`):
+every minor-step increment at the internal rate (the C core's minor loop,
+``sarins_fmu/core/imu.h``):
 
     x_meas = (I + diag(sf(T)) + M) x_true + b(T, t) + q * x|x| + n
 
@@ -40,9 +41,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from . import earth
+from .core import imu as core_imu
+from .core._lib import array_table
 from .imu_correlated import CorrelatedErrors
 from . import imu_step
-from .imu_kernel import increments as _increments_kernel
 from .imu_step import T_REF
 from .thermal import Ambient, ThermalModel, ThermalParams, _check_temperature
 from .units import ARCSEC_TO_RAD, DAY, DEG_TO_RAD, DPH_TO_RPS, DPSH_TO_RPSS, PPM, UG_TO_MPS2
@@ -476,6 +478,7 @@ class IMU:
         self._state = (consts, np.zeros(3), sensor_par, np.zeros((2, 6)), coef, triad, mats,
                        np.ascontiguousarray(self.axes), base, np.zeros((block_rows, 6)), np.zeros((block_rows, 6)),
                        corr.par, corr.state, corr.phi, corr.q, corr.x_flicker, np.zeros((corr_rows, corr.columns)))
+        self._table = array_table(self._state)  # the same arrays as the C core sees them
 
     def reset(self, ambient0: float | None = None) -> None:
         """Return to the state at construction (time, temperatures, random
@@ -559,17 +562,28 @@ class IMU:
         w_t, f_t = self.base.base_motion(t_end - self.h, self.h)
         w_t, f_t = (np.ascontiguousarray(x, dtype=float) for x in (w_t, f_t))
         dtheta, dv, temps = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 6))
-        s = self._state
-        g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad, g_mis = imu_step.increments_args(s)
         for k0 in range(0, n, self._block_rows):
             k1 = min(n, k0 + self._block_rows)
             self._refill(k1 - k0)
-            g_bias, g_sf, a_bias, a_sf = (np.empty((k1 - k0, 3)) for _ in range(4))
-            imu_step.advance(s, amb_end[k0:k1], temps[k0:k1], g_bias, g_sf, a_bias, a_sf)
-            dtheta[k0:k1], dv[k0:k1] = _increments_kernel(
-                s[imu_step.AXES], angle0[k0:k1], rate0[k0:k1], accel[k0:k1], w_t[k0:k1], f_t[k0:k1], self.h,
-                self.n_sub, g_sf, g_mis, g_bias, g_quad, g_lowrate, g_width, g_sens, a_sf, a_mis, a_bias, a_quad)
-            imu_step.white_noise(s, dtheta[k0:k1], dv[k0:k1])
+            dtheta[k0:k1], dv[k0:k1], temps[k0:k1] = self._block(
+                angle0[k0:k1], rate0[k0:k1], accel[k0:k1], w_t[k0:k1], f_t[k0:k1], amb_end[k0:k1])
+        return dtheta, dv, temps
+
+    def _block(self, angle0, rate0, accel, w_t, f_t, amb_end):
+        """K intervals whose random numbers the blocks hold: one C call for a few, the minor loop over the
+        thread pool for many (the same results)."""
+        n = amb_end.shape[0]
+        if n < core_imu.PARALLEL_MIN:
+            return core_imu.steps(self._table, angle0, rate0, accel, w_t, f_t, amb_end)
+        s = self._state
+        triad, mats = s[imu_step.TRIAD], s[imu_step.MATS]
+        temps = np.empty((n, 6))
+        g_bias, g_sf, a_bias, a_sf = (np.empty((n, 3)) for _ in range(4))
+        core_imu.advance(self._table, amb_end, temps, g_bias, g_sf, a_bias, a_sf)
+        dtheta, dv = core_imu.increments(
+            s[imu_step.AXES], angle0, rate0, accel, w_t, f_t, self.h, self.n_sub, g_sf, mats[0:3], g_bias,
+            triad[1], triad[2], triad[3], mats[3:6], a_sf, mats[6:9], a_bias, triad[4])
+        core_imu.white_noise(self._table, dtheta, dv)
         return dtheta, dv, temps
 
     def _times(self, n):
@@ -582,7 +596,7 @@ def deterministic_axial_drift(model: ImuModel, temperature, dt: float) -> np.nda
     """Deterministic z-gyro drift (rad/s) along a temperature series.
 
     eps_z = b + b1 (T - T_REF) + b2 (T - T_REF)^2 + a T^2 + b T + c + d dT/dt
-    (the z-gyro terms of :func:`sarins_fmu.imu_step.interval_terms` without the Gauss-Markov
+    (the z-gyro terms of ``sarins_imu_interval_terms`` (``sarins_fmu/core/imu.h``) without the Gauss-Markov
     bias instability and the white noise; ageing as in ``model``).
 
     Parameters

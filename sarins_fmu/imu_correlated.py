@@ -47,6 +47,10 @@ interval midpoint, Tdot its rate over the interval, degC/s)::
 * **Turn-on bias** (``turn_on_bias``, std): a constant drawn once per seed
   (run-to-run repeatability), from its own stream.
 
+The terms are evaluated per interval in the C core
+(``sarins_fmu/core/correlated.c``); this module holds their parameters and
+random streams.
+
 Every random term draws from streams spawned from the IMU seed at indices
 that the older terms do not use, so adding these terms never changes the
 noise of a model that has them all at zero (``ideal``, ``nav-rlg``).
@@ -57,8 +61,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-from ._jit import jit
 
 TERMS_PER_DECADE = 3
 _STREAM_TURN_ON, _STREAM_PROCESS = 2, 3  # spawn keys beside the IMU's noise (0) and GM (1) streams
@@ -139,48 +141,3 @@ class CorrelatedErrors:
     def draw(self, out) -> None:
         """Fill ``out`` (rows, columns) with the next driving noise (zeros when no term is random)."""
         out[:] = self._rng.standard_normal(out.shape) if self.random else 0.0
-
-
-@jit
-def _terms(die0, die, h, c_grad, s_grad, c_hyst, w_hyst, play, phi, q, x_flicker, rrw, x_rrw, turn_on,
-           noise, bias, sf):
-    """Compiled interval loop; updates play, x_flicker, x_rrw in place."""
-    n_terms = phi.shape[0]
-    sqrt_h = math.sqrt(h)
-    for j in range(6):
-        prev = die0[j]
-        for k in range(die.shape[0]):
-            mid = 0.5 * (prev + die[k, j])
-            rate = (die[k, j] - prev) / h
-            play[j] = max(mid - w_hyst[j], min(mid + w_hyst[j], play[j]))
-            flick = 0.0
-            for i in range(n_terms):
-                x_flicker[i, j] = (phi[i] * x_flicker[i, j]
-                                   + q[i, j] * math.sqrt(1.0 - phi[i] ** 2) * noise[k, i * 6 + j])
-                flick += x_flicker[i, j]
-            x_rrw[j] += rrw[j] * sqrt_h * noise[k, n_terms * 6 + j]
-            bias[k, j] = (c_grad[j] * rate + c_hyst[j] * (mid - play[j]) / w_hyst[j]
-                          + flick + x_rrw[j] + turn_on[j])
-            sf[k, j] = s_grad[j] * rate
-            prev = die[k, j]
-
-
-@jit
-def correlated_terms(die0, die, h, corr_par, corr_state, phi, q, x_flicker, noise, g_bias, g_sf, a_bias, a_sf):
-    """Add the terms of K intervals to the (K, 3) bias and scale-factor arrays, in place.
-
-    ``corr_par`` (7, 6): die time constant, c_grad, s_grad, c_hyst, w_hyst,
-    rrw, turn-on bias; ``corr_state`` (3, 6): die, play, x_rrw; ``noise``
-    (K, F * 6 + 6) the driving noise (zeros when no term is random).
-    """
-    n = die.shape[0]
-    bias = np.empty((n, 6))
-    sf = np.empty((n, 6))
-    _terms(die0, die, h, corr_par[1], corr_par[2], corr_par[3], corr_par[4], corr_state[1], phi, q, x_flicker,
-           corr_par[5], corr_state[2], corr_par[6], noise, bias, sf)
-    for k in range(n):
-        for i in range(3):
-            g_bias[k, i] += bias[k, i]
-            a_bias[k, i] += bias[k, 3 + i]
-            g_sf[k, i] += sf[k, i]
-            a_sf[k, i] += sf[k, 3 + i]

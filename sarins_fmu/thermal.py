@@ -27,6 +27,9 @@ Navigation*, 2nd ed., sec. 4.4.5 on thermal lag; it is why a bias modelled as
 a function of the reported temperature shows a loop on a chamber ramp.
 :func:`die_temperatures` integrates it exactly for a reported temperature
 taken linear over each output interval.
+
+The exact steps run in the C core (``sarins_fmu/core/thermal.c``,
+:mod:`sarins_fmu.core.thermal`).
 """
 
 from __future__ import annotations
@@ -36,8 +39,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._jit import jit
 from .checks import finite_number
+from .core.thermal import die_temperatures, exact_steps  # noqa: F401 (die_temperatures: part of this API)
 
 SENSORS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
 N_SENSORS = len(SENSORS)
@@ -174,7 +177,7 @@ class ThermalModel:
         amb[0] = self._ambient_now
         amb[1:] = self.ambient(times) if ambient is None else ambient
         _check_temperature(amb)
-        out = _exact_steps(h, amb, self._heat, self._tau, self.temperature)
+        out = exact_steps(h, amb, self._heat, self._tau, self.temperature)
         self.time = float(times[-1])
         self._ambient_now = float(amb[-1])
         self.temperature = out[-1].copy()
@@ -185,93 +188,6 @@ def _check_temperature(values) -> None:
     values = np.asarray(values, float)
     if not np.isfinite(values).all() or np.any(values < -273.15):
         raise ValueError("ambient temperature must be finite and above absolute zero (degC)")
-
-
-@jit
-def _linear_recurrence(a, b, x0):
-    """x_k = a_k x_{k-1} + b_k for k = 1..K (returns x_1..x_K); compiled loop."""
-    out = np.empty_like(b)
-    x = x0
-    for k in range(a.shape[0]):
-        x = a[k] * x + b[k]
-        out[k] = x
-    return out
-
-
-@jit
-def _exact_step(x, amb0, amb1, dt, heat, tau):
-    """One exact step of dT/dt = (A(t) + dT - T)/tau with A linear from amb0 to amb1
-    over dt: with s the ambient slope,
-    T <- e T + (amb0 + dT - s tau)(1 - e) + s dt,  e = exp(-dt/tau)."""
-    slope = (amb1 - amb0) / dt if dt > 0 else 0.0
-    decay = math.exp(-dt / tau)
-    return decay * x + (amb0 + heat - slope * tau) * (1.0 - decay) + slope * dt
-
-
-@jit
-def _exact_steps(h, amb, heat, tau, temp0):
-    """Exact steps of lengths h (K,) with ambient amb (K + 1,) at the step ends
-    (:func:`_exact_step`).  Returns (K, 6) temperatures at the step ends."""
-    n = h.shape[0]
-    out = np.empty((n, heat.shape[0]))
-    for j in range(heat.shape[0]):
-        x = temp0[j]
-        for k in range(n):
-            x = _exact_step(x, amb[k], amb[k + 1], h[k], heat[j], tau[j])
-            out[k, j] = x
-    return out
-
-
-@jit
-def thermal_steps(t0, h, k0, amb0, amb_end, heat, tau, temperature, out):
-    """Exact steps over K intervals of the grid t0 + k h, from interval k0 on.
-
-    The interval ends are t0 + (k0 + k + 1) h (the step lengths are their
-    differences, as :meth:`ThermalModel.advance` takes them); the ambient is
-    amb0 at the start and amb_end (K,) at the ends.  ``temperature`` (6,) is
-    advanced in place; ``out`` (K, 6) receives the temperatures at the ends.
-    """
-    for j in range(heat.shape[0]):
-        x = temperature[j]
-        a_prev = amb0
-        t_prev = t0 + k0 * h
-        for k in range(amb_end.shape[0]):
-            t_k = t0 + (k0 + k + 1) * h
-            x = _exact_step(x, a_prev, amb_end[k], t_k - t_prev, heat[j], tau[j])
-            out[k, j] = x
-            a_prev = amb_end[k]
-            t_prev = t_k
-        temperature[j] = x
-
-
-@jit
-def die_temperatures(reported0, reported, h, tau, die):
-    """Die temperatures at the ends of K output intervals, degC.
-
-    Exact step of dT_die/dt = (T_rep - T_die)/tau with T_rep linear over an
-    interval of length h (slope s): T_die <- e T_die + (T_rep0 - s tau)(1 - e)
-    + s h, e = exp(-h/tau); tau = 0 passes the reported temperature through.
-
-    Parameters
-    ----------
-    reported0 : (6,) reported temperatures at the start of the first interval
-    reported : (K, 6) reported temperatures at the interval ends
-    h : interval, s; tau : (6,) die time constants, s
-    die : (6,) die temperatures at the start, updated in place to the last end
-    """
-    out = np.empty_like(reported)
-    prev = reported0.copy()
-    for k in range(reported.shape[0]):
-        for j in range(reported.shape[1]):
-            if tau[j] > 0.0:
-                slope = (reported[k, j] - prev[j]) / h
-                decay = math.exp(-h / tau[j])
-                die[j] = decay * die[j] + (prev[j] - slope * tau[j]) * (1.0 - decay) + slope * h
-            else:
-                die[j] = reported[k, j]
-            out[k, j] = die[j]
-            prev[j] = reported[k, j]
-    return out
 
 
 def chamber_profile(duration: float, *, low_c: float = -25.0, high_c: float = 40.0,

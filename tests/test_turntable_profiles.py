@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
-from sarins_fmu import imu_kernel
+from sarins_fmu.core import imu as core_imu
 from sarins_fmu import turntable as tt
 
 E = np.eye(3)
@@ -66,7 +66,7 @@ def check_kinematics(sched, times):
         w_chain = rate_chain(sched, t)
         assert_allclose(rate_fd(sched, t), w_chain, atol=1e-7, err_msg=f"t={t}")
         angle, rate, acc = sched.state(t)
-        truth = imu_kernel._truth(sched.axes, angle, rate, acc, 0, 0.0, np.zeros((1, 3)), f_t[None, :])
+        truth = core_imu.truth(sched.axes, angle, rate, acc, 0, 0.0, np.zeros((1, 3)), f_t[None, :])
         assert_allclose(truth[:3], w_chain, atol=1e-13)
         assert_allclose(truth[3:], mat_tb(sched, t).T @ f_t, atol=1e-12)
 

@@ -2,14 +2,19 @@
 
 ``pip install`` builds ``sarins_fmu/core/*.c`` into one shared library beside
 this file (``setup.py``).  :data:`LIB` is that library; component modules
-declare the prototypes they use with :func:`function`.
+declare the prototypes they use with :func:`function`.  The environment
+variable ``SARINS_CORE_LIB`` (a path) loads another build of it instead
+(e.g. one built with sanitizers).
 """
 
 from __future__ import annotations
 
 import ctypes
 import importlib.machinery
+import os
 from pathlib import Path
+
+import numpy as np
 
 ABI = 1  # SARINS_CORE_ABI in sarins_core.h
 
@@ -25,7 +30,13 @@ class CoreNotBuilt(ImportError):
 
 
 def library_path() -> Path:
-    """The built library beside this file (any of this interpreter's extension suffixes)."""
+    """The built library beside this file (any of this interpreter's extension suffixes), or the
+    file that ``SARINS_CORE_LIB`` names."""
+    override = os.environ.get("SARINS_CORE_LIB", "")
+    if override:
+        if not Path(override).is_file():
+            raise CoreNotBuilt(f"SARINS_CORE_LIB names {override}, which is not a file")
+        return Path(override)
     for suffix in importlib.machinery.EXTENSION_SUFFIXES:
         candidate = HERE / (NAME + suffix)
         if candidate.is_file():
@@ -50,7 +61,23 @@ LIB = _load()
 
 def function(name: str, restype, *argtypes):
     """The library's function ``name`` with its prototype set."""
-    fn = getattr(LIB, name)
+    try:
+        fn = getattr(LIB, name)
+    except AttributeError:
+        raise CoreNotBuilt(f"the C physics core at {library_path()} has no function {name} (built from older "
+                           "sources): rebuild it with 'python3 -m pip install -e .'") from None
     fn.restype = restype
     fn.argtypes = list(argtypes)
     return fn
+
+
+def array_table(arrays) -> np.ndarray:
+    """(N, 3) int64 table (address, rows, columns) of C-contiguous 1-D or 2-D float64 arrays, the form in
+    which the core's table functions take a component's state (a 1-D array has 1 column).  The caller
+    keeps the arrays alive and updates them in place only."""
+    rows = []
+    for i, a in enumerate(arrays):
+        if not (isinstance(a, np.ndarray) and a.dtype == np.float64 and a.flags.c_contiguous and a.ndim in (1, 2)):
+            raise ValueError(f"array table row {i}: needs a C-contiguous 1-D or 2-D float64 array")
+        rows.append((a.ctypes.data, a.shape[0], a.shape[1] if a.ndim == 2 else 1))
+    return np.array(rows, dtype=np.int64).reshape(len(rows), 3)

@@ -20,4 +20,8 @@
 
 int sarins_core_abi(void);
 
+#include "thermal.h"
+#include "correlated.h"
+#include "imu.h"
+
 #endif

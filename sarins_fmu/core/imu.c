@@ -1,0 +1,480 @@
+/* The IMU: see imu.h.  The evaluation order of every expression follows the
+ * former numba kernels (sarins_fmu/imu_kernel.py, imu_step.py) term by term,
+ * so the results are the same bit for bit. */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "correlated.h"
+#include "imu.h"
+#include "thermal.h"
+
+/* ------------------------------------------------------------ minor loop */
+
+/* v <- R(a, theta)^T v = cos v - sin (a x v) + (1 - cos)(a.v) a, with c = cos theta, s = sin theta */
+static void rot_t(double ax, double ay, double az, double c, double s, double v[3]) {
+    double cx = ay * v[2] - az * v[1];
+    double cy = az * v[0] - ax * v[2];
+    double cz = ax * v[1] - ay * v[0];
+    double d = (1.0 - c) * (ax * v[0] + ay * v[1] + az * v[2]);
+    v[0] = c * v[0] - s * cx + d * ax;
+    v[1] = c * v[1] - s * cy + d * ay;
+    v[2] = c * v[2] - s * cz + d * az;
+}
+
+void sarins_imu_truth(int64_t n_axes, const double *axes, const double *angle0, const double *rate0,
+                      const double *accel, double tau, const double *w_t, const double *f_t, double *out) {
+    double w[3] = {w_t[0], w_t[1], w_t[2]};
+    double f[3] = {f_t[0], f_t[1], f_t[2]};
+    double s[3] = {0.0, 0.0, 0.0}; /* omega_tb resolved in the current gimbal frame */
+    for (int64_t j = 0; j < n_axes; j++) {
+        /* theta = theta0 + (rate0 + accel tau / 2) tau, thetadot = rate0 + accel tau */
+        double th = angle0[j] + (rate0[j] + 0.5 * accel[j] * tau) * tau;
+        double thd = rate0[j] + accel[j] * tau;
+        double c = cos(th), sn = sin(th);
+        double ax = axes[3 * j], ay = axes[3 * j + 1], az = axes[3 * j + 2];
+        rot_t(ax, ay, az, c, sn, w);
+        rot_t(ax, ay, az, c, sn, f);
+        rot_t(ax, ay, az, c, sn, s);
+        s[0] += thd * ax;
+        s[1] += thd * ay;
+        s[2] += thd * az;
+    }
+    /* omega_ib_b = mat_bt omega_it_t + omega_tb_b, f_b = mat_bt f_t */
+    out[0] = w[0] + s[0];
+    out[1] = w[1] + s[1];
+    out[2] = w[2] + s[2];
+    out[3] = f[0];
+    out[4] = f[1];
+    out[5] = f[2];
+}
+
+/* Deterministic triad errors on one minor-step increment d over dt:
+ * m = (I + diag(sf) + M) d + b dt + q d|d| / dt; sf, bias: this interval's rows. */
+static void apply_errors(const double d[3], double dt, const double *sf, const double *mis, const double *bias,
+                         const double *quad, double m[3]) {
+    m[0] = d[0] * (1.0 + sf[0]) + mis[1] * d[1] + mis[2] * d[2] + bias[0] * dt + quad[0] * d[0] * fabs(d[0]) / dt;
+    m[1] = d[1] * (1.0 + sf[1]) + mis[3] * d[0] + mis[5] * d[2] + bias[1] * dt + quad[1] * d[1] * fabs(d[1]) / dt;
+    m[2] = d[2] * (1.0 + sf[2]) + mis[6] * d[0] + mis[7] * d[1] + bias[2] * dt + quad[2] * d[2] * fabs(d[2]) / dt;
+}
+
+/* r = v rotated by the unit quaternion q = [w x y z]: v + 2w (u x v) + 2 u x (u x v) */
+static void qrot(const double q[4], const double v[3], double r[3]) {
+    double cx = q[2] * v[2] - q[3] * v[1];
+    double cy = q[3] * v[0] - q[1] * v[2];
+    double cz = q[1] * v[1] - q[2] * v[0];
+    r[0] = v[0] + 2.0 * (q[0] * cx + q[2] * cz - q[3] * cy);
+    r[1] = v[1] + 2.0 * (q[0] * cy + q[3] * cx - q[1] * cz);
+    r[2] = v[2] + 2.0 * (q[0] * cz + q[1] * cy - q[2] * cx);
+}
+
+/* Minor loop of output interval k; writes dtheta[k], dv[k]. */
+static void interval(int64_t k, int64_t n_axes, const double *axes, const double *angle0, const double *rate0,
+                     const double *accel, const double *w_t, const double *f_t, double h, int64_t n_sub,
+                     const double *g_sf, const double *g_mis, const double *g_bias, const double *g_quad,
+                     const double *g_lowrate, const double *g_width, const double *g_sens, const double *a_sf,
+                     const double *a_mis, const double *a_bias, const double *a_quad, double *dtheta,
+                     double *dv) {
+    const double *ang = angle0 + k * n_axes, *rat = rate0 + k * n_axes, *acc = accel + k * n_axes;
+    const double *wk = w_t + 3 * k, *fk = f_t + 3 * k;
+    const double *gsf = g_sf + 3 * k, *gb = g_bias + 3 * k, *asf = a_sf + 3 * k, *ab = a_bias + 3 * k;
+    int lowrate = g_lowrate[0] != 0.0 || g_lowrate[1] != 0.0 || g_lowrate[2] != 0.0;
+    double dt = h / (double)n_sub;
+    double t0[6], t1[6];
+    sarins_imu_truth(n_axes, axes, ang, rat, acc, 0.0, wk, fk, t0);
+    double q[4] = {1.0, 0.0, 0.0, 0.0}; /* q_{b(k-1) b(m)} */
+    double v[3] = {0.0, 0.0, 0.0};      /* velocity increment in b(k-1) */
+    double pa[3] = {0.0, 0.0, 0.0};     /* previous minor angle increment */
+    double pv[3] = {0.0, 0.0, 0.0};     /* previous minor velocity increment */
+    for (int64_t i = 1; i <= n_sub; i++) {
+        sarins_imu_truth(n_axes, axes, ang, rat, acc, (double)i * dt, wk, fk, t1);
+        /* trapezoid increments over the minor step */
+        double u[3], e[3];
+        for (int a = 0; a < 3; a++) {
+            u[a] = 0.5 * (t0[3 + a] + t1[3 + a]) * dt;
+            e[a] = 0.5 * (t0[a] + t1[a]) * dt;
+        }
+        /* g-sensitivity G u and the low-rate nonlinearity k e exp(-(e / (w dt))^2) */
+        double g[3];
+        for (int a = 0; a < 3; a++) g[a] = g_sens[3 * a] * u[0] + g_sens[3 * a + 1] * u[1] + g_sens[3 * a + 2] * u[2];
+        if (lowrate) {
+            for (int a = 0; a < 3; a++) {
+                double r = e[a] / (dt * g_width[a]);
+                g[a] += g_lowrate[a] * e[a] * exp(-(r * r));
+            }
+        }
+        double da[3], dvm[3];
+        apply_errors(e, dt, gsf, g_mis, gb, g_quad, da);
+        da[0] += g[0];
+        da[1] += g[1];
+        da[2] += g[2];
+        apply_errors(u, dt, asf, a_mis, ab, a_quad, dvm);
+        /* minor-step velocity in b(m-1): dnu + dalpha x dnu / 2 + (dalpha_prev x dnu + dnu_prev x dalpha) / 12 */
+        double sv[3];
+        sv[0] = dvm[0] + 0.5 * (da[1] * dvm[2] - da[2] * dvm[1])
+                + ((pa[1] * dvm[2] - pa[2] * dvm[1]) + (pv[1] * da[2] - pv[2] * da[1])) / 12.0;
+        sv[1] = dvm[1] + 0.5 * (da[2] * dvm[0] - da[0] * dvm[2])
+                + ((pa[2] * dvm[0] - pa[0] * dvm[2]) + (pv[2] * da[0] - pv[0] * da[2])) / 12.0;
+        sv[2] = dvm[2] + 0.5 * (da[0] * dvm[1] - da[1] * dvm[0])
+                + ((pa[0] * dvm[1] - pa[1] * dvm[0]) + (pv[0] * da[1] - pv[1] * da[0])) / 12.0;
+        double r[3];
+        qrot(q, sv, r);
+        v[0] += r[0];
+        v[1] += r[1];
+        v[2] += r[2];
+        /* coning-corrected minor rotation vector dphi = dalpha + dalpha_prev x dalpha / 12 */
+        double p[3];
+        p[0] = da[0] + (pa[1] * da[2] - pa[2] * da[1]) / 12.0;
+        p[1] = da[1] + (pa[2] * da[0] - pa[0] * da[2]) / 12.0;
+        p[2] = da[2] + (pa[0] * da[1] - pa[1] * da[0]) / 12.0;
+        /* q <- q * [cos(|p|/2), sin(|p|/2) p/|p|], both by their series to th^4 */
+        double th2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+        double c = 1.0 - th2 / 8.0 + th2 * th2 / 384.0;
+        double s = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0;
+        double qn[4];
+        qn[0] = q[0] * c - s * (q[1] * p[0] + q[2] * p[1] + q[3] * p[2]);
+        qn[1] = q[0] * s * p[0] + q[1] * c + s * (q[2] * p[2] - q[3] * p[1]);
+        qn[2] = q[0] * s * p[1] + q[2] * c + s * (q[3] * p[0] - q[1] * p[2]);
+        qn[3] = q[0] * s * p[2] + q[3] * c + s * (q[1] * p[1] - q[2] * p[0]);
+        memcpy(q, qn, sizeof q);
+        memcpy(pa, da, sizeof pa);
+        memcpy(pv, dvm, sizeof pv);
+        memcpy(t0, t1, sizeof t0);
+    }
+    /* rotation vector of q, sign fixed so that the angle is in [0, pi]: 2 atan2(|u|, w) u / |u| */
+    if (q[0] < 0.0) {
+        for (int a = 0; a < 4; a++) q[a] = -q[a];
+    }
+    double vn = sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    double scale = vn > 1e-300 ? 2.0 * atan2(vn, q[0]) / vn : 2.0;
+    dtheta[3 * k] = q[1] * scale;
+    dtheta[3 * k + 1] = q[2] * scale;
+    dtheta[3 * k + 2] = q[3] * scale;
+    dv[3 * k] = v[0];
+    dv[3 * k + 1] = v[1];
+    dv[3 * k + 2] = v[2];
+}
+
+void sarins_imu_increments(int64_t k0, int64_t k1, int64_t n_axes, const double *axes, const double *angle0,
+                           const double *rate0, const double *accel, const double *w_t, const double *f_t,
+                           double h, int64_t n_sub, const double *g_sf, const double *g_mis,
+                           const double *g_bias, const double *g_quad, const double *g_lowrate,
+                           const double *g_lowrate_width, const double *g_sens, const double *a_sf,
+                           const double *a_mis, const double *a_bias, const double *a_quad, double *dtheta,
+                           double *dv) {
+    for (int64_t k = k0; k < k1; k++) {
+        interval(k, n_axes, axes, angle0, rate0, accel, w_t, f_t, h, n_sub, g_sf, g_mis, g_bias, g_quad,
+                 g_lowrate, g_lowrate_width, g_sens, a_sf, a_mis, a_bias, a_quad, dtheta, dv);
+    }
+}
+
+/* ------------------------------------------------------ interval terms */
+
+void sarins_imu_interval_terms(int64_t n_steps, const double *temp0, const double *temps, double h,
+                               const double *coef, const double *drift_poly, double drift_dtdt, double *gm,
+                               const double *gm_phi, const double *gm_std, const double *gm_noise,
+                               double *g_bias, double *g_sf, double *a_bias, double *a_sf) {
+    double prev[6];
+    memcpy(prev, temp0, sizeof prev);
+    for (int64_t k = 0; k < n_steps; k++) {
+        const double *now = temps + 6 * k;
+        for (int j = 0; j < 6; j++) {
+            /* Gauss-Markov exact step x_k = phi x_{k-1} + std sqrt(1 - phi^2) w_k */
+            gm[j] = gm_phi[j] * gm[j] + gm_std[j] * sqrt(1.0 - gm_phi[j] * gm_phi[j]) * gm_noise[6 * k + j];
+        }
+        for (int t = 0; t < 2; t++) {
+            for (int i = 0; i < 3; i++) {
+                int s = 3 * t + i;
+                const double *c = coef + 15 * t + i; /* rows 5t..5t+4, column i */
+                double mid = 0.5 * (prev[s] + now[s]);
+                double d = mid - SARINS_IMU_T_REF;
+                /* b(T) = bias + tc1 (T - T_ref) + tc2 (T - T_ref)^2 + GM; sf(T) = sf + sf_tc (T - T_ref) */
+                double bias = c[0] + c[3] * d + c[6] * d * d + gm[s];
+                double sf = c[9] + c[12] * d;
+                if (t == 0) {
+                    if (i == 2) { /* azimuth drift model eps(T) = (a T + b) T + c, plus d dT/dt */
+                        bias += (drift_poly[0] * mid + drift_poly[1]) * mid + drift_poly[2];
+                        bias += drift_dtdt * (now[s] - prev[s]) / h;
+                    }
+                    g_bias[3 * k + i] = bias;
+                    g_sf[3 * k + i] = sf;
+                } else {
+                    a_bias[3 * k + i] = bias;
+                    a_sf[3 * k + i] = sf;
+                }
+            }
+        }
+        memcpy(prev, now, sizeof prev);
+    }
+}
+
+/* ------------------------------------------------------ the state table */
+
+typedef struct {
+    double *consts, *clock, *sensor_par, *state, *coef, *triad, *mats, *axes, *base, *gm_block, *white_block,
+        *corr_par, *corr_state, *phi, *q, *x_flicker, *corr_block;
+    int64_t n_axes, block_rows, n_flicker, corr_cols;
+} ImuView;
+
+static double *table_array(const int64_t *table, int64_t i) { return (double *)(intptr_t)table[3 * i]; }
+
+static int has_shape(const int64_t *table, int64_t i, int64_t rows, int64_t cols) {
+    return table[3 * i + 1] == rows && table[3 * i + 2] == cols && (rows == 0 || table[3 * i] != 0);
+}
+
+/* The IMU arrays of table rows 0..16 with their shapes checked; 0 when they fit. */
+static int imu_view(const int64_t *table, int64_t rows, ImuView *v) {
+    if (table == NULL || rows < SARINS_IMU_N_ARRAYS) return SARINS_IMU_BAD_TABLE;
+    v->n_axes = table[3 * SARINS_IMU_AXES + 1];
+    v->block_rows = table[3 * SARINS_IMU_GM_BLOCK + 1];
+    v->n_flicker = table[3 * SARINS_IMU_PHI + 1];
+    v->corr_cols = 6 * v->n_flicker + 6;
+    int64_t corr_rows = table[3 * SARINS_IMU_CORR_BLOCK + 1];
+    if (!(has_shape(table, SARINS_IMU_CONSTS, 8, 1) && has_shape(table, SARINS_IMU_CLOCK, 3, 1)
+          && has_shape(table, SARINS_IMU_SENSOR_PAR, 4, 6) && has_shape(table, SARINS_IMU_STATE, 2, 6)
+          && has_shape(table, SARINS_IMU_COEF, 10, 3) && has_shape(table, SARINS_IMU_TRIAD, 7, 3)
+          && has_shape(table, SARINS_IMU_MATS, 9, 3) && v->n_axes >= 1
+          && has_shape(table, SARINS_IMU_AXES, v->n_axes, 3) && has_shape(table, SARINS_IMU_BASE, 2, 3)
+          && v->block_rows >= 1 && has_shape(table, SARINS_IMU_GM_BLOCK, v->block_rows, 6)
+          && has_shape(table, SARINS_IMU_WHITE_BLOCK, v->block_rows, 6)
+          && has_shape(table, SARINS_IMU_CORR_PAR, 7, 6) && has_shape(table, SARINS_IMU_CORR_STATE, 3, 6)
+          && v->n_flicker >= 0 && has_shape(table, SARINS_IMU_PHI, v->n_flicker, 1)
+          && has_shape(table, SARINS_IMU_Q, v->n_flicker, 6) && has_shape(table, SARINS_IMU_X_FLICKER, v->n_flicker, 6)
+          && has_shape(table, SARINS_IMU_CORR_BLOCK, corr_rows, v->corr_cols)))
+        return SARINS_IMU_BAD_TABLE;
+    v->consts = table_array(table, SARINS_IMU_CONSTS);
+    v->clock = table_array(table, SARINS_IMU_CLOCK);
+    v->sensor_par = table_array(table, SARINS_IMU_SENSOR_PAR);
+    v->state = table_array(table, SARINS_IMU_STATE);
+    v->coef = table_array(table, SARINS_IMU_COEF);
+    v->triad = table_array(table, SARINS_IMU_TRIAD);
+    v->mats = table_array(table, SARINS_IMU_MATS);
+    v->axes = table_array(table, SARINS_IMU_AXES);
+    v->base = table_array(table, SARINS_IMU_BASE);
+    v->gm_block = table_array(table, SARINS_IMU_GM_BLOCK);
+    v->white_block = table_array(table, SARINS_IMU_WHITE_BLOCK);
+    v->corr_par = table_array(table, SARINS_IMU_CORR_PAR);
+    v->corr_state = table_array(table, SARINS_IMU_CORR_STATE);
+    v->phi = table_array(table, SARINS_IMU_PHI);
+    v->q = table_array(table, SARINS_IMU_Q);
+    v->x_flicker = table_array(table, SARINS_IMU_X_FLICKER);
+    v->corr_block = table_array(table, SARINS_IMU_CORR_BLOCK);
+    /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub, block_rows */
+    if (!(v->consts[1] > 0.0 && v->consts[5] >= 1.0 && v->consts[6] == (double)v->block_rows))
+        return SARINS_IMU_BAD_TABLE;
+    if (v->consts[4] != 0.0 && corr_rows != v->block_rows) return SARINS_IMU_BAD_TABLE;
+    return SARINS_IMU_OK;
+}
+
+/* Unused rows of the random blocks from the clock's row position, or -1 when the position is out of range. */
+static int64_t unused_rows(const ImuView *v) {
+    double pos = v->clock[2];
+    if (!(pos >= 0.0 && pos <= (double)v->block_rows)) return -1;
+    return v->block_rows - (int64_t)pos;
+}
+
+int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, const double *amb_end, double *temps,
+                       double *die, double *g_bias, double *g_sf, double *a_bias, double *a_sf) {
+    ImuView v;
+    int status = imu_view(table, rows, &v);
+    if (status != SARINS_IMU_OK) return status;
+    if (n_steps < 1 || unused_rows(&v) < n_steps) return SARINS_IMU_NO_ROWS;
+    double h = v.consts[1];
+    int64_t pos = (int64_t)v.clock[2];
+    double *temperature = v.state; /* reported temperatures, row 0 */
+    double start[6];
+    memcpy(start, temperature, sizeof start);
+    sarins_thermal_steps(v.consts[0], h, v.clock[0], v.clock[1], n_steps, amb_end, 6, v.sensor_par,
+                         v.sensor_par + 6, temperature, temps);
+    v.clock[1] = amb_end[n_steps - 1];
+    const double *die0 = start, *die_t = temps;
+    double die_start[6];
+    if (v.consts[3] != 0.0) { /* the errors follow the die, which lags the reported temperature */
+        double *die_now = v.corr_state; /* row 0 */
+        memcpy(die_start, die_now, sizeof die_start);
+        sarins_die_temperatures(n_steps, 6, start, temps, h, v.corr_par, die_now, die);
+        die0 = die_start;
+        die_t = die;
+    }
+    sarins_imu_interval_terms(n_steps, die0, die_t, h, v.coef, v.triad, v.consts[2], v.state + 6,
+                              v.sensor_par + 12, v.sensor_par + 18, v.gm_block + 6 * pos, g_bias, g_sf, a_bias,
+                              a_sf);
+    if (v.consts[4] != 0.0) {
+        sarins_correlated_terms(n_steps, die0, die_t, h, v.corr_par, v.corr_state, v.n_flicker, v.phi, v.q,
+                                v.x_flicker, v.corr_block + v.corr_cols * pos, g_bias, g_sf, a_bias, a_sf);
+    }
+    return SARINS_IMU_OK;
+}
+
+int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, double *dtheta, double *dv) {
+    ImuView v;
+    int status = imu_view(table, rows, &v);
+    if (status != SARINS_IMU_OK) return status;
+    if (n_steps < 0 || unused_rows(&v) < n_steps) return SARINS_IMU_NO_ROWS;
+    int64_t pos = (int64_t)v.clock[2];
+    double sqrt_h = sqrt(v.consts[1]);
+    const double *rw_g = v.triad + 15, *rw_a = v.triad + 18; /* triad rows 5 and 6 */
+    for (int64_t k = 0; k < n_steps; k++) {
+        const double *w = v.white_block + 6 * (pos + k);
+        for (int i = 0; i < 3; i++) {
+            /* N(0, rw^2 h): the random walk integrated over the interval */
+            dtheta[3 * k + i] += w[i] * sqrt_h * rw_g[i];
+            dv[3 * k + i] += w[3 + i] * sqrt_h * rw_a[i];
+        }
+    }
+    v.clock[0] += (double)n_steps;
+    v.clock[2] = (double)(pos + n_steps);
+    return SARINS_IMU_OK;
+}
+
+int sarins_imu_steps(const int64_t *table, int64_t rows, int64_t n_steps, const double *angle0,
+                     const double *rate0, const double *accel, const double *w_t, const double *f_t,
+                     const double *amb_end, double *dtheta, double *dv, double *temps, double *work) {
+    ImuView v;
+    int status = imu_view(table, rows, &v);
+    if (status != SARINS_IMU_OK) return status;
+    if (n_steps < 1 || unused_rows(&v) < n_steps) return SARINS_IMU_NO_ROWS;
+    double *g_bias = work, *g_sf = work + 3 * n_steps, *a_bias = work + 6 * n_steps, *a_sf = work + 9 * n_steps;
+    status = sarins_imu_advance(table, rows, n_steps, amb_end, temps, work + 12 * n_steps, g_bias, g_sf, a_bias,
+                                a_sf);
+    if (status != SARINS_IMU_OK) return status;
+    /* triad rows: drift poly, gyro quadratic, low-rate gain, low-rate width, accel quadratic, random walks;
+       mats rows: gyro misalignment, g-sensitivity, accel misalignment */
+    sarins_imu_increments(0, n_steps, v.n_axes, v.axes, angle0, rate0, accel, w_t, f_t, v.consts[1],
+                          (int64_t)v.consts[5], g_sf, v.mats, g_bias, v.triad + 3, v.triad + 6, v.triad + 9,
+                          v.mats + 9, a_sf, v.mats + 18, a_bias, v.triad + 12, dtheta, dv);
+    return sarins_imu_white_noise(table, rows, n_steps, dtheta, dv);
+}
+
+int sarins_imu_one_interval(const int64_t *table, int64_t rows, const double *angle0, const double *rate0,
+                            const double *accel, double amb_end, double *dtheta, double *dv, double *temps) {
+    double work[18];
+    const double *base = table != NULL && rows > SARINS_IMU_BASE ? table_array(table, SARINS_IMU_BASE) : NULL;
+    if (base == NULL) return SARINS_IMU_BAD_TABLE;
+    return sarins_imu_steps(table, rows, 1, angle0, rate0, accel, base, base + 3, &amb_end, dtheta, dv, temps,
+                            work);
+}
+
+/* ------------------------------------------------------ the FMU's step */
+
+#define TAG_TOL 1e-6    /* of a step: two time tags closer than this name the same point (fmus.slave_support) */
+#define NO_TAG (-1.0e9) /* start value of a time-tag input: not connected */
+#define VEHICLE_SET 15  /* yaw, pitch, roll; their rates; their accelerations; base rate e n u; force e n u */
+
+/* io row (fmus/compiled_steps.py): expected step, start time, gimbals A, slots of motion_time,
+ * ambient_temp, ambient_temp_rate, angle_1..3, rate_1..3, accel_1..3, the 12 outputs, increment_end_time;
+ * moving base (1/0), slots of base_motion_time and of the 15 vehicle inputs */
+enum { IO_STEP = 0, IO_START = 1, IO_GIMBALS = 2, IO_MOTION_TIME = 3, IO_AMBIENT = 4, IO_MOTION = 6,
+       IO_OUT = 15, IO_END_TIME = 27, IO_VEHICLE = 28, IO_SIZE = IO_VEHICLE + 2 + VEHICLE_SET };
+
+static int same_time(double a, double b, double step) { return fabs(a - b) <= TAG_TOL * step; }
+
+/* Buffer index of a slot (a float64 holding an index), or -1 outside buf[0..n). */
+static int64_t slot_index(double slot, int64_t n) {
+    if (!(slot >= 0.0 && slot < (double)n)) return -1;
+    return (int64_t)slot;
+}
+
+/* out[i] = buf[slots[i]]; 0 if a slot is out of range or a value not finite. */
+static int read_slots(const double *buf, int64_t n, const double *slots, int count, double *out) {
+    for (int i = 0; i < count; i++) {
+        int64_t at = slot_index(slots[i], n);
+        if (at < 0) return 0;
+        out[i] = buf[at];
+        if (!isfinite(out[i])) return 0;
+    }
+    return 1;
+}
+
+/* The set tagged t among the current one and the held one (held = [kept, tag, values...]) into chosen;
+ * 0 when neither is. */
+static int choose(const double *held, const double *current, int count, double tag, double t, double h,
+                  double *chosen) {
+    if (same_time(tag, t, h)) {
+        memcpy(chosen, current, (size_t)count * sizeof *chosen);
+        return 1;
+    }
+    if (held[0] != 0.0 && same_time(held[1], t, h)) {
+        memcpy(chosen, held + 2, (size_t)count * sizeof *chosen);
+        return 1;
+    }
+    return 0;
+}
+
+static void keep(double *held, const double *current, int count, double tag) {
+    memcpy(held + 2, current, (size_t)count * sizeof *held);
+    held[1] = tag;
+    held[0] = 1.0;
+}
+
+int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h) {
+    ImuView v;
+    if (buf == NULL || rows < SARINS_IMU_N_ARRAYS + 3 || imu_view(table, rows, &v) != SARINS_IMU_OK) return 1;
+    if (!has_shape(table, SARINS_IMU_N_ARRAYS, IO_SIZE, 1)) return 1;
+    const double *io = table_array(table, SARINS_IMU_N_ARRAYS);
+    double *held = table_array(table, SARINS_IMU_N_ARRAYS + 1);
+    double *v_held = table_array(table, SARINS_IMU_N_ARRAYS + 2);
+    const double *consts = v.consts, *clock = v.clock;
+    if (!(fabs(h - io[IO_STEP]) <= 1e-9 * io[IO_STEP])) return 1;
+    if (clock[2] >= consts[6]) return 1; /* random blocks used up: the Python step draws the next ones */
+    if (!same_time(consts[0] + clock[0] * consts[1] + io[IO_START], t, h)) return 1;
+    if (!(io[IO_GIMBALS] >= 1.0 && io[IO_GIMBALS] <= 3.0)) return 1;
+    int na = (int)io[IO_GIMBALS];
+    int count = 3 * na + 2;
+    int moving = io[IO_VEHICLE] != 0.0;
+    int m = moving ? na + 3 : na; /* the vehicle's attitude gimbals carry the table's */
+    if (!has_shape(table, SARINS_IMU_N_ARRAYS + 1, count + 2, 1) || v.n_axes != m
+        || (moving && !has_shape(table, SARINS_IMU_N_ARRAYS + 2, VEHICLE_SET + 2, 1)))
+        return 1;
+    for (int i = IO_OUT; i <= IO_END_TIME; i++) {
+        if (slot_index(io[i], n) < 0) return 1;
+    }
+    double slots[11], current[11], chosen[11];
+    for (int k = 0; k < 3; k++) memcpy(slots + k * na, io + IO_MOTION + 3 * k, (size_t)na * sizeof *slots);
+    slots[3 * na] = io[IO_AMBIENT];
+    slots[3 * na + 1] = io[IO_AMBIENT + 1];
+    int64_t tag_at = slot_index(io[IO_MOTION_TIME], n);
+    if (tag_at < 0) return 1;
+    double tag = buf[tag_at];
+    if (!(read_slots(buf, n, slots, count, current) && isfinite(tag))) return 1;
+    int fixed = tag == NO_TAG && held[0] != 0.0 && held[1] == NO_TAG; /* no turntable connected */
+    if (fixed) {
+        memcpy(chosen, current, (size_t)count * sizeof *chosen);
+    } else if (!choose(held, current, count, tag, t, h, chosen)) {
+        return 1;
+    }
+    double vehicle[VEHICLE_SET], v_chosen[VEHICLE_SET], v_tag = 0.0;
+    if (moving) {
+        int64_t v_tag_at = slot_index(io[IO_VEHICLE + 1], n);
+        if (v_tag_at < 0) return 1;
+        v_tag = buf[v_tag_at];
+        if (!(read_slots(buf, n, io + IO_VEHICLE + 2, VEHICLE_SET, vehicle) && isfinite(v_tag))) return 1;
+        if (!choose(v_held, vehicle, VEHICLE_SET, v_tag, t, h, v_chosen)) return 1;
+    }
+    /* ambient linear over the step: its value at the end */
+    double amb_end = chosen[3 * na] + chosen[3 * na + 1] * h;
+    if (!(isfinite(amb_end) && amb_end >= -273.15)) return 1;
+    /* every check passed: from here on the step happens */
+    if (!fixed) keep(held, current, count, tag);
+    double motion[3][SARINS_IMU_MAX_AXES];
+    for (int k = 0; k < 3; k++) {
+        if (moving) memcpy(motion[k], v_chosen + 3 * k, 3 * sizeof **motion);
+        memcpy(motion[k] + (m - na), chosen + k * na, (size_t)na * sizeof **motion);
+    }
+    if (moving) {
+        keep(v_held, vehicle, VEHICLE_SET, v_tag);
+        memcpy(v.base, v_chosen + 9, 3 * sizeof *v.base);
+        memcpy(v.base + 3, v_chosen + 12, 3 * sizeof *v.base);
+    }
+    double dtheta[3], dv[3], temps[6];
+    if (sarins_imu_one_interval(table, rows, motion[0], motion[1], motion[2], amb_end, dtheta, dv, temps)
+        != SARINS_IMU_OK)
+        return 1; /* not reached: the table and the random blocks were checked above */
+    for (int i = 0; i < 3; i++) {
+        buf[(int64_t)io[IO_OUT + i]] = dtheta[i];
+        buf[(int64_t)io[IO_OUT + 3 + i]] = dv[i];
+    }
+    for (int i = 0; i < 6; i++) buf[(int64_t)io[IO_OUT + 6 + i]] = temps[i];
+    buf[(int64_t)io[IO_END_TIME]] = t + h;
+    return 0;
+}

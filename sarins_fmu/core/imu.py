@@ -1,0 +1,205 @@
+"""ctypes binding of the IMU kernels (``imu.h``): the minor loop, the state advance, the FMU's step.
+
+Units and frames as in ``imu.h`` and :mod:`sarins_fmu.imu`.  A batch of K
+intervals runs in parallel threads (ctypes releases the GIL): the K
+independent intervals are split into contiguous chunks, one per thread;
+the results do not depend on the thread count.  Threads: ``os.cpu_count()``,
+or the environment variable ``SARINS_THREADS``; fewer than
+:data:`PARALLEL_MIN` intervals run on the calling thread.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from . import _arrays
+from ._lib import function
+
+_I64, _F64, _P, _INT = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p, ctypes.c_int
+
+_truth = function("sarins_imu_truth", None, _I64, _P, _P, _P, _P, _F64, _P, _P, _P)
+_increments = function("sarins_imu_increments", None, _I64, _I64, _I64, _P, _P, _P, _P, _P, _P, _F64, _I64,
+                       *([_P] * 13))
+_advance = function("sarins_imu_advance", _INT, _P, _I64, _I64, *([_P] * 7))
+_white_noise = function("sarins_imu_white_noise", _INT, _P, _I64, _I64, _P, _P)
+_steps = function("sarins_imu_steps", _INT, _P, _I64, _I64, *([_P] * 10))
+_one_interval = function("sarins_imu_one_interval", _INT, _P, _I64, _P, _P, _P, _F64, _P, _P, _P)
+FMU_STEP = function("sarins_imu_fmu_step", _INT, _P, _I64, _P, _I64, _F64, _F64)
+FMU_STEP_ADDRESS = ctypes.cast(FMU_STEP, ctypes.c_void_p).value  # for the native FMI layer
+
+PARALLEL_MIN = 64  # intervals; below this a thread hand-off costs more than it saves
+_CPUS = os.cpu_count() or 1  # (os.cpu_count() takes tens of microseconds: asked once)
+_ERRORS = {1: "the IMU state table does not fit the layout of sarins_fmu.imu_step (imu.h)",
+           2: "the IMU's random blocks hold fewer unused rows than intervals asked for"}
+_POOLS: dict[tuple, ThreadPoolExecutor] = {}
+_POOLS_LOCK = threading.Lock()
+
+
+def thread_count() -> int:
+    """Threads of a batch: ``SARINS_THREADS`` if set (a positive integer), else ``os.cpu_count()``."""
+    text = os.environ.get("SARINS_THREADS", "").strip()
+    if not text:
+        return _CPUS
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise ValueError(f"SARINS_THREADS must be a positive integer, got {text!r}")
+    return value
+
+
+def _pool(workers: int) -> ThreadPoolExecutor:
+    """A pool of ``workers`` threads of this process (a forked child, e.g. a campaign worker, makes its own:
+    the parent's pool has no threads there)."""
+    key = (os.getpid(), workers)
+    with _POOLS_LOCK:
+        if key not in _POOLS:
+            _POOLS[key] = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="sarins-core")
+        return _POOLS[key]
+
+
+def _check(status: int) -> None:
+    if status != 0:
+        raise ValueError(_ERRORS.get(status, f"IMU core call failed with code {status}"))
+
+
+def truth(axes, angle0, rate0, accel, k: int, tau: float, w_t, f_t) -> tuple:
+    """True omega_ib_b (rad/s) and f_b (m/s^2) at tau s into interval k: (wx, wy, wz, fx, fy, fz).
+
+    axes (A, 3); angle0, rate0, accel (K, A) gimbal state at each interval
+    start; w_t, f_t (K, 3) the base frame's inertial rate and specific force
+    resolved in t."""
+    axes = _arrays.read(axes, np.shape(axes), "axes")
+    n_axes = axes.shape[0]
+    rows = [_arrays.read(a, np.shape(a), name)[k] for a, name in ((angle0, "angle0"), (rate0, "rate0"),
+                                                                 (accel, "accel"), (w_t, "w_t"), (f_t, "f_t"))]
+    if axes.shape != (n_axes, 3) or any(r.shape != (n_axes,) for r in rows[:3]) or any(r.shape != (3,) for r in rows[3:]):
+        raise ValueError("truth needs axes (A, 3), gimbal states (K, A) and base motion (K, 3)")
+    out = np.empty(6)
+    rows = [np.ascontiguousarray(r) for r in rows]
+    _truth(n_axes, axes.ctypes.data, *(r.ctypes.data for r in rows[:3]), float(tau), rows[3].ctypes.data,
+           rows[4].ctypes.data, out.ctypes.data)
+    return tuple(float(x) for x in out)
+
+
+def increments(axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
+               g_sf, g_mis, g_bias, g_quad, g_lowrate, g_lowrate_width, g_sens,
+               a_sf, a_mis, a_bias, a_quad, *, threads: int | None = None):
+    """Compensated increments of K intervals: dtheta, dv (K, 3), rad and m/s, body axes at each interval start.
+
+    axes (A, 3) gimbal axes; angle0, rate0, accel (K, A) gimbal state at each
+    interval start (rad, rad/s, rad/s^2); w_t, f_t (K, 3) base inertial rate
+    (rad/s) and specific force (m/s^2) resolved in t; h interval (s); n_sub
+    minor steps per interval; g_sf, a_sf, g_bias, a_bias (K, 3) scale-factor
+    errors and biases (rad/s, m/s^2); g_mis, a_mis (3, 3) misalignment (rad);
+    g_quad, a_quad (3,) x|x| coefficients; g_lowrate, g_lowrate_width (3,)
+    low-rate nonlinearity; g_sens (3, 3) g-sensitivity (rad/s per m/s^2).
+    ``threads``: default :func:`thread_count`.
+    """
+    axes = _arrays.read(axes, np.shape(axes), "axes")
+    n_axes = axes.shape[0]
+    if axes.shape != (n_axes, 3) or n_axes < 1:
+        raise ValueError(f"axes must have shape (A, 3), got {axes.shape}")
+    n_int = np.shape(angle0)[0]
+    per_k = [_arrays.read(a, (n_int, cols), name) for a, cols, name in (
+        (angle0, n_axes, "angle0"), (rate0, n_axes, "rate0"), (accel, n_axes, "accel"), (w_t, 3, "w_t"),
+        (f_t, 3, "f_t"), (g_sf, 3, "g_sf"), (g_bias, 3, "g_bias"), (a_sf, 3, "a_sf"), (a_bias, 3, "a_bias"))]
+    fixed = [_arrays.read(a, shape, name) for a, shape, name in (
+        (g_mis, (3, 3), "g_mis"), (g_quad, (3,), "g_quad"), (g_lowrate, (3,), "g_lowrate"),
+        (g_lowrate_width, (3,), "g_lowrate_width"), (g_sens, (3, 3), "g_sens"), (a_mis, (3, 3), "a_mis"),
+        (a_quad, (3,), "a_quad"))]
+    n_sub = int(n_sub)
+    if n_sub < 1 or not float(h) > 0:
+        raise ValueError(f"increments need h > 0 and n_sub >= 1, got h={h}, n_sub={n_sub}")
+    angle0, rate0, accel, w_t, f_t, g_sf, g_bias, a_sf, a_bias = (a.ctypes.data for a in per_k)
+    g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad = (a.ctypes.data for a in fixed)
+    dtheta, dv = np.empty((n_int, 3)), np.empty((n_int, 3))
+
+    def run(k0: int, k1: int) -> None:
+        _increments(k0, k1, n_axes, axes.ctypes.data, angle0, rate0, accel, w_t, f_t, float(h), n_sub,
+                    g_sf, g_mis, g_bias, g_quad, g_lowrate, g_width, g_sens, a_sf, a_mis, a_bias, a_quad,
+                    dtheta.ctypes.data, dv.ctypes.data)
+
+    if threads is not None and int(threads) < 1:
+        raise ValueError(f"threads must be a positive integer, got {threads}")
+    workers = 1
+    if n_int >= PARALLEL_MIN:
+        workers = min(thread_count() if threads is None else int(threads), n_int)
+    if workers == 1:
+        run(0, n_int)
+    else:
+        bounds = [n_int * i // workers for i in range(workers + 1)]
+        futures = [_pool(workers - 1).submit(run, bounds[i], bounds[i + 1]) for i in range(workers - 1)]
+        run(bounds[-2], bounds[-1])
+        for f in futures:
+            f.result()
+    return dtheta, dv
+
+
+def advance(table, amb_end, temps, g_bias, g_sf, a_bias, a_sf) -> None:
+    """Advance the thermal and error states of the IMU ``table`` over K intervals (``imu.h``):
+    amb_end (K,) ambient at the ends (degC, checked by the caller); temps (K, 6), g_bias, g_sf,
+    a_bias, a_sf (K, 3) out."""
+    table = _arrays.table(table)
+    amb_end = _arrays.read(amb_end, np.shape(amb_end)[:1], "amb_end")
+    n = amb_end.shape[0]
+    _arrays.written(temps, (n, 6), "temps")
+    for a, name in ((g_bias, "g_bias"), (g_sf, "g_sf"), (a_bias, "a_bias"), (a_sf, "a_sf")):
+        _arrays.written(a, (n, 3), name)
+    die = np.empty((n, 6))
+    _check(_advance(table.ctypes.data, table.shape[0], n, amb_end.ctypes.data, temps.ctypes.data, die.ctypes.data,
+                    g_bias.ctypes.data, g_sf.ctypes.data, a_bias.ctypes.data, a_sf.ctypes.data))
+
+
+def steps(table, angle0, rate0, accel, w_t, f_t, amb_end):
+    """K intervals of the IMU ``table`` in one call on this thread (``sarins_imu_steps``: advance, minor
+    loop, white noise): angle0, rate0, accel (K, A) gimbal state, w_t, f_t (K, 3) base motion, amb_end (K,)
+    ambient at the ends (degC, checked by the caller).  Returns dtheta, dv (K, 3) and temps (K, 6)."""
+    table = _arrays.table(table)
+    n = np.shape(amb_end)[0]
+    n_axes = int(table[7, 1]) if table.shape[0] > 7 else 0
+    angle0, rate0, accel = (_arrays.read(a, (n, n_axes), name) for a, name in (
+        (angle0, "angle0"), (rate0, "rate0"), (accel, "accel")))
+    w_t, f_t = _arrays.read(w_t, (n, 3), "w_t"), _arrays.read(f_t, (n, 3), "f_t")
+    amb_end = _arrays.read(amb_end, (n,), "amb_end")
+    dtheta, dv, temps, work = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 6)), np.empty((n, 18))
+    _check(_steps(table.ctypes.data, table.shape[0], n, angle0.ctypes.data, rate0.ctypes.data, accel.ctypes.data,
+                  w_t.ctypes.data, f_t.ctypes.data, amb_end.ctypes.data, dtheta.ctypes.data, dv.ctypes.data,
+                  temps.ctypes.data, work.ctypes.data))
+    return dtheta, dv, temps
+
+
+def white_noise(table, dtheta, dv) -> None:
+    """Add the angle / velocity random walk to K intervals' increments (K, 3), in place; moves the clock on."""
+    table = _arrays.table(table)
+    n = np.shape(dtheta)[0]
+    _arrays.written(dtheta, (n, 3), "dtheta")
+    _arrays.written(dv, (n, 3), "dv")
+    _check(_white_noise(table.ctypes.data, table.shape[0], n, dtheta.ctypes.data, dv.ctypes.data))
+
+
+def one_interval(table, angle0, rate0, accel, amb_end: float):
+    """One output interval with the base motion of the table's base row (the FMU's step): angle0, rate0,
+    accel (A,) gimbal state at its start, amb_end ambient at its end (degC).  Returns dtheta (3,), dv (3,),
+    temps (6,)."""
+    table = _arrays.table(table)
+    n_axes = int(table[7, 1]) if table.shape[0] > 7 else 0
+    angle0, rate0, accel = (_arrays.read(a, (n_axes,), name) for a, name in (
+        (angle0, "angle0"), (rate0, "rate0"), (accel, "accel")))
+    dtheta, dv, temps = np.empty(3), np.empty(3), np.empty(6)
+    _check(_one_interval(table.ctypes.data, table.shape[0], angle0.ctypes.data, rate0.ctypes.data,
+                         accel.ctypes.data, float(amb_end), dtheta.ctypes.data, dv.ctypes.data, temps.ctypes.data))
+    return dtheta, dv, temps
+
+
+def fmu_step(table, buffer, t: float, h: float) -> int:
+    """The IMUThermal FMU's step (``sarins_imu_fmu_step``): 0 when it did the step, 1 when it changed nothing."""
+    table = _arrays.table(table)
+    _arrays.written(buffer, np.shape(buffer)[:1], "buffer")
+    return FMU_STEP(table.ctypes.data, table.shape[0], buffer.ctypes.data, buffer.shape[0], float(t), float(h))
