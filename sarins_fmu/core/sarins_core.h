@@ -20,4 +20,13 @@
 
 int sarins_core_abi(void);
 
+/* INS family and turntable (issue 18) */
+#include "earth.h"
+#include "rotations.h"
+#include "filter.h"
+#include "ins.h"
+#include "turntable.h"
+#include "ins_fmu_step.h"
+#include "turntable_fmu_step.h"
+
 #endif
