@@ -3,7 +3,8 @@
 ``build_fmus(out_dir)`` runs pythonfmu's builder on every slave with the
 ``sarins_fmu`` and ``fmus`` packages as resources (so a host Python with
 numpy and scipy, without this project installed, runs them; numba is used
-when the host has it), then rewrites each modelDescription.xml:
+when the host has it; the built C physics core and its sources ride along,
+:func:`core_files`), then rewrites each modelDescription.xml:
 
 * ``unit`` / ``displayUnit`` attributes from the ``[unit; display]`` suffix
   of each variable's description, with ``<UnitDefinitions>`` (SI base-unit
@@ -237,6 +238,20 @@ def shipped_modules(slave_path: Path) -> list[str]:
     return sorted(str(p.relative_to(ROOT)) for p in seen if ROOT in p.parents)
 
 
+def core_files() -> list[Path]:
+    """The built C physics core and its sources (``sarins_fmu/core``), shipped beside the
+    binding in an FMU whose library uses it, so that the FMU's copy loads its own core."""
+    import importlib.machinery
+
+    from sarins_fmu.core import _lib
+
+    core = ROOT / "sarins_fmu" / "core"
+    built = [core / (_lib.NAME + s) for s in importlib.machinery.EXTENSION_SUFFIXES if (core / (_lib.NAME + s)).is_file()]
+    if not built:
+        raise RuntimeError(f"the C physics core is not built in {core}: run 'python3 -m pip install -e .' first")
+    return built[:1] + sorted(core.glob("*.c")) + sorted(core.glob("*.h"))
+
+
 def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
     """Build one slave into ``out_dir`` and fix its model description.
 
@@ -256,6 +271,9 @@ def build_fmu(slave_file: str, out_dir: Path, extra_files=()) -> Path:
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(ROOT / rel, target)
         shutil.copytree(Path(sarins_fmu.__file__).parent / "data", tmp / "sarins_fmu" / "data")
+        if any(rel.startswith(str(Path("sarins_fmu") / "core")) for rel in shipped_modules(HERE / slave_file)):
+            for path in core_files():
+                shutil.copy2(path, tmp / "sarins_fmu" / "core" / path.name)
         script = tmp / slave_file
         shutil.copy2(HERE / slave_file, script)
         project_files = [tmp / "sarins_fmu", tmp / "fmus", *(Path(p) for p in extra_files)]
