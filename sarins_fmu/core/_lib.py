@@ -2,13 +2,16 @@
 
 ``pip install`` builds ``sarins_fmu/core/*.c`` into one shared library beside
 this file (``setup.py``).  :data:`LIB` is that library; component modules
-declare the prototypes they use with :func:`function`.
+declare the prototypes they use with :func:`function`.  The environment
+variable ``SARINS_CORE_LIB`` (a path) loads another build of it instead
+(e.g. one built with sanitizers).
 """
 
 from __future__ import annotations
 
 import ctypes
 import importlib.machinery
+import os
 from pathlib import Path
 
 ABI = 1  # SARINS_CORE_ABI in sarins_core.h
@@ -25,7 +28,13 @@ class CoreNotBuilt(ImportError):
 
 
 def library_path() -> Path:
-    """The built library beside this file (any of this interpreter's extension suffixes)."""
+    """The built library beside this file (any of this interpreter's extension suffixes), or the
+    file that ``SARINS_CORE_LIB`` names."""
+    override = os.environ.get("SARINS_CORE_LIB", "")
+    if override:
+        if not Path(override).is_file():
+            raise CoreNotBuilt(f"SARINS_CORE_LIB names {override}, which is not a file")
+        return Path(override)
     for suffix in importlib.machinery.EXTENSION_SUFFIXES:
         candidate = HERE / (NAME + suffix)
         if candidate.is_file():
