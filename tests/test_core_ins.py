@@ -219,3 +219,113 @@ def test_fmu_step_bindings_reject_bad_buffers_and_tables():
         core_turntable.fmu_step(table, np.zeros(16, dtype=np.float32), 0.0, 1.0)
     with pytest.raises(ValueError, match="state table"):
         core_ins.fmu_step(table.astype(np.int32), np.zeros(16), 0.0, 1.0)
+
+
+# ------------------------------------------------------------------ sanitizers
+
+SANITIZED_RUN = """
+import math
+import numpy as np
+from fmus.strapdown_ins_slave import StrapdownINS
+from fmus.turntable_slave import Turntable
+from sarins_fmu import earth, ins_kernel, rotations as rot
+from sarins_fmu.core import _lib, ins as core_ins, turntable as core_turntable
+from sarins_fmu.kalman import StopKalmanFilter
+from sarins_fmu.turntable import single_axis
+from sarins_fmu._jit import array_table
+
+print("core", _lib.library_path())
+lat = 0.55
+rng = np.random.default_rng(0)
+earth.radii(np.linspace(-1.5, 1.5, 101)); earth.gravity(np.linspace(-1.5, 1.5, 101), 10.0)
+phi = rng.standard_normal((20, 3)); rot.rotvec_to_mat(phi); rot.rotvec_to_quat(phi * 1e-10)
+rot.quat_to_mat(rot.quat_mult(rng.standard_normal((20, 4)), rng.standard_normal((20, 4)))); rot.euler_to_mat(*phi.T)
+w = np.array([0.0, earth.RATE * math.cos(lat), earth.RATE * math.sin(lat)])
+f = np.array([0.0, 0.0, earth.gravity(lat, 0.0)])
+k = 400
+dth = np.tile(w, (k, 1)) + 1e-7 * rng.standard_normal((k, 3))
+dv = np.tile(f + 0.5 * np.cross(w, f), (k, 1)) + 1e-5 * rng.standard_normal((k, 3))
+q, v, pos = np.array([1.0, 0, 0, 0]), np.zeros(3), np.array([lat, 0.0, 0.0])
+ins_kernel.coarse_steps(q.copy(), np.zeros(3), dth, dv)
+x, p = np.zeros(9), np.eye(9) * 1e-4
+ins_kernel.align_steps(q, v, pos, dth, dv, 1.0, np.zeros(3), np.zeros(3), x, p, np.full(9, 1e-12), 1e-6)
+ins_kernel.nav_steps(q, v, pos, dth, dv, 1.0, np.zeros(3), np.zeros(3), np.zeros(k))
+ins_kernel.held_row(q, pos)
+stop = StopKalmanFilter(lat)
+stop.step(1e-3 * rng.standard_normal((k, 2)), 1e-4 * rng.standard_normal((k, 3)))
+sched = single_axis("forward-reverse", 3600.0)
+sched.state(np.linspace(-10.0, 4000.0, 3001))
+
+# the FMU steps, through slaves run in process (their compiled steps are the core's)
+ins = StrapdownINS(instance_name="ins", resources="/tmp")
+ins.align_time, ins.coarse_time = 300.0, 60.0
+ins.enter_initialization_mode(); ins.exit_initialization_mode()
+tt = Turntable(instance_name="tt", resources="/tmp")
+tt.enter_initialization_mode(); tt.exit_initialization_mode()
+fast = 0
+for n in range(400):
+    for i, a in enumerate("xyz"):
+        setattr(ins, f"dtheta_{a}", float(dth[n, i])); setattr(ins, f"dv_{a}", float(dv[n, i]))
+    ins.increment_end_time = n + 1.0
+    ins.temp_gyro_z = 25.0
+    if ins._fast is not None and ins._fast.step(ins._fmi_buffer, float(n), 1.0):
+        fast += 1
+    else:
+        ins.do_step(float(n), 1.0)
+    tt.do_step(float(n), 1.0)
+assert fast > 300 and ins._ins.steps == 400 and tt._fast is not None, (fast, ins._ins.steps)
+# bad tables and slots: refused, nothing touched
+table, buf = ins._fast.table, ins._fmi_buffer
+assert core_ins.fmu_step(table[:5].copy(), buf, 400.0, 1.0) == 1
+assert core_turntable.fmu_step(table, buf, 400.0, 1.0) == 1
+io = np.zeros(16); io[0:4] = 1.0, 1, 1.0, 20.0; io[4:] = 1e9
+s_tables = sched.tables()
+assert core_turntable.fmu_step(array_table((*s_tables, io)), np.zeros(8), 0.0, 1.0) == 1
+print("sanitized run ok", fast)
+"""
+
+
+def _build_sanitized_core(out_dir):
+    """The core's sources built with AddressSanitizer and UndefinedBehaviorSanitizer (every report fatal)."""
+    import subprocess
+    from pathlib import Path
+
+    from sarins_fmu.core import _lib
+
+    lib = Path(out_dir) / "libsarins_core_asan.so"
+    sources = sorted(str(p) for p in _lib.HERE.glob("*.c"))
+    subprocess.run(["gcc", "-std=c11", "-O1", "-g", "-fPIC", "-shared", "-Wall", "-Wextra", "-Werror", "-ffp-contract=off",
+                    "-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer",
+                    f"-I{_lib.HERE}", *sources, "-o", str(lib), "-lm"], check=True, capture_output=True, text=True)
+    return lib
+
+
+@pytest.mark.slow
+def test_ins_filter_and_turntable_under_address_and_undefined_behaviour_sanitizers(tmp_path):
+    """The INS, filter and turntable functions and both FMU steps (valid and refused tables) run on a core
+    built with -fsanitize=address,undefined, loaded through SARINS_CORE_LIB in a fresh interpreter with
+    libasan preloaded; any sanitizer report fails the run."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    if shutil.which("gcc") is None:
+        pytest.skip("needs gcc")
+    libasan = subprocess.run(["gcc", "-print-file-name=libasan.so"], capture_output=True, text=True).stdout.strip()
+    if not Path(libasan).is_file():
+        pytest.skip("gcc has no libasan")
+    lib = _build_sanitized_core(tmp_path)
+    script = tmp_path / "run.py"
+    script.write_text(SANITIZED_RUN)
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, SARINS_CORE_LIB=str(lib), LD_PRELOAD=libasan, ASAN_OPTIONS="detect_leaks=0",
+               UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1", PYTHONPATH=str(root))
+    run = subprocess.run([sys.executable, str(script)], cwd=root, env=env, capture_output=True, text=True, timeout=1200)
+    report = run.stdout + run.stderr
+    assert run.returncode == 0, report[-4000:]
+    assert f"core {lib}" in run.stdout  # the sanitized build, not the regular one
+    assert "sanitized run ok" in run.stdout
+    for marker in ("ERROR: AddressSanitizer", "runtime error:", "UndefinedBehaviorSanitizer"):
+        assert marker not in report, report[-4000:]
