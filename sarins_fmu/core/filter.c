@@ -51,9 +51,22 @@ void sarins_filter_propagate(int n, double *x, double *p, const double *phi, con
         p[n * i + i] += q_diag[i] * dt;
 }
 
+/* sum_k (I - K H)_ik b[k * stride] over k in {i, 3, 4} ascending, with ikh[i] = ((I - K H)_i3, (I - K H)_i4) */
+static double ikh_row_dot(int i, const double (*ikh)[2], const double *b, int stride)
+{
+    double s = 0.0;
+    if (i < 3)
+        s += 1.0 * b[i * stride];
+    s += ikh[i][0] * b[3 * stride];
+    s += ikh[i][1] * b[4 * stride];
+    if (i > 4)
+        s += 1.0 * b[i * stride];
+    return s;
+}
+
 void sarins_filter_velocity_update(int n, double *x, double *p, double r_var, double z_east, double z_north)
 {
-    double gain[MAXN][2], ikh[MAXN * MAXN] = {0.0}, tmp[MAXN * MAXN];
+    double gain[MAXN][2], ikh[MAXN][2], tmp[MAXN * MAXN];
     if (n < 5 || n > MAXN)
         return; /* callers pass their fixed state count (9 or 11) */
     /* S = H P H' + R, H selecting states 3 and 4 */
@@ -71,13 +84,21 @@ void sarins_filter_velocity_update(int n, double *x, double *p, double r_var, do
     double innov0 = z_east - x[3], innov1 = z_north - x[4];
     for (int i = 0; i < n; i++)
         x[i] += gain[i][0] * innov0 + gain[i][1] * innov1;
-    /* I - K H: the identity with columns 3 and 4 less K */
+    /* I - K H: the identity with columns 3 and 4 less K; its other entries are exact zeros, so the
+     * products below sum only over k in {i, 3, 4} (ascending), which is the full index-ordered sum
+     * without its zero terms */
+    for (int i = 0; i < n; i++) {
+        ikh[i][0] = ((i == 3) ? 1.0 : 0.0) - gain[i][0];
+        ikh[i][1] = ((i == 4) ? 1.0 : 0.0) - gain[i][1];
+    }
+    /* tmp = (I - K H) P */
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++)
-            ikh[n * i + j] = ((i == j) ? 1.0 : 0.0) - ((j == 3) ? gain[i][0] : (j == 4) ? gain[i][1] : 0.0);
-    /* P = (I - K H) P (I - K H)' + r K K' */
-    sarins_matmul(n, ikh, p, tmp);
-    matmul_bt(n, tmp, ikh, p);
+            tmp[n * i + j] = ikh_row_dot(i, ikh, p + j, n);
+    /* P = tmp (I - K H)' + r K K' */
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++)
+            p[n * i + j] = ikh_row_dot(j, ikh, tmp + n * i, 1);
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++)
             p[n * i + j] += r_var * (gain[i][0] * gain[j][0] + gain[i][1] * gain[j][1]);
