@@ -32,8 +32,15 @@ def _constants():
 # _K_SOMIGLIANA = B GAMMA_P / (A GAMMA_E) - 1, _M = RATE^2 A^2 B / GM (geodetic parameter m)
 A, F, E2, B, RATE, GM, GAMMA_E, GAMMA_P, _K_SOMIGLIANA, _M = _constants()
 
+_radii_1 = function("sarins_earth_radii", None, ctypes.c_double, ctypes.POINTER(ctypes.c_double),
+                    ctypes.POINTER(ctypes.c_double))
+_gravity_1 = function("sarins_earth_gravity", ctypes.c_double, ctypes.c_double, ctypes.c_double)
 _radii_n = function("sarins_earth_radii_n", None, ctypes.c_int64, _VP, _VP, _VP)
 _gravity_n = function("sarins_earth_gravity_n", None, ctypes.c_int64, _VP, _VP, _VP)
+
+
+def _scalar(x) -> bool:
+    return isinstance(x, (float, int)) or np.ndim(x) == 0
 
 
 def radii(lat):
@@ -49,11 +56,13 @@ def radii(lat):
     r_meridian, r_prime_vertical : float, or arrays of lat's shape
         R_M = a(1-e^2)/(1-e^2 sin^2 L)^(3/2) and R_N = a/sqrt(1-e^2 sin^2 L), m.
     """
+    if _scalar(lat):
+        r_m, r_n = ctypes.c_double(), ctypes.c_double()
+        _radii_1(float(lat), ctypes.byref(r_m), ctypes.byref(r_n))
+        return r_m.value, r_n.value
     lat_a = np.asarray(lat, dtype=np.float64, order="C")
     r_m, r_n = np.empty_like(lat_a), np.empty_like(lat_a)
     _radii_n(lat_a.size, lat_a.ctypes.data, r_m.ctypes.data, r_n.ctypes.data)
-    if lat_a.ndim == 0:
-        return float(r_m), float(r_n)
     return r_m, r_n
 
 
@@ -65,11 +74,13 @@ def gravity(lat, height):
     g(L,h) = g0(L) [1 - 2/a (1 + f + m - 2 f sin^2 L) h + 3 h^2 / a^2].
     ``lat`` (rad) and ``height`` (m) broadcast; a float for scalars.
     """
+    if _scalar(lat) and _scalar(height):
+        return _gravity_1(float(lat), float(height))
     lat_b, height_b = np.broadcast_arrays(np.asarray(lat, dtype=np.float64), np.asarray(height, dtype=np.float64))
     lat_a, height_a = np.asarray(lat_b, order="C"), np.asarray(height_b, order="C")
     out = np.empty(lat_a.shape)
     _gravity_n(lat_a.size, lat_a.ctypes.data, height_a.ctypes.data, out.ctypes.data)
-    return float(out) if out.ndim == 0 else out
+    return out
 
 
 def earth_rate_n(lat):

@@ -28,6 +28,11 @@ def skew(v):
 
 def _batched(name, args, in_shapes, out_shape):
     """Run the core's batched ``name`` over the leading axes of ``args`` (each of trailing shape in_shapes)."""
+    if all(isinstance(a, np.ndarray) and a.shape == s and a.dtype == np.float64 and a.flags.c_contiguous
+           for a, s in zip(args, in_shapes)):  # one item, nothing to convert: the cheap path
+        out = np.empty(out_shape)
+        _CORE[name](1, *(a.ctypes.data for a in args), out.ctypes.data)
+        return out
     arrays = [read(a, np.shape(a), f"{name} argument {i + 1}") for i, a in enumerate(args)]
     lead = np.broadcast_shapes(*(a.shape[:a.ndim - len(s)] for a, s in zip(arrays, in_shapes)))
     for i, (a, s) in enumerate(zip(arrays, in_shapes)):
@@ -43,6 +48,7 @@ _VP = ctypes.c_void_p
 _CORE = {name: function(f"sarins_{name}_n", None, ctypes.c_int64, *([_VP] * n_args))
          for name, n_args in (("rotvec_to_mat", 2), ("rotvec_to_quat", 2), ("quat_mult", 3), ("quat_to_mat", 2),
                               ("euler_to_mat", 2))}
+_euler_to_mat = function("sarins_euler_to_mat", None, ctypes.c_double, ctypes.c_double, ctypes.c_double, _VP)
 
 
 def rotvec_to_mat(phi):
@@ -99,6 +105,10 @@ def mat_to_rotvec(mat):
 def euler_to_mat(yaw, pitch, roll):
     """mat_nb = Rz(yaw) Rx(pitch) Ry(roll) for ENU / right-front-up, angles in rad (scalars or arrays
     that broadcast): (..., 3, 3)."""
+    if all(isinstance(a, (float, int)) or np.ndim(a) == 0 for a in (yaw, pitch, roll)):  # one attitude
+        out = np.empty((3, 3))
+        _euler_to_mat(float(yaw), float(pitch), float(roll), out.ctypes.data)
+        return out
     angles = np.stack(np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (yaw, pitch, roll))), axis=-1)
     return _batched("euler_to_mat", (angles,), ((3,),), (3, 3))
 
