@@ -3,7 +3,7 @@
 Reports, in one process, same seed:
 
 * wall time of the identical in-process run (``run_static`` as the library
-  runs it by default, numba's threads in use; the single-thread figure
+  runs it by default, the core's batch threads in use; the single-thread figure
   beside it for context: one FMU step is one interval and runs serially);
 * wall time of the co-simulation (Turntable -> IMUThermal -> StrapdownINS,
   Gauss-Seidel, 1 s step, nav-rlg, recording three outputs) as
@@ -44,18 +44,19 @@ RECORD = ["ins.lat_error", "ins.lon_error", "ins.position_error"]
 
 
 def in_process(hours: float, align: float, threads: int | None = None):
-    """(result, seconds) of run_static; ``threads`` limits numba's threads for the run."""
-    import numba
-
-    before = numba.get_num_threads()
+    """(result, seconds) of run_static; ``threads`` limits the C core's batch threads for the run."""
+    before = os.environ.get("SARINS_THREADS")
     if threads is not None:
-        numba.set_num_threads(threads)
+        os.environ["SARINS_THREADS"] = str(threads)
     try:
         t0 = time.perf_counter()
         ref = run_static(align_hours=align, nav_hours=hours - align, seed=0)
         return ref, time.perf_counter() - t0
     finally:
-        numba.set_num_threads(before)
+        if before is None:
+            os.environ.pop("SARINS_THREADS", None)
+        else:
+            os.environ["SARINS_THREADS"] = before
 
 
 def cosimulate(system, hours: float, fast: bool):
@@ -197,7 +198,7 @@ def main():
     us = 1e6 / steps
     per_step, work_sum, raw = t_cosim * us, sum(work.values()), t_raw * 1e6
     print(f"{hours:g} h, {steps} steps of 1 s (load average {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f})")
-    print(f"in process     : {t_inproc:7.2f} s = {t_inproc * us:5.1f} us/step (run_static, numba threads); "
+    print(f"in process     : {t_inproc:7.2f} s = {t_inproc * us:5.1f} us/step (run_static, core threads); "
           f"single thread {t_serial:.2f} s = {t_serial * us:.1f} us/step")
     print(f"co-simulation  : {t_cosim:7.2f} s = {per_step:5.1f} us/step, {t_cosim / t_inproc:.1f}x the in-process "
           f"run ({t_cosim / t_serial:.1f}x the single-thread one); results bit-identical")

@@ -42,7 +42,7 @@ INS_PHASES = {"coarse_time": 2.0, "align_time": 4.0}  # StrapdownINS: step 5 is 
 ALL_NAMES = ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "DriftModelUpdater", "VehicleMotion",
              "IMUCompensator", "IMULog"]
 # environment variables that would point an FMU at a Python, or change its kernels
-HOST_ENV_DROP = ("PYTHONPATH", "PYTHONHOME", "LD_PRELOAD", "LD_LIBRARY_PATH", "VIRTUAL_ENV", "SARINS_NO_NUMBA")
+HOST_ENV_DROP = ("PYTHONPATH", "PYTHONHOME", "LD_PRELOAD", "LD_LIBRARY_PATH", "VIRTUAL_ENV")
 
 
 @dataclass(frozen=True)

@@ -2,8 +2,8 @@
 
 ``build_fmus(out_dir)`` runs pythonfmu's builder on every slave with the
 ``sarins_fmu`` and ``fmus`` packages as resources (so a host Python with
-numpy and scipy, without this project installed, runs them; numba is used
-when the host has it; the built C physics core and its sources ride along,
+numpy and scipy, without this project installed, runs them; the built C
+physics core and its sources ride along,
 :func:`core_files`), then rewrites each modelDescription.xml:
 
 * ``unit`` / ``displayUnit`` attributes from the ``[unit; display]`` suffix

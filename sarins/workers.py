@@ -2,10 +2,10 @@
 
 Local workers are spawned processes that
 
-* run single-threaded kernels (``NUMBA_NUM_THREADS``, ``OMP_NUM_THREADS``,
-  ``MKL_NUM_THREADS``, ``OPENBLAS_NUM_THREADS`` = 1 in their environment
-  before anything is imported, and ``numba.set_num_threads(1)`` per task),
-  so ``--workers N`` uses N cores, not N times all of them;
+* run single-threaded kernels (``SARINS_THREADS`` for the C core's batches,
+  ``OMP_NUM_THREADS``, ``MKL_NUM_THREADS``, ``OPENBLAS_NUM_THREADS`` = 1 in
+  their environment before anything is imported, and ``SARINS_THREADS=1``
+  again per task), so ``--workers N`` uses N cores, not N times all of them;
 * die with the campaign process: ``PR_SET_PDEATHSIG`` (Linux, via
   ``prctl``) sends them SIGKILL when it dies, even by SIGKILL, and a
   watchdog thread covers systems without it; once they are gone the
@@ -14,8 +14,8 @@ Local workers are spawned processes that
   and the campaign process stops them itself (:func:`stop_local`).
 
 Dask workers are started by the user (``dask worker ADDRESS --nthreads 1``
-gives one single-threaded task per worker process); every task still calls
-``numba.set_num_threads(1)`` for the thread that runs it.
+gives one single-threaded task per worker process); every task still sets
+``SARINS_THREADS=1`` in its worker process (the core reads it per batch).
 """
 
 from __future__ import annotations
@@ -26,11 +26,10 @@ import ctypes
 import multiprocessing
 import os
 import signal
-import sys
 import threading
 import time
 
-SINGLE_THREAD_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+SINGLE_THREAD_ENV = {"SARINS_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
                      "OPENBLAS_NUM_THREADS": "1"}
 _PR_SET_PDEATHSIG = 1
 
@@ -61,11 +60,8 @@ def worker_init(parent_pid: int) -> None:
 
 
 def single_threaded() -> None:
-    """Limit numba's parallel kernels to the calling thread (if numba is loaded)."""
-    numba = sys.modules.get("numba")
-    if numba is not None:
-        with contextlib.suppress(Exception):
-            numba.set_num_threads(1)
+    """Run the C core's batches of this worker process on the calling thread."""
+    os.environ["SARINS_THREADS"] = "1"
 
 
 def call(fn, kwargs):

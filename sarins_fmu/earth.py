@@ -2,58 +2,85 @@
 
 All angles in rad, lengths in m, rates in rad/s.  Navigation frame ENU.
 
+The constants, :func:`radii` and :func:`gravity` are the C physics core's
+(``sarins_fmu/core/earth.c``), the one implementation the INS kernels use
+too; the functions here are thin bindings, vectorised over numpy arrays.
+
 References: NIMA TR8350.2 (WGS-84), Titterton & Weston (2004) ch. 3,
 Savage, *Strapdown Analytics* (2000) ch. 5.
 """
 
+import ctypes
 import math
 
 import numpy as np
 
-from ._jit import jit
+from .core._lib import function
 
-A = 6378137.0  # semi-major axis, m
-F = 1.0 / 298.257223563  # flattening
-E2 = F * (2.0 - F)  # first eccentricity squared
-B = A * (1.0 - F)  # semi-minor axis, m
-RATE = 7.2921151467e-5  # Earth rotation rate, rad/s
-GM = 3.986004418e14  # gravitational constant x Earth mass, m^3/s^2
-GAMMA_E = 9.7803253359  # normal gravity at the equator, m/s^2
-GAMMA_P = 9.8321849378  # normal gravity at the poles, m/s^2
-_K_SOMIGLIANA = B * GAMMA_P / (A * GAMMA_E) - 1.0
-_M = RATE**2 * A**2 * B / GM  # geodetic parameter m of the normal field
+_VP = ctypes.c_void_p
 
 
-@jit
+def _constants():
+    out = np.empty(10)
+    function("sarins_earth_constants", None, _VP)(out.ctypes.data)
+    return tuple(float(x) for x in out)
+
+
+# A semi-major axis (m), F flattening, E2 first eccentricity squared, B semi-minor axis (m),
+# RATE Earth rotation rate (rad/s), GM gravitational constant x Earth mass (m^3/s^2),
+# GAMMA_E / GAMMA_P normal gravity at the equator / poles (m/s^2),
+# _K_SOMIGLIANA = B GAMMA_P / (A GAMMA_E) - 1, _M = RATE^2 A^2 B / GM (geodetic parameter m)
+A, F, E2, B, RATE, GM, GAMMA_E, GAMMA_P, _K_SOMIGLIANA, _M = _constants()
+
+_radii_1 = function("sarins_earth_radii", None, ctypes.c_double, ctypes.POINTER(ctypes.c_double),
+                    ctypes.POINTER(ctypes.c_double))
+_gravity_1 = function("sarins_earth_gravity", ctypes.c_double, ctypes.c_double, ctypes.c_double)
+_radii_n = function("sarins_earth_radii_n", None, ctypes.c_int64, _VP, _VP, _VP)
+_gravity_n = function("sarins_earth_gravity_n", None, ctypes.c_int64, _VP, _VP, _VP)
+
+
+def _scalar(x) -> bool:
+    return isinstance(x, (float, int)) or np.ndim(x) == 0
+
+
 def radii(lat):
     """Meridian and prime-vertical radii of curvature.
 
     Parameters
     ----------
-    lat : float
+    lat : float or array_like
         Geodetic latitude, rad.
 
     Returns
     -------
-    r_meridian, r_prime_vertical : float
+    r_meridian, r_prime_vertical : float, or arrays of lat's shape
         R_M = a(1-e^2)/(1-e^2 sin^2 L)^(3/2) and R_N = a/sqrt(1-e^2 sin^2 L), m.
     """
-    s2 = math.sin(lat) ** 2
-    w = math.sqrt(1.0 - E2 * s2)
-    return A * (1.0 - E2) / w**3, A / w
+    if _scalar(lat):
+        r_m, r_n = ctypes.c_double(), ctypes.c_double()
+        _radii_1(float(lat), ctypes.byref(r_m), ctypes.byref(r_n))
+        return r_m.value, r_n.value
+    lat_a = np.asarray(lat, dtype=np.float64, order="C")
+    r_m, r_n = np.empty_like(lat_a), np.empty_like(lat_a)
+    _radii_n(lat_a.size, lat_a.ctypes.data, r_m.ctypes.data, r_n.ctypes.data)
+    return r_m, r_n
 
 
-@jit
 def gravity(lat, height):
     """Normal gravity magnitude (gravitation + centrifugal), m/s^2.
 
     Somigliana's closed formula on the ellipsoid with the second-order
     free-air correction of WGS-84 (TR8350.2 eq. 4-3):
     g(L,h) = g0(L) [1 - 2/a (1 + f + m - 2 f sin^2 L) h + 3 h^2 / a^2].
+    ``lat`` (rad) and ``height`` (m) broadcast; a float for scalars.
     """
-    s2 = math.sin(lat) ** 2
-    g0 = GAMMA_E * (1.0 + _K_SOMIGLIANA * s2) / math.sqrt(1.0 - E2 * s2)
-    return g0 * (1.0 - 2.0 / A * (1.0 + F + _M - 2.0 * F * s2) * height + 3.0 * height**2 / A**2)
+    if _scalar(lat) and _scalar(height):
+        return _gravity_1(float(lat), float(height))
+    lat_b, height_b = np.broadcast_arrays(np.asarray(lat, dtype=np.float64), np.asarray(height, dtype=np.float64))
+    lat_a, height_a = np.asarray(lat_b, order="C"), np.asarray(height_b, order="C")
+    out = np.empty(lat_a.shape)
+    _gravity_n(lat_a.size, lat_a.ctypes.data, height_a.ctypes.data, out.ctypes.data)
+    return out
 
 
 def earth_rate_n(lat):

@@ -49,16 +49,16 @@ Units: rad, rad/s, m/s, m/s², s.
 
 from __future__ import annotations
 
+import ctypes
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import earth
-from ._jit import jit
-from .filter_kernel import propagate, velocity_update
+from .core._arrays import read, written
+from .core._lib import function
 from .imu import ImuModel
-from .rotations import euler_to_mat
 from .units import ARCSEC_TO_RAD, DEG_TO_RAD, DPH_TO_RPS, UG_TO_MPS2
 
 N_STATES = 11
@@ -135,13 +135,18 @@ class StopFilterSettings:
                          self.drift_rw, self.bias_rw, self.bias_rw, 0.0]) ** 2
 
 
-@jit
+_stop_steps = function("sarins_stop_filter_steps", None, ctypes.c_int64, ctypes.c_void_p, ctypes.c_void_p,
+                       ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_void_p,
+                       ctypes.c_double, ctypes.c_void_p)
+
+
 def stop_filter_steps(x, p, velocity_en, attitude, lat, dt, q_diag, r_var):
-    """Propagate and update the stop filter over K measurements (in place).
+    """Propagate and update the stop filter over K measurements (in place; the C core's
+    ``sarins_stop_filter_steps``, ``sarins_fmu/core/filter.h``).
 
     Parameters
     ----------
-    x : (11,) state estimate; p : (11, 11) covariance (modified in place).
+    x : (11,) state estimate; p : (11, 11) covariance (C-contiguous float64, modified in place).
     velocity_en : (K, 2) INS east/north velocity at the end of each step, m/s.
     attitude : (K, 3) INS yaw, pitch, roll at the end of each step, rad.
     lat : float, latitude, rad.  dt : float, step, s.
@@ -151,39 +156,15 @@ def stop_filter_steps(x, p, velocity_en, attitude, lat, dt, q_diag, r_var):
     -------
     (K, 2) : estimate and standard deviation of eps_z after each step, rad/s.
     """
-    n = velocity_en.shape[0]
-    out = np.empty((n, 2))
-    r_m, r_n = earth.radii(lat)
-    w_c, w_s = earth.RATE * math.cos(lat), earth.RATE * math.sin(lat)
-    g = earth.gravity(lat, 0.0)
-    f = np.zeros((11, 11))
-    f[0, 1], f[0, 2], f[0, 4] = w_s, -w_c, -1.0 / r_m
-    f[1, 0], f[1, 3] = -w_s, 1.0 / r_n
-    f[2, 0], f[2, 3] = w_c, math.tan(lat) / r_n
-    f[3, 1], f[3, 4] = -g, 2.0 * w_s
-    f[4, 0], f[4, 3] = g, -2.0 * w_s
-    # north position error: d_lat' = dv_N / R_M; the computed Earth rate is off by
-    # d_omega_ie^n = W (0, -sin L, cos L) d_lat
-    f[10, 4] = 1.0 / r_m
-    f[1, 10], f[2, 10] = -w_s, w_c
-    eye = np.eye(11)
-    hm = np.zeros((2, 11))
-    hm[0, 3] = 1.0
-    hm[1, 4] = 1.0
-    for k in range(n):
-        c = euler_to_mat(attitude[k, 0], attitude[k, 1], attitude[k, 2])
-        for i in range(3):
-            f[i, 5], f[i, 6], f[i, 7] = -c[i, 0], -c[i, 1], -c[i, 2]
-        for i in range(2):
-            f[3 + i, 8], f[3 + i, 9] = c[i, 0], c[i, 1]
-        fh = f * dt
-        # Phi = I + F dt + (F dt)^2 / 2 + (F dt)^3 / 6
-        fh2 = fh @ fh
-        phi_m = eye + fh + 0.5 * fh2 + (fh2 @ fh) / 6.0
-        propagate(x, p, phi_m, q_diag, dt)
-        velocity_update(x, p, hm, eye, r_var, velocity_en[k, 0], velocity_en[k, 1])
-        out[k, 0] = x[EPS_Z]
-        out[k, 1] = math.sqrt(p[EPS_Z, EPS_Z])
+    velocity_en = read(velocity_en, (np.shape(velocity_en)[0], 2), "velocity_en")
+    k = velocity_en.shape[0]
+    attitude = read(attitude, (k, 3), "attitude")
+    q_diag = read(q_diag, (N_STATES,), "q_diag")
+    out = np.empty((k, 2))
+    x_address = written(x, (N_STATES,), "x").ctypes.data
+    p_address = written(p, (N_STATES, N_STATES), "p").ctypes.data
+    _stop_steps(k, x_address, p_address, velocity_en.ctypes.data, attitude.ctypes.data, float(lat), float(dt),
+                q_diag.ctypes.data, float(r_var), out.ctypes.data)
     return out
 
 

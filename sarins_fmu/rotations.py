@@ -5,15 +5,20 @@ transformation as the DCM ``mat_xy`` they are named after.  A rotation vector
 ``phi`` maps to the DCM exp([phi x]) (Rodrigues).  Euler angles follow the
 Chinese-literature convention used by the seeds for ENU / right-front-up:
 mat_nb = Rz(yaw) Rx(pitch) Ry(roll), yaw positive counter-clockwise about up.
-All functions are plain numpy on small arrays; the ``_*`` scalar versions are
-compiled and used inside the kernels.
+:func:`rotvec_to_mat`, :func:`rotvec_to_quat`, :func:`quat_mult`,
+:func:`quat_to_mat` and :func:`euler_to_mat` are thin bindings of the C
+physics core (``sarins_fmu/core/rotations.c``, the one implementation the
+INS kernels use too), vectorised over leading axes; the others are plain
+numpy helpers used at low rate.
 """
 
+import ctypes
 import math
 
 import numpy as np
 
-from ._jit import jit
+from .core._arrays import read
+from .core._lib import function
 
 
 def skew(v):
@@ -21,55 +26,49 @@ def skew(v):
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
-@jit
+def _batched(name, args, in_shapes, out_shape):
+    """Run the core's batched ``name`` over the leading axes of ``args`` (each of trailing shape in_shapes)."""
+    if all(isinstance(a, np.ndarray) and a.shape == s and a.dtype == np.float64 and a.flags.c_contiguous
+           for a, s in zip(args, in_shapes)):  # one item, nothing to convert: the cheap path
+        out = np.empty(out_shape)
+        _CORE[name](1, *(a.ctypes.data for a in args), out.ctypes.data)
+        return out
+    arrays = [read(a, np.shape(a), f"{name} argument {i + 1}") for i, a in enumerate(args)]
+    lead = np.broadcast_shapes(*(a.shape[:a.ndim - len(s)] for a, s in zip(arrays, in_shapes)))
+    for i, (a, s) in enumerate(zip(arrays, in_shapes)):
+        if a.shape[a.ndim - len(s):] != s:
+            raise ValueError(f"{name}: argument {i + 1} must have trailing shape {s}, got {a.shape}")
+    arrays = [np.ascontiguousarray(np.broadcast_to(a, lead + s)) for a, s in zip(arrays, in_shapes)]
+    out = np.empty(lead + out_shape)
+    _CORE[name](int(np.prod(lead, dtype=np.int64)), *(a.ctypes.data for a in arrays), out.ctypes.data)
+    return out
+
+
+_VP = ctypes.c_void_p
+_CORE = {name: function(f"sarins_{name}_n", None, ctypes.c_int64, *([_VP] * n_args))
+         for name, n_args in (("rotvec_to_mat", 2), ("rotvec_to_quat", 2), ("quat_mult", 3), ("quat_to_mat", 2),
+                              ("euler_to_mat", 2))}
+_euler_to_mat = function("sarins_euler_to_mat", None, ctypes.c_double, ctypes.c_double, ctypes.c_double, _VP)
+
+
 def rotvec_to_mat(phi):
-    """DCM exp([phi x]) of a rotation vector phi (3,), rad (Rodrigues)."""
-    theta2 = phi[0] ** 2 + phi[1] ** 2 + phi[2] ** 2
-    theta = math.sqrt(theta2)
-    if theta < 1e-8:
-        a = 1.0 - theta2 / 6.0
-        b = 0.5 - theta2 / 24.0
-    else:
-        a = math.sin(theta) / theta
-        b = (1.0 - math.cos(theta)) / theta2
-    k = np.array([[0.0, -phi[2], phi[1]], [phi[2], 0.0, -phi[0]], [-phi[1], phi[0], 0.0]])
-    return np.eye(3) + a * k + b * (k @ k)
+    """DCM exp([phi x]) of a rotation vector phi (..., 3), rad (Rodrigues): (..., 3, 3)."""
+    return _batched("rotvec_to_mat", (phi,), ((3,),), (3, 3))
 
 
-@jit
 def rotvec_to_quat(phi):
-    """Quaternion [w, x, y, z] of a rotation vector phi (3,), rad."""
-    theta2 = phi[0] ** 2 + phi[1] ** 2 + phi[2] ** 2
-    theta = math.sqrt(theta2)
-    if theta < 1e-8:
-        s = 0.5 - theta2 / 48.0
-        c = 1.0 - theta2 / 8.0
-    else:
-        s = math.sin(0.5 * theta) / theta
-        c = math.cos(0.5 * theta)
-    return np.array([c, s * phi[0], s * phi[1], s * phi[2]])
+    """Quaternion [w, x, y, z] of a rotation vector phi (..., 3), rad: (..., 4)."""
+    return _batched("rotvec_to_quat", (phi,), ((3,),), (4,))
 
 
-@jit
 def quat_mult(p, q):
-    """Hamilton product p * q of scalar-first quaternions."""
-    return np.array([
-        p[0] * q[0] - p[1] * q[1] - p[2] * q[2] - p[3] * q[3],
-        p[0] * q[1] + p[1] * q[0] + p[2] * q[3] - p[3] * q[2],
-        p[0] * q[2] - p[1] * q[3] + p[2] * q[0] + p[3] * q[1],
-        p[0] * q[3] + p[1] * q[2] - p[2] * q[1] + p[3] * q[0],
-    ])
+    """Hamilton product p * q of scalar-first quaternions (..., 4)."""
+    return _batched("quat_mult", (p, q), ((4,), (4,)), (4,))
 
 
-@jit
 def quat_to_mat(q):
-    """DCM of a unit quaternion [w, x, y, z]."""
-    w, x, y, z = q[0], q[1], q[2], q[3]
-    return np.array([
-        [w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z],
-    ])
+    """DCM of a unit quaternion [w, x, y, z] (..., 4): (..., 3, 3)."""
+    return _batched("quat_to_mat", (q,), ((4,),), (3, 3))
 
 
 def mat_to_quat(mat):
@@ -103,24 +102,15 @@ def mat_to_rotvec(mat):
     return 2.0 * math.atan2(s, q[0]) * q[1:] / s
 
 
-@jit
 def euler_to_mat(yaw, pitch, roll):
-    """mat_nb = Rz(yaw) Rx(pitch) Ry(roll) for ENU / right-front-up, angles in rad
-    (the product written out element by element; compiled, so kernels call it too)."""
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cr, sr = math.cos(roll), math.sin(roll)
-    c = np.empty((3, 3))
-    c[0, 0] = cy * cr - sy * sp * sr
-    c[0, 1] = -sy * cp
-    c[0, 2] = cy * sr + sy * sp * cr
-    c[1, 0] = sy * cr + cy * sp * sr
-    c[1, 1] = cy * cp
-    c[1, 2] = sy * sr - cy * sp * cr
-    c[2, 0] = -cp * sr
-    c[2, 1] = sp
-    c[2, 2] = cp * cr
-    return c
+    """mat_nb = Rz(yaw) Rx(pitch) Ry(roll) for ENU / right-front-up, angles in rad (scalars or arrays
+    that broadcast): (..., 3, 3)."""
+    if all(isinstance(a, (float, int)) or np.ndim(a) == 0 for a in (yaw, pitch, roll)):  # one attitude
+        out = np.empty((3, 3))
+        _euler_to_mat(float(yaw), float(pitch), float(roll), out.ctypes.data)
+        return out
+    angles = np.stack(np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (yaw, pitch, roll))), axis=-1)
+    return _batched("euler_to_mat", (angles,), ((3,),), (3, 3))
 
 
 def mat_to_euler(mat_nb):

@@ -179,12 +179,6 @@ def random_legs(duration: float, seed: int, *, n_stops: int = 3, stop_range=(600
     return legs
 
 
-def _radii(lat: np.ndarray):
-    """Vectorised :func:`earth.radii`: meridian and prime-vertical radii, m."""
-    w = np.sqrt(1.0 - earth.E2 * np.sin(lat) ** 2)
-    return earth.A * (1.0 - earth.E2) / w**3, earth.A / w
-
-
 def _compress(accel: np.ndarray, step: float):
     """Segments [(duration, accel row)] of consecutive equal rows."""
     change = np.flatnonzero(np.any(np.diff(accel, axis=0) != 0.0, axis=1)) + 1
@@ -279,15 +273,15 @@ class VehicleTrajectory:
         # latitude/longitude by two vectorised passes (radii at the first-pass latitudes)
         lat = np.full(self.n_steps + 1, float(lat0))
         for _ in range(2):
-            r_m, r_n = _radii(lat[:-1])
+            r_m, r_n = earth.radii(lat[:-1])
             lat = lat0 + np.concatenate([[0.0], np.cumsum(v_mean[:, 1] * h / r_m)])
         lat_mid = 0.5 * (lat[:-1] + lat[1:])
-        r_m, r_n = _radii(lat_mid)
+        r_m, r_n = earth.radii(lat_mid)
         lon = lon0 + np.concatenate([[0.0], np.cumsum(v_mean[:, 0] * h / (r_n * np.cos(lat_mid)))])
         zeros = np.zeros_like(lat_mid)
         w_ie = earth.RATE * np.column_stack([zeros, np.cos(lat_mid), np.sin(lat_mid)])
         w_en = np.column_stack([-v_mean[:, 1] / r_m, v_mean[:, 0] / r_n, v_mean[:, 0] * np.tan(lat_mid) / r_n])
-        g = np.array([earth.gravity(x, 0.0) for x in lat_mid])
+        g = earth.gravity(lat_mid, 0.0)
         w_it = w_ie + w_en
         # f = dv/dt + (2 w_ie + w_en) x v - g^n,  g^n = (0, 0, -g)
         f_n = (v_grid[1:] - v_grid[:-1]) / h + np.cross(2.0 * w_ie + w_en, v_mean)

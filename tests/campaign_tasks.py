@@ -20,11 +20,10 @@ def fail(x):
 
 def environment():
     """What a worker sees: its single-thread settings and its parent."""
-    import sys
+    from sarins_fmu.core.imu import thread_count
 
-    numba = sys.modules.get("numba")
-    return {"numba_env": os.environ.get("NUMBA_NUM_THREADS", ""), "omp_env": os.environ.get("OMP_NUM_THREADS", ""),
-            "numba_threads": numba.get_num_threads() if numba is not None else -1, "pid": os.getpid()}
+    return {"threads_env": os.environ.get("SARINS_THREADS", ""), "omp_env": os.environ.get("OMP_NUM_THREADS", ""),
+            "core_threads": thread_count(), "pid": os.getpid()}
 
 
 def sleeper(x, seconds=60.0):

@@ -1,7 +1,7 @@
 """The benchmarks' FMU helpers run (no timing asserted): the start-up feeds make the
 time-tagged FMUs compute from their first step in both hosts (FMPy and the C host),
 and the out-of-process prototype gives the slaves' in-process outputs bit for bit.
-Plain-Python kernels (SARINS_NO_NUMBA=1) and a few steps keep it quick."""
+A few steps keep it quick."""
 
 from __future__ import annotations
 
@@ -41,7 +41,7 @@ def test_start_up_feed_runs_five_real_steps(fmu_dir, c_host, tmp_path, name, hos
     if name == "IMUThermal":  # plain-Python minor loop: keep it short
         feed = fmu_runs.Feed(values={**feed.values, "internal_rate": 10.0}, tags=feed.tags)
     fmu = fmu_dir / f"{name}.fmu"
-    env = fmu_runs.host_env(os.environ, SARINS_NO_NUMBA="1", SARINS_FMU_CACHE=str(tmp_path / "cache"))
+    env = fmu_runs.host_env(os.environ, SARINS_FMU_CACHE=str(tmp_path / "cache"))
     if host == "fmpy":
         argv = fmu_runs.fmpy_command(fmu, feed, 5, stamps=(1, 5), printed=[TAGGED[name][0]])
     else:
@@ -70,7 +70,7 @@ for label, kind, method in (("direct", "direct", "run_per_call"), ("per_call", "
     codes[label] = chain.free()
 print(json.dumps({{"rows": rows, "codes": codes}}))
 """
-    env = {**os.environ, "SARINS_NO_NUMBA": "1"}
+    env = dict(os.environ)
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300,
                           cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-2000:]

@@ -20,7 +20,7 @@ pytest.importorskip("distributed", reason="Dask distributed is not installed (pi
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-ENV = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{HERE}", "NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1",
+ENV = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{HERE}", "SARINS_THREADS": "1", "OMP_NUM_THREADS": "1",
        "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
 
 
@@ -135,4 +135,4 @@ def test_generic_campaign_through_dask(cluster, tmp_path):
     _assert_same({k: v for k, v in remote.items()}, {k: v for k, v in local.items()})
     env = run_campaign([Task(f"e{i}", environment) for i in range(6)], tmp_path / "env", scheduler=cluster,
                        progress=False)
-    assert len({r["pid"] for r in env.values()}) == 2 and all(r["numba_threads"] in (1, -1) for r in env.values())
+    assert len({r["pid"] for r in env.values()}) == 2 and all(r["core_threads"] == 1 for r in env.values())

@@ -235,14 +235,12 @@ def test_workers_die_with_a_killed_campaign(tmp_path):
 
 
 def test_workers_run_single_threaded_kernels(tmp_path):
-    import numba  # noqa: F401  (loaded in the parent: the workers still get one thread)
-
-    before = os.environ.get("NUMBA_NUM_THREADS")
+    before = os.environ.get("SARINS_THREADS")
     out = run_campaign([Task(f"e{i}", environment) for i in range(2)], tmp_path, workers=2, progress=False)
     for result in out.values():
-        assert result["numba_env"] == "1" and result["omp_env"] == "1" and result["numba_threads"] in (1, -1)
+        assert result["threads_env"] == "1" and result["omp_env"] == "1" and result["core_threads"] == 1
         assert result["pid"] != os.getpid()
-    assert os.environ.get("NUMBA_NUM_THREADS") == before  # the campaign process keeps its own setting
+    assert os.environ.get("SARINS_THREADS") == before  # the campaign process keeps its own setting
 
 
 def test_artifacts_are_built_in_a_temporary_folder(tmp_path):

@@ -11,13 +11,10 @@ from fmpy.fmi1 import FMICallException
 
 from fmu_driver import IMU_TO_INS, TT_TO_IMU, Slave
 from sarins_fmu import imu, turntable
-from sarins_fmu._jit import HAVE_NUMBA
 from sarins_fmu.experiments import run_static
 from sarins_fmu.imu import IMU, StaticBase
 from sarins_fmu.thermal import Ambient
 from sarins_fmu.units import DPH_TO_RPS
-
-pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="the compiled steps need numba")
 
 ALIGN = 1200.0  # s (coarse alignment: the default 300 s)
 CORRECTION = 0.01 * DPH_TO_RPS  # rad/s, from nav time CORRECTION_FROM on

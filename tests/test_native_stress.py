@@ -32,7 +32,7 @@ PARAMS = dict(turntable=dict(align_time=ALIGN), ins=dict(align_time=ALIGN, coars
 
 def clean_env() -> dict:
     return {k: v for k, v in os.environ.items()
-            if k not in ("PYTHONPATH", "PYTHONHOME", "LD_PRELOAD", "LD_LIBRARY_PATH", "SARINS_NO_NUMBA")}
+            if k not in ("PYTHONPATH", "PYTHONHOME", "LD_PRELOAD", "LD_LIBRARY_PATH")}
 
 
 def write_plan(system, fmu_dir: Path, unzip_root: Path, steps: int, step: float, prints) -> Path:

@@ -15,8 +15,8 @@ What it does
   imports to the alias.  The alias package is imported from a per-user
   cache folder keyed by its content hash (``$SARINS_FMU_CACHE`` or
   ``$XDG_CACHE_HOME/sarins-fmu`` or ``~/.cache/sarins-fmu``; a temporary
-  folder when none is writable), so numba's on-disk cache survives between
-  runs of the FMU.
+  folder when none is writable), so a second run of the FMU finds it
+  there.
 * Instantiates the pythonfmu slave class with pythonfmu's keyword arguments
   and describes its variables to the C core (value reference, type,
   causality, variability, name) and, when the slave offers one, the float64

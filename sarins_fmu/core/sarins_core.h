@@ -20,8 +20,18 @@
 
 int sarins_core_abi(void);
 
+/* IMU family (issue 18) */
 #include "thermal.h"
 #include "correlated.h"
 #include "imu.h"
+
+/* INS family and turntable (issue 18) */
+#include "earth.h"
+#include "rotations.h"
+#include "filter.h"
+#include "ins.h"
+#include "turntable.h"
+#include "ins_fmu_step.h"
+#include "turntable_fmu_step.h"
 
 #endif

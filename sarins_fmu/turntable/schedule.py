@@ -6,12 +6,14 @@ Angles rad, rates rad/s, accelerations rad/s^2, times s.
 
 from __future__ import annotations
 
+import ctypes
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from .._jit import jit
+from ..core._arrays import read, written
+from ..core._lib import function
 
 AXIS_X = (1.0, 0.0, 0.0)
 AXIS_Y = (0.0, 1.0, 0.0)
@@ -107,37 +109,33 @@ class GimbalSchedule:
                 "the IMU cannot rebuild the motion inside a step exactly")
 
 
-@jit
+_state = function("sarins_turntable_state", None, ctypes.c_int64, ctypes.c_void_p, ctypes.c_int64, ctypes.c_int64,
+                  *([ctypes.c_void_p] * 9))
+
+
 def _state_kernel(t, times, angle_bp, rate_bp, accel, angle0, rate0):
-    """Exact gimbal state at times t (see GimbalSchedule.state)."""
+    """Exact gimbal state at times t (see GimbalSchedule.state): (angle, rate, acc), each (K, A)."""
     n, n_axes = t.shape[0], angle_bp.shape[1]
     angle = np.empty((n, n_axes))
     rate = np.empty((n, n_axes))
-    acc = np.zeros((n, n_axes))
+    acc = np.empty((n, n_axes))
     state_into(t, times, angle_bp, rate_bp, accel, angle0, rate0, angle, rate, acc)
     return angle, rate, acc
 
 
-@jit
 def state_into(t, times, angle_bp, rate_bp, accel, angle0, rate0, angle, rate, acc):
-    """:meth:`GimbalSchedule.state` at times t (K,) written to angle, rate, acc (K, A)
-    (acc must be zero on entry); the schedule's arrays are its breakpoint tables."""
-    n, n_axes = t.shape[0], angle_bp.shape[1]
-    last = times.shape[0] - 1
-    seg = np.searchsorted(times, t, side="right") - 1
-    for k in range(n):
-        if seg[k] < 0:  # before the schedule: hold the initial state
-            for j in range(n_axes):
-                rate[k, j] = rate0[j]
-                angle[k, j] = angle0[j] + rate0[j] * (t[k] - times[0])
-            continue
-        s = seg[k]
-        tau = t[k] - times[s]
-        for j in range(n_axes):
-            a = accel[s, j] if s < last else 0.0
-            acc[k, j] = a
-            rate[k, j] = rate_bp[s, j] + a * tau
-            angle[k, j] = angle_bp[s, j] + rate_bp[s, j] * tau + 0.5 * a * tau * tau
+    """:meth:`GimbalSchedule.state` at times t (K,) written to angle, rate, acc (K, A) (C-contiguous float64);
+    the schedule's arrays are its breakpoint tables (:meth:`GimbalSchedule.tables`).  The C core's
+    ``sarins_turntable_state`` (``sarins_fmu/core/turntable.h``)."""
+    t = read(t, np.shape(t)[:1], "t")
+    times = read(times, np.shape(times)[:1], "times")
+    n_times, n_axes = times.shape[0], np.shape(angle_bp)[1]
+    tables = [read(a, shape, name) for name, a, shape in (
+        ("angle_bp", angle_bp, (n_times, n_axes)), ("rate_bp", rate_bp, (n_times, n_axes)),
+        ("accel", accel, (n_times - 1, n_axes)), ("angle0", angle0, (n_axes,)), ("rate0", rate0, (n_axes,)))]
+    outs = [written(a, (t.shape[0], n_axes), name).ctypes.data
+            for name, a in (("angle", angle), ("rate", rate), ("acc", acc))]
+    _state(t.shape[0], t.ctypes.data, n_times, n_axes, times.ctypes.data, *(a.ctypes.data for a in tables), *outs)
 
 
 def axis_rotation(axis, angle: float) -> np.ndarray:
