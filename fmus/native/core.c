@@ -71,6 +71,7 @@ typedef struct {
     /* time */
     int have_time;
     double t_next;
+    double t_start; /* fmi2SetupExperiment's start time (0 until it is called): the first step starts there */
     /* compiled step offered by the slave (bridge Instance.fast_step()): 0 = step done, else not touched */
     int (*fast)(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h);
     int64_t *fast_table;
@@ -564,6 +565,7 @@ static fmi2Status core_setup_experiment(fmi2Component c, fmi2Boolean tolDefined,
     else {
         Py_DECREF(r);
         st = after_call(in, 0);
+        if (st <= fmi2Warning) in->t_start = t0;
     }
     PyGILState_Release(g);
     return st;
@@ -642,6 +644,7 @@ static fmi2Status core_reset(fmi2Component c) {
         if (st <= fmi2Warning) {
             in->state = S_INSTANTIATED;
             in->have_time = 0;
+            in->t_start = 0.0; /* the slave is new: back to the default start time */
         }
     }
     PyGILState_Release(g);
@@ -950,6 +953,9 @@ static fmi2Status core_do_step(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Bool
     if (in->have_time && fabs(t - in->t_next) > 1e-9 * fmax(1.0, fabs(in->t_next)))
         return fail(in, "fmi2DoStep: communication point %.17g does not continue the previous step, which "
                     "ended at %.17g", t, in->t_next);
+    if (!in->have_time && fabs(t - in->t_start) > 1e-9 * fmax(1.0, fabs(in->t_start)))
+        return fail(in, "fmi2DoStep: the first communication point %.17g is not the start time %.17g "
+                    "(fmi2SetupExperiment)", t, in->t_start);
     fmi2Status st;
     /* the slave's compiled step: no Python, no GIL; non-zero = declined, nothing changed */
     if (in->fast != NULL && in->fast(in->fast_table, in->fast_rows, in->buf, in->view.len / 8, t, h) == 0) {
