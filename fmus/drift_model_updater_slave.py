@@ -153,7 +153,10 @@ class DriftModelUpdater(Fmi2Slave):
         if not self.model_file:
             p0 = prior_covariance(self.prior_points, self.prior_t_min, self.prior_t_max)
             return ForgettingRLS([self.a0, self.b0, self.c0], p0, 0.0, settings)
-        rls = ForgettingRLS.load(self.model_file)
+        try:
+            rls = ForgettingRLS.load(self.model_file)
+        except (ValueError, OSError) as exc:
+            raise ParameterError(f"parameter model_file = {self.model_file!r}: {exc}") from None
         if rls.settings != settings:
             raise ParameterError(f"model_file {self.model_file} has forgetting factor "
                                  f"{rls.settings.forgetting_factor} per {rls.settings.time_scale} s; the parameters "

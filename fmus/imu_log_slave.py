@@ -51,7 +51,7 @@ class IMULog(Fmi2Slave):
         try:
             self._log = read_log(self.log_file)
         except LogError as exc:
-            raise ParameterError(str(exc)) from None
+            raise ParameterError(f"parameter log_file: {exc}") from None
         log = self._log
         self.log_step = log.step
         self.log_time = float(log.time[0] - log.step)

@@ -1,6 +1,5 @@
 """IMUThermal FMU: increment-output IMU with its error and thermal models."""
 
-import math
 
 import numpy as np
 from pythonfmu import Fmi2Slave
@@ -8,14 +7,15 @@ from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus import compiled_steps
 from fmus.slave_support import (INPUT, NO_TAG, OUTPUT, PARAMETER, ParameterError, StartOfStepInputs,
-                                check_finite, check_step, declare, discard_on_error, guarded, real_slots, same_time)
+                                check_finite, check_integer, check_latitude, check_range, check_step, declare,
+                                discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import imu, imu_params
 from sarins_fmu.thermal import SENSORS, ThermalModel
-from sarins_fmu.units import DEG_TO_RAD
 from sarins_fmu.site import SITE_LAT
 
 GIMBAL_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 UNIT_DISPLAY = {"rad/s": "deg/h", "rad": "deg"}
+SELF_HEATING_LIMIT = 500.0  # degC: a sensor's rise above the ambient; beyond it no sensor runs (and the model overflows)
 
 
 class IMUThermal(Fmi2Slave):
@@ -137,8 +137,11 @@ class IMUThermal(Fmi2Slave):
     def exit_initialization_mode(self):
         check_finite(self, ["lat", "height", "base_yaw", "internal_rate", "aging_days"],
                      positive=["internal_rate"], non_negative=["aging_days"])
-        if abs(self.lat) > 89.9 * DEG_TO_RAD:
-            raise ParameterError(f"parameter lat = {math.degrees(self.lat):.6g} deg is outside +-89.9 deg")
+        check_latitude(self, "lat")
+        check_integer(self, "seed", 0)  # the noise streams take a non-negative seed
+        for name in self._overridden:
+            if name.startswith("self_heating_"):
+                check_range(self, name, -SELF_HEATING_LIMIT, SELF_HEATING_LIMIT, unit="degC")
         if self.thermal_start not in ("hot", "cold"):
             raise ParameterError(f"thermal_start must be 'hot' or 'cold', got {self.thermal_start!r}")
         if self.base not in ("static", "input"):
@@ -148,8 +151,10 @@ class IMUThermal(Fmi2Slave):
             raise ParameterError(f"gimbals must list 1 to 3 of x, y, z, got {self.gimbals!r}")
         try:
             base_model = imu.preset(self.preset)
-            overrides = {name: getattr(self, name) for name in self._overridden}
-            self._model = imu_params.apply_overrides(base_model, overrides)
+        except ValueError as exc:
+            raise ParameterError(f"parameter preset: {exc}") from None
+        self._model = self._overridden_model(base_model)
+        try:
             self._base = imu.StaticBase(self.lat, 0.0, self.height, self.base_yaw) if self.base == "static" \
                 else imu.HeldBase()
         except ValueError as exc:
@@ -164,6 +169,21 @@ class IMUThermal(Fmi2Slave):
         initial.reset(0.0, float(self.ambient_temp))  # the initial outputs; the state starts at the first step
         for j, sensor in enumerate(SENSORS):
             setattr(self, f"temp_{sensor}", float(initial.temperature[j]))
+
+    def _overridden_model(self, base_model):
+        """The preset with the set coefficients; a coefficient the model refuses is named."""
+        overrides = {name: getattr(self, name) for name in sorted(self._overridden)}
+        try:
+            return imu_params.apply_overrides(base_model, overrides)
+        except ValueError as exc:
+            culprits = []
+            for name, value in overrides.items():  # which of them (the model's message names a field, not these)
+                try:
+                    imu_params.apply_overrides(base_model, {name: value})
+                except ValueError:
+                    culprits.append(f"{name} = {value!r}")
+            named = f"parameter {', '.join(culprits)}: " if culprits else f"parameters {', '.join(overrides)}: "
+            raise ParameterError(named + str(exc)) from None
 
     def _read_motion(self):
         """The motion inputs as one flat set: angles, rates, accelerations (A each), ambient and its slope."""

@@ -50,11 +50,13 @@ class RBFIdentifier(Fmi2Slave):
     @guarded
     def exit_initialization_mode(self):
         check_finite(self, ["trigger_time", "latency"], non_negative=["trigger_time", "latency"])
+        name = "model_file" if self.model_file.strip() else "model_kind"
         try:
             path = self.model_file.strip() or default_model_path(self.model_kind)
             self._identifier = DriftIdentifier(path)
         except (ModelFileError, ValueError, OSError) as exc:
-            raise ParameterError(f"cannot load the identifier model: {exc}") from None
+            raise ParameterError(f"parameter {name} = {getattr(self, name)!r}: cannot load the identifier model: "
+                                 f"{exc}") from None
         self.axial_drift, self.identified, self.apply_from = 0.0, 0, 0.0
 
     @guarded

@@ -139,6 +139,36 @@ def check_finite(slave, names, *, positive=(), non_negative=()):
             raise ParameterError(f"parameter {name} = {getattr(slave, name)} must not be negative")
 
 
+INT32_MIN, INT32_MAX = -2**31, 2**31 - 1  # the range of an FMI 2.0 Integer
+
+
+def check_integer(slave, name: str, low: int = INT32_MIN, high: int = INT32_MAX) -> int:
+    """Raise ParameterError unless the Integer parameter ``name`` lies in [low, high]; returns it."""
+    value = getattr(slave, name)
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
+        raise ParameterError(f"parameter {name} = {value!r} must be an integer in [{low}, {high}]")
+    return int(value)
+
+
+def check_range(slave, name: str, low: float, high: float, *, unit: str = "", scale: float = 1.0) -> float:
+    """Raise ParameterError unless the Real parameter ``name`` is finite and in [low, high] (SI units);
+    the message shows the values divided by ``scale`` with ``unit`` (e.g. radians shown in deg)."""
+    value = getattr(slave, name)
+    if not (math.isfinite(value) and low <= value <= high):
+        shown = f" {unit}" if unit else ""
+        raise ParameterError(f"parameter {name} = {value / scale:.9g}{shown} is outside "
+                             f"[{low / scale:.9g}, {high / scale:.9g}]{shown}")
+    return float(value)
+
+
+LAT_LIMIT = math.radians(89.9)  # rad: the navigation frame is singular at the poles
+
+
+def check_latitude(slave, name: str) -> float:
+    """A latitude parameter (rad) within +-89.9 deg."""
+    return check_range(slave, name, -LAT_LIMIT, LAT_LIMIT, unit="deg", scale=math.pi / 180.0)
+
+
 def check_step(slave, step_size: float, expected: float | None) -> float:
     """The communication step must be positive, finite and, once set, constant."""
     if not (step_size > 0 and math.isfinite(step_size)):

@@ -8,7 +8,8 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus import compiled_steps
-from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
+from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_latitude, check_range,
+                                check_step, declare,
                                 discard_on_error, guarded, real_slots, same_time)
 from sarins_fmu import ins
 from sarins_fmu.drift_model import drift_model_value
@@ -120,6 +121,7 @@ class StrapdownINS(Fmi2Slave):
         names = ["lat0", "lon0", "height0", "align_time", "coarse_time"] + [f"kf_{n}" for n in FILTER_UNITS]
         check_finite(self, names, non_negative=["align_time", "coarse_time"],
                      positive=[f"kf_{n}" for n in FILTER_UNITS])
+        check_latitude(self, "lat0")
         try:
             filt = ins.AlignmentFilter(**{n: float(getattr(self, f"kf_{n}")) for n in FILTER_UNITS})
             return ins.InsConfig(lat=self.lat0, lon=self.lon0, height=self.height0, align_time=self.align_time,
@@ -133,6 +135,7 @@ class StrapdownINS(Fmi2Slave):
     @guarded
     def exit_initialization_mode(self):
         check_finite(self, ["yaw0", "pitch0", "roll0"])
+        check_range(self, "pitch0", -0.5 * math.pi, 0.5 * math.pi, unit="deg", scale=math.pi / 180.0)
         self._make_config(1.0)  # validate parameters before the first step
         self._publish_start()
         self.temp_align_start = self.temp_gyro_z

@@ -6,8 +6,8 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus import compiled_steps
-from fmus.slave_support import (OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
-                                discard_on_error, guarded, real_slots)
+from fmus.slave_support import (OUTPUT, PARAMETER, ParameterError, check_finite, check_integer, check_step,
+                                declare, discard_on_error, guarded, real_slots)
 from sarins_fmu import thermal, turntable
 from sarins_fmu.thermal import Ambient
 from sarins_fmu.units import DEG_TO_RAD
@@ -109,16 +109,26 @@ class Turntable(Fmi2Slave):
                             "chamber_step_hold"]
                      + [f"table_{n}_{q}" for n in ("inner", "middle", "outer") for q in ("rate", "accel")],
                      positive=["grid", "duration", "ambient_period"],
-                     non_negative=["rate", "accel", "dwell", "align_time", "align_dwell"])
+                     non_negative=["rate", "accel", "dwell", "align_time", "align_dwell", "outer_rate", "outer_accel",
+                                   "warmup", "chamber_hold", "chamber_step", "chamber_step_hold",
+                                   "ambient_amplitude"])
+        if not self.chamber_ramp > 0:
+            raise ParameterError(f"parameter chamber_ramp = {self.chamber_ramp} degC/s must be positive")
+        if self.chamber_first not in ("low", "high"):
+            raise ParameterError(f"parameter chamber_first must be 'low' or 'high', got {self.chamber_first!r}")
+        revolutions = check_integer(self, "revolutions", 1)
         try:
             self._schedule = turntable.schedule_for(
                 self.scheme, self.duration, rate_dps=self.rate / DEG_TO_RAD, accel_dps2=self.accel / DEG_TO_RAD,
-                dwell=self.dwell, grid=self.grid, revolutions=int(self.revolutions),
+                dwell=self.dwell, grid=self.grid, revolutions=revolutions,
                 align_time=self.align_time, align_dwell=self.align_dwell,
                 outer_rate_dps=self.outer_rate / DEG_TO_RAD, outer_accel_dps2=self.outer_accel / DEG_TO_RAD,
                 table_rates_dps=[getattr(self, f"table_{n}_rate") / DEG_TO_RAD for n in ("inner", "middle", "outer")],
                 table_accels_dps2=[getattr(self, f"table_{n}_accel") / DEG_TO_RAD for n in ("inner", "middle", "outer")],
                 warmup=self.warmup)
+        except ValueError as exc:
+            raise ParameterError(f"parameter scheme = {self.scheme!r} with its motion parameters: {exc}") from None
+        try:
             if self.ambient_mode == "chamber":
                 profile = thermal.chamber_profile(
                     self.duration, low_c=self.chamber_low, high_c=self.chamber_high,
@@ -130,9 +140,9 @@ class Turntable(Fmi2Slave):
                 self._ambient = Ambient(mean=self.ambient_mean, amplitude=self.ambient_amplitude,
                                         period=self.ambient_period)
             else:
-                raise ValueError(f"ambient_mode must be 'sinusoid' or 'chamber', got {self.ambient_mode!r}")
+                raise ValueError("ambient_mode must be 'sinusoid' or 'chamber'")
         except ValueError as exc:
-            raise ParameterError(str(exc)) from None
+            raise ParameterError(f"parameter ambient_mode = {self.ambient_mode!r}: {exc}") from None
         self.n_gimbals = self._schedule.n_axes
         self._publish(self._start_time)
 

@@ -5,7 +5,8 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import (OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
+from fmus.slave_support import (OUTPUT, PARAMETER, ParameterError, check_finite, check_integer, check_latitude,
+                                check_step, declare,
                                 discard_on_error, guarded, same_time)
 from sarins_fmu import vehicle
 from sarins_fmu.site import SITE_LAT_DEG
@@ -21,12 +22,13 @@ def parse_legs(text: str):
         try:
             legs.append((kind, *(float(x) for x in numbers)))
         except ValueError:
-            raise ParameterError(f"leg {part!r}: numbers expected after {kind!r}") from None
+            raise ParameterError(f"parameter legs: leg {part!r}: numbers expected after {kind!r}") from None
         want = {"drive": 2, "turn": 1, "stop": 1}.get(kind)
         if want is None or len(numbers) != want:
-            raise ParameterError(f"leg {part!r}: use 'drive SECONDS SPEED', 'turn DEGREES' or 'stop SECONDS'")
+            raise ParameterError(f"parameter legs: leg {part!r}: use 'drive SECONDS SPEED', 'turn DEGREES' or "
+                                 "'stop SECONDS'")
     if not legs:
-        raise ParameterError("legs is empty")
+        raise ParameterError("parameter legs is empty")
     return legs
 
 
@@ -106,14 +108,20 @@ class VehicleMotion(Fmi2Slave):
         check_finite(self, ["lat0", "lon0", "heading0", "lead_time", "grid", "sway_pitch", "sway_roll", "sway_period",
                             "vibration", "reference_speed"], positive=["grid", "sway_period", "reference_speed"],
                      non_negative=["lead_time", "sway_pitch", "sway_roll", "vibration"])
+        check_latitude(self, "lat0")
+        seed = check_integer(self, "body_seed", 0)
         legs = parse_legs(self.legs)
         try:
             body = vehicle.BodyMotion(self.sway_pitch, self.sway_roll, self.sway_period, self.vibration,
-                                      reference_speed=self.reference_speed, seed=int(self.body_seed))
+                                      reference_speed=self.reference_speed, seed=seed)
+        except ValueError as exc:
+            raise ParameterError(f"parameters sway_pitch, sway_roll, sway_period, vibration, reference_speed: "
+                                 f"{exc}") from None
+        try:
             self._trajectory = vehicle.VehicleTrajectory(legs, self.lat0, self.lon0, self.heading0, step=self.grid,
                                                          rotation="none", lead_time=self.lead_time, body=body)
         except ValueError as exc:
-            raise ParameterError(str(exc)) from None
+            raise ParameterError(f"parameter legs = {self.legs!r}: {exc}") from None
         self._publish(self._start_time)
 
     def _publish(self, time):

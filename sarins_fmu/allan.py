@@ -1,6 +1,6 @@
 """Overlapping Allan deviation of IMU rates and the IEEE Std 952 read-outs.
 
-The overlapping Allan deviation (allantools ``oadev``, rate data) of a
+The overlapping Allan deviation (:func:`overlapping_adev`, rate data) of a
 stationary record shows each noise term as a straight line in log-log axes
 (IEEE Std 952-1997 annex C; Titterton & Weston 2004, sec. 4.4.3; El-Sheimy,
 Hou & Niu, IEEE Trans. Instrum. Meas. 57(1), 2008):
@@ -77,26 +77,71 @@ def default_taus(n: int, rate_hz: float, per_decade: int = 10) -> np.ndarray:
     return m / rate_hz
 
 
+def averaging_factors(n: int, rate_hz: float, taus) -> np.ndarray:
+    """Cluster lengths m (samples) for the averaging times ``taus`` (s) of a record of ``n`` samples.
+
+    m = round(tau * rate_hz), kept if 1 <= m <= n, sorted, without repeats (the averaging
+    time used is then m / rate_hz).  A cluster length that leaves fewer than two
+    second differences (m > (n - 1) / 2) is dropped by :func:`overlapping_adev`.
+    """
+    m = np.round(np.asarray(taus, float).ravel() * rate_hz)
+    m = m[np.isfinite(m) & (m >= 1) & (m <= n)]
+    return np.unique(m).astype(np.int64)
+
+
+def overlapping_adev(y, rate_hz: float, taus) -> tuple[np.ndarray, np.ndarray]:
+    """Overlapping Allan deviation of one rate series ``y`` (K,) sampled at ``rate_hz`` (Hz).
+
+    With the integrated series x_0 = 0, x_k = (y_0 + ... + y_(k-1)) / rate_hz
+    (the angle for a gyro rate) and tau = m / rate_hz,
+
+        sigma^2(tau) = sum_(k=0)^(K-2m) (x_(k+2m) - 2 x_(k+m) + x_k)^2 / (2 (K + 1 - 2m) tau^2)
+
+    (IEEE Std 952-1997 annex C; NIST SP 1065 eq. (11)): half the mean square
+    difference of successive m-sample averages, over every start k (overlapping
+    clusters).  Averaging times with fewer than two terms are dropped.
+
+    Returns (taus used (T,) s, deviation (T,)) in the unit of ``y``.
+    """
+    y = np.asarray(y, float)
+    if y.ndim != 1 or y.size < 3 or not np.isfinite(y).all():
+        raise ValueError("Allan deviation needs at least 3 finite samples")
+    x = np.concatenate(([0.0], np.cumsum(y - y.mean()))) / rate_hz  # the mean cancels; removed for precision
+    n = y.size
+    used, dev = [], []
+    for m in averaging_factors(n, rate_hz, taus):
+        terms = n + 1 - 2 * m
+        if terms < 2:
+            continue
+        d = x[2 * m:] - 2.0 * x[m:n + 1 - m] + x[:terms]
+        tau = m / rate_hz
+        used.append(tau)
+        dev.append(math.sqrt(float(np.dot(d, d)) / (2.0 * terms)) / tau)
+    return np.asarray(used), np.asarray(dev)
+
+
 def allan_deviation(rates, rate_hz: float, taus=None) -> tuple[np.ndarray, np.ndarray]:
     """Overlapping Allan deviation of each column of ``rates`` (K, M).
 
     Returns (taus (T,), adev (T, M)) in the unit of ``rates``; ``taus`` in s
     (default :func:`default_taus`).  Raises ValueError on NaN or too few samples.
     """
-    import allantools
-
     rates = np.asarray(rates, float)
     if rates.ndim == 1:
         rates = rates[:, None]
     if rates.shape[0] < 3 or not np.isfinite(rates).all():
         raise ValueError("Allan deviation needs at least 3 finite samples per column")
+    if not (rate_hz > 0 and math.isfinite(rate_hz)):
+        raise ValueError(f"sample rate must be positive, got {rate_hz}")
     taus = default_taus(rates.shape[0], rate_hz) if taus is None else np.asarray(taus, float)
     out_taus, cols = None, []
     for col in rates.T:
-        t, dev, _, _ = allantools.oadev(col - col.mean(), rate=rate_hz, data_type="freq", taus=taus)
+        t, dev = overlapping_adev(col, rate_hz, taus)
         out_taus = t if out_taus is None else out_taus
-        cols.append(dev[:len(out_taus)])
-    return np.asarray(out_taus), np.column_stack(cols)
+        cols.append(dev)
+    if out_taus.size == 0:
+        raise ValueError("no averaging time fits the record (each needs at least two cluster differences)")
+    return out_taus, np.column_stack(cols)
 
 
 def readouts(taus, adev, record_length: float) -> Readout:

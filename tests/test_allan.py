@@ -129,3 +129,70 @@ def test_allan_command_on_a_recorded_log(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["source"].startswith("log ") and "random_walk_spec" not in out["channels"][0]
     assert out["channels"][0]["random_walk"] == pytest.approx(0.3, rel=0.1)  # deg/sqrt(h)
+
+
+# -- our overlapping Allan deviation (issue 21: allantools dropped, it pulled Sphinx and numpydoc in) --
+
+
+def test_hand_computed_series_exactly():
+    """y = 1, 3, 2, 6, 4: m = 1, the successive differences 2, -1, 4, -2: sigma^2 = 25 / (2 * 4);
+    m = 2, the overlapping 2-sample means 2, 2.5, 4, 5 differ by 2 and 2.5 at lag 2:
+    sigma^2 = (4 + 6.25) / (2 * 2); m = 3 leaves no two differences and is dropped."""
+    for rate in (1.0, 2.0):  # the deviation of rate data does not depend on the rate; tau does
+        taus, dev = allan.overlapping_adev([1.0, 3.0, 2.0, 6.0, 4.0], rate, np.array([1.0, 2.0, 3.0]) / rate)
+        np.testing.assert_allclose(taus, np.array([1.0, 2.0]) / rate, rtol=0, atol=0)
+        np.testing.assert_allclose(dev, [math.sqrt(25.0 / 8.0), math.sqrt(10.25 / 4.0)], rtol=1e-14)
+
+
+def test_white_noise_falls_as_one_over_root_tau():
+    """White rate noise of std sigma_1 at tau0: sigma(tau) = sigma_1 / sqrt(tau / tau0). The overlapping
+    estimate at m samples has a relative std below 1 / sqrt(K / m) (K samples); checked at 3 times that."""
+    rate, n, sigma1 = 10.0, 200_000, 2.5e-6
+    y = np.random.default_rng(7).normal(0.0, sigma1, n)
+    taus, dev = allan.overlapping_adev(y, rate, allan.default_taus(n, rate))
+    m = np.round(taus * rate)
+    expected = sigma1 / np.sqrt(m)
+    bound = 3.0 / np.sqrt(n / m)
+    assert len(taus) > 30
+    assert np.all(np.abs(dev / expected - 1.0) < bound), np.max(np.abs(dev / expected - 1.0) / bound)
+
+
+def test_random_walk_rises_with_slope_one_half():
+    """A rate random walk (integrated white noise) has sigma(tau) = K sqrt(tau / 3): log-log slope +1/2."""
+    rate, n, k = 1.0, 100_000, 1e-8
+    y = np.cumsum(np.random.default_rng(11).normal(0.0, k / math.sqrt(rate), n))
+    taus, dev = allan.overlapping_adev(y, rate, np.geomspace(10.0, n / 20.0, 20))
+    slope = np.polyfit(np.log(taus), np.log(dev), 1)[0]
+    assert abs(slope - 0.5) < 0.05, slope
+    np.testing.assert_allclose(dev, k * np.sqrt(taus / 3.0), rtol=0.35)
+
+
+def test_averaging_times_and_bad_input():
+    taus, _ = allan.allan_deviation(np.random.default_rng(0).normal(size=100), 10.0, [0.04, 0.1, 0.1, 0.12, 50.0])
+    np.testing.assert_allclose(taus, [0.1])  # 0.04 s -> m = 0 dropped, repeats merged, 50 s beyond the record
+    with pytest.raises(ValueError, match="at least two cluster"):
+        allan.allan_deviation(np.ones(10), 1.0, [6.0])
+    with pytest.raises(ValueError, match="sample rate"):
+        allan.allan_deviation(np.ones(10), 0.0)
+
+
+def test_the_package_does_not_need_allantools():
+    import tomllib
+    from pathlib import Path
+
+    project = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())["project"]
+    assert not any(d.startswith("allantools") for d in project["dependencies"])
+    source = Path(allan.__file__).read_text()
+    assert "import allantools" not in source
+
+
+@pytest.mark.parametrize("seed, rate, n", [(1, 10.0, 5000), (2, 200.0, 20_000), (3, 1.0, 777)])
+def test_same_numbers_as_allantools_when_it_is_installed(seed, rate, n):
+    allantools = pytest.importorskip("allantools")
+    rng = np.random.default_rng(seed)
+    y = rng.normal(size=n) * 1e-5 + np.cumsum(rng.normal(size=n)) * 1e-7 + 3.0
+    taus = allan.default_taus(n, rate)
+    ours_t, ours = allan.overlapping_adev(y, rate, taus)
+    theirs_t, theirs, _, _ = allantools.oadev(y - y.mean(), rate=rate, data_type="freq", taus=taus)
+    np.testing.assert_array_equal(ours_t, theirs_t)
+    np.testing.assert_allclose(ours, theirs, rtol=1e-10)

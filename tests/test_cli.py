@@ -3,6 +3,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from sarins.cli import main
@@ -47,16 +48,57 @@ def test_demo_cosimulates_the_identified_system(tmp_path, capsys):
     """align -> navigate -> identify (RBFIdentifier FMU) -> compensate -> navigate, scaled down."""
     from sarins_fmu.identify.axial import default_model_path
 
-    assert main(["demo", "--align-hours", "0.2", "--identify-hours", "0.1", "--nav-hours", "0.1", "--no-progress",
-                 "--model-file", str(default_model_path("hot")), "--fmu-dir", str(tmp_path)]) == 0
-    out = capsys.readouterr().out
+    assert main(["demo", "--align-hours", "0.2", "--identify-hours", "0.1", "--nav-hours", "0.1",
+                 "--model-file", str(default_model_path("hot")), "--fmu-dir", str(tmp_path),
+                 "--out", str(tmp_path / "results")]) == 0
+    captured = capsys.readouterr()
+    out, err = captured.out, captured.err
     assert "gauss-seidel" in out and "position error, compensated" in out
+    # issue 21: each phase announced on stderr, in order, with its duration
+    phases = ["building the FMUs", "compiling", "co-simulating", "in-process reference"]
+    starts = [err.index(f"sarins demo: {p}") for p in phases]
+    assert starts == sorted(starts), err
+    assert all(f"sarins demo: {p}: done in" in err for p in phases), err
+    # ... the series and the figure in the folder it names, and what to run next
+    series = (tmp_path / "results" / "series.csv").read_text().splitlines()
+    assert series[0].split(",")[:3] == ["nav_time_s", "position_error_compensated_m",
+                                        "position_error_uncompensated_m"]
+    assert len(series) == 1 + int(0.2 * 3600 / 60) + 1  # one row a minute of navigation, both ends
+    assert all(np.isfinite([float(x) for x in row.split(",")]).all() for row in series[1:])
+    assert (tmp_path / "results" / "position_error.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"results in {tmp_path / 'results'}" in out
+    assert "sarins campaign axial-rbf" in out.split("to go further:")[1]
     drift = float(out.split("identified axial drift")[1].split()[0])
     true = float(out.split("true axial drift")[1].split()[0])
     error = float(out.split("identification error")[1].split()[0])
     assert drift != 0.0 and abs(drift) < 0.01
     assert abs(true) < 0.01 and error == pytest.approx(drift - true, abs=2e-5)
     assert (tmp_path / "StrapdownINS.fmu").exists() and (tmp_path / "RBFIdentifier.fmu").exists()
+
+
+def test_demo_progress_estimate_is_right_from_its_first_update():
+    """Issue 21: the bar sat at 0 during a 63 s set-up, then estimated 3.5 h for a 21 s run. The estimate
+    now counts only from the first step: set-up 63 s, then 316800 steps at 15000 steps/s."""
+    import io
+
+    from sarins.demo import Phases
+
+    now = [0.0]
+    stream = io.StringIO()
+    phases = Phases(stream, clock=lambda: now[0])
+    phases.start("compiling")
+    bar = phases.progress(316800)
+    now[0] = 63.0  # loading and compiling: no step yet
+    bar.update(1)
+    rate = 15000.0
+    for done in range(1000, 316800, 1000):
+        now[0] = 63.0 + (done - 1) / rate
+        left = bar.estimate(done, now[0])
+        assert left == pytest.approx((316800 - done) / rate, rel=1e-9)
+        bar.update(done)
+    lines = [line for line in stream.getvalue().splitlines() if "%" in line]
+    assert lines and "about 19 s left" in lines[0], lines  # the first update: 10 % done, 19 s left
+    assert len(lines) == 9  # one line per 10 % when stderr is not a terminal
 
 
 def test_demo_refuses_an_identify_time_the_shipped_model_was_not_trained_for(tmp_path, capsys):

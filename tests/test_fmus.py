@@ -86,7 +86,7 @@ def test_axial_correction_input_in_cosimulation(fmu_dir):
     ("Turntable", dict(rate=-1.0), "must not be negative"),
     ("Turntable", dict(scheme="sideways"), "unknown scheme"),
     ("Turntable", dict(ambient_mode="chamber", chamber_first="middle"), "'low' or 'high'"),
-    ("Turntable", dict(ambient_mode="chamber", chamber_step=-2.0), "step_c"),
+    ("Turntable", dict(ambient_mode="chamber", chamber_step=-2.0), "chamber_step"),
     ("StrapdownINS", dict(kf_arw=0.0), "must be positive"),
 ])
 def test_bad_parameters_give_an_error_status_and_a_message(fmu_dir, fmu, params, text):

@@ -48,6 +48,9 @@ HOST_REQUIREMENTS = (
     "Only binaries/linux64 is shipped.")
 
 _ALIASED = ("sarins_fmu", "fmus", "pythonfmu")
+SOURCES = ("shim.c", "core.c", "sarins_fmi.h", "sarins_uri.h")
+# warnings are errors: the layer must compile clean with every compiler that builds the FMUs
+WARNINGS = ("-std=c11", "-Wall", "-Wextra", "-Werror")
 _FROM = re.compile(r"^(\s*)from\s+(" + "|".join(_ALIASED) + r")(\.|\s)", re.M)
 _IMPORT = re.compile(r"^(\s*)import\s+(" + "|".join(_ALIASED) + r")((?:\.\w+)*)(\s+as\s+\w+)?\s*$", re.M)
 
@@ -72,7 +75,7 @@ def _fmi_headers() -> Path:
 
 def _sources_digest() -> str:
     h = hashlib.sha256()
-    for name in ("shim.c", "core.c", "sarins_fmi.h"):
+    for name in SOURCES:
         h.update((HERE / name).read_bytes())
     h.update(sysconfig.get_paths()["include"].encode())
     return h.hexdigest()
@@ -81,7 +84,7 @@ def _sources_digest() -> str:
 @functools.lru_cache(maxsize=4)
 def _compiled(digest: str) -> tuple[bytes, bytes]:
     cc = compiler()
-    flags = ["-O2", "-shared", "-fPIC", "-fvisibility=hidden", "-Wl,-Bsymbolic", f"-I{_fmi_headers()}", f"-I{HERE}"]
+    flags = ["-O2", *WARNINGS, "-shared", "-fPIC", "-fvisibility=hidden", "-Wl,-Bsymbolic", f"-I{_fmi_headers()}", f"-I{HERE}"]
     with tempfile.TemporaryDirectory(prefix="sarins_fmi_cc_") as tmp:
         shim, core = Path(tmp) / "shim.so", Path(tmp) / "core.so"
         runs = [[cc, *flags, "-o", str(shim), str(HERE / "shim.c"), "-ldl", "-lpthread"],

@@ -22,6 +22,7 @@
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -31,6 +32,7 @@
 #include <stdint.h>
 
 #include "sarins_fmi.h"
+#include "sarins_uri.h"
 
 #define EXPORT __attribute__((visibility("default")))
 
@@ -71,6 +73,7 @@ typedef struct {
     /* time */
     int have_time;
     double t_next;
+    double t_start; /* fmi2SetupExperiment's start time (0 until it is called): the first step starts there */
     /* compiled step offered by the slave (bridge Instance.fast_step()): 0 = step done, else not touched */
     int (*fast)(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h);
     int64_t *fast_table;
@@ -280,10 +283,19 @@ static int load_slave(Inst *in, int logging_on) {
     Py_ssize_t n = PyList_GET_SIZE(table);
     long maxvr = -1;
     for (Py_ssize_t i = 0; i < n; i++) {
-        long vr = PyLong_AsLong(PyTuple_GetItem(PyList_GET_ITEM(table, i), 0));
+        PyObject *row = PyList_GET_ITEM(table, i);
+        if (!PyTuple_Check(row) || PyTuple_GET_SIZE(row) != 5) {
+            PyErr_SetString(PyExc_TypeError, "bridge variable table: a row is not a 5-tuple");
+            goto done;
+        }
+        long vr = PyLong_AsLong(PyTuple_GET_ITEM(row, 0));
+        if (vr == -1 && PyErr_Occurred()) goto done; /* checked here: the next call must not run with it set */
+        if (vr < 0 || vr > INT_MAX - 1) {
+            PyErr_Format(PyExc_ValueError, "bridge variable table: value reference %ld out of range", vr);
+            goto done;
+        }
         if (vr > maxvr) maxvr = vr;
     }
-    if (PyErr_Occurred()) goto done;
     in->nvr = maxvr + 1;
     size_t m = in->nvr > 0 ? (size_t)in->nvr : 1;
     in->vtype = malloc(m); in->caus = malloc(m); in->varb = malloc(m);
@@ -296,28 +308,56 @@ static int load_slave(Inst *in, int logging_on) {
     memset(in->vtype, -1, m);
     for (size_t i = 0; i < m; i++) in->slot[i] = -1;
     for (Py_ssize_t i = 0; i < n; i++) {
-        PyObject *row = PyList_GET_ITEM(table, i);
-        long vr = PyLong_AsLong(PyTuple_GetItem(row, 0));
-        long t = PyLong_AsLong(PyTuple_GetItem(row, 1));
-        long c = PyLong_AsLong(PyTuple_GetItem(row, 2));
-        long v = PyLong_AsLong(PyTuple_GetItem(row, 3));
-        const char *name = PyUnicode_AsUTF8(PyTuple_GetItem(row, 4));
-        if (PyErr_Occurred() || vr < 0 || t < 0 || t > 3 || c < 0 || c > 5 || v < 0 || v > 4 || !name) {
-            if (!PyErr_Occurred()) PyErr_SetString(PyExc_ValueError, "bad variable table row");
+        PyObject *row = PyList_GET_ITEM(table, i); /* a 5-tuple (first pass) */
+        long field[4];
+        for (int j = 0; j < 4; j++) {
+            field[j] = PyLong_AsLong(PyTuple_GET_ITEM(row, j));
+            if (field[j] == -1 && PyErr_Occurred()) goto done;
+        }
+        long vr = field[0], t = field[1], c = field[2], v = field[3];
+        const char *name = PyUnicode_AsUTF8(PyTuple_GET_ITEM(row, 4));
+        if (!name) goto done;
+        if (t < 0 || t > 3 || c < 0 || c > 5 || v < 0 || v > 4) {
+            PyErr_Format(PyExc_ValueError, "bridge variable table: bad row for %s", name);
+            goto done;
+        }
+        if (in->vtype[vr] >= 0) { /* refused: aliases are not supported, and the first name would leak */
+            PyErr_Format(PyExc_ValueError, "bridge variable table: value reference %ld given to both %s and %s", vr,
+                         in->vname[vr], name);
+            goto done;
+        }
+        char *copy = strdup(name);
+        if (!copy) {
+            PyErr_NoMemory();
             goto done;
         }
         in->vtype[vr] = (signed char)t; in->caus[vr] = (signed char)c; in->varb[vr] = (signed char)v;
-        in->vname[vr] = strdup(name);
+        in->vname[vr] = copy;
     }
-    in->ncat = (int)PyList_GET_SIZE(cats);
-    in->cat = calloc(in->ncat ? in->ncat : 1, sizeof(char *));
+    Py_ssize_t ncat = PyList_GET_SIZE(cats);
+    if (ncat > 1024) {
+        PyErr_SetString(PyExc_ValueError, "bridge: more than 1024 log categories");
+        goto done;
+    }
     free(in->cat_on);
-    in->cat_on = calloc(in->ncat ? in->ncat : 1, sizeof(int));
-    for (int i = 0; i < in->ncat; i++) {
+    in->cat_on = NULL;
+    in->cat = calloc(ncat ? (size_t)ncat : 1, sizeof(char *));
+    in->cat_on = calloc(ncat ? (size_t)ncat : 1, sizeof(int));
+    if (!in->cat || !in->cat_on) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    for (Py_ssize_t i = 0; i < ncat; i++) {
         const char *c = PyUnicode_AsUTF8(PyList_GET_ITEM(cats, i));
         if (!c) goto done;
-        in->cat[i] = strdup(c);
+        char *copy = strdup(c);
+        if (!copy) {
+            PyErr_NoMemory();
+            goto done;
+        }
+        in->cat[i] = copy;
         in->cat_on[i] = logging_on;
+        in->ncat = (int)i + 1; /* clear_slave frees what was copied so far */
     }
     if (buffer != Py_None) {
         if (PyObject_GetBuffer(buffer, &in->view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0)
@@ -379,15 +419,23 @@ static unsigned long long fnv1a(const char *s, size_t n) {
 /* Import resources/_fmi_bridge.py under a name derived from its content (GIL held). */
 static PyObject *import_bridge(const char *resources) {
     char path[4096];
-    snprintf(path, sizeof path, "%s/_fmi_bridge.py", resources);
+    int len = snprintf(path, sizeof path, "%s/_fmi_bridge.py", resources);
+    if (len < 0 || (size_t)len >= sizeof path) {
+        PyErr_Format(PyExc_OSError, "the path of %s/_fmi_bridge.py is too long (%zu bytes at most)", resources,
+                     sizeof path - 1);
+        return NULL;
+    }
     FILE *f = fopen(path, "rb");
     if (!f) {
         PyErr_Format(PyExc_FileNotFoundError, "cannot open %s", path);
         return NULL;
     }
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
+    long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+    if (size < 0 || size > (1L << 24) || fseek(f, 0, SEEK_SET) != 0) {
+        fclose(f);
+        PyErr_Format(PyExc_OSError, "cannot read %s: %s", path, size < 0 ? "cannot tell its size" : "over 16 MiB");
+        return NULL;
+    }
     char *src = malloc((size_t)size + 1);
     if (!src || fread(src, 1, (size_t)size, f) != (size_t)size) {
         fclose(f);
@@ -398,7 +446,12 @@ static PyObject *import_bridge(const char *resources) {
     fclose(f);
     src[size] = '\0';
     char name[64];
-    snprintf(name, sizeof name, "_sarins_fmi_bridge_%016llx", fnv1a(src, (size_t)size));
+    len = snprintf(name, sizeof name, "_sarins_fmi_bridge_%016llx", fnv1a(src, (size_t)size));
+    if (len < 0 || (size_t)len >= sizeof name) { /* cannot happen (35 characters); checked all the same */
+        free(src);
+        PyErr_SetString(PyExc_OSError, "bridge module name truncated");
+        return NULL;
+    }
     PyObject *modules = PyImport_GetModuleDict();
     PyObject *mod = PyDict_GetItemString(modules, name);
     if (mod != NULL) {
@@ -414,35 +467,6 @@ static PyObject *import_bridge(const char *resources) {
     return mod;
 }
 
-static int hexval(char c) {
-    if (c >= '0' && c <= '9') return c - '0';
-    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-    return -1;
-}
-
-/* fmuResourceLocation (file: URI, or a plain absolute path) -> path; 0 on failure. */
-static int uri_to_path(const char *uri, char *out, size_t outlen) {
-    const char *p = uri;
-    if (p == NULL) return 0;
-    if (strncmp(p, "file://localhost/", 17) == 0) p += 16;
-    else if (strncmp(p, "file:///", 8) == 0) p += 7;
-    else if (strncmp(p, "file:/", 6) == 0) p += 5;
-    else if (p[0] != '/') return 0;
-    size_t k = 0;
-    for (; *p && k + 1 < outlen; p++) {
-        if (p[0] == '%' && hexval(p[1]) >= 0 && hexval(p[2]) >= 0) {
-            out[k++] = (char)(hexval(p[1]) * 16 + hexval(p[2]));
-            p += 2;
-        } else {
-            out[k++] = *p;
-        }
-    }
-    out[k] = '\0';
-    while (k > 1 && out[k - 1] == '/') out[--k] = '\0';
-    return k > 0;
-}
-
 static void free_inst(Inst *in) {
     if (!in) return;
     free(in->name);
@@ -456,6 +480,13 @@ static fmi2Component core_instantiate(fmi2String instanceName, fmi2Type fmuType,
     Inst *in = calloc(1, sizeof(Inst));
     if (!in) return NULL;
     in->name = strdup(instanceName ? instanceName : "");
+    if (!in->name) {
+        free(in);
+        if (functions && functions->logger)
+            functions->logger(functions->componentEnvironment, instanceName ? instanceName : "", fmi2Error,
+                              "logStatusError", "fmi2Instantiate: out of memory");
+        return NULL;
+    }
     if (functions) {
         in->logger = functions->logger;
         in->env = functions->componentEnvironment;
@@ -472,9 +503,10 @@ static fmi2Component core_instantiate(fmi2String instanceName, fmi2Type fmuType,
         return NULL;
     }
     char resources[4096];
-    if (!uri_to_path(resourceLocation, resources, sizeof resources)) {
-        logf_(in, fmi2Error, "fmi2Instantiate: fmuResourceLocation %s is not a file: URI",
-              resourceLocation ? resourceLocation : "(null)");
+    int uri = sarins_uri_to_path(resourceLocation, resources, sizeof resources);
+    if (uri != SARINS_URI_OK) {
+        logf_(in, fmi2Error, "fmi2Instantiate: fmuResourceLocation %.1000s: %s",
+              resourceLocation ? resourceLocation : "(null)", sarins_uri_error(uri));
         free_inst(in);
         return NULL;
     }
@@ -564,6 +596,7 @@ static fmi2Status core_setup_experiment(fmi2Component c, fmi2Boolean tolDefined,
     else {
         Py_DECREF(r);
         st = after_call(in, 0);
+        if (st <= fmi2Warning) in->t_start = t0;
     }
     PyGILState_Release(g);
     return st;
@@ -618,10 +651,14 @@ static fmi2Status core_reset(fmi2Component c) {
     if (nsaved > 0) {
         saved = malloc((size_t)nsaved * sizeof(int));
         saved_names = malloc((size_t)nsaved * sizeof(char *));
-        if (!saved || !saved_names) nsaved = 0;
+        if (!saved || !saved_names) nsaved = 0; /* out of memory: the settings are not kept */
         for (int i = 0; i < nsaved; i++) {
             saved[i] = in->cat_on[i];
             saved_names[i] = strdup(in->cat[i]);
+            if (!saved_names[i]) { /* keep those copied so far */
+                nsaved = i;
+                break;
+            }
         }
     }
     PyGILState_STATE g = PyGILState_Ensure();
@@ -642,6 +679,7 @@ static fmi2Status core_reset(fmi2Component c) {
         if (st <= fmi2Warning) {
             in->state = S_INSTANTIATED;
             in->have_time = 0;
+            in->t_start = 0.0; /* the slave is new: back to the default start time */
         }
     }
     PyGILState_Release(g);
@@ -950,6 +988,9 @@ static fmi2Status core_do_step(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Bool
     if (in->have_time && fabs(t - in->t_next) > 1e-9 * fmax(1.0, fabs(in->t_next)))
         return fail(in, "fmi2DoStep: communication point %.17g does not continue the previous step, which "
                     "ended at %.17g", t, in->t_next);
+    if (!in->have_time && fabs(t - in->t_start) > 1e-9 * fmax(1.0, fabs(in->t_start)))
+        return fail(in, "fmi2DoStep: the first communication point %.17g is not the start time %.17g "
+                    "(fmi2SetupExperiment)", t, in->t_start);
     fmi2Status st;
     /* the slave's compiled step: no Python, no GIL; non-zero = declined, nothing changed */
     if (in->fast != NULL && in->fast(in->fast_table, in->fast_rows, in->buf, in->view.len / 8, t, h) == 0) {

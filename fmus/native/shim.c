@@ -27,6 +27,7 @@
 
 #include "fmi2Functions.h"
 #include "sarins_fmi.h"
+#include "sarins_uri.h"
 
 static const sarins_core_api *api = NULL;
 static pthread_mutex_t load_lock = PTHREAD_MUTEX_INITIALIZER;
@@ -270,26 +271,12 @@ static int load_core(const char *resources, char *err, size_t errlen) {
     return 1;
 }
 
-/* fmuResourceLocation -> path (the core does the full URI decoding) */
-static int resource_path(const char *uri, char *out, size_t len) {
-    if (!uri) return 0;
-    const char *p = uri;
-    if (strncmp(p, "file://localhost/", 17) == 0) p += 16;
-    else if (strncmp(p, "file:///", 8) == 0) p += 7;
-    else if (strncmp(p, "file:/", 6) == 0) p += 5;
-    size_t k = 0;
-    for (; *p && k + 1 < len; p++) {
-        if (p[0] == '%' && p[1] && p[2]) {
-            char hex[3] = {p[1], p[2], 0};
-            out[k++] = (char)strtol(hex, NULL, 16);
-            p += 2;
-        } else {
-            out[k++] = *p;
-        }
-    }
-    out[k] = '\0';
-    while (k > 1 && out[k - 1] == '/') out[--k] = '\0';
-    return k > 0;
+/* The core's table once loaded (NULL before), read under load_lock like every access to api. */
+static const sarins_core_api *loaded_api(void) {
+    pthread_mutex_lock(&load_lock);
+    const sarins_core_api *a = api;
+    pthread_mutex_unlock(&load_lock);
+    return a;
 }
 
 FMI2_Export const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
@@ -302,8 +289,10 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2St
     pthread_mutex_lock(&load_lock);
     if (api == NULL) {
         char path[PATH_MAX];
-        if (!resource_path(resources, path, sizeof path))
-            snprintf(err, sizeof err, "fmuResourceLocation %s is not a file: URI", resources ? resources : "(null)");
+        int uri = sarins_uri_to_path(resources, path, sizeof path);
+        if (uri != SARINS_URI_OK)
+            snprintf(err, sizeof err, "fmuResourceLocation %.4000s: %s", resources ? resources : "(null)",
+                     sarins_uri_error(uri));
         else
             load_core(path, err, sizeof err);
     }
@@ -316,10 +305,15 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2St
     return a->instantiate(name, type, guid, resources, functions, visible, loggingOn);
 }
 
-#define FWD(call) return (c && api) ? api->call : fmi2Error
+#define FWD(call)                                          \
+    do {                                                   \
+        const sarins_core_api *a_ = loaded_api();          \
+        return (c && a_) ? a_->call : fmi2Error;           \
+    } while (0)
 
 FMI2_Export void fmi2FreeInstance(fmi2Component c) {
-    if (c && api) api->freeInstance(c);
+    const sarins_core_api *a = loaded_api();
+    if (c && a) a->freeInstance(c);
 }
 FMI2_Export fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n, const fmi2String cats[]) {
     FWD(setDebugLogging(c, on, n, cats));

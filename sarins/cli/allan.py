@@ -26,7 +26,7 @@ from .navigate import seed_value
 
 def register(sub) -> None:
     p = sub.add_parser("allan", help="Allan deviation and noise read-outs of an IMU preset or log",
-                       description="Overlapping Allan deviation (allantools) of simulated static data of a "
+                       description="Overlapping Allan deviation of simulated static data of a "
                                    "preset, with the random-walk, bias-instability and rate-random-walk read-outs.")
     p.add_argument("--imu", choices=sorted(imu_mod.PRESETS), default="mems", help="IMU preset to simulate")
     p.add_argument("--log", default=None, metavar="PATH",

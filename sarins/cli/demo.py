@@ -23,13 +23,16 @@ def register(sub) -> None:
     p.add_argument("--model", choices=("hot", "cold"), default="hot", help="shipped identifier model (default hot)")
     p.add_argument("--model-file", default=None, help="identifier model file (JSON), instead of --model")
     p.add_argument("--fmu-dir", default="build/fmus", help="where the FMUs are built (default build/fmus)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--out", default="results/demo",
+                   help="folder for the series (series.csv) and the figure of the position error with and without "
+                        "compensation (position_error.png) (default results/demo)")
+    p.add_argument("--no-progress", action="store_true", help="no phase announcements or progress on stderr")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     from orchestration.errors import FMUCallError
-    from sarins.demo import run_demo
+    from sarins.demo import NEXT_COMMANDS, run_demo, write_results
 
     check_run_args(args)
     refuse_unless(args, {"model": "--model"}, args.model_file is None,
@@ -41,6 +44,12 @@ def run(args) -> int:
     fmu_dir = Path(args.fmu_dir)
     if fmu_dir.exists() and not fmu_dir.is_dir():
         raise UsageError(f"--fmu-dir {fmu_dir} exists and is not a folder")
+    out_dir = Path(args.out)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise UsageError(f"--out {out_dir} exists and is not a folder")
+    for name in ("series.csv", "position_error.png"):
+        if (out_dir / name).exists() and not (out_dir / name).is_file():
+            raise UsageError(f"--out {out_dir}: {out_dir / name} exists and is not a regular file")
     hours = args.align_hours + args.identify_hours + args.nav_hours
     print(f"sarins demo: co-simulating {hours:g} h of the identified static system "
           f"({args.imu} IMU, {args.start} start, {args.rotation} rotation, {args.lat_deg:g} deg; "
@@ -52,6 +61,10 @@ def run(args) -> int:
                        model_file=args.model_file, fmu_dir=args.fmu_dir, progress=not args.no_progress)
     except FMUCallError as exc:  # the co-simulation failed: a failed run, not bad input
         raise RunError(str(exc)) from None
+    try:
+        files = write_results(out, out_dir, identify_hours=args.identify_hours)
+    except OSError as exc:
+        raise RunError(f"cannot write the results to {out_dir}: {exc}") from None
     res, ref = out["cosim"], out["reference"]
     nav = res["ins.nav_time"]
     after = nav > args.identify_hours * 3600.0 + 0.5
@@ -73,4 +86,9 @@ def run(args) -> int:
     ]
     for name, value in rows:
         print(f"  {name:<30} {value}")
+    print(f"results in {files.folder}/: {files.series.name} (the series, one row a minute), {files.figure.name} "
+          "(position error with and without compensation)")
+    print("to go further:")
+    for what, command in NEXT_COMMANDS:
+        print(f"  {command:<96} # {what}")
     return 0

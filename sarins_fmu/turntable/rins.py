@@ -28,6 +28,8 @@ def _single_axis_segments(scheme, duration, rate, acc, dwell, grid, revolutions=
         return [(t_acc, rate / t_acc)]
     dwell = ceil_to_grid(dwell, grid) if dwell > 0 else 0.0
     if scheme == "forward-reverse":
+        if not (revolutions >= 1 and float(revolutions).is_integer()):  # 0 turns: a cycle of no time, never ending
+            raise ValueError(f"revolutions must be a positive whole number, got {revolutions!r}")
         cycle_moves = [2 * math.pi * revolutions, -2 * math.pi * revolutions]
     else:
         cycle_moves = [math.pi, -0.5 * math.pi, math.pi, -1.5 * math.pi]
