@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 
 from sarins_fmu import imu as imu_mod
+from sarins_fmu.files import check_output_path
 
 from . import UsageError, finite
 from .navigate import seed_value
@@ -42,6 +43,8 @@ def run(args) -> int:
         raise UsageError(f"--rate-hz must be positive, got {args.rate_hz:g}")
     if args.hours <= 0:
         raise UsageError(f"--hours must be positive, got {args.hours:g}")
+    if args.plot:
+        check_output_path(args.plot, "--plot")
     if args.log:
         from sarins_fmu.imu_log import read_log
 
