@@ -368,3 +368,15 @@ def test_campaign_writes_name_the_file_when_the_disk_is_full(tmp_path):
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))  # as write() raises it: no file name
     assert caught.value.errno == errno.ENOSPC and caught.value.filename == str(target)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_interrupted_cosim_on_a_full_disk_keeps_its_status_and_says_what_was_lost(ramp_gain, tmp_path, capsys,
+                                                                                   monkeypatch):
+    archive = write_ssp(ramp_gain, tmp_path / "rg.ssp")
+    out = tmp_path / "out.csv"
+    monkeypatch.setattr(pathlib.Path, "open", _full_disk_open(".csv"))
+    monkeypatch.setenv("ORCHESTRATION_TEST_SIGNAL_AFTER", "5:SIGTERM")
+    assert main(["cosim", str(archive), "--stop-time", "100", "--step", "0.5", "--output", str(out),
+                 "--no-progress"]) == 143
+    line = one_clean_line(capsys.readouterr().err)
+    assert "interrupted at t = 3 s; the 7 rows recorded so far could not be written" in line and str(out) in line

@@ -185,7 +185,11 @@ def _interrupted(stop: interrupt.Interrupted, output, units: dict) -> str:
     if output:
         mark = (f"{INTERRUPTED_MARK} {partial.meta['signal']} at t = {reached:.9g} s: the rows "
                 f"above are the run up to t = {partial['time'][-1]:.9g} s")
-        path, _ = write_output(partial, output, units, mark)
+        try:
+            path, _ = write_output(partial, output, units, mark)
+        except OSError as error:  # the stop's status stands; say what was lost
+            return text + f"; the {len(partial)} rows recorded so far could not be written: " \
+                          f"{' '.join(str(error).split())}"
         text += f"; the {len(partial)} rows recorded so far are in {path}, its last line marks the stop"
     return text
 
