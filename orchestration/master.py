@@ -327,7 +327,7 @@ class Master:
         callback = _test_signal_hook(callback)
         meta = self._meta(start, segments, total, output_every, realtime)
         meta["step_source"] = step_source
-        pacer = None if realtime is None else RealTimePacer(realtime, start)
+        pacer = None if realtime is None else RealTimePacer(realtime, start, capacity=total)
         bar = Progress(total, progress, description=self.system.name)
         recorder = None
         try:

@@ -211,7 +211,11 @@ NAV_RLG = ImuModel(
     ),
     axial_drift_poly=np.array([1.0e-6, -4.0e-5, 0.0025]) * DPH_TO_RPS,
     axial_drift_dtdt=1.0e-4 * DPH_TO_RPS * 3600.0,  # 1e-4 deg/h per degC/h
-    aging_sigma=np.array([0.3e-6, 1.0e-5, 0.0008]) * DPH_TO_RPS,
+    # ageing (seed 002 eq. (20): first-order Markov, 360-day correlation time): the constant term's
+    # stationary std is the HG9900 brochure's gyro bias, 0.0035 deg/h 1 sigma, read as the bias a
+    # navigation-grade RLG wanders over its calibration life; a and b have no public source
+    # (docs/imu-presets.md)
+    aging_sigma=np.array([0.3e-6, 1.0e-5, 0.0035]) * DPH_TO_RPS,
 )
 
 # Consumer/tactical MEMS unit like seed 003's MIMU: bias ~10 deg/h with strong

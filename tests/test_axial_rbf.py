@@ -154,8 +154,9 @@ def test_drift_identifier_accepts_latitude_reading_or_error(tmp_path, line_model
 
 @pytest.mark.slow
 def test_quick_campaign_identifies_and_compensates(tmp_path):
-    """Issue acceptance (quick profile): hot-start identification error below
-    0.0005 deg/h on every held-out experiment, compensated 72 h position
+    """Issue acceptance (quick profile): hot-start identification error within
+    4 sigma of the noise floor the preset's gyro noise sets (sweep.noise_floor_dph,
+    0.00034 deg/h at 28.2 deg; issue 20: no noise scale), compensated 72 h position
     error below the uncompensated one for every hot held-out experiment, the
     short co-simulated identified run equal to its in-process twin, and the
     report with its four figures."""
@@ -165,8 +166,12 @@ def test_quick_campaign_identifies_and_compensates(tmp_path):
     summary = execute(profile="quick", out=tmp_path, workers=2, progress=False)
     hot = summary["test"]["hot"]
     assert len(hot) == 3
+    from sarins.axial_rbf.sweep import noise_floor_dph
+    from sarins_fmu.experiments import axial_rbf as s0
+
+    floor = noise_floor_dph(s0.GYRO_NOISE_SCALE, s0.SITE_LAT_DEG)
     for t in hot:
-        assert abs(t["ident_dph"] - t["drift_dph"]) < 0.0005, t["name"]
+        assert abs(t["ident_dph"] - t["drift_dph"]) < 4 * floor, t["name"]
     for t in hot:
         assert t["max_comp_nmi"] < t["max_uncomp_nmi"], t["name"]
     check = summary["cosim_check"]
@@ -178,6 +183,8 @@ def test_quick_campaign_identifies_and_compensates(tmp_path):
                     "paper's 6 rows", "Fig. 1: the sign of the longitude error"):
         assert heading in text
     assert len(list((tmp_path / "report").glob("fig*.png"))) == 4
+    assert "| claim | paper value | ours (median) | ours 5-95 % | paper's percentile in ours |" in text
+    assert "**The quick profile is too small to test:** hot start: abs. identification error" in text
     cold = summary["comparison"]["cold"]
     assert {"mt_hot", "mt_hot_mt", "mt_cold_mt", "cold6_1", "cold6_2"} <= set(cold)
     for t, mt in zip(summary["test"]["cold"], cold["mt_hot_mt"]):  # the same held-out runs, with the table
@@ -262,3 +269,24 @@ def test_identifier_fmu_reset_and_two_instances(fmu_dir, line_model):
     finally:
         a.free()
         b.free()
+
+
+def test_comparison_table_rows_from_the_held_out_comparisons():
+    """The report's comparison table (sarins.comparison): paper value, our median and range, the paper's
+    percentile; the quick profile's 3 + 2 held-out runs are too few to test any claim."""
+    from sarins.axial_rbf.report import comparison_claims
+    from sarins.comparison import comparison_lines
+
+    def entries(errors, nmi):
+        return [{"error_dph": e, "max_nmi": m, "drift_dph": 0.0} for e, m in zip(errors, nmi)]
+
+    big = {"hot": {"rbf": entries([1e-4, -2e-4, 4e-4, 5e-4, -6e-4], [0.2, 0.4, 0.6, 0.8, 1.2])},
+           "cold": {"rbf": entries([1e-4, 2e-4], [0.3, 0.5]),
+                    "mt_hot_mt": entries([1e-4] * 4 + [1e-3] * 6, [0.5] * 10)}}
+    rows = [c.cells() for c in comparison_claims({"comparison": big})]
+    assert rows[0][1:] == ["< 0.0003", "0.0004 (n = 5)", "0.00012 .. 0.00058", "40 %"]
+    assert rows[1][4] == "80 %"  # 4 of 5 runs within 1 nmi
+    assert rows[2][1] == "0.0005 .. 0.0015" and rows[2][4] == "40 .. 100 %"
+    assert rows[3][4].startswith("not tested: too few runs (2")
+    text = "\n".join(comparison_lines(comparison_claims({"comparison": big}), profile="quick"))
+    assert "**The quick profile is too small to test:** cold start, cold network" in text

@@ -391,6 +391,27 @@ def test_quick_campaign_orders_models_as_the_report_claims(quick_campaign):
     assert summary["n_test"] > 0.5 * summary["n_train"] > 0
     held = next(line for line in (out / "report.md").read_text().splitlines() if "holds on:" in line)
     assert all(m in held.split("; not on")[0] for m in ("std", "mean |r|", "systematic"))
+    text = (out / "report.md").read_text()
+    assert "| claim | paper value | ours (median) | ours 5-95 % | paper's percentile in ours |" in text
+    assert "| traditional: mean reduction (%), Table 3 | 9.2 |" in text
+    assert "**The quick profile is too small to test:** traditional: mean reduction (%)" in text
+
+
+def test_comparison_claims_pool_the_groups_models_and_power_ups():
+    from sarins.mems_calibration.report import comparison_claims
+
+    red = {"traditional": {"mean": 20.0, "std": 15.0}, "rbf": {"mean": 60.0, "std": 50.0},
+           "grnn": {"mean": 70.0, "std": 55.0}, "lstm": {"mean": 80.0, "std": 60.0},
+           "gru": {"mean": 82.0, "std": 61.0}, "lstm3": {"mean": 84.0, "std": 62.0},
+           "lstm-memoryless": {"mean": 1.0, "std": 1.0}}
+    rep = {k: {"mean": v["mean"] - 10.0, "std": v["std"] - 10.0} for k, v in red.items()}
+    rows = {c.name: c for c in comparison_claims({"reductions": red, "reductions_repowered": rep})}
+    assert sorted(rows["traditional: mean reduction (%), Table 3"].sample) == [10.0, 20.0]
+    assert sorted(rows["shallow: std reduction (%), Table 3"].sample) == [40.0, 45.0, 50.0, 55.0]
+    recurrent_mean = rows["recurrent: mean reduction (%), Table 3"]  # the memoryless control is not in a group
+    assert sorted(recurrent_mean.sample) == [70.0, 72.0, 74.0, 80.0, 82.0, 84.0]
+    assert recurrent_mean.cells()[4] == "0 %"  # the paper's 55 % is below all six
+    assert not rows["shallow: mean reduction (%), Table 3"].tested
 
 
 @pytest.mark.slow

@@ -245,7 +245,8 @@ def sweep_section(sweep: dict, folder: Path) -> tuple[list[str], list[str]]:
              f"Grid **{sweep['grid']}**, seed {sweep['seed']}: hot starts, {n['n_train']} training and "
              f"{n['n_test']} held-out experiments per point, the same experiments (drifts, temperatures, noise "
              "seeds) at every point; only the gyro white noise and bias instability (scale s times the nav-rlg "
-             "preset's; the campaign's unit is s = 0.4) and the site latitude change. Each point trains its own hot "
+             "preset's; a sensitivity study: the campaign's unit is s = "
+             f"{s0.GYRO_NOISE_SCALE:g}, the preset's own noise) and the site latitude change. Each point trains its own hot "
              "network (SPREAD by leave-one-out). Cells: RBF RMS / max error on the held-out rows / analytic 1-sigma "
              "floor sqrt(3/2 (N^2 + 2 sigma_b^2 tau) t) / (cos L (1 - cos Wt)/W) (`sarins_fmu/static_errors.py`), "
              f"deg/h; **yes** where every held-out error is below the paper's {CLAIM_DPH} deg/h.", "",

@@ -58,7 +58,7 @@ def register(subparsers) -> argparse.ArgumentParser:
                              "'# interrupted by SIG... at t = T s')")
     parser.add_argument("--realtime", type=finite, default=None, metavar="FACTOR",
                         help="pace the run: wall-clock seconds per simulated second (the "
-                             "clock starts after initialisation; the worst lag is reported)")
+                             "clock starts after initialisation; the lag distribution is reported)")
     parser.add_argument("--no-progress", action="store_true", help="never show a progress bar")
     parser.set_defaults(func=run)
     return parser
@@ -83,7 +83,7 @@ def _format(value) -> str:
 
 
 OPTIONS = {"start_time": "--start-time", "stop_time": "--stop-time", "step_size": "--step",
-           "output_every": "--output-every"}  # Master.simulate's arguments -> this command's options
+           "output_every": "--output-every", "realtime": "--realtime"}  # Master.simulate's arguments -> this command's options
 INTERRUPTED_MARK = "# interrupted by"  # first words of the last line of an interrupted run's CSV
 
 
@@ -207,10 +207,12 @@ def column_units(master, columns) -> dict:
 
 
 def realtime_summary(report: dict) -> str:
-    """One line from ``result.meta['realtime']``: worst lag and late steps."""
+    """One line from ``result.meta['realtime']``: late steps, the lag distribution, the least slack."""
+    head = f"real time (factor {report['factor']:g}): "
+    slack = report.get("min_slack_s")
+    margin = "" if slack is None else f"; least slack {slack:.6f} s"
     if not report["late_steps"]:
-        return (f"real time (factor {report['factor']:g}): no step late in "
-                f"{report['steps']} steps")
-    return (f"real time (factor {report['factor']:g}): {report['late_steps']} of "
-            f"{report['steps']} steps late, worst lag {report['max_lag_s']:.6f} s at "
-            f"simulated t = {report['max_lag_time']:.9g} s")
+        return head + f"no step late in {report['steps']} steps" + margin
+    return (head + f"{report['late_steps']} of {report['steps']} steps late; lag p50 "
+            f"{report['lag_p50_s']:.6f} s, p99 {report['lag_p99_s']:.6f} s, p99.9 {report['lag_p999_s']:.6f} s, "
+            f"max {report['max_lag_s']:.6f} s at simulated t = {report['max_lag_time']:.9g} s" + margin)

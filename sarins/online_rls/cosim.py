@@ -28,7 +28,7 @@ import numpy as np
 from fmus.drift_model_updater_slave import P_INDEX, P_UNITS
 from sarins_fmu import imu as imu_mod
 from sarins_fmu import imu_params
-from sarins_fmu.experiments.online_rls_vehicle import RIGID_BODY, RINS_ROTATION, UPDATE_LATENCY, VehicleRun
+from sarins_fmu.experiments.online_rls_vehicle import RINS_ROTATION, UPDATE_LATENCY, VehicleRun
 from sarins_fmu.identify.online import OnlineDriftUpdater
 from sarins_fmu.identify.rls import ForgettingRLS
 from sarins_fmu.kalman import StopFilterSettings
@@ -82,9 +82,9 @@ class CosimEngine:
         from sarins.systems import vehicle_rins_online
 
         traj = run.trajectory()
-        body = {"sway_pitch": RIGID_BODY.sway_pitch, "sway_roll": RIGID_BODY.sway_roll,
-                "sway_period": RIGID_BODY.sway_period, "vibration": RIGID_BODY.vibration,
-                "reference_speed": RIGID_BODY.reference_speed, "body_seed": RIGID_BODY.seed}
+        b = run.body
+        body = {"sway_pitch": b.sway_pitch, "sway_roll": b.sway_roll, "sway_period": b.sway_period,
+                "vibration": b.vibration, "reference_speed": b.reference_speed, "body_seed": b.seed}
         vehicle = {"legs": legs_text(run.legs), "lat0": run.lat, "lon0": run.lon, "heading0": run.heading,
                    "lead_time": run.lead_time, "grid": run.step, **body}
         turntable = {"scheme": RINS_ROTATION, "align_time": 0.0, "grid": run.step,

@@ -34,7 +34,8 @@ from ..rotations import euler_to_mat, mat_to_euler, rotvec_to_mat
 from ..thermal import Ambient
 from ..vehicle import random_legs
 from ..units import ARCSEC_TO_RAD, DAY, DEG_TO_RAD, DPH_TO_RPS, DPSH_TO_RPSS, RPS_TO_DPH, UG_TO_MPS2
-from .online_rls_vehicle import GYRO_Z, InProcessEngine, VehicleRun, position_errors, reference_navigation
+from .online_rls_vehicle import (GYRO_Z, INTERNAL_RATE, VEHICLE_BODY, InProcessEngine, VehicleRun,
+                                 position_errors, reference_navigation)
 
 TEMPERATURE_RANGE = (0.0, 50.0)  # degC, seed 002's stop temperatures and S-metric range
 N_STOPS = 20  # seed 002: stops in the 300-day simulation
@@ -298,7 +299,7 @@ def model_update_run(*, seed: int = 0, unit: str = "premise", days: float = SIM_
 # --------------------------------------------------------------------------
 
 def _session_run(model, coef, *, day, temperature, stop_seconds, lat, seed, step=1.0,
-                 internal_rate=50.0) -> VehicleRun:
+                 internal_rate=INTERNAL_RATE) -> VehicleRun:
     """One drive with a stop of ``stop_seconds`` on ``day`` (random legs, heading and INS
     attitude error from ``seed``), the IMU carrying the day's true coefficients ``coef``."""
     rng = np.random.default_rng([seed, 40])
@@ -308,7 +309,7 @@ def _session_run(model, coef, *, day, temperature, stop_seconds, lat, seed, step
     heading = float(rng.uniform(-math.pi, math.pi))
     unit = replace(model, axial_drift_poly=np.asarray(coef, float), aging_sigma=np.zeros(3))
     run = VehicleRun(legs, lat, 0.0, heading, unit, temperature - unit.thermal.self_heating[GYRO_Z], seed,
-                     start_day=day, step=step, internal_rate=internal_rate)
+                     start_day=day, step=step, internal_rate=internal_rate, body=replace(VEHICLE_BODY, seed=seed))
     phi0 = rng.standard_normal(3) * np.array([10 * ARCSEC_TO_RAD, 10 * ARCSEC_TO_RAD, 0.05 * DEG_TO_RAD])
     mat_true = euler_to_mat(heading, 0.0, 0.0)  # the vehicle at rest, level, table at zero
     return replace(run, attitude0=tuple(float(x) for x in mat_to_euler(_perturbed_attitude(mat_true, phi0))))
@@ -322,7 +323,7 @@ def cep(radial: np.ndarray) -> float:
 def vehicle_test(*, seed: int = 0, unit: str = "premise", n_sessions: int = 20, year_days: float = 318.0,
                  test_day: float = 368.0, drive_hours: float = 6.0, lat_deg: float = 40.0,
                  stop_minutes=(15.0, 60.0), ageing: str = "markov", forgetting_factor: float = 0.8,
-                 calibration_points: int = 11, internal_rate: float = 50.0, ageing_scale: float = 1.0,
+                 calibration_points: int = 11, internal_rate: float = INTERNAL_RATE, ageing_scale: float = 1.0,
                  engine=None) -> dict:
     """The vehicle test analogue: a year of online updates, then a 6 h drive.
 
@@ -336,7 +337,10 @@ def vehicle_test(*, seed: int = 0, unit: str = "premise", n_sessions: int = 20, 
     ``drive_hours`` drive with random turns and stops is navigated with the
     initial and with the updated model (Fig. 8); CEP and maximum radial
     error (Table 5) against an ideal-sensor INS on the same motion.
-    ``ageing_scale`` multiplies the unit's ageing standard deviations.
+    ``ageing_scale`` multiplies the unit's ageing standard deviations.  The
+    vehicle body sways and vibrates while it moves (:data:`VEHICLE_BODY`,
+    seeded per drive) and the IMU's minor loop runs at ``internal_rate``
+    (default 200 Hz).
 
     ``engine`` runs the sessions and the drive's navigations (default
     :class:`~sarins_fmu.experiments.online_rls_vehicle.InProcessEngine`; the
@@ -373,7 +377,8 @@ def vehicle_test(*, seed: int = 0, unit: str = "premise", n_sessions: int = 20, 
     test_unit = replace(model, axial_drift_poly=truth[-1], aging_sigma=np.zeros(3))
     drive = VehicleRun(legs, lat, 0.0, heading, test_unit, test_temp - test_unit.thermal.self_heating[GYRO_Z],
                        seed * 1000 + 999, lead_time=DRIVE_ALIGN_TIME, align_time=DRIVE_ALIGN_TIME,
-                       start_day=test_day, internal_rate=internal_rate)
+                       start_day=test_day, internal_rate=internal_rate,
+                       body=replace(VEHICLE_BODY, seed=seed * 1000 + 999))
     navs = engine.drive(drive, [fit.coefficients, rls.parameters])
     east, north = position_errors(navs, reference_navigation(drive), lat)
     time = np.arange(1, east.shape[1] + 1) * drive.step

@@ -44,7 +44,9 @@ from ..vehicle import BodyMotion, VehicleTrajectory
 
 GYRO_Z = 2  # index of the azimuth gyro in the IMU's temperature vector
 RINS_ROTATION = "forward-reverse"  # the RINS's rotation about azimuth (seed 002)
-RIGID_BODY = BodyMotion(0.0, 0.0, vibration=0.0)  # the test's vehicle body: level, no sway or vibration
+RIGID_BODY = BodyMotion(0.0, 0.0, vibration=0.0)  # a level body with no sway or vibration (tests, sensitivity)
+VEHICLE_BODY = BodyMotion()  # the vehicle test's body: suspension sway and vibration on (BodyMotion defaults)
+INTERNAL_RATE = 200.0  # Hz, the IMU minor loop of the vehicle test (the design's default rate)
 UPDATE_LATENCY = 1.0  # s, from the INS row that updates the model to the first interval compensated with it
 
 
@@ -65,6 +67,7 @@ class VehicleRun:
     start_day : days since the calibration at t = 0 (the updater's clock).
     step : IMU output and INS step (the communication step), s.
     internal_rate : IMU minor-loop rate, Hz.
+    body : the vehicle body's sway and vibration (:class:`~sarins_fmu.vehicle.BodyMotion`).
     """
 
     legs: tuple
@@ -79,12 +82,13 @@ class VehicleRun:
     attitude0: tuple = (0.0, 0.0, 0.0)
     start_day: float = 0.0
     step: float = 1.0
-    internal_rate: float = 50.0
+    internal_rate: float = INTERNAL_RATE
+    body: BodyMotion = VEHICLE_BODY
 
     def trajectory(self) -> VehicleTrajectory:
-        """The vehicle: legs after ``lead_time`` at rest, rigid body, no RINS rotation."""
+        """The vehicle: legs after ``lead_time`` at rest, the run's body motion, no RINS rotation."""
         return VehicleTrajectory(list(self.legs), self.lat, self.lon, self.heading, step=self.step,
-                                 rotation="none", lead_time=self.lead_time, body=RIGID_BODY)
+                                 rotation="none", lead_time=self.lead_time, body=self.body)
 
     def table_duration(self, traj: VehicleTrajectory) -> float:
         """Length of the RINS rotation pattern, s (the Turntable FMU's ``duration``)."""
