@@ -17,6 +17,7 @@ from .errors import (AlgebraicLoopWarning, IncompatibleConnectionError,
 from .system import Connection
 
 __all__ = ["Link", "VALUE_TYPES", "value_type", "find_variable", "check_connections",
+           "check_connector_types",
            "group_links", "gauss_seidel_order", "warn_unconnected", "output_dependencies",
            "algebraic_loops"]
 
@@ -80,6 +81,36 @@ def _endpoint(component: str, variable: str, index: Mapping[str, int],
                                     component=component, variable=variable)
     i = index[component]
     return i, find_variable(variables[i], variable, component=component, file=files[i])
+
+
+def check_connector_types(components: Sequence, variables: Sequence[Mapping],
+                          files: Sequence[str], file: str | None) -> None:
+    """Refuse an SSD connector whose declared type differs from its FMU variable's type.
+
+    Parameters
+    ----------
+    components : sequence of Component
+        With ``connector_types`` as read from the SSD.
+    variables : sequence of dict
+        ``{name: ModelVariable}`` per component.
+    files : sequence of str
+        FMU file per component.
+    file : str or None
+        System file, for the message.
+
+    Raises
+    ------
+    IncompatibleConnectionError
+        Naming the component, the connector, the declared and the FMU's type.
+    """
+    for component, known, fmu_file in zip(components, variables, files):
+        for connector, declared in getattr(component, "connector_types", {}).items():
+            var = known.get(connector)
+            if var is not None and var.type != declared:
+                raise IncompatibleConnectionError(
+                    f"connector '{connector}' is declared {declared} in the system file, but "
+                    f"the FMU's variable is {var.type} (FMU '{fmu_file}')", file=file,
+                    component=component.name, variable=connector)
 
 
 def check_connections(connections: Sequence[Connection], names: Sequence[str],

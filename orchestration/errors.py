@@ -95,7 +95,21 @@ class StartValueError(SystemDescriptionError):
 
 
 class ScheduleError(OrchestrationError, ValueError):
-    """Start/stop time or communication step (schedule) is invalid."""
+    """Start/stop time or communication step (schedule) is invalid.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong.
+    names : tuple of str
+        The arguments of :meth:`orchestration.Master.simulate` at fault
+        (``'start_time'``, ``'stop_time'``, ``'step_size'``,
+        ``'output_every'``), so that a front end can name its own options.
+    """
+
+    def __init__(self, message: str, *, names: tuple[str, ...] = ()):
+        self.names = tuple(names)
+        super().__init__(message)
 
 
 class FMUCallError(OrchestrationError, RuntimeError):

@@ -26,7 +26,7 @@ FMI_FATAL = 4
 LOG_MESSAGES_KEPT = 50
 
 
-def read_description(path: Path, component: str | None = None):
+def read_description(path: Path, component: str | None = None, shown: Path | None = None):
     """Read and check the model description of a co-simulation FMU.
 
     Parameters
@@ -35,6 +35,8 @@ def read_description(path: Path, component: str | None = None):
         FMU file (or unzipped FMU folder).
     component : str, optional
         Component name, for error messages.
+    shown : Path, optional
+        The FMU file to name in messages when ``path`` is its extracted folder.
 
     Returns
     -------
@@ -48,22 +50,23 @@ def read_description(path: Path, component: str | None = None):
     from fmpy import read_model_description
 
     path = Path(path)
+    name = str(path if shown is None else shown)
     if not path.exists():
-        raise SystemFileError("FMU file not found", file=str(path), component=component)
+        raise SystemFileError("FMU file not found", file=name, component=component)
     try:
         description = read_model_description(str(path), validate=False)
     except (zipfile.BadZipFile, KeyError, OSError) as error:
-        raise SystemFileError(f"not a readable FMU: {error}", file=str(path),
+        raise SystemFileError(f"not a readable FMU: {error}", file=name,
                               component=component) from None
     except Exception as error:  # fmpy raises bare Exception on malformed XML
-        raise SystemFileError(f"not a readable FMU: {error}", file=str(path),
+        raise SystemFileError(f"not a readable FMU: {' '.join(str(error).split())}", file=name,
                               component=component) from None
     if description.fmiVersion != "2.0":
         raise SystemFileError(f"FMI version {description.fmiVersion} is not supported "
-                              "(FMI 2.0 co-simulation only)", file=str(path),
+                              "(FMI 2.0 co-simulation only)", file=name,
                               component=component)
     if description.coSimulation is None:
-        raise SystemFileError("the FMU does not support co-simulation", file=str(path),
+        raise SystemFileError("the FMU does not support co-simulation", file=name,
                               component=component)
     return description
 
@@ -80,15 +83,23 @@ class UnpackedFMU:
 
     The archive is extracted with the limits of
     :func:`orchestration.archive.extract_archive` (size, member count, no
-    member outside the folder).
+    member outside the folder) before its model description is read from
+    the extracted folder, so the description is within the limits too.
     """
 
     def __init__(self, path: Path, component: str):
         self.path = Path(path)
-        self.description = read_description(self.path, component)
+        if not self.path.is_file():
+            raise SystemFileError("FMU file not found" if not self.path.exists() else
+                                  "not a regular file", file=str(self.path), component=component)
         self.unzipdir = str(extract_archive(self.path, kind="fmu", component=component))
-        self.variables = {v.name: v for v in self.description.modelVariables}
         self._finalizer = weakref.finalize(self, shutil.rmtree, self.unzipdir, True)
+        try:
+            self.description = read_description(Path(self.unzipdir), component, shown=self.path)
+        except BaseException:
+            self.remove()
+            raise
+        self.variables = {v.name: v for v in self.description.modelVariables}
 
     def remove(self) -> None:
         """Delete the extracted folder (also done when the object is garbage collected)."""

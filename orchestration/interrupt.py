@@ -26,10 +26,14 @@ class Interrupted(KeyboardInterrupt):
     ----------
     signum : int
         The signal (``signal.SIGINT`` or ``signal.SIGTERM``).
+    partial : ResultArray or None
+        Set by :meth:`orchestration.Master.simulate`: the rows recorded
+        before the stop.
     """
 
     def __init__(self, signum: int):
         self.signum = signum
+        self.partial = None
         super().__init__(f"stopped by {signal.Signals(signum).name}")
 
 

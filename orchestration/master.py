@@ -35,6 +35,8 @@ lag is reported in ``result.meta['realtime']``.
 from __future__ import annotations
 
 import math
+import os
+import signal
 from collections.abc import Callable, Sequence
 from ctypes import c_double
 from pathlib import Path
@@ -44,7 +46,8 @@ import warnings
 import numpy as np
 
 from . import interrupt
-from .coupling import (algebraic_loops, check_connections, find_variable, gauss_seidel_order,
+from .coupling import (algebraic_loops, check_connections, check_connector_types, find_variable,
+                       gauss_seidel_order,
                        group_links, output_dependencies, value_type, warn_unconnected)
 from .errors import (DefaultStepWarning, OrchestrationError, ScheduleError, StartValueError,
                      UnknownComponentError)
@@ -62,6 +65,26 @@ __all__ = ["Master", "simulate_system", "SCHEMES", "StepCallback"]
 SCHEMES = ("gauss-seidel", "jacobi")
 StepCallback = Callable[[float, "Master"], bool | None]
 _SETTABLE_CAUSALITIES = ("parameter", "input")
+MAX_RECORD_BYTES = 2**31  # recorder storage preallocated for one run (rows x values x 8 bytes)
+TEST_SIGNAL_ENV = "ORCHESTRATION_TEST_SIGNAL_AFTER"  # tests only: "N:SIGTERM" raises it after step N
+
+
+def _test_signal_hook(callback: StepCallback | None) -> StepCallback | None:
+    """Tests only: with ``ORCHESTRATION_TEST_SIGNAL_AFTER=N:SIGNAME`` the process sends
+    itself that signal after the Nth communication step (a deterministic Ctrl-C)."""
+    spec = os.environ.get(TEST_SIGNAL_ENV)
+    if not spec:
+        return callback
+    count, _, name = spec.partition(":")
+    after, signum, done = int(count), signal.Signals[name or "SIGINT"], [0]
+
+    def hook(time: float, master: Master):
+        done[0] += 1
+        if done[0] == after:
+            os.kill(os.getpid(), signum)
+        return None if callback is None else callback(time, master)
+
+    return hook
 
 
 def _check_scheme(scheme: str) -> str:
@@ -156,6 +179,7 @@ class Master:
             self.units.append(self._unpacked[path])
         self.files = [str(u.path) for u in self.units]
         self.variables = [u.variables for u in self.units]
+        check_connector_types(system.components, self.variables, self.files, file)
         self.start_values = [self._check_start_values(i) for i in range(len(self.names))]
         checked = check_connections(system.connections, self.names, self.variables,
                                     self.files, file)
@@ -278,7 +302,10 @@ class Master:
             released before it propagates.
         orchestration.interrupt.Interrupted
             Inside :func:`orchestration.interrupt.handle_signals`, on SIGINT
-            or SIGTERM (all instances released first).
+            or SIGTERM (all instances released first).  Its ``partial``
+            attribute holds the rows recorded so far (a ResultArray whose
+            ``meta['interrupted_at']`` is the time the last completed step
+            reached), or ``None`` if the loop had not started.
         """
         start = self.system.start_time if start_time is None else start_time
         start = 0.0 if start is None else float(start)
@@ -286,13 +313,23 @@ class Master:
         step, step_source = self._step(step_size)
         segments = make_schedule(start, stop, step)
         if not (isinstance(output_every, int) and output_every >= 1):
-            raise ScheduleError(f"output_every must be a positive integer, got {output_every!r}")
+            raise ScheduleError(f"output_every must be a positive integer, got {output_every!r}",
+                                names=("output_every",))
         self._check_variable_steps(segments)
         total = sum(s.count for s in segments)
+        record_bytes = (total // output_every + 3) * (1 + len(self.selection)) * 8
+        if record_bytes > MAX_RECORD_BYTES:
+            raise ScheduleError(f"recording {total // output_every + 1} rows of "
+                                f"{1 + len(self.selection)} values needs {record_bytes:.3g} bytes, "
+                                f"more than the limit of {MAX_RECORD_BYTES} bytes (MAX_RECORD_BYTES); "
+                                "record fewer rows or variables",
+                                names=("stop_time", "step_size", "output_every"))
+        callback = _test_signal_hook(callback)
         meta = self._meta(start, segments, total, output_every, realtime)
         meta["step_source"] = step_source
         pacer = None if realtime is None else RealTimePacer(realtime, start, capacity=total)
         bar = Progress(total, progress, description=self.system.name)
+        recorder = None
         try:
             self._initialize(start)
             recorder = Recorder([inst.slave for inst in self.instances], self.names,
@@ -301,6 +338,12 @@ class Master:
             if pacer is not None:
                 pacer.start()  # the clock starts once every FMU is loaded and initialised
             steps = self._loop(segments, total, recorder, output_every, bar, pacer, callback)
+        except interrupt.Interrupted as stop:
+            stop.partial = None
+            if recorder is not None and recorder.count:
+                stop.partial = recorder.result({**meta, "interrupted_at": self.time,
+                                                "signal": signal.Signals(stop.signum).name})
+            raise
         finally:
             bar.close()
             self._release()

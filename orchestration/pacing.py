@@ -44,10 +44,10 @@ class RealTimePacer:
     def __init__(self, factor: float, start_time: float, capacity: int = 0):
         if not (math.isfinite(factor) and factor > 0.0):
             raise ScheduleError(f"real-time factor must be a finite positive number, got "
-                                f"{factor!r}")
+                                f"{factor!r}", names=("realtime",))
         if factor > MAX_FACTOR:
             raise ScheduleError(f"real-time factor {factor!r} is above {MAX_FACTOR:g} wall-clock "
-                                "seconds per simulated second")
+                                "seconds per simulated second", names=("realtime",))
         self.factor = float(factor)
         self.start_time = start_time
         self.wall_start = _time.perf_counter()

@@ -18,6 +18,7 @@ __all__ = ["Segment", "make_schedule", "StepSpec"]
 
 StepSpec = float | Sequence[tuple[float, float]] | np.ndarray
 REL_TOL = 1e-9
+MAX_STEPS = 10**9  # communication steps in one run (a 300-day run at 0.01 s is 2.6e9: split it)
 
 
 @dataclass(frozen=True)
@@ -32,15 +33,24 @@ class Segment:
 
 def _count(begin: float, end: float, step: float) -> int:
     if not (math.isfinite(step) and step > 0.0):
-        raise ScheduleError(f"communication step must be a finite positive number, got {step!r}")
+        raise ScheduleError(f"communication step must be a finite positive number, got {step!r}",
+                            names=("step_size",))
+    if not math.isfinite(end):
+        raise ScheduleError(f"stop time must be finite, got {end!r}", names=("stop_time",))
     if not end > begin:
-        raise ScheduleError(f"segment end {end!r} s must be after its start {begin!r} s")
-    count = round((end - begin) / step)
+        raise ScheduleError(f"segment end {end!r} s must be after its start {begin!r} s",
+                            names=("stop_time",))
+    steps = (end - begin) / step
+    if not steps <= MAX_STEPS:
+        raise ScheduleError(f"{end - begin!r} s in steps of {step!r} s is {steps:.3g} communication "
+                            f"steps, more than the limit of {MAX_STEPS:.0e} (MAX_STEPS)",
+                            names=("stop_time", "step_size"))
+    count = round(steps)
     scale = max(abs(begin), abs(end), step)
     if count < 1 or not math.isclose(begin + count * step, end, rel_tol=REL_TOL,
                                      abs_tol=REL_TOL * scale):
         raise ScheduleError(f"{end - begin!r} s from {begin!r} s to {end!r} s is not a whole "
-                            f"number of steps of {step!r} s")
+                            f"number of steps of {step!r} s", names=("stop_time", "step_size"))
     return count
 
 
@@ -70,10 +80,10 @@ def make_schedule(start: float, stop: float | None, step: StepSpec) -> list[Segm
         whole number of steps, or a non-increasing schedule.
     """
     if not math.isfinite(start):
-        raise ScheduleError(f"start time must be finite, got {start!r}")
+        raise ScheduleError(f"start time must be finite, got {start!r}", names=("start_time",))
     if np.ndim(step) == 0:
         if stop is None:
-            raise ScheduleError("a stop time is needed with a fixed step")
+            raise ScheduleError("a stop time is needed with a fixed step", names=("stop_time",))
         return [Segment(float(start), float(stop), float(step),
                         _count(float(start), float(stop), float(step)))]
     if isinstance(step, np.ndarray) and step.ndim == 1:
@@ -83,7 +93,7 @@ def make_schedule(start: float, stop: float | None, step: StepSpec) -> list[Segm
     if stop is not None and not math.isclose(segments[-1].end, stop, rel_tol=REL_TOL,
                                              abs_tol=REL_TOL * max(1.0, abs(stop))):
         raise ScheduleError(f"schedule ends at {segments[-1].end!r} s, not at the stop "
-                            f"time {stop!r} s")
+                            f"time {stop!r} s", names=("stop_time", "step_size"))
     return segments
 
 

@@ -45,6 +45,7 @@ class _Flattener:
         self.components: list[Component] = []
         self.by_name: dict[str, Component] = {}
         self.connector_units: dict[tuple[str, str], str | None] = {}
+        self.connector_types: dict[str, dict[str, str]] = {}  # owner -> {connector: declared type}
         self.system_connectors: dict[str, dict[str, str]] = {}  # path -> {name: kind}
         self.feeds: dict[tuple[str, str], tuple[tuple[str, str], Hop]] = {}
         self.systems: set[str] = set()
@@ -84,7 +85,8 @@ class _Flattener:
                                   component=name)
         self._connectors(element, name)
         values, units = self.read_bindings(element, name)
-        component = Component(name, element.get("source"), values, units)
+        component = Component(name, element.get("source"), values, units,
+                              self.connector_types.get(name, {}))
         self.components.append(component)
         self.by_name[name] = component
 
@@ -95,6 +97,8 @@ class _Flattener:
             kinds[name] = connector.get("kind")
             unit = None
             for typed in connector:
+                if isinstance(typed.tag, str) and _local(typed) in _TYPES:
+                    self.connector_types.setdefault(owner, {})[name] = _local(typed)
                 if isinstance(typed.tag, str) and _local(typed) == "Real":
                     unit = typed.get("unit")
             if unit is not None and unit not in self.units:

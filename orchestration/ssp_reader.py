@@ -24,14 +24,27 @@ parameter mappings (``.ssm``), signal dictionaries, non-FMU components,
 Model Exchange implementations, Boolean/Integer/Enumeration mapping
 transformations, Enumeration and Binary parameter values, binding sources
 outside the system's folder.  ``.ssp`` archives are extracted with limits
-(:mod:`orchestration.archive`).
+(:mod:`orchestration.archive`); an SSD file on disk or a parameter file is
+read only up to :data:`MAX_XML_BYTES`.
+
+Component sources are trusted no further than the system: a source must be
+a relative reference (percent-encoded, as a URI reference) or a ``file:``
+URI (host empty or ``localhost``) that resolves inside the archive or, for
+an SSD on disk, inside the SSD's folder.  ``..`` leading out, an absolute
+path or ``file:`` URI elsewhere, a symbolic link leading out and any other
+URI scheme are refused naming the component, before any file is opened (an
+``.ssp`` received from someone else cannot make the master load a library
+that is not in it).
 """
 from __future__ import annotations
 
+import dataclasses
+import os
 import shutil
 import weakref
 import zipfile
 from pathlib import Path
+from urllib.parse import unquote, urlsplit
 
 from lxml import etree
 
@@ -47,6 +60,7 @@ __all__ = ["read_system", "ANNOTATION_TYPE", "parse_literal", "SSD_NAME", "FMU_M
 ANNOTATION_TYPE = "org.sarins-fmu.master"
 SSD_NAME = "SystemStructure.ssd"
 PARAMETER_SET_MIME = "application/x-ssp-parameter-set"
+MAX_XML_BYTES = 64 * 2**20  # an SSD or SSV file on disk larger than this is refused before parsing
 
 
 def xml_parser() -> etree.XMLParser:
@@ -158,6 +172,13 @@ def _parse(file: Path, shown: Path, schema: str):
     from fmpy.ssp.ssd import validate_tree
 
     try:
+        size = file.stat().st_size
+    except OSError as error:
+        raise SystemFileError(f"cannot read: {error.strerror}", file=str(shown)) from None
+    if size > MAX_XML_BYTES:
+        raise SystemFileError(f"{size} bytes, more than the limit of {MAX_XML_BYTES} bytes "
+                              "(MAX_XML_BYTES) for an SSP XML file; refused", file=str(shown))
+    try:
         tree = etree.parse(str(file), xml_parser())
     except etree.XMLSyntaxError as error:
         raise SystemFileError(f"not well-formed XML: {error}", file=str(shown)) from None
@@ -170,8 +191,79 @@ def _parse(file: Path, shown: Path, schema: str):
     try:
         validate_tree(root, schema)
     except Exception as error:  # fmpy raises a bare Exception listing the schema errors
-        raise SystemFileError(str(error), file=str(shown)) from None
+        raise SystemFileError(_schema_summary(str(error)), file=str(shown)) from None
     return root
+
+
+def _schema_summary(text: str) -> str:
+    """fmpy's schema report (a title line, then one line per error) as one line:
+    the first error and how many more."""
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    errors = lines[1:] if len(lines) > 1 else lines
+    extra = len(errors) - 1
+    more = f" (and {extra} more schema error{'s' if extra > 1 else ''})" if extra else ""
+    return f"not valid SSP 1.0: {errors[0] if errors else 'schema validation failed'}{more}"
+
+
+def confined_source(source: str | None, base_dir: Path, *, file: str,
+                    component: str) -> Path:
+    """Resolve a component's ``source`` inside ``base_dir`` or refuse it.
+
+    Nothing is opened: the path is checked as text first (``..``, absolute
+    paths, URI schemes), then resolved (symbolic links are read, not
+    followed into files) and checked again.
+
+    Parameters
+    ----------
+    source : str
+        The ``source`` attribute: a relative URI reference or a ``file:`` URI.
+    base_dir : Path
+        The extracted archive, or the folder of the SSD file.
+    file, component : str
+        For the message.
+
+    Returns
+    -------
+    Path
+        The resolved absolute path, inside ``base_dir``.
+
+    Raises
+    ------
+    SystemFileError
+        Naming the component and the source.
+    """
+    def refuse(why: str) -> SystemFileError:
+        return SystemFileError(f"source '{source}' {why}; only files inside the "
+                               f"{'archive' if _is_workdir(base_dir) else 'system folder'} are "
+                               "loaded (refused before opening anything)", file=file,
+                               component=component)
+
+    if not source:
+        raise SystemFileError("component has no source", file=file, component=component)
+    parts = urlsplit(source)
+    if len(parts.scheme) > 1:  # one letter is a drive, not a scheme
+        if parts.scheme.lower() != "file":
+            raise refuse(f"uses the URI scheme '{parts.scheme}'")
+        if parts.netloc not in ("", "localhost"):
+            raise refuse(f"names the host '{parts.netloc}'")
+    if parts.query or parts.fragment:
+        raise refuse("has a query or fragment")
+    relative = Path(unquote(parts.path))
+    roots = {Path(os.path.abspath(base_dir)), Path(base_dir).resolve()}
+    target = relative if relative.is_absolute() else Path(base_dir).resolve() / relative
+    lexical = Path(os.path.normpath(target))
+    if not any(root in lexical.parents for root in roots):
+        raise refuse("is outside" if relative.is_absolute() else "leads outside with '..'")
+    real = lexical.resolve()
+    if Path(base_dir).resolve() not in real.parents:
+        raise refuse("leads outside through a symbolic link")
+    return real
+
+
+def _is_workdir(base_dir: Path) -> bool:
+    from .archive import TEMP_PREFIX
+
+    return Path(base_dir).name.startswith(f"{TEMP_PREFIX}ssp_")
 
 
 def _read_ssd(ssd_path: Path, shown: Path, base_dir: Path) -> System:
@@ -182,6 +274,9 @@ def _read_ssd(ssd_path: Path, shown: Path, base_dir: Path) -> System:
     xsystem = root.find("ssd:System", NS)
     components, connections, dangling = flatten(xsystem, file=file, units=units,
                                                 read_bindings=reader)
+    components = [dataclasses.replace(c, source=confined_source(c.source, base_dir, file=file,
+                                                                component=c.name))
+                  for c in components]
     system = System(name=xsystem.get("name") or root.get("name") or shown.stem,
                     components=components, connections=connections, base_dir=base_dir,
                     source_file=shown, units=units)

@@ -197,14 +197,25 @@ def write_ssd(system: System, path: str | Path) -> Path:
     -------
     Path
         The written file.
+
+    Raises
+    ------
+    SystemFileError
+        If an FMU is not inside the SSD's folder (the reader loads FMUs
+        from there only; write an ``.ssp`` to pack FMUs from elsewhere).
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     sources = {}
+    folder = path.parent.resolve()
     for component in system.components:
         fmu = system.fmu_path(component)
         _check_fmu(fmu, component.name)
-        sources[component.name] = Path(os.path.relpath(fmu, path.parent.resolve())).as_posix()
+        if folder not in fmu.parents:
+            raise SystemFileError(f"the FMU is not inside the SSD's folder {folder}; the reader "
+                                  "loads FMUs from there only (copy it there, or write an .ssp)",
+                                  file=str(fmu), component=component.name)
+        sources[component.name] = Path(os.path.relpath(fmu, folder)).as_posix()
     path.write_bytes(ssd_bytes(system, sources))
     return path
 

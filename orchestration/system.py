@@ -57,12 +57,17 @@ class Component:
     parameter_units : dict
         ``{variable: unit name}`` for Real start values given in a unit (SSP
         ``ssv:Real unit``); the master converts them to the variable's unit.
+    connector_types : dict
+        ``{connector: type}`` declared by an SSD (``'Real'``, ``'Integer'``,
+        ``'Boolean'``, ``'String'``, ``'Enumeration'``, ``'Binary'``); the
+        master checks them against the FMU's variables.
     """
 
     name: str
     source: str | Path
     parameters: dict[str, StartValue] = field(default_factory=dict)
     parameter_units: dict[str, str] = field(default_factory=dict)
+    connector_types: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

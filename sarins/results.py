@@ -19,6 +19,11 @@ models) are built in a temporary folder and moved into place
 (:func:`build_artifacts`, :func:`atomic_output`), so a kill never leaves a
 half-written file under its final name.  :func:`exclusive` locks an output
 folder (``fcntl.flock`` on ``<dir>/.lock``) for one campaign at a time.
+
+Size budget: a stored result whose arrays expand to more than
+:data:`MAX_RESULT_BYTES` (or that has more than :data:`MAX_RESULT_MEMBERS`
+arrays) is not read: it is recomputed like any other unusable file.  A
+write that fails (a full disk) raises an ``OSError`` naming the final file.
 """
 
 from __future__ import annotations
@@ -38,12 +43,16 @@ from pathlib import Path
 
 import numpy as np
 
+from sarins_fmu.files import BudgetError, check_zip_budget, naming_path
+
 RECORD_KEY = "__record__"  # the canonical record (JSON text) inside a result file
 HASH_KEY = "__record_sha256__"
 KEYS_KEY = "__keys__"  # the result's own keys, to detect a file that lost some
 MANIFEST_KEY = "__manifest__"  # JSON {key: [dtype, shape, sha256 of the bytes]} of every array as written
 RESERVED = (RECORD_KEY, HASH_KEY, KEYS_KEY, MANIFEST_KEY)
 LOCK_NAME = ".lock"
+MAX_RESULT_BYTES = 2**30  # bytes a stored result's arrays may expand to, uncompressed
+MAX_RESULT_MEMBERS = 10_000  # arrays in a stored result
 
 _CODE_ROOTS = ("sarins_fmu", "fmus", "orchestration")  # the code a result can depend on
 
@@ -158,11 +167,12 @@ def atomic_output(path, keep_suffix: bool = False):
     os.close(fd)
     tmp = Path(tmp)
     try:
-        yield tmp
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-        _fsync_dir(path.parent)
+        with naming_path(path, replacing=[tmp]):  # a full disk names the file being written
+            yield tmp
+            with open(tmp, "rb+") as fh:
+                os.fsync(fh.fileno())
+            os.replace(tmp, path)
+            _fsync_dir(path.parent)
     finally:
         if tmp.exists():
             tmp.unlink()
@@ -222,6 +232,12 @@ def _check_manifest(raw: dict, text) -> None:
 
 def _read(path: Path) -> tuple[dict, dict | None]:
     """(result, record) of a file; raises StoredResultError for anything unreadable."""
+    try:
+        check_zip_budget(path, MAX_RESULT_BYTES, "a stored result (MAX_RESULT_BYTES)", MAX_RESULT_MEMBERS)
+    except BudgetError as exc:
+        raise StoredResultError(exc.reason) from None
+    except Exception as exc:  # BadZipFile, OSError, EOFError: not a zip at all
+        raise StoredResultError(f"unreadable ({type(exc).__name__}: {' '.join(str(exc).split())[:120]})") from None
     try:
         with np.load(path, allow_pickle=False) as data:
             if not hasattr(data, "files"):

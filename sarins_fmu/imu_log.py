@@ -38,6 +38,11 @@ else, naming the CSV line (or NPZ row); and the data checks: duplicated or
 non-monotonic timestamps, gaps and rate changes, NaN or infinite values,
 columns in other units, and unit mistakes over the whole log whether it rests
 or moves (:func:`_check_units`).
+
+Size budget: a CSV log larger than :data:`MAX_LOG_BYTES`, or an NPZ log
+whose members expand to more than that (or that has more than
+:data:`MAX_LOG_MEMBERS` members), is refused before it is parsed or
+decompressed; a truncated or corrupted NPZ is refused naming the file.
 """
 
 from __future__ import annotations
@@ -45,10 +50,14 @@ from __future__ import annotations
 import json
 import math
 import re
+import zipfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from .files import BudgetError, check_file_size, check_zip_budget, naming_path
 
 TAG = "# sarins-imu-log 1"
 AXES = "xyz"
@@ -58,6 +67,8 @@ TEMP_COLUMNS = [f"temp_{s}_{a}_c" for s in ("gyro", "accel") for a in AXES]
 REF_COLUMNS = ["ref_lat_deg", "ref_lon_deg", "ref_height_m"]
 MAX_GYRO_RATE = 35.0  # rad/s (2000 deg/s, the largest MEMS full scale)
 STATIC_RATE_LIMIT = 1e-3  # rad/s (206 deg/h): Earth rate plus any plausible bias, at rest
+MAX_LOG_BYTES = 2 * 2**30  # bytes: a CSV file, or an NPZ's members uncompressed (~240 days at 1 Hz, 13 columns)
+MAX_LOG_MEMBERS = 64  # arrays in an NPZ log (the format has at most 19 columns and meta)
 GRAVITY_RANGE = (9.0, 10.6)  # m/s^2, plausible |f| averaged over a static or turning start
 MAX_SPECIFIC_FORCE = 16 * 9.80665  # m/s^2 (16 g, the largest MEMS accelerometer full scale)
 STATIC_WINDOW = 60.0  # s, window of the gyro-against-tilt check, anywhere in the log
@@ -120,15 +131,16 @@ def write_log(path, time, dtheta, dv, *, lat_deg: float, lon_deg: float = 0.0, h
         cols.update(ref_lat_deg=np.degrees(ref[:, 0]), ref_lon_deg=np.degrees(ref[:, 1]), ref_height_m=ref[:, 2])
     info = {"lat_deg": repr(float(lat_deg)), "lon_deg": repr(float(lon_deg)), "height_m": repr(float(height_m)),
             **{k: str(v) for k, v in (meta or {}).items()}}
-    if path.suffix == ".npz":
-        np.savez_compressed(path, meta=np.array(json.dumps(info)), **cols)
-        return path
-    with open(path, "w") as fh:
-        fh.write(TAG + "\n")
-        for k, v in info.items():
-            fh.write(f"# {k}: {v}\n")
-        np.savetxt(fh, np.column_stack(list(cols.values())), delimiter=",", fmt="%.17g",
-                   header=",".join(cols), comments="")
+    with naming_path(path):  # a full disk names the file
+        if path.suffix == ".npz":
+            np.savez_compressed(path, meta=np.array(json.dumps(info)), **cols)
+            return path
+        with open(path, "w") as fh:
+            fh.write(TAG + "\n")
+            for k, v in info.items():
+                fh.write(f"# {k}: {v}\n")
+            np.savetxt(fh, np.column_stack(list(cols.values())), delimiter=",", fmt="%.17g",
+                       header=",".join(cols), comments="")
     return path
 
 
@@ -141,6 +153,16 @@ def read_log(path) -> ImuLog:
     path = Path(path)
     if not path.is_file():
         raise LogError(f"{path}: no such log file")
+    try:
+        if path.suffix == ".npz":
+            check_zip_budget(path, MAX_LOG_BYTES, "an IMU log (MAX_LOG_BYTES)", MAX_LOG_MEMBERS)
+        else:
+            check_file_size(path, MAX_LOG_BYTES, "an IMU log (MAX_LOG_BYTES)")
+    except BudgetError as exc:
+        raise LogError(str(exc)) from None
+    except (zipfile.BadZipFile, OSError, EOFError) as exc:
+        kind = "NPZ log" if path.suffix == ".npz" else "log"
+        raise LogError(f"{path}: not a readable {kind} ({_one_line(exc)})") from None
     if path.suffix == ".npz":
         kind, columns, meta, first = "npz", *_read_npz(path), 0
     else:
@@ -176,8 +198,8 @@ def _read_npz(path):
                 meta_text = str(raw)
     except LogError:
         raise
-    except (OSError, ValueError, KeyError) as exc:
-        raise LogError(f"{path}: not a readable NPZ log ({exc})") from None
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError, zlib.error) as exc:
+        raise LogError(f"{path}: not a readable NPZ log ({_one_line(exc)})") from None
     meta = {}
     if meta_text is not None:
         try:
@@ -231,6 +253,10 @@ def _lines(path):
 
 def _eol_name(ending: bytes) -> str:
     return "CRLF" if ending == b"\r\n" else "LF"
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())[:200] or type(exc).__name__
 
 
 def _read_csv(path):

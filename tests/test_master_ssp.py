@@ -1,7 +1,9 @@
 """SSP system files: writing, reading, parameter-binding forms, unsupported features."""
 from __future__ import annotations
 
+import dataclasses
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -60,6 +62,14 @@ def folder(tmp_path, fixture_fmus):
 
 def test_written_ssd_is_schema_valid_and_round_trips(ramp_gain, tmp_path):
     ramp_gain.start_time, ramp_gain.stop_time, ramp_gain.step_size = 0.0, 1.0, 0.125
+    with pytest.raises(SystemFileError, match="not inside the SSD's folder"):
+        write_ssd(ramp_gain, tmp_path / "elsewhere" / "SystemStructure.ssd")
+    for component in ramp_gain.components:  # the FMUs beside the SSD, as the reader wants them
+        (tmp_path / "sys" / "fmus").mkdir(parents=True, exist_ok=True)
+        copy = tmp_path / "sys" / "fmus" / Path(component.source).name
+        copy.write_bytes(Path(component.source).read_bytes())
+    ramp_gain.components = [dataclasses.replace(c, source=tmp_path / "sys" / "fmus" / Path(c.source).name)
+                            for c in ramp_gain.components]
     path = write_ssd(ramp_gain, tmp_path / "sys" / "SystemStructure.ssd")
     back = read_system(path.parent)  # a folder works too; read validates against the XSD
     assert [c.name for c in back.components] == ["ramp", "gain"]
@@ -131,7 +141,7 @@ def test_system_level_parameter_for_an_unknown_component(folder):
      "BooleanMappingTransformation on connections is not supported"),
     ({"system_extra": '<ssd:ParameterBindings><ssd:ParameterBinding source="../../x.ssv"/>'
                       '</ssd:ParameterBindings>'}, "outside the system's folder"),
-    ({"ramp_extra": "<ssd:Bogus/>"}, "Failed to validate"),
+    ({"ramp_extra": "<ssd:Bogus/>"}, "not valid SSP 1.0: ERROR .*Bogus"),
 ])
 def test_unsupported_or_invalid_ssd(folder, kwargs, match):
     (folder / "SystemStructure.ssd").write_text(hand_written("Ramp.fmu", "Gain.fmu", **kwargs))

@@ -5,7 +5,8 @@ Each sub-command lives in a module of this package with ``register(sub)``
 the application layer and prints.  Conventions for every command: exit 0 on
 success, 2 for bad usage or input, 1 for a run that failed, 130 on Ctrl-C
 (SIGINT, even if the process started with SIGINT ignored) and 143 on
-SIGTERM; every message is one line starting with the
+SIGTERM; a write that fails for want of room (ENOSPC) is a failed run (1)
+whose message names the file; every message is one line starting with the
 command's name (``sarins <command>: error: ...`` or ``...: failed: ...``),
 never a traceback (``SARINS_DEBUG=1`` re-raises unexpected errors); warnings
 print as one plain line.  ``--seed`` means the same in every command: the
@@ -25,6 +26,7 @@ import threading
 import warnings
 
 from sarins import __version__
+from sarins_fmu.files import DISK_FULL_ERRNOS
 
 EXIT_FAILED = 1  # the run itself failed (an FMU error, a failed fit)
 EXIT_USAGE = 2  # bad command-line usage or input
@@ -215,7 +217,13 @@ def main(argv=None) -> int:
         print(f"{name}: error: this needs the package {missing!r}, which is not installed or cannot be "
               "imported", file=sys.stderr)
         return EXIT_USAGE
-    except (UsageError, ValueError, OSError) as exc:
+    except OSError as exc:
+        if exc.errno in DISK_FULL_ERRNOS:  # the run failed for want of room, not the user's input
+            print(f"{name}: failed: {_one_line(exc)}", file=sys.stderr)
+            return EXIT_FAILED
+        print(f"{name}: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+    except (UsageError, ValueError) as exc:
         print(f"{name}: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
     except (RunError, RuntimeError) as exc:  # incl. an FMU call that failed, a campaign task that failed

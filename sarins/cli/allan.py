@@ -19,6 +19,7 @@ from __future__ import annotations
 import json
 
 from sarins_fmu import imu as imu_mod
+from sarins_fmu.files import check_output_path
 
 from . import UsageError, finite, refuse_unless
 from .navigate import seed_value
@@ -49,6 +50,8 @@ def run(args) -> int:
     refuse_unless(args, {"imu": "--imu", "hours": "--hours", "rate_hz": "--rate-hz", "seed": "--seed"},
                   not args.log, "describes simulated data and does not apply with --log (the log sets the "
                                 "data, its sample rate and its length)")
+    if args.plot:
+        check_output_path(args.plot, "--plot")
     if args.log:
         from sarins_fmu.imu_log import read_log
 

@@ -44,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from sarins_fmu.files import DISK_FULL_ERRNOS, check_output_path
 from sarins_fmu.identify.axial import site_latitude_deg
 from sarins_fmu.identify.modelfile import ModelFileError
 from sarins_fmu.identify.rbf import RANGE_MARGIN, RBFNetwork
@@ -182,6 +183,9 @@ def _train(args: argparse.Namespace) -> None:
     _check_number("--goal", args.goal, low=0.0, high=1e300)
     if args.max_neurons is not None and not 1 <= args.max_neurons <= 100_000:
         raise _UsageError(f"--max-neurons must be in 1 .. 100000, got {args.max_neurons}")
+    check_output_path(args.out, "--out")
+    if args.curve is not None:
+        check_output_path(args.curve, "--curve")
     table = read_table(args.data)
     x = _input_matrix(table, names, args.local_lat_deg, args.data)
     y = numeric_column(table, args.target, args.data)
@@ -236,6 +240,8 @@ def _refuse_outside_training_range(net: RBFNetwork, x: np.ndarray, data: Path, m
 
 
 def _predict(args: argparse.Namespace) -> None:
+    if args.out is not None:
+        check_output_path(args.out, "--out")
     net = RBFNetwork.load(args.model)
     if net.input_names is None:
         raise _UsageError(
@@ -281,8 +287,9 @@ def run(args: argparse.Namespace) -> int:
     Returns
     -------
     int
-        Exit status: 0 on success, 2 on a bad file, column or option (with a
-        one-line message on stderr).
+        Exit status: 0 on success, 2 on a bad file, column or option, 1 when
+        a write fails for want of room (with a one-line message on stderr
+        naming the file).
     """
     command = getattr(args, "identify_command", None)
     try:
@@ -299,6 +306,9 @@ def run(args: argparse.Namespace) -> int:
     except (_UsageError, TableError, ModelFileError, ValueError, OSError, RecursionError) as exc:
         message = " ".join(str(exc).split())
         where = f"{_PROG} {command}" if command else _PROG
+        if isinstance(exc, OSError) and exc.errno in DISK_FULL_ERRNOS:  # no room: the run failed
+            print(f"{where}: failed: {message}", file=sys.stderr)
+            return 1
         print(f"{where}: error: {message}", file=sys.stderr)
         return 2
     return 0

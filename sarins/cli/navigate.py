@@ -8,6 +8,7 @@ import time
 import numpy as np
 
 from sarins_fmu import imu as imu_mod
+from sarins_fmu.files import check_output_path
 from sarins_fmu.site import SITE_LAT_DEG
 from sarins_fmu.turntable import ROTATION_SCHEMES
 
@@ -80,6 +81,8 @@ def run(args) -> int:
         raise UsageError(f"--correction-dph {args.correction_dph:g} deg/h is not a drift correction")
     if args.write_log and not str(args.write_log).endswith((".csv", ".npz")):
         raise UsageError(f"--write-log {args.write_log}: the file must end in .csv or .npz")
+    if args.write_log:
+        check_output_path(args.write_log, "--write-log")  # before the run: a FIFO there would block
     t0 = time.perf_counter()
     chunks = []
     result = run_static(lat_deg=args.lat_deg, align_hours=args.align_hours, nav_hours=args.nav_hours,
@@ -88,11 +91,13 @@ def run(args) -> int:
                         correction_from_hours=args.correction_from_hours,
                         on_increments=(lambda *chunk: chunks.append(chunk)) if args.write_log else None)
     if args.write_log:
+        from sarins.results import atomic_output
         from sarins_fmu.imu_log import write_log
 
-        write_log(args.write_log, *(np.concatenate([c[j] for c in chunks]) for j in range(3)),
-                  temps=np.concatenate([c[3] for c in chunks]), lat_deg=args.lat_deg,
-                  meta={"source": f"sarins navigate --imu {args.imu} --seed {args.seed}"})
+        with atomic_output(args.write_log, keep_suffix=True) as tmp:
+            write_log(tmp, *(np.concatenate([c[j] for c in chunks]) for j in range(3)),
+                      temps=np.concatenate([c[3] for c in chunks]), lat_deg=args.lat_deg,
+                      meta={"source": f"sarins navigate --imu {args.imu} --seed {args.seed}"})
     summary = result.summary()
     summary.update({"wall_seconds": time.perf_counter() - t0, **{
         k: v for k, v in result.info.items() if k in ("imu", "rotation", "start", "seed")}})

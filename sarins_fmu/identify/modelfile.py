@@ -15,9 +15,11 @@ anything else (``.json`` recommended)
     reproduces every value bit for bit.
 
 Every failure to read a file (missing, not JSON / not a zip, wrong format
-tag, unsupported version, missing key, wrong shape, NaN or infinity) raises
-:class:`ModelFileError`, a :class:`ValueError` subclass whose message starts
-with the file name.
+tag, unsupported version, missing key, wrong shape, NaN or infinity, a file
+over its size budget) raises :class:`ModelFileError`, a :class:`ValueError`
+subclass whose message starts with the file name.  Budgets: a JSON file of
+at most :data:`MAX_JSON_BYTES`, an ``.npz`` whose arrays expand to at most
+:data:`MAX_NPZ_BYTES` (checked before anything is decompressed).
 """
 
 from __future__ import annotations
@@ -31,6 +33,8 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from ..files import BudgetError, check_file_size, check_zip_budget, naming_path
+
 __all__ = [
     "ModelFileError",
     "save_model_file",
@@ -42,6 +46,8 @@ T = TypeVar("T")
 
 _HEADER_KEY = "__header__"
 MAX_JSON_BYTES = 256 * 2**20  # a JSON model file larger than this is refused before reading
+MAX_NPZ_BYTES = 256 * 2**20  # an .npz model file whose arrays expand to more is refused before reading
+MAX_NPZ_MEMBERS = 1000  # arrays in an .npz model file
 
 
 class ModelFileError(ValueError):
@@ -111,7 +117,7 @@ def save_model_file(
     header = {"format": format_tag, "version": int(version), "meta": dict(meta)}
     if _is_npz(path):
         header_json = json.dumps(header, allow_nan=False)
-        with open(path, "wb") as fh:
+        with naming_path(path), open(path, "wb") as fh:
             np.savez(fh, **{_HEADER_KEY: np.array(header_json)}, **clean)
     else:
         doc = dict(header)
@@ -119,15 +125,17 @@ def save_model_file(
             name: {"shape": list(arr.shape), "data": arr.ravel().tolist()}
             for name, arr in clean.items()
         }
-        path.write_text(json.dumps(doc, allow_nan=False), encoding="utf-8")
+        with naming_path(path):
+            path.write_text(json.dumps(doc, allow_nan=False), encoding="utf-8")
     return path
 
 
 def _read_json(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
     try:
-        if path.stat().st_size > MAX_JSON_BYTES:
-            raise ModelFileError(path, f"larger than {MAX_JSON_BYTES // 2**20} MiB, not a model file")
+        check_file_size(path, MAX_JSON_BYTES, "a JSON model file (MAX_JSON_BYTES)")
         text = path.read_text(encoding="utf-8")
+    except BudgetError as exc:
+        raise ModelFileError(path, exc.reason) from None
     except UnicodeDecodeError as exc:
         raise ModelFileError(path, f"not a text (JSON) file: {exc}") from None
     except OSError as exc:
@@ -160,6 +168,12 @@ def _read_json(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
 
 
 def _read_npz(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
+    try:
+        check_zip_budget(path, MAX_NPZ_BYTES, "an .npz model file (MAX_NPZ_BYTES)", MAX_NPZ_MEMBERS)
+    except BudgetError as exc:
+        raise ModelFileError(path, exc.reason) from None
+    except (OSError, zipfile.BadZipFile, EOFError) as exc:
+        raise ModelFileError(path, f"not a readable npz file: {exc}") from None
     try:
         with np.load(path, allow_pickle=False) as npz:
             contents = {name: npz[name] for name in npz.files}

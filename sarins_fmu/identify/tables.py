@@ -37,6 +37,8 @@ from pathlib import Path
 from typing import TextIO
 
 import numpy as np
+
+from ..files import naming_path
 from ..site import SITE_LAT_DEG as SEED000_SITE_LAT_DEG
 
 __all__ = [
@@ -178,7 +180,7 @@ def write_table(dest: str | Path | TextIO, table: dict[str, np.ndarray]) -> None
     if hasattr(dest, "write"):
         _write(dest)
     else:
-        with open(dest, "w", newline="", encoding="utf-8") as fh:
+        with naming_path(dest), open(dest, "w", newline="", encoding="utf-8") as fh:
             _write(fh)
 
 
