@@ -8,21 +8,46 @@
  *   real FMU VR VALUE | int FMU VR VALUE | string FMU VR TEXT   (start values)
  *   link SRC_FMU SRC_VR DST_FMU DST_VR              (Real output -> Real input)
  *   print FMU VR                                    (Real printed after the last step)
+ *   latency WARMUP                                  (real-time profile, below)
  * Inputs are set from their sources before each FMU leaves initialisation and
  * before each FMU's doStep.  Prints "STATUS <fmu> <function> <status>" for
  * every non-OK call, "VALUE <fmu> <vr> <value>" and "DONE <steps>"; exits 0
  * when the run completed, 1 when a call failed, 2 on a usage/loading error.
+ *
+ * Real-time profile (plan item "latency WARMUP"): after initialisation the
+ * chain makes WARMUP untimed steps, then the N steps of "steps", each timed
+ * with clock_gettime(CLOCK_MONOTONIC) (one chain step: the link gets/sets and
+ * every FMU's doStep) into an array allocated and touched before the warm-up.
+ * When the process carries the allocation counter (LD_PRELOAD of
+ * alloc_counter.so), it is zeroed after the warm-up and read after every
+ * timed step; the last reading is taken before fmi2Terminate.  Prints
+ *   ALLOC_STEP <step> <allocs> <frees> <mmaps> <munmaps>   (each timed step that
+ *       called the heap or mmap, first MAX_ALLOC_LINES of them; step counted from 0
+ *       after the warm-up, values of that step alone)
+ *   LATENCY steps=N warmup=K step_s=H p50_ns=.. p99_ns=.. p999_ns=.. max_ns=..
+ *       jitter=p99.9/p50 counter=1|0 allocs=.. frees=.. mmaps=.. munmaps=.. alloc_steps=..
+ *       max_quiet_ns=.. max_alloc_ns=..
+ * (counts -1 without the counter; percentiles by nearest rank; max_quiet_ns is the
+ * slowest step that made no heap or mmap call, max_alloc_ns the slowest that did,
+ * -1 when there is none).
  */
+#define _GNU_SOURCE /* RTLD_DEFAULT, clock_gettime */
 #include <dlfcn.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "fmi2Functions.h"
 
 #define MAXF 8
 #define MAXL 64
+#define ALLOC_COUNTER_N 4
+#define MAX_ALLOC_LINES 1000
+
+typedef void alloc_reset_fn(void);
+typedef void alloc_get_fn(unsigned long long out[ALLOC_COUNTER_N]);
 
 typedef struct {
     void *lib;
@@ -60,6 +85,100 @@ static int check(int k, const char *fn, fmi2Status st) {
     return 1;
 }
 
+/* One Gauss-Seidel step of the chain at time t: each FMU's inputs from their sources, then its doStep. */
+static int chain_step(Fmu *f, int nf, int link[][4], int nl, double t, double h) {
+    int ok = 1;
+    for (int k = 0; ok && k < nf; k++) {
+        for (int l = 0; ok && l < nl; l++)
+            if (link[l][2] == k) {
+                fmi2ValueReference src = (fmi2ValueReference)link[l][1], dst = (fmi2ValueReference)link[l][3];
+                fmi2Real v;
+                ok = check(link[l][0], "fmi2GetReal", f[link[l][0]].getReal(f[link[l][0]].c, &src, 1, &v)) &&
+                     check(k, "fmi2SetReal", f[k].setReal(f[k].c, &dst, 1, &v));
+            }
+        ok = ok && check(k, "fmi2DoStep", f[k].step(f[k].c, t, h, fmi2True));
+    }
+    return ok;
+}
+
+static long long now_ns(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (long long)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+static int cmp_ll(const void *a, const void *b) {
+    long long x = *(const long long *)a, y = *(const long long *)b;
+    return (x > y) - (x < y);
+}
+
+/* Nearest-rank percentile q (0 < q <= 1) of sorted[0..n). */
+static long long percentile(const long long *sorted, long n, double q) {
+    long rank = (long)((double)n * q + 0.999999999);
+    if (rank < 1) rank = 1;
+    return sorted[(rank > n ? n : rank) - 1];
+}
+
+/* The real-time profile: WARMUP untimed steps, then STEPS timed ones (see the header). */
+static int profile(Fmu *f, int nf, int link[][4], int nl, long warmup, long steps, double h, long *done) {
+    alloc_reset_fn *reset = (alloc_reset_fn *)dlsym(RTLD_DEFAULT, "alloc_counter_reset");
+    alloc_get_fn *get = (alloc_get_fn *)dlsym(RTLD_DEFAULT, "alloc_counter_get");
+    int counted = reset != NULL && get != NULL;
+    if (steps < 1) {
+        fprintf(stderr, "latency: steps must be >= 1\n");
+        return 0;
+    }
+    long long *lat = malloc((size_t)steps * sizeof *lat);
+    unsigned long long(*seen)[ALLOC_COUNTER_N] = malloc((size_t)steps * sizeof *seen);
+    if (!lat || !seen) {
+        fprintf(stderr, "latency: cannot allocate %ld samples\n", steps);
+        free(lat);
+        free(seen);
+        return 0;
+    }
+    memset(lat, 0, (size_t)steps * sizeof *lat); /* touch every page before timing */
+    memset(seen, 0, (size_t)steps * sizeof *seen);
+    int ok = 1;
+    long n = 0;
+    for (; ok && n < warmup; n++, (*done)++) ok = chain_step(f, nf, link, nl, (double)n * h, h);
+    if (counted) reset();
+    for (long k = 0; ok && k < steps; k++, n++, (*done)++) {
+        long long t0 = now_ns();
+        ok = chain_step(f, nf, link, nl, (double)n * h, h);
+        lat[k] = now_ns() - t0;
+        if (counted) get(seen[k]);
+    }
+    unsigned long long total[ALLOC_COUNTER_N] = {0};
+    if (counted) get(total); /* before fmi2Terminate (the caller's next call) */
+    if (ok) {
+        long alloc_steps = 0;
+        long long max_quiet = -1, max_alloc = -1; /* slowest step without / with heap or mmap calls */
+        for (long k = 0; k < steps; k++) {
+            unsigned long long d[ALLOC_COUNTER_N] = {0};
+            for (int j = 0; counted && j < ALLOC_COUNTER_N; j++) d[j] = seen[k][j] - (k ? seen[k - 1][j] : 0);
+            if (d[0] + d[1] + d[2] + d[3] == 0) {
+                if (lat[k] > max_quiet) max_quiet = lat[k];
+                continue;
+            }
+            if (lat[k] > max_alloc) max_alloc = lat[k];
+            if (alloc_steps++ < MAX_ALLOC_LINES) printf("ALLOC_STEP %ld %llu %llu %llu %llu\n", k, d[0], d[1], d[2], d[3]);
+        }
+        qsort(lat, (size_t)steps, sizeof *lat, cmp_ll);
+        long long p50 = percentile(lat, steps, 0.50), p99 = percentile(lat, steps, 0.99);
+        long long p999 = percentile(lat, steps, 0.999), max = lat[steps - 1];
+        long long c[ALLOC_COUNTER_N];
+        for (int j = 0; j < ALLOC_COUNTER_N; j++) c[j] = counted ? (long long)total[j] : -1;
+        printf("LATENCY steps=%ld warmup=%ld step_s=%.17g p50_ns=%lld p99_ns=%lld p999_ns=%lld max_ns=%lld "
+               "jitter=%.6g counter=%d allocs=%lld frees=%lld mmaps=%lld munmaps=%lld alloc_steps=%ld "
+               "max_quiet_ns=%lld max_alloc_ns=%lld\n",
+               steps, warmup, h, p50, p99, p999, max, p50 > 0 ? (double)p999 / (double)p50 : 0.0, counted, c[0], c[1],
+               c[2], c[3], counted ? alloc_steps : -1L, max_quiet, max_alloc);
+    }
+    free(lat);
+    free(seen);
+    return ok;
+}
+
 int main(int argc, char **argv) {
     if (argc != 2) {
         fprintf(stderr, "usage: system PLAN_FILE\n");
@@ -73,7 +192,7 @@ int main(int argc, char **argv) {
     Fmu f[MAXF];
     int nf = 0, nl = 0, np = 0;
     int link[MAXL][4], printed[MAXL][2];
-    long steps = 0;
+    long steps = 0, warmup = -1;
     double h = 1.0;
     fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
     char kind[32];
@@ -132,6 +251,8 @@ int main(int argc, char **argv) {
             if (nl == MAXL || fscanf(plan, "%d %d %d %d", &link[nl][0], &link[nl][1], &link[nl][2], &link[nl][3]) != 4)
                 return 2;
             nl++;
+        } else if (strcmp(kind, "latency") == 0) {
+            if (fscanf(plan, "%ld", &warmup) != 1 || warmup < 0) return 2;
         } else if (strcmp(kind, "print") == 0) {
             if (np == MAXL || fscanf(plan, "%d %d", &printed[np][0], &printed[np][1]) != 2) return 2;
             np++;
@@ -155,17 +276,11 @@ int main(int argc, char **argv) {
         ok = ok && check(k, "fmi2ExitInitializationMode", f[k].exit_(f[k].c));
     }
     long done = 0;
-    for (long n = 0; ok && n < steps; n++, done++)
-        for (int k = 0; ok && k < nf; k++) {
-            for (int l = 0; ok && l < nl; l++)
-                if (link[l][2] == k) {
-                    fmi2ValueReference src = (fmi2ValueReference)link[l][1], dst = (fmi2ValueReference)link[l][3];
-                    fmi2Real v;
-                    ok = check(link[l][0], "fmi2GetReal", f[link[l][0]].getReal(f[link[l][0]].c, &src, 1, &v)) &&
-                         check(k, "fmi2SetReal", f[k].setReal(f[k].c, &dst, 1, &v));
-                }
-            ok = ok && check(k, "fmi2DoStep", f[k].step(f[k].c, n * h, h, fmi2True));
-        }
+    if (warmup < 0) {
+        for (long n = 0; ok && n < steps; n++, done++) ok = chain_step(f, nf, link, nl, n * h, h);
+    } else {
+        ok = ok && profile(f, nf, link, nl, warmup, steps, h, &done);
+    }
     for (int p = 0; ok && p < np; p++) {
         fmi2ValueReference vr = (fmi2ValueReference)printed[p][1];
         fmi2Real v;
