@@ -11,7 +11,13 @@ span 2 s and the whole 2 s more; the turntable starts rotating at 5 s), every ch
 heap calls are counted by ``tests/native_host/alloc_counter.c`` (LD_PRELOAD)
 between the end of the warm-up and ``fmi2Terminate``.
 
-usage: python benchmarks/bench_realtime.py [--steps N] [--rates 200,1000] [--show-alloc-steps K]
+usage: python benchmarks/bench_realtime.py [--steps N] [--rates 200,1000] [--paced-seconds S]
+                                          [--show-alloc-steps K]
+
+By default the steps follow each other at once (the compute latency per step);
+``--paced-seconds S`` adds a run per rate in which each step starts at its
+deadline (clock_nanosleep, one communication step apart) for S seconds, which
+also reports how late the steps woke up and how many overran their period.
 
 Prints one row per rate: steps, p50 / p99 / p99.9 / max step latency (us),
 jitter p99.9/p50, heap allocations after the warm-up (and the steps that
@@ -71,6 +77,11 @@ class Profile:
     alloc_steps: int
     max_quiet_ns: int
     max_alloc_ns: int
+    paced: bool
+    wake_p50_ns: int
+    wake_p99_ns: int
+    wake_max_ns: int
+    overruns: int
     alloc_step_list: tuple
 
 
@@ -100,8 +111,9 @@ def warmup_steps(step: float) -> int:
     return int(math.ceil(ALIGN_S / step)) + EXTRA_WARMUP
 
 
-def write_plan(fmu_dir: Path, work: Path, step: float, steps: int) -> Path:
-    """The C master's plan: the standard static chain at ``step`` s, IMU internal rate 1/step, latency mode."""
+def write_plan(fmu_dir: Path, work: Path, step: float, steps: int, paced: bool = False) -> Path:
+    """The C master's plan: the standard static chain at ``step`` s, IMU internal rate 1/step, latency mode
+    (paced: one step per ``step`` of wall time)."""
     from fmpy import read_model_description
 
     from sarins.systems import standard_static
@@ -109,7 +121,7 @@ def write_plan(fmu_dir: Path, work: Path, step: float, steps: int) -> Path:
     system = standard_static(fmu_dir, turntable=dict(align_time=ALIGN_S),
                              imu=dict(internal_rate=1.0 / step),
                              ins=dict(coarse_time=COARSE_S, align_time=ALIGN_S))
-    lines = [f"steps {steps} {step!r}", f"latency {warmup_steps(step)}"]
+    lines = [f"steps {steps} {step!r}", f"latency {warmup_steps(step)}"] + (["paced"] if paced else [])
     index, variables = {}, {}
     for k, comp in enumerate(system.components):
         fmu = Path(comp.source)
@@ -128,7 +140,7 @@ def write_plan(fmu_dir: Path, work: Path, step: float, steps: int) -> Path:
     for c in system.connections:
         lines.append(f"link {index[c.start_component]} {variables[c.start_component][c.start_variable].valueReference}"
                      f" {index[c.end_component]} {variables[c.end_component][c.end_variable].valueReference}")
-    plan = work / f"plan_{step!r}.txt"
+    plan = work / f"plan_{step!r}{'_paced' if paced else ''}.txt"
     plan.write_text("\n".join(lines) + "\n")
     return plan
 
@@ -142,9 +154,10 @@ def parse(stdout: str) -> Profile:
     alloc_steps = tuple(AllocStep(*map(int, line.split()[1:])) for line in stdout.splitlines()
                         if line.startswith("ALLOC_STEP "))
     ints = ("steps", "warmup", "p50_ns", "p99_ns", "p999_ns", "max_ns", "allocs", "frees", "mmaps", "munmaps",
-            "alloc_steps", "max_quiet_ns", "max_alloc_ns")
+            "alloc_steps", "max_quiet_ns", "max_alloc_ns", "wake_p50_ns", "wake_p99_ns", "wake_max_ns", "overruns")
     return Profile(**{k: int(fields[k]) for k in ints}, step_s=float(fields["step_s"]),
-                   jitter=float(fields["jitter"]), counter=fields["counter"] == "1", alloc_step_list=alloc_steps)
+                   jitter=float(fields["jitter"]), counter=fields["counter"] == "1", paced=fields["paced"] == "1",
+                   alloc_step_list=alloc_steps)
 
 
 def run(exe: Path, plan: Path, counter: Path | None, timeout: float | None = None) -> Profile:
@@ -163,49 +176,69 @@ def load() -> str:
     return " ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
+def print_table(rows) -> None:
+    """The latency table, one row per (rate, Profile, load before, load after)."""
+    paced = any(p.paced for _, p, _, _ in rows)
+    print("| rate | steps | p50 | p99 | p99.9 | max | jitter p99.9/p50 | allocations after warm-up "
+          "(allocs / frees / mmaps / munmaps; steps that made them) | slowest step without / with them "
+          + ("| wake-up lateness p50 / p99 / max | overruns " if paced else "") + "| load before -> after |")
+    print("|---" * (12 if paced else 10) + "|")
+    for rate, p, before, after in rows:
+        us = [f"{x / 1000:.1f} us" for x in (p.p50_ns, p.p99_ns, p.p999_ns, p.max_ns)]
+        split = " / ".join("-" if x < 0 else f"{x / 1000:.1f} us" for x in (p.max_quiet_ns, p.max_alloc_ns))
+        wake = (f"{' / '.join(f'{x / 1000:.1f} us' for x in (p.wake_p50_ns, p.wake_p99_ns, p.wake_max_ns))} | "
+                f"{p.overruns} | ") if paced else ""
+        print(f"| {rate:g} Hz ({p.step_s * 1000:g} ms) | {p.steps} | {' | '.join(us)} | {p.jitter:.2f} | "
+              f"{p.allocs} / {p.frees} / {p.mmaps} / {p.munmaps}; {p.alloc_steps} steps | {split} | {wake}"
+              f"{before} -> {after} |")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=1_000_000, help="timed steps per rate (default 10^6)")
     ap.add_argument("--rates", default="200,1000", help="communication rates, Hz (default 200,1000)")
+    ap.add_argument("--paced-seconds", type=float, default=0.0,
+                    help="also run each rate paced (one step per period) for this many seconds (default: not)")
     ap.add_argument("--show-alloc-steps", type=int, default=5, help="allocating steps listed per rate")
     args = ap.parse_args(argv)
     if args.steps < 1:
         ap.error("--steps must be >= 1")
+    if not (args.paced_seconds >= 0.0 and math.isfinite(args.paced_seconds)):
+        ap.error("--paced-seconds must be >= 0")
     try:
         rates = [float(r) for r in args.rates.split(",")]
     except ValueError:
         ap.error(f"--rates: not a list of numbers: {args.rates!r}")
+    if not all(r > 0.0 and math.isfinite(r) for r in rates):
+        ap.error("--rates: every rate must be positive")
     from fmus.build import build_fmus
 
+    runs = [(rate, False, args.steps) for rate in rates]
+    if args.paced_seconds > 0.0:
+        runs += [(rate, True, max(1, round(args.paced_seconds * rate))) for rate in rates]
     with tempfile.TemporaryDirectory(prefix="bench_rt_") as tmp:
         tmp = Path(tmp)
         build_fmus(tmp / "fmus", names=CHAIN)
         exe, counter = build_tools(tmp)
-        rows = []
-        for rate in rates:
-            step = 1.0 / rate
-            work = tmp / f"run_{rate:g}"
+        rows = {False: [], True: []}
+        for rate, paced, steps in runs:
+            work = tmp / f"run_{rate:g}_{int(paced)}"
             work.mkdir()
-            plan = write_plan(tmp / "fmus", work, step, args.steps)
+            plan = write_plan(tmp / "fmus", work, 1.0 / rate, steps, paced=paced)
             before = load()
             prof = run(exe, plan, counter)
-            rows.append((rate, prof, before, load()))
-            print(f"{rate:g} Hz done (load {before} -> {rows[-1][3]})", file=sys.stderr)
-    print("| rate | steps | p50 | p99 | p99.9 | max | jitter p99.9/p50 | allocations after warm-up "
-          "(allocs / frees / mmaps / munmaps; steps that made them) | slowest step without / with them "
-          "| load before -> after |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    for rate, p, before, after in rows:
-        us = [f"{x / 1000:.1f} us" for x in (p.p50_ns, p.p99_ns, p.p999_ns, p.max_ns)]
-        split = " / ".join("-" if x < 0 else f"{x / 1000:.1f} us" for x in (p.max_quiet_ns, p.max_alloc_ns))
-        print(f"| {rate:g} Hz ({p.step_s * 1000:g} ms) | {p.steps} | {' | '.join(us)} | {p.jitter:.2f} | "
-              f"{p.allocs} / {p.frees} / {p.mmaps} / {p.munmaps}; {p.alloc_steps} steps | {split} | "
-              f"{before} -> {after} |")
-    for rate, p, _, _ in rows:
+            rows[paced].append((rate, prof, before, load()))
+            print(f"{rate:g} Hz{' paced' if paced else ''} done (load {before} -> {load()})", file=sys.stderr)
+    print("As fast as possible (each step starts when the previous one ends):")
+    print_table(rows[False])
+    if rows[True]:
+        print("\nPaced (each step starts at its deadline, one communication step apart):")
+        print_table(rows[True])
+    for rate, p, _, _ in rows[False] + rows[True]:
         listed = ", ".join(f"{a.step} ({a.allocs}/{a.frees}/{a.mmaps}/{a.munmaps})"
                            for a in p.alloc_step_list[:args.show_alloc_steps])
-        print(f"{rate:g} Hz: warm-up {p.warmup} steps; first allocating steps (allocs/frees/mmaps/munmaps): "
-              f"{listed or 'none'}")
+        print(f"{rate:g} Hz{' paced' if p.paced else ''}: warm-up {p.warmup} steps; first allocating steps "
+              f"(allocs/frees/mmaps/munmaps): {listed or 'none'}")
     return 0
 
 

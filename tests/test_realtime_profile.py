@@ -41,7 +41,7 @@ def block_rows() -> int:
 
 
 def check_latencies(p: bench_realtime.Profile, step: float):
-    assert p.steps == STEPS and p.warmup == bench_realtime.warmup_steps(step) and p.step_s == step
+    assert not p.paced and p.steps == STEPS and p.warmup == bench_realtime.warmup_steps(step) and p.step_s == step
     assert 0 < p.p50_ns <= p.p99_ns <= p.p999_ns <= p.max_ns
     assert p.jitter == pytest.approx(p.p999_ns / p.p50_ns, rel=1e-5)
 
@@ -74,6 +74,18 @@ def test_latency_mode_without_the_counter(fmu_dir, tools, tmp_path):
     assert not p.counter
     assert (p.allocs, p.frees, p.mmaps, p.munmaps, p.alloc_steps, p.max_alloc_ns) == (-1, -1, -1, -1, -1, -1)
     assert p.max_quiet_ns == p.max_ns and p.alloc_step_list == ()
+    assert not p.paced and (p.wake_p50_ns, p.wake_p99_ns, p.wake_max_ns, p.overruns) == (-1, -1, -1, -1)
+
+
+def test_paced_latency_mode(fmu_dir, tools, tmp_path):
+    exe, counter = tools
+    step, steps = 0.001, 300
+    p = bench_realtime.run(exe, bench_realtime.write_plan(fmu_dir, tmp_path, step, steps, paced=True), counter,
+                           timeout=600)
+    assert p.paced and p.steps == steps
+    assert 0 < p.p50_ns <= p.p99_ns <= p.p999_ns <= p.max_ns
+    assert 0 <= p.wake_p50_ns <= p.wake_p99_ns <= p.wake_max_ns and 0 <= p.overruns <= steps
+    assert p.alloc_steps == 0 and p.allocs == 0  # no block refill among these steps (warm-up 5200 + 300 < 8192)
 
 
 def test_parse_refuses_output_without_one_latency_line():

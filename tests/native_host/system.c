@@ -9,6 +9,7 @@
  *   link SRC_FMU SRC_VR DST_FMU DST_VR              (Real output -> Real input)
  *   print FMU VR                                    (Real printed after the last step)
  *   latency WARMUP                                  (real-time profile, below)
+ *   paced                                           (with latency: one step per period)
  * Inputs are set from their sources before each FMU leaves initialisation and
  * before each FMU's doStep.  Prints "STATUS <fmu> <function> <status>" for
  * every non-OK call, "VALUE <fmu> <vr> <value>" and "DONE <steps>"; exits 0
@@ -27,16 +28,23 @@
  *   LATENCY steps=N warmup=K step_s=H p50_ns=.. p99_ns=.. p999_ns=.. max_ns=..
  *       jitter=p99.9/p50 counter=1|0 allocs=.. frees=.. mmaps=.. munmaps=.. alloc_steps=..
  *       max_quiet_ns=.. max_alloc_ns=..
+ *       paced=0|1 wake_p50_ns=.. wake_p99_ns=.. wake_max_ns=.. overruns=..
  * (counts -1 without the counter; percentiles by nearest rank; max_quiet_ns is the
  * slowest step that made no heap or mmap call, max_alloc_ns the slowest that did,
- * -1 when there is none).
+ * -1 when there is none).  With "paced", timed step k starts at its deadline
+ * (clock_nanosleep, absolute, one communication step apart, timer slack 1 ns;
+ * normal scheduling policy, memory not locked): wake_* is how late
+ * it started, overruns counts the steps that ended after the next deadline
+ * (-1 when not paced).  Without it the steps follow each other at once.
  */
 #define _GNU_SOURCE /* RTLD_DEFAULT, clock_gettime */
 #include <dlfcn.h>
+#include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/prctl.h>
 #include <time.h>
 
 #include "fmi2Functions.h"
@@ -119,8 +127,87 @@ static long long percentile(const long long *sorted, long n, double q) {
     return sorted[(rank > n ? n : rank) - 1];
 }
 
+typedef struct {
+    long long *lat;                         /* ns, per timed step */
+    long long *wake;                        /* ns after the step's deadline it started (paced) */
+    unsigned long long (*seen)[ALLOC_COUNTER_N]; /* counter readings after each step */
+    long overruns;                          /* paced steps that ended after the next deadline */
+} Samples;
+
+/* Sleep until the CLOCK_MONOTONIC time deadline_ns (returns at once when it has passed). */
+static void sleep_until(long long deadline_ns) {
+    struct timespec ts = {(time_t)(deadline_ns / 1000000000LL), (long)(deadline_ns % 1000000000LL)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
+    }
+}
+
+/* STEPS timed chain steps from step index n0; paced: step k starts at its deadline, one period apart. */
+static int timed_steps(Fmu *f, int nf, int link[][4], int nl, long n0, long steps, double h, int paced,
+                       alloc_get_fn *get, Samples *s, long *done) {
+    int ok = 1;
+    long long period = (long long)(h * 1e9 + 0.5), first = now_ns() + period;
+    if (paced) prctl(PR_SET_TIMERSLACK, 1UL); /* wake at the deadline, not up to 50 us after it */
+    for (long k = 0; ok && k < steps; k++, (*done)++) {
+        long long deadline = first + k * period, t0;
+        if (paced) {
+            sleep_until(deadline);
+            t0 = now_ns();
+            s->wake[k] = t0 - deadline;
+        } else {
+            t0 = now_ns();
+        }
+        ok = chain_step(f, nf, link, nl, (double)(n0 + k) * h, h);
+        long long t1 = now_ns();
+        s->lat[k] = t1 - t0;
+        if (paced && t1 > deadline + period) s->overruns++;
+        if (get) get(s->seen[k]);
+    }
+    return ok;
+}
+
+/* Prints the ALLOC_STEP lines; the number of steps with heap or mmap calls, their slowest and the others' slowest. */
+static long alloc_steps_report(const Samples *s, long steps, int counted, long long *max_quiet, long long *max_alloc) {
+    long n = 0;
+    *max_quiet = *max_alloc = -1;
+    for (long k = 0; k < steps; k++) {
+        unsigned long long d[ALLOC_COUNTER_N] = {0};
+        for (int j = 0; counted && j < ALLOC_COUNTER_N; j++) d[j] = s->seen[k][j] - (k ? s->seen[k - 1][j] : 0);
+        if (d[0] + d[1] + d[2] + d[3] == 0) {
+            if (s->lat[k] > *max_quiet) *max_quiet = s->lat[k];
+            continue;
+        }
+        if (s->lat[k] > *max_alloc) *max_alloc = s->lat[k];
+        if (n++ < MAX_ALLOC_LINES) printf("ALLOC_STEP %ld %llu %llu %llu %llu\n", k, d[0], d[1], d[2], d[3]);
+    }
+    return counted ? n : -1;
+}
+
+/* The LATENCY line (sorts the samples). */
+static void latency_report(Samples *s, long steps, long warmup, double h, int paced, int counted,
+                           const unsigned long long total[ALLOC_COUNTER_N]) {
+    long long max_quiet, max_alloc;
+    long alloc_steps = alloc_steps_report(s, steps, counted, &max_quiet, &max_alloc);
+    qsort(s->lat, (size_t)steps, sizeof *s->lat, cmp_ll);
+    long long p50 = percentile(s->lat, steps, 0.50), p99 = percentile(s->lat, steps, 0.99);
+    long long p999 = percentile(s->lat, steps, 0.999), max = s->lat[steps - 1];
+    long long w50 = -1, w99 = -1, wmax = -1;
+    if (paced) {
+        qsort(s->wake, (size_t)steps, sizeof *s->wake, cmp_ll);
+        w50 = percentile(s->wake, steps, 0.50), w99 = percentile(s->wake, steps, 0.99), wmax = s->wake[steps - 1];
+    }
+    long long c[ALLOC_COUNTER_N];
+    for (int j = 0; j < ALLOC_COUNTER_N; j++) c[j] = counted ? (long long)total[j] : -1;
+    printf("LATENCY steps=%ld warmup=%ld step_s=%.17g p50_ns=%lld p99_ns=%lld p999_ns=%lld max_ns=%lld "
+           "jitter=%.6g counter=%d allocs=%lld frees=%lld mmaps=%lld munmaps=%lld alloc_steps=%ld "
+           "max_quiet_ns=%lld max_alloc_ns=%lld paced=%d wake_p50_ns=%lld wake_p99_ns=%lld wake_max_ns=%lld "
+           "overruns=%ld\n",
+           steps, warmup, h, p50, p99, p999, max, p50 > 0 ? (double)p999 / (double)p50 : 0.0, counted, c[0], c[1],
+           c[2], c[3], alloc_steps, max_quiet, max_alloc, paced, w50, w99, wmax, paced ? s->overruns : -1L);
+}
+
 /* The real-time profile: WARMUP untimed steps, then STEPS timed ones (see the header). */
-static int profile(Fmu *f, int nf, int link[][4], int nl, long warmup, long steps, double h, long *done) {
+static int profile(Fmu *f, int nf, int link[][4], int nl, long warmup, long steps, double h, int paced,
+                   long *done) {
     alloc_reset_fn *reset = (alloc_reset_fn *)dlsym(RTLD_DEFAULT, "alloc_counter_reset");
     alloc_get_fn *get = (alloc_get_fn *)dlsym(RTLD_DEFAULT, "alloc_counter_get");
     int counted = reset != NULL && get != NULL;
@@ -128,54 +215,25 @@ static int profile(Fmu *f, int nf, int link[][4], int nl, long warmup, long step
         fprintf(stderr, "latency: steps must be >= 1\n");
         return 0;
     }
-    long long *lat = malloc((size_t)steps * sizeof *lat);
-    unsigned long long(*seen)[ALLOC_COUNTER_N] = malloc((size_t)steps * sizeof *seen);
-    if (!lat || !seen) {
+    Samples s = {malloc((size_t)steps * sizeof *s.lat), malloc((size_t)steps * sizeof *s.wake),
+                 malloc((size_t)steps * sizeof *s.seen), 0};
+    int ok = s.lat && s.wake && s.seen;
+    if (!ok) {
         fprintf(stderr, "latency: cannot allocate %ld samples\n", steps);
-        free(lat);
-        free(seen);
-        return 0;
+    } else {
+        memset(s.lat, 0, (size_t)steps * sizeof *s.lat); /* touch every page before timing */
+        memset(s.wake, 0, (size_t)steps * sizeof *s.wake);
+        memset(s.seen, 0, (size_t)steps * sizeof *s.seen);
+        for (long n = 0; ok && n < warmup; n++, (*done)++) ok = chain_step(f, nf, link, nl, (double)n * h, h);
+        if (ok && counted) reset();
+        ok = ok && timed_steps(f, nf, link, nl, warmup, steps, h, paced, counted ? get : NULL, &s, done);
+        unsigned long long total[ALLOC_COUNTER_N] = {0};
+        if (counted) get(total); /* before fmi2Terminate (the caller's next call) */
+        if (ok) latency_report(&s, steps, warmup, h, paced, counted, total);
     }
-    memset(lat, 0, (size_t)steps * sizeof *lat); /* touch every page before timing */
-    memset(seen, 0, (size_t)steps * sizeof *seen);
-    int ok = 1;
-    long n = 0;
-    for (; ok && n < warmup; n++, (*done)++) ok = chain_step(f, nf, link, nl, (double)n * h, h);
-    if (counted) reset();
-    for (long k = 0; ok && k < steps; k++, n++, (*done)++) {
-        long long t0 = now_ns();
-        ok = chain_step(f, nf, link, nl, (double)n * h, h);
-        lat[k] = now_ns() - t0;
-        if (counted) get(seen[k]);
-    }
-    unsigned long long total[ALLOC_COUNTER_N] = {0};
-    if (counted) get(total); /* before fmi2Terminate (the caller's next call) */
-    if (ok) {
-        long alloc_steps = 0;
-        long long max_quiet = -1, max_alloc = -1; /* slowest step without / with heap or mmap calls */
-        for (long k = 0; k < steps; k++) {
-            unsigned long long d[ALLOC_COUNTER_N] = {0};
-            for (int j = 0; counted && j < ALLOC_COUNTER_N; j++) d[j] = seen[k][j] - (k ? seen[k - 1][j] : 0);
-            if (d[0] + d[1] + d[2] + d[3] == 0) {
-                if (lat[k] > max_quiet) max_quiet = lat[k];
-                continue;
-            }
-            if (lat[k] > max_alloc) max_alloc = lat[k];
-            if (alloc_steps++ < MAX_ALLOC_LINES) printf("ALLOC_STEP %ld %llu %llu %llu %llu\n", k, d[0], d[1], d[2], d[3]);
-        }
-        qsort(lat, (size_t)steps, sizeof *lat, cmp_ll);
-        long long p50 = percentile(lat, steps, 0.50), p99 = percentile(lat, steps, 0.99);
-        long long p999 = percentile(lat, steps, 0.999), max = lat[steps - 1];
-        long long c[ALLOC_COUNTER_N];
-        for (int j = 0; j < ALLOC_COUNTER_N; j++) c[j] = counted ? (long long)total[j] : -1;
-        printf("LATENCY steps=%ld warmup=%ld step_s=%.17g p50_ns=%lld p99_ns=%lld p999_ns=%lld max_ns=%lld "
-               "jitter=%.6g counter=%d allocs=%lld frees=%lld mmaps=%lld munmaps=%lld alloc_steps=%ld "
-               "max_quiet_ns=%lld max_alloc_ns=%lld\n",
-               steps, warmup, h, p50, p99, p999, max, p50 > 0 ? (double)p999 / (double)p50 : 0.0, counted, c[0], c[1],
-               c[2], c[3], counted ? alloc_steps : -1L, max_quiet, max_alloc);
-    }
-    free(lat);
-    free(seen);
+    free(s.lat);
+    free(s.wake);
+    free(s.seen);
     return ok;
 }
 
@@ -193,6 +251,7 @@ int main(int argc, char **argv) {
     int nf = 0, nl = 0, np = 0;
     int link[MAXL][4], printed[MAXL][2];
     long steps = 0, warmup = -1;
+    int paced = 0;
     double h = 1.0;
     fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
     char kind[32];
@@ -253,6 +312,8 @@ int main(int argc, char **argv) {
             nl++;
         } else if (strcmp(kind, "latency") == 0) {
             if (fscanf(plan, "%ld", &warmup) != 1 || warmup < 0) return 2;
+        } else if (strcmp(kind, "paced") == 0) {
+            paced = 1;
         } else if (strcmp(kind, "print") == 0) {
             if (np == MAXL || fscanf(plan, "%d %d", &printed[np][0], &printed[np][1]) != 2) return 2;
             np++;
@@ -279,7 +340,7 @@ int main(int argc, char **argv) {
     if (warmup < 0) {
         for (long n = 0; ok && n < steps; n++, done++) ok = chain_step(f, nf, link, nl, n * h, h);
     } else {
-        ok = ok && profile(f, nf, link, nl, warmup, steps, h, &done);
+        ok = ok && profile(f, nf, link, nl, warmup, steps, h, paced, &done);
     }
     for (int p = 0; ok && p < np; p++) {
         fmi2ValueReference vr = (fmi2ValueReference)printed[p][1];
