@@ -69,7 +69,8 @@ static void *boot_alloc(size_t n) {
 }
 
 static int in_boot(const void *p) {
-    return (const unsigned char *)p >= boot && (const unsigned char *)p < boot + BOOT_SIZE;
+    uintptr_t a = (uintptr_t)p, b = (uintptr_t)boot;
+    return a >= b && a < b + BOOT_SIZE;
 }
 
 static void resolve(void) {

@@ -146,7 +146,8 @@ static int timed_steps(Fmu *f, int nf, int link[][4], int nl, long n0, long step
                        alloc_get_fn *get, Samples *s, long *done) {
     int ok = 1;
     long long period = (long long)(h * 1e9 + 0.5), first = now_ns() + period;
-    if (paced) prctl(PR_SET_TIMERSLACK, 1UL); /* wake at the deadline, not up to 50 us after it */
+    if (paced && prctl(PR_SET_TIMERSLACK, 1UL) != 0) /* wake at the deadline, not up to 50 us after it */
+        perror("latency: prctl(PR_SET_TIMERSLACK) failed, default timer slack kept");
     for (long k = 0; ok && k < steps; k++, (*done)++) {
         long long deadline = first + k * period, t0;
         if (paced) {
@@ -165,8 +166,10 @@ static int timed_steps(Fmu *f, int nf, int link[][4], int nl, long n0, long step
     return ok;
 }
 
-/* Prints the ALLOC_STEP lines; the number of steps with heap or mmap calls, their slowest and the others' slowest. */
-static long alloc_steps_report(const Samples *s, long steps, int counted, long long *max_quiet, long long *max_alloc) {
+/* Prints the ALLOC_STEP lines; returns the number of steps with heap or mmap calls (-1 without the
+ * counter) and sets the slowest of them and the slowest of the others (-1 when there is none). */
+static long alloc_steps_report(const Samples *s, long steps, int counted, long long *max_quiet,
+                               long long *max_alloc) {
     long n = 0;
     *max_quiet = *max_alloc = -1;
     for (long k = 0; k < steps; k++) {
