@@ -191,6 +191,7 @@ def test_quick_campaign_identifies_and_compensates(tmp_path):
         assert mt["error_dph"] == pytest.approx(t["mt_total_hot_mt_dph"] - t["drift_dph"])
 
 
+@pytest.mark.slow  # 17 s; the default run keeps test_campaign's kill-and-resume on small tasks
 def test_killed_campaign_resumes_without_redoing_finished_experiments(tmp_path):
     """Kill the axial-rbf campaign (process and pool) after a few experiments,
     rerun the same campaign: finished files are kept untouched, the rest

@@ -122,6 +122,7 @@ def _compare(lin, win):
     return rows
 
 
+@pytest.mark.slow  # 20 s with the wine prefix
 def test_win64_core_matches_linux64(tmp_path, wine_env):
     _need("gcc", MINGW, "wine")
     lin_exe, win_exe = tmp_path / "core_driver", tmp_path / "core_driver.exe"
@@ -155,6 +156,7 @@ def _dll_imports_exports(dll):
     return imports, exports
 
 
+@pytest.mark.slow
 def test_core_builds_as_win64_dll(tmp_path):
     _need("gcc", "nm", MINGW, MINGW_OBJDUMP)
     dll, so = tmp_path / "sarins_core.dll", tmp_path / "libsarins_core.so"

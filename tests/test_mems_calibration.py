@@ -390,6 +390,7 @@ def _assert_report_claims(summary: dict, recurrent_models) -> None:
     assert ins["grnn"]["sys"] - red["grnn"]["sys"] >= CARRY_OVER
 
 
+@pytest.mark.slow  # 30 s: the quick campaign (kept out of the default run's 4 min budget)
 @pytest.mark.integration
 def test_quick_campaign_orders_models_as_the_report_claims(quick_campaign):
     """`sarins campaign mems-calibration --profile quick` (the default suite's model subset): the ordering
@@ -452,6 +453,7 @@ def test_quick_campaign_with_every_model_and_the_ablation(tmp_path):
 
 
 @pytest.mark.integration
+@pytest.mark.slow  # shares the quick campaign's fixture
 def test_campaign_without_torch_says_how_to_install_and_runs_the_others(quick_campaign, tmp_path, monkeypatch,
                                                                         capsys):
     """The recordings of a finished campaign are reused (resume, in another folder); torch hidden."""
