@@ -34,16 +34,16 @@ import shutil
 import subprocess
 import sys
 import tempfile
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
+
+import fmu_runs  # benchmarks/ is on sys.path (run as a script, or as the tests put it there)
 
 ROOT = Path(__file__).resolve().parents[1]
 HOST_DIR = ROOT / "tests" / "native_host"
 COARSE_S, ALIGN_S = 2.0, 5.0  # INS coarse / whole alignment, s; the turntable rotates from ALIGN_S
 EXTRA_WARMUP = 200  # steps after the alignment before timing starts
 CHAIN = ("Turntable", "IMUThermal", "StrapdownINS")
-HOST_ENV_DROP = ("PYTHONPATH", "PYTHONHOME", "LD_PRELOAD", "LD_LIBRARY_PATH", "VIRTUAL_ENV")
 
 
 @dataclass(frozen=True)
@@ -114,32 +114,13 @@ def warmup_steps(step: float) -> int:
 def write_plan(fmu_dir: Path, work: Path, step: float, steps: int, paced: bool = False) -> Path:
     """The C master's plan: the standard static chain at ``step`` s, IMU internal rate 1/step, latency mode
     (paced: one step per ``step`` of wall time)."""
-    from fmpy import read_model_description
-
     from sarins.systems import standard_static
 
     system = standard_static(fmu_dir, turntable=dict(align_time=ALIGN_S),
                              imu=dict(internal_rate=1.0 / step),
                              ins=dict(coarse_time=COARSE_S, align_time=ALIGN_S))
-    lines = [f"steps {steps} {step!r}", f"latency {warmup_steps(step)}"] + (["paced"] if paced else [])
-    index, variables = {}, {}
-    for k, comp in enumerate(system.components):
-        fmu = Path(comp.source)
-        folder = work / comp.name
-        if not folder.exists():
-            with zipfile.ZipFile(fmu) as z:
-                z.extractall(folder)
-        md = read_model_description(str(fmu))
-        index[comp.name], variables[comp.name] = k, {v.name: v for v in md.modelVariables}
-        lines.append(f"fmu {folder} {md.coSimulation.modelIdentifier} {md.guid}")
-        for name, value in comp.parameters.items():
-            var = variables[comp.name][name]
-            kind = {"Real": "real", "Integer": "int", "String": "string"}[var.type]
-            lines.append(f"{kind} {k} {var.valueReference} {value!r}" if kind == "real"
-                         else f"{kind} {k} {var.valueReference} {value}")
-    for c in system.connections:
-        lines.append(f"link {index[c.start_component]} {variables[c.start_component][c.start_variable].valueReference}"
-                     f" {index[c.end_component]} {variables[c.end_component][c.end_variable].valueReference}")
+    body, _, _ = fmu_runs.system_plan_lines(system, work)
+    lines = [f"steps {steps} {step!r}", f"latency {warmup_steps(step)}"] + (["paced"] if paced else []) + body
     plan = work / f"plan_{step!r}{'_paced' if paced else ''}.txt"
     plan.write_text("\n".join(lines) + "\n")
     return plan
@@ -162,7 +143,7 @@ def parse(stdout: str) -> Profile:
 
 def run(exe: Path, plan: Path, counter: Path | None, timeout: float | None = None) -> Profile:
     """Run the C master on ``plan`` (with the counter preloaded unless None); its Profile."""
-    env = {k: v for k, v in os.environ.items() if k not in HOST_ENV_DROP}
+    env = {k: v for k, v in os.environ.items() if k not in fmu_runs.HOST_ENV_DROP}
     if counter is not None:
         env["LD_PRELOAD"] = str(counter)
     r = subprocess.run([str(exe), str(plan)], capture_output=True, text=True, env=env, timeout=timeout)

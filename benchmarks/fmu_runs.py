@@ -179,6 +179,33 @@ def c_host_command(host: Path, folder: Path, fmu: Path, feed: Feed, steps: int, 
     return [str(host), str(folder), md.coSimulation.modelIdentifier, md.guid, str(steps), repr(STEP), *ops]
 
 
+def system_plan_lines(system, unzip_root: Path, fmu_of=lambda comp: Path(comp.source)):
+    """The ``fmu``, start-value and ``link`` lines of the C master's plan (tests/native_host/system.c) for
+    ``system``, each FMU unzipped once under ``unzip_root``; ``fmu_of(component)`` is its FMU file.
+    Returns (lines, {component: index}, {component: {variable name: model variable}})."""
+    from fmpy import read_model_description
+
+    lines, index, variables = [], {}, {}
+    for k, comp in enumerate(system.components):
+        fmu = fmu_of(comp)
+        folder = unzip_root / comp.name
+        if not folder.exists():
+            with zipfile.ZipFile(fmu) as z:
+                z.extractall(folder)
+        md = read_model_description(str(fmu))
+        index[comp.name], variables[comp.name] = k, {v.name: v for v in md.modelVariables}
+        lines.append(f"fmu {folder} {md.coSimulation.modelIdentifier} {md.guid}")
+        for name, value in comp.parameters.items():
+            var = variables[comp.name][name]
+            kind = {"Real": "real", "Integer": "int", "String": "string"}[var.type]
+            lines.append(f"{kind} {k} {var.valueReference} {value!r}" if kind == "real"
+                         else f"{kind} {k} {var.valueReference} {value}")
+    for c in system.connections:
+        lines.append(f"link {index[c.start_component]} {variables[c.start_component][c.start_variable].valueReference}"
+                     f" {index[c.end_component]} {variables[c.end_component][c.end_variable].valueReference}")
+    return lines, index, variables
+
+
 def unzip(fmu: Path, folder: Path) -> Path:
     """Extract ``fmu`` into ``folder`` (a native tool's fresh unpack)."""
     with zipfile.ZipFile(fmu) as z:

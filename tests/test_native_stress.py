@@ -12,12 +12,10 @@ import os
 import shutil
 import subprocess
 import sys
-import zipfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
-from fmpy import read_model_description
 
 from sarins.systems import standard_static_identified
 
@@ -25,6 +23,9 @@ pytestmark = pytest.mark.slow
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import fmu_runs  # noqa: E402
 ALIGN, TRIGGER, STEPS = 600.0, 300.0, 1200
 PARAMS = dict(turntable=dict(align_time=ALIGN), ins=dict(align_time=ALIGN, coarse_time=120.0),
               identifier=dict(trigger_time=TRIGGER))
@@ -37,25 +38,8 @@ def clean_env() -> dict:
 
 def write_plan(system, fmu_dir: Path, unzip_root: Path, steps: int, step: float, prints) -> Path:
     """The C master's plan file for ``system`` (FMUs unzipped under ``unzip_root``)."""
-    lines = [f"steps {steps} {step!r}"]
-    index, mds = {}, {}
-    for k, comp in enumerate(system.components):
-        fmu = fmu_dir / Path(comp.source).name
-        folder = unzip_root / comp.name
-        if not folder.exists():
-            with zipfile.ZipFile(fmu) as z:
-                z.extractall(folder)
-        md = read_model_description(str(fmu))
-        index[comp.name], mds[comp.name] = k, {v.name: v for v in md.modelVariables}
-        lines.append(f"fmu {folder} {md.coSimulation.modelIdentifier} {md.guid}")
-        for name, value in comp.parameters.items():
-            var = mds[comp.name][name]
-            kind = {"Real": "real", "Integer": "int", "String": "string"}[var.type]
-            lines.append(f"{kind} {k} {var.valueReference} {value!r}" if kind == "real"
-                         else f"{kind} {k} {var.valueReference} {value}")
-    for c in system.connections:
-        lines.append(f"link {index[c.start_component]} {mds[c.start_component][c.start_variable].valueReference} "
-                     f"{index[c.end_component]} {mds[c.end_component][c.end_variable].valueReference}")
+    body, index, mds = fmu_runs.system_plan_lines(system, unzip_root, lambda comp: fmu_dir / Path(comp.source).name)
+    lines = [f"steps {steps} {step!r}"] + body
     for comp, name in prints:
         lines.append(f"print {index[comp]} {mds[comp][name].valueReference}")
     plan = unzip_root / "plan.txt"

@@ -93,19 +93,24 @@ static int check(int k, const char *fn, fmi2Status st) {
     return 1;
 }
 
+/* FMU k's connected inputs from their sources' current outputs (link rows: source, vr, target, vr). */
+static int pass_inputs(Fmu *f, int k, int link[][4], int nl) {
+    int ok = 1;
+    for (int l = 0; ok && l < nl; l++)
+        if (link[l][2] == k) {
+            fmi2ValueReference src = (fmi2ValueReference)link[l][1], dst = (fmi2ValueReference)link[l][3];
+            fmi2Real v;
+            ok = check(link[l][0], "fmi2GetReal", f[link[l][0]].getReal(f[link[l][0]].c, &src, 1, &v)) &&
+                 check(k, "fmi2SetReal", f[k].setReal(f[k].c, &dst, 1, &v));
+        }
+    return ok;
+}
+
 /* One Gauss-Seidel step of the chain at time t: each FMU's inputs from their sources, then its doStep. */
 static int chain_step(Fmu *f, int nf, int link[][4], int nl, double t, double h) {
     int ok = 1;
-    for (int k = 0; ok && k < nf; k++) {
-        for (int l = 0; ok && l < nl; l++)
-            if (link[l][2] == k) {
-                fmi2ValueReference src = (fmi2ValueReference)link[l][1], dst = (fmi2ValueReference)link[l][3];
-                fmi2Real v;
-                ok = check(link[l][0], "fmi2GetReal", f[link[l][0]].getReal(f[link[l][0]].c, &src, 1, &v)) &&
-                     check(k, "fmi2SetReal", f[k].setReal(f[k].c, &dst, 1, &v));
-            }
-        ok = ok && check(k, "fmi2DoStep", f[k].step(f[k].c, t, h, fmi2True));
-    }
+    for (int k = 0; ok && k < nf; k++)
+        ok = pass_inputs(f, k, link, nl) && check(k, "fmi2DoStep", f[k].step(f[k].c, t, h, fmi2True));
     return ok;
 }
 
@@ -329,16 +334,8 @@ int main(int argc, char **argv) {
     for (int k = 0; k < nf; k++)
         if (!check(k, "fmi2EnterInitializationMode", f[k].enter(f[k].c))) return 1;
     int ok = 1;
-    for (int k = 0; ok && k < nf; k++) {
-        for (int l = 0; ok && l < nl; l++)
-            if (link[l][2] == k) {
-                fmi2ValueReference src = (fmi2ValueReference)link[l][1], dst = (fmi2ValueReference)link[l][3];
-                fmi2Real v;
-                ok = check(link[l][0], "fmi2GetReal", f[link[l][0]].getReal(f[link[l][0]].c, &src, 1, &v)) &&
-                     check(k, "fmi2SetReal", f[k].setReal(f[k].c, &dst, 1, &v));
-            }
-        ok = ok && check(k, "fmi2ExitInitializationMode", f[k].exit_(f[k].c));
-    }
+    for (int k = 0; ok && k < nf; k++)
+        ok = pass_inputs(f, k, link, nl) && check(k, "fmi2ExitInitializationMode", f[k].exit_(f[k].c));
     long done = 0;
     if (warmup < 0) {
         for (long n = 0; ok && n < steps; n++, done++) ok = chain_step(f, nf, link, nl, n * h, h);
