@@ -49,7 +49,7 @@ def main():
     simulated = 88 * 3600.0
     t0 = time.perf_counter()
     static_run.run_static(nav_hours=0.1, align_hours=0.2)
-    print(f"first call (numba compile or cache load): {time.perf_counter() - t0:.2f} s")
+    print(f"first call (imports, loading the C core): {time.perf_counter() - t0:.2f} s")
     walls = []
     for _ in range(args.repeat):
         totals = {}
