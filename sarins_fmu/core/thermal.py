@@ -13,7 +13,6 @@ _I64, _F64, _P = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p
 
 _exact_step = function("sarins_thermal_exact_step", _F64, _F64, _F64, _F64, _F64, _F64, _F64)
 _exact_steps = function("sarins_thermal_exact_steps", None, _I64, _P, _P, _I64, _P, _P, _P, _P)
-_thermal_steps = function("sarins_thermal_steps", None, _F64, _F64, _F64, _F64, _I64, _P, _I64, _P, _P, _P, _P)
 _die = function("sarins_die_temperatures", None, _I64, _I64, _P, _P, _F64, _P, _P, _P)
 
 
@@ -33,18 +32,6 @@ def exact_steps(h, amb, heat, tau, temp0) -> np.ndarray:
     _exact_steps(n, h.ctypes.data, amb.ctypes.data, s, heat.ctypes.data, tau.ctypes.data, temp0.ctypes.data,
                  out.ctypes.data)
     return out
-
-
-def thermal_steps(t0, h, k0, amb0, amb_end, heat, tau, temperature, out) -> None:
-    """Exact steps over K intervals of the grid t0 + k h from interval k0 on (``thermal.h``);
-    ``temperature`` (S,) is advanced in place, ``out`` (K, S) receives the temperatures at the ends."""
-    amb_end = _arrays.read(amb_end, np.shape(amb_end)[:1], "amb_end")
-    n, s = amb_end.shape[0], np.shape(heat)[0]
-    heat, tau = _arrays.read(heat, (s,), "heat"), _arrays.read(tau, (s,), "tau")
-    _arrays.written(temperature, (s,), "temperature")
-    _arrays.written(out, (n, s), "out")
-    _thermal_steps(t0, h, k0, amb0, n, amb_end.ctypes.data, s, heat.ctypes.data, tau.ctypes.data,
-                   temperature.ctypes.data, out.ctypes.data)
 
 
 def die_temperatures(reported0, reported, h, tau, die) -> np.ndarray:
