@@ -33,12 +33,11 @@ With ``SARINS_FMU_NO_COMPILED_STEP=1`` every context is None and the Python
 
 from __future__ import annotations
 
-import math
 import os
 
 import numpy as np
 
-from fmus.slave_support import TAG_TOL, real_slots
+from fmus.slave_support import real_slots
 from sarins_fmu.core import imu as core_imu
 from sarins_fmu.core import ins as core_ins
 from sarins_fmu.core import turntable as core_turntable
@@ -104,55 +103,13 @@ def imu_context(slave, step: float):
 
 # ---------------------------------------------------------------- StrapdownINS
 
-# io row: expected step, start time, align time, steps of the alignment; slots of the inputs (dtheta/dv (6),
-# increment_end_time, temp_gyro_z, the correction c, b, a, axial_drift_apply_from), the 9 navigation
-# outputs, the 5 error outputs, the 4 estimates, the time and temperature outputs (nav_time, temp_azimuth_gyro,
-# temp_align_start, temp_align_end, temp_change_align, solution_time); lat0, lon0, (r_m + h0), (r_n + h0),
-# cos(lat0); steps of the coarse alignment, the filter's velocity measurement variance; the time-tag tolerance
-# (the layout of ins_fmu_step.h)
-INS_INPUTS = [f"dtheta_{a}" for a in "xyz"] + [f"dv_{a}" for a in "xyz"] + [
-    "increment_end_time", "temp_gyro_z", "axial_drift_correction", "axial_drift_correction_b",
-    "axial_drift_correction_a", "axial_drift_apply_from"]
-INS_TIME_TEMP = ["nav_time", "temp_azimuth_gyro", "temp_align_start", "temp_align_end", "temp_change_align",
-                 "solution_time"]
-_INS_IN = 4
-_INS_NAV = _INS_IN + len(INS_INPUTS)
-_INS_ERR = _INS_NAV + 9
-_INS_EST = _INS_ERR + 5
-_INS_TEMP = _INS_EST + 4
-_INS_SITE = _INS_TEMP + len(INS_TIME_TEMP)
-_INS_FILTER = _INS_SITE + 5
-_INS_TAG_TOL = _INS_FILTER + 2
-_INS_IO = _INS_TAG_TOL + 1
-
-
 def ins_context(slave):
-    """The StrapdownINS slave's compiled step (fine alignment, navigation with a constant or temperature-model
-    drift correction: the C core's ``sarins_ins_fmu_step``), or None with ``SARINS_FMU_NO_COMPILED_STEP=1``."""
+    """The StrapdownINS slave's compiled step (every step: the C core's ``sarins_ins_fmu_step`` on the
+    slave's FMU state struct), or None with ``SARINS_FMU_NO_COMPILED_STEP=1``."""
     if not enabled():
         return None
-    if core_ins.IO_SIZE != _INS_IO:
-        raise RuntimeError(f"the C core's INS step reads an io row of {core_ins.IO_SIZE} values, this module "
-                           f"writes {_INS_IO}: rebuild the core ('python3 -m pip install -e .')")
-    from sarins_fmu import earth
-
-    config = slave._config
-    io = np.zeros(_INS_IO)
-    io[0:4] = config.step, slave._start_time, config.align_time, round(config.align_time / config.step)
-    io[_INS_IN:_INS_NAV] = real_slots(slave, INS_INPUTS)
-    io[_INS_NAV:_INS_ERR] = slave._nav_slots
-    io[_INS_ERR:_INS_EST] = slave._err_slots
-    io[_INS_EST:_INS_TEMP] = slave._est_slots
-    io[_INS_TEMP:_INS_SITE] = real_slots(slave, INS_TIME_TEMP)
-    r_m, r_n = earth.radii(config.lat)
-    io[_INS_SITE:_INS_FILTER] = config.lat, config.lon, r_m + config.height, r_n + config.height, math.cos(config.lat)
-    io[_INS_FILTER:_INS_TAG_TOL] = slave._ins._n_coarse, config.filter.velocity_meas_std ** 2
-    io[_INS_TAG_TOL] = TAG_TOL
-    q, v, pos, gyro_comp, accel_comp, steps, x, p, q_diag, p_history = slave._ins.state_arrays()
-    if p_history.shape[0] == 0:
-        p_history = np.zeros((1, 9))  # no fine alignment: never written
-    arrays = (q, v, pos, gyro_comp, accel_comp, steps, io, slave._compensation.state, x, p, q_diag, p_history)
-    return FastStep(core_ins.fmu_step, core_ins.FMU_STEP_ADDRESS, arrays)
+    io = np.concatenate([real_slots(slave, core_ins.FMU_INPUTS), real_slots(slave, core_ins.FMU_OUTPUTS)])
+    return FastStep(core_ins.fmu_step, core_ins.FMU_STEP_ADDRESS, (slave._core.buffer, io.astype(float)))
 
 
 # ------------------------------------------------------------------- Turntable

@@ -1,8 +1,9 @@
 """Major loop of the strapdown INS (ENU) and its fine-alignment filter: bindings of the C core.
 
 The physics is ``sarins_fmu/core/ins.c`` (its header ``ins.h`` states the
-equations, units and frames); the FMU's compiled step and the in-process
-runs call the same C functions.  Major-loop update from the IMU's
+equations, units and frames); :class:`sarins_fmu.ins.StrapdownINS` and the
+StrapdownINS FMU run these kernels inside the core's ``sarins_ins_steps``;
+the bindings here expose them one by one (closed-form tests).  Major-loop update from the IMU's
 compensated increments (phi, dv_b) over [t_{k-1}, t_k] (Savage, *Strapdown
 Analytics* 2000, ch. 7; Titterton & Weston 2004, ch. 11):
 

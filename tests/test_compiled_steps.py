@@ -369,7 +369,7 @@ def _queue_every_pair(inputs, step):
     dropping repeated values), written out as the reference."""
     import collections
 
-    current, pending, seen, out = (0.0,), collections.deque([inputs[0]]), inputs[0], []
+    current, pending, seen, out = (0.0,) * len(inputs[0][0]), collections.deque([inputs[0]]), inputs[0], []
     for k, (value, apply_from) in enumerate(inputs):
         if (value, apply_from) != seen:
             while pending and pending[-1][1] >= apply_from - 1e-6 * step:
@@ -383,23 +383,47 @@ def _queue_every_pair(inputs, step):
 
 
 def test_compensation_drops_repeated_values_without_changing_what_is_in_force():
-    """Compensation does not queue a pair whose value equals the one it would follow; the value in
-    force at every interval is that of queueing every pair (random senders: repeated values, apply_from
-    moving on, back, or staying)."""
-    from fmus.strapdown_ins_slave import Compensation
+    """The FMU's compensation queue (the C core's) does not queue a pair whose value equals the one it
+    would follow; the value in force at every interval is that of queueing every pair (random senders:
+    repeated values, apply_from moving on, back, or staying)."""
+    from sarins_fmu.core.ins import CompensationQueue
 
     rng = np.random.default_rng(5)
     for _ in range(200):
-        n, values = 60, [(0.0,), (1.0,), (2.0,)]
+        n, values = 60, [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (2.0, 0.5, 0.0)]
         inputs, apply_from = [], 0.0
         for k in range(n):
             apply_from = max(k + 0.0, apply_from + float(rng.choice([-3.0, 0.0, 1.0, 1.0, 4.0])))
             inputs.append((values[int(rng.integers(3))] if rng.random() < 0.3 or not inputs else inputs[-1][0],
                            apply_from))
-        comp = Compensation(*inputs[0])
+        comp = CompensationQueue(*inputs[0])
         got = [comp.value_at(float(k), value, a, 1.0) for k, (value, a) in enumerate(inputs)]
         assert got == _queue_every_pair(inputs, 1.0)
-    comp = Compensation((1.0,), 1.0)  # a sender repeating its value one step ahead: nothing more queued
+    one = (1.0, 0.0, 0.0)
+    comp = CompensationQueue(one, 1.0)  # a sender repeating its value one step ahead: nothing more queued
     for k in range(20):
-        assert comp.value_at(float(k), (1.0,), k + 1.0, 1.0) == ((0.0,) if k < 1 else (1.0,))
-        assert len(comp.pending) == (1 if k < 1 else 0)
+        assert comp.value_at(float(k), one, k + 1.0, 1.0) == ((0.0, 0.0, 0.0) if k < 1 else one)
+        assert comp.queued == (1 if k < 1 else 0)
+
+
+def test_compensation_queue_refuses_late_pairs_and_overflow_without_changing():
+    """A pair whose apply_from lies before the interval about to be integrated, a non-finite pair, and
+    more pairs waiting than the queue holds are refused with a reason; the queue is left as it was."""
+    from sarins_fmu.core.ins import CompensationQueue
+
+    comp = CompensationQueue((0.0, 0.0, 0.0), 0.0)
+    assert comp.value_at(0.0, (1.0, 0.0, 0.0), 5.0, 1.0) == (0.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="arrived when the INS integrates the interval starting at 2 s"):
+        comp.value_at(2.0, (2.0, 0.0, 0.0), 1.0, 1.0)
+    with pytest.raises(ValueError, match="not finite"):
+        comp.value_at(2.0, (2.0, float("nan"), 0.0), 9.0, 1.0)
+    assert comp.queued == 1 and comp.value_at(5.0, (1.0, 0.0, 0.0), 5.0, 1.0) == (1.0, 0.0, 0.0)
+    k = 6
+    while True:  # a sender changing its value every step, 10^4 steps ahead
+        try:
+            comp.value_at(float(k), (float(k), 0.0, 0.0), k + 1e4, 1.0)
+        except ValueError as exc:
+            assert "wait to apply" in str(exc)
+            break
+        k += 1
+    assert comp.queued == k - 6 == 256

@@ -273,10 +273,19 @@ for n in range(400):
     else:
         ins.do_step(float(n), 1.0)
     tt.do_step(float(n), 1.0)
-assert fast > 300 and ins._ins.steps == 400 and tt._fast is not None, (fast, ins._ins.steps)
-# bad tables and slots: refused, nothing touched
+assert fast == 400 and ins.solution_time == 400.0 and ins.phase == 2 and tt._fast is not None, (fast, ins.phase)
+# bad tables and slots, refused steps: nothing touched
 table, buf = ins._fast.table, ins._fmi_buffer
-assert core_ins.fmu_step(table[:5].copy(), buf, 400.0, 1.0) == 1
+ins.increment_end_time = 402.0  # would skip an interval
+before = buf.copy(), ins._core.buffer.copy()
+assert core_ins.fmu_step(table[:1].copy(), buf, 400.0, 1.0) == 1
+assert core_ins.fmu_step(table, buf, 400.0, 2.0) == 1  # another step size
+assert core_ins.fmu_step(table, buf, 400.0, 1.0) == 1
+assert np.array_equal(buf, before[0]) and np.array_equal(ins._core.buffer, before[1])
+# the library's INS across its three phases (coarse alignment's end included)
+from sarins_fmu.ins import InsConfig, StrapdownINS as LibraryINS
+lib_ins = LibraryINS(InsConfig(lat=lat, align_time=300.0, coarse_time=60.0))
+assert np.isfinite(lib_ins.step(dth, dv)).all() and lib_ins.phase == "navigate"
 assert core_turntable.fmu_step(table, buf, 400.0, 1.0) == 1
 io = np.zeros(16); io[0:4] = 1.0, 1, 1.0, 20.0; io[4:] = 1e9
 s_tables = sched.tables()
