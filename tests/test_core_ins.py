@@ -119,6 +119,130 @@ def test_nav_steps_in_one_batch_equal_one_by_one():
     assert all(np.array_equal(a, b) for a, b in zip(*states))
 
 
+def _static_body_increments(k, lat, mat_nb, h=1.0, gyro_bias=(0.0, 0.0, 0.0), accel_bias=(0.0, 0.0, 0.0)):
+    """Increments of an IMU at rest with attitude mat_nb (and constant body-frame sensor biases, rad/s and
+    m/s^2): dtheta = w_b h, dv = f_b h + (w_b h x f_b h) / 2 with w_b, f_b the Earth rate and specific force
+    resolved in the body."""
+    w = mat_nb.T @ np.array([0.0, earth.RATE * math.cos(lat), earth.RATE * math.sin(lat)])
+    f = mat_nb.T @ np.array([0.0, 0.0, earth.gravity(lat, 0.0)])
+    dtheta = (w + np.asarray(gyro_bias)) * h
+    dv = (f + np.asarray(accel_bias)) * h + 0.5 * np.cross(w * h, f * h)
+    return np.tile(dtheta, (k, 1)), np.tile(dv, (k, 1))
+
+
+def _coarse_attitude(lat, mat_nb, **biases):
+    """(yaw, pitch, roll) right after a 300 s coarse alignment of the core's INS on these increments."""
+    from sarins_fmu.ins import InsConfig, StrapdownINS
+
+    ins = StrapdownINS(InsConfig(lat=lat, align_time=600.0, coarse_time=300.0))
+    dtheta, dv = _static_body_increments(300, lat, mat_nb, **biases)
+    out = ins.step(dtheta, dv)
+    assert ins.phase == "fine" and np.array_equal(out[-1, 6:9], ins.attitude_euler())
+    return np.array(ins.attitude_euler())
+
+
+@pytest.mark.parametrize("lat, yaw, pitch, roll", [(LAT, 0.7, 0.01, -0.02), (-0.9, -2.5, -0.03, 0.002),
+                                                   (0.1, 3.0, 0.0, 0.05)])
+def test_coarse_alignment_finds_the_attitude_of_an_ideal_static_imu(lat, yaw, pitch, roll):
+    """Levelling and gyrocompassing in the inertial frame: an error-free static IMU gives its attitude back."""
+    got = _coarse_attitude(lat, rot.euler_to_mat(yaw, pitch, roll))
+    err = (got - [yaw, pitch, roll] + math.pi) % (2 * math.pi) - math.pi
+    assert np.max(np.abs(err[1:])) < 1e-9  # rad, levelling
+    assert abs(err[0]) < 1e-7  # rad, gyrocompassing (Earth rate 7.3e-5 rad/s)
+
+
+def test_coarse_alignment_errors_follow_the_static_closed_forms():
+    """Level, north-pointing IMU: an x (east) accelerometer bias tilts the found vertical by nabla / g
+    (roll error -nabla / g), and an x gyro drift eps turns the found north by eps / (W cos L) (yaw error
+    +eps / (W cos L)), Titterton & Weston sec. 10.3."""
+    lat = LAT
+    g = earth.gravity(lat, 0.0)
+    nabla, eps = 1e-4 * g, 0.01 * DPH_TO_RPS
+    roll = _coarse_attitude(lat, np.eye(3), accel_bias=(nabla, 0.0, 0.0))[2]
+    assert roll == pytest.approx(-nabla / g, rel=1e-3)
+    yaw = _coarse_attitude(lat, np.eye(3), gyro_bias=(eps, 0.0, 0.0))[0]
+    assert yaw == pytest.approx(eps / (earth.RATE * math.cos(lat)), rel=0.02)
+
+
+def test_fmu_state_struct_copy_restores_the_run_bit_for_bit():
+    """The StrapdownINS FMU's state is its struct: a copy of its bytes taken in the fine alignment,
+    restored after 400 more steps (the end of the alignment, a queued temperature-model correction),
+    gives the same outputs again, bit for bit."""
+    rng = np.random.default_rng(2)
+    mat = rot.euler_to_mat(0.4, 0.001, -0.002)
+    dtheta, dv = _static_body_increments(1000, LAT, mat)
+    dtheta = dtheta + 1e-7 * rng.standard_normal(dtheta.shape)
+    from sarins_fmu.ins import InsConfig
+
+    config = core_ins.config_array(InsConfig(lat=LAT, align_time=600.0, coarse_time=120.0))
+    f = core_ins.FmuState()
+    f.setup(config, [0.0, 0.0, 0.0], 0.0)
+    inputs = np.zeros(len(core_ins.FMU_INPUTS))
+    inputs[7] = 20.0
+    f.start(inputs)
+
+    def run(k0, k1):
+        rows = []
+        for k in range(k0, k1):
+            inputs[:3], inputs[3:6], inputs[6], inputs[7] = dtheta[k], dv[k], k + 1.0, 20.0 + 1e-3 * k
+            if k == 650:  # a temperature model, queued to apply from nav time 100 s
+                inputs[8:12] = 1e-8, 2e-10, 3e-12, 100.0
+            f.do_step(inputs, float(k), 1.0)
+            rows.append(np.append(f.out, f.phase))
+        return np.array(rows)
+
+    run(0, 500)
+    saved, saved_inputs = f.buffer.copy(), inputs.copy()
+    first = run(500, 900)
+    assert first[-1, -1] == 2 and first[0, -1] == 1
+    f.buffer[:] = saved
+    inputs[:] = saved_inputs
+    assert np.array_equal(run(500, 900), first)
+
+
+@pytest.mark.parametrize("fault", ["step", "changed_step", "tag", "nan", "late", "overflow", "config"])
+def test_fmu_step_refusals_give_a_reason_and_change_nothing(fault):
+    from sarins_fmu.ins import InsConfig
+
+    config = core_ins.config_array(InsConfig(lat=LAT, align_time=0.0, coarse_time=0.0))
+    f = core_ins.FmuState()
+    f.setup(config, [0.1, 0.0, 0.0], 0.0)
+    inputs = np.zeros(len(core_ins.FMU_INPUTS))
+    f.start(inputs)
+    dtheta, dv = _static_body_increments(3, LAT, rot.euler_to_mat(0.1, 0.0, 0.0))
+    for k in range(3):
+        inputs[:3], inputs[3:6], inputs[6] = dtheta[k], dv[k], k + 1.0
+        f.do_step(inputs, float(k), 1.0)
+    inputs[:3], inputs[3:6], inputs[6] = dtheta[0], dv[0], 4.0
+    t, h, reason = 3.0, 1.0, ""
+    if fault == "step":
+        h, reason = -1.0, "must be positive and finite"
+    elif fault == "changed_step":
+        h, reason = 2.0, "this FMU needs a fixed step"
+    elif fault == "tag":
+        inputs[6], reason = 3.0, "were already integrated"
+    elif fault == "nan":
+        inputs[1], reason = np.nan, "NaN or infinity"
+    elif fault == "late":
+        inputs[8], inputs[11], reason = 1e-7, 1.0, "arrived when the INS integrates the interval starting at 3 s"
+    elif fault == "overflow":
+        inputs[8], inputs[10], inputs[11], inputs[7] = 1e-7, 1e300, 3.0, 1e10
+        reason = "axial correction contains NaN or infinity"
+    else:
+        bad = config.copy()
+        bad[3], bad[4] = 60.0, 1e-3  # align_time, coarse_time (s)
+        f = core_ins.FmuState()
+        f.setup(bad, [0.0, 0.0, 0.0], 0.0)
+        reason = "coarse_time must span at least two steps"
+        with pytest.raises(ValueError, match=reason):
+            f.start(inputs)
+        return
+    before = f.buffer.copy()
+    with pytest.raises(ValueError, match=reason):
+        f.do_step(inputs, t, h)
+    assert np.array_equal(f.buffer, before)
+
+
 def test_turntable_constant_acceleration_segment():
     a, w0, th0 = 0.3, -0.2, 0.5
     s = GimbalSchedule(axes=[(0, 0, 1.0)], times=[0.0, 10.0, 20.0], accel=[[a], [0.0]], angle0=[th0], rate0=[w0])
