@@ -110,7 +110,8 @@ extern const sarins_model sarins_model_desc;
 
 /* Log a message to the host (implemented by the glue).  status SARINS_OK/WARNING reach the host when debug
  * logging is on for its category ("logAll" for OK, "logStatusWarning" for WARNING); DISCARD and ERROR always
- * do.  Nothing is logged during a quiet initialize() (c->quiet).  Never allocates. */
+ * do.  Nothing is logged during a quiet initialize() (c->quiet).  Never allocates.  Formats: C99 printf,
+ * but no %zu (mingw-w64 checks against msvcrt): cast sizes to unsigned long long and use %llu. */
 void sarins_log(const sarins_ctx *c, int status, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
