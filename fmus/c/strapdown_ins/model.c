@@ -1,0 +1,162 @@
+/* StrapdownINS as a native model for the shared FMI 2.0 glue (fmus/c/model.h).
+ *
+ * Thin: the parameter checks of the slave (fmus/strapdown_ins_slave.py, the
+ * one declaration of the variables) with logged reasons, then the C core's
+ * StrapdownINS FMU step (sarins_fmu/core/ins_fmu_step.h: time tags, the
+ * drift compensation queue, alignment and navigation), whose state struct
+ * is this model's whole state (plain bytes, no pointer).  Units and frames
+ * as in the core's headers: rad, m, m/s, s, degC, ENU.
+ */
+#include <math.h>
+#include <stdio.h>
+
+#include "ins_fmu_step.h"
+#include "model.h"
+#include "variables.h"
+
+#define PI 3.141592653589793
+#define DEG (PI / 180.0)
+
+/* The filter parameters kf_<name>, in the order of the core's settings array (ins.h). */
+static const unsigned FILTER_SLOTS[SARINS_INS_CONFIG - SARINS_INS_FILTER_FIRST] = {
+    SARINS_R_kf_arw, SARINS_R_kf_vrw, SARINS_R_kf_drift_rw, SARINS_R_kf_bias_rw, SARINS_R_kf_velocity_meas_std,
+    SARINS_R_kf_tilt0_std, SARINS_R_kf_heading0_std, SARINS_R_kf_velocity0_std, SARINS_R_kf_drift0_std,
+    SARINS_R_kf_bias0_std};
+static const char *const FILTER_NAMES[SARINS_INS_CONFIG - SARINS_INS_FILTER_FIRST] = {
+    "kf_arw", "kf_vrw", "kf_drift_rw", "kf_bias_rw", "kf_velocity_meas_std", "kf_tilt0_std", "kf_heading0_std",
+    "kf_velocity0_std", "kf_drift0_std", "kf_bias0_std"};
+
+/* The core's inputs, in its order (ins_fmu_step.h). */
+static const unsigned INPUT_SLOTS[SARINS_INS_N_IN] = {
+    SARINS_R_dtheta_x, SARINS_R_dtheta_y, SARINS_R_dtheta_z, SARINS_R_dv_x, SARINS_R_dv_y, SARINS_R_dv_z,
+    SARINS_R_increment_end_time, SARINS_R_temp_gyro_z, SARINS_R_axial_drift_correction,
+    SARINS_R_axial_drift_correction_b, SARINS_R_axial_drift_correction_a, SARINS_R_axial_drift_apply_from};
+
+/* The core's Real outputs, in its order. */
+static const unsigned OUTPUT_SLOTS[SARINS_INS_N_OUT] = {
+    SARINS_R_lat, SARINS_R_lon, SARINS_R_height, SARINS_R_v_e, SARINS_R_v_n, SARINS_R_v_u, SARINS_R_yaw,
+    SARINS_R_pitch, SARINS_R_roll, SARINS_R_lat_error, SARINS_R_lon_error, SARINS_R_north_error,
+    SARINS_R_east_error, SARINS_R_position_error, SARINS_R_nav_time, SARINS_R_gyro_drift_est_x,
+    SARINS_R_gyro_drift_est_y, SARINS_R_accel_bias_est_x, SARINS_R_accel_bias_est_y, SARINS_R_temp_align_start,
+    SARINS_R_temp_align_end, SARINS_R_temp_change_align, SARINS_R_temp_azimuth_gyro, SARINS_R_solution_time};
+
+static void read_inputs(const sarins_ctx *c, double *in)
+{
+    for (int i = 0; i < SARINS_INS_N_IN; i++)
+        in[i] = c->r[INPUT_SLOTS[i]];
+}
+
+static void write_outputs(sarins_ctx *c, const sarins_ins_fmu *f)
+{
+    for (int i = 0; i < SARINS_INS_N_OUT; i++)
+        c->r[OUTPUT_SLOTS[i]] = f->out[i];
+    c->i[SARINS_I_phase] = (int)f->phase;
+}
+
+/* The core's settings array from the parameters (its step is set by the first doStep). */
+static void read_config(const sarins_ctx *c, double *config)
+{
+    config[SARINS_INS_LAT] = c->r[SARINS_R_lat0];
+    config[SARINS_INS_LON] = c->r[SARINS_R_lon0];
+    config[SARINS_INS_HEIGHT] = c->r[SARINS_R_height0];
+    config[SARINS_INS_ALIGN_TIME] = c->r[SARINS_R_align_time];
+    config[SARINS_INS_COARSE_TIME] = c->r[SARINS_R_coarse_time];
+    config[SARINS_INS_STEP] = 1.0;
+    for (int i = 0; i < SARINS_INS_CONFIG - SARINS_INS_FILTER_FIRST; i++)
+        config[SARINS_INS_FILTER_FIRST + i] = c->r[FILTER_SLOTS[i]];
+}
+
+static int refuse(const sarins_ctx *c, const char *name, double value, const char *what)
+{
+    sarins_log(c, SARINS_ERROR, "parameter %s = %.17g %s", name, value, what);
+    return SARINS_ERROR;
+}
+
+/* A parameter within [low, high] (SI), reported in degrees. */
+static int check_range_deg(const sarins_ctx *c, const char *name, double value, double low, double high)
+{
+    if (isfinite(value) && low <= value && value <= high)
+        return SARINS_OK;
+    sarins_log(c, SARINS_ERROR, "parameter %s = %.9g deg is outside [%.9g, %.9g] deg", name, value / DEG,
+               low / DEG, high / DEG);
+    return SARINS_ERROR;
+}
+
+/* The slave's parameter checks, in its order. */
+static int check_parameters(const sarins_ctx *c)
+{
+    static const char *const ATTITUDE[3] = {"yaw0", "pitch0", "roll0"};
+    const double attitude[3] = {c->r[SARINS_R_yaw0], c->r[SARINS_R_pitch0], c->r[SARINS_R_roll0]};
+    for (int i = 0; i < 3; i++)
+        if (!isfinite(attitude[i]))
+            return refuse(c, ATTITUDE[i], attitude[i], "is not a finite number");
+    if (check_range_deg(c, "pitch0", attitude[1], -0.5 * PI, 0.5 * PI) != SARINS_OK)
+        return SARINS_ERROR;
+    static const char *const SITE[5] = {"lat0", "lon0", "height0", "align_time", "coarse_time"};
+    double config[SARINS_INS_CONFIG];
+    read_config(c, config);
+    for (int i = 0; i < 5; i++)
+        if (!isfinite(config[i]))
+            return refuse(c, SITE[i], config[i], "is not a finite number");
+    for (int i = 0; i < SARINS_INS_CONFIG - SARINS_INS_FILTER_FIRST; i++)
+        if (!isfinite(config[SARINS_INS_FILTER_FIRST + i]))
+            return refuse(c, FILTER_NAMES[i], config[SARINS_INS_FILTER_FIRST + i], "is not a finite number");
+    for (int i = 0; i < SARINS_INS_CONFIG - SARINS_INS_FILTER_FIRST; i++)
+        if (!(config[SARINS_INS_FILTER_FIRST + i] > 0.0))
+            return refuse(c, FILTER_NAMES[i], config[SARINS_INS_FILTER_FIRST + i], "must be positive");
+    for (int i = SARINS_INS_ALIGN_TIME; i <= SARINS_INS_COARSE_TIME; i++)
+        if (!(config[i] >= 0.0))
+            return refuse(c, SITE[i], config[i], "must not be negative");
+    return check_range_deg(c, "lat0", config[SARINS_INS_LAT], -SARINS_INS_LAT_LIMIT, SARINS_INS_LAT_LIMIT);
+}
+
+static int initialize(sarins_ctx *c)
+{
+    sarins_ins_fmu *f = (sarins_ins_fmu *)c->state;
+    if (!c->quiet && check_parameters(c) != SARINS_OK)
+        return SARINS_ERROR;
+    double config[SARINS_INS_CONFIG];
+    read_config(c, config);
+    const double attitude[3] = {c->r[SARINS_R_yaw0], c->r[SARINS_R_pitch0], c->r[SARINS_R_roll0]};
+    sarins_ins_fmu_setup(f, config, attitude, c->start_time);
+    if (!c->quiet) {
+        char msg[512];
+        double in[SARINS_INS_N_IN];
+        read_inputs(c, in);
+        if (sarins_ins_fmu_start(f, in, msg, sizeof msg) != SARINS_INS_OK) {
+            sarins_log(c, SARINS_ERROR, "%s", msg);
+            return SARINS_ERROR;
+        }
+    }
+    write_outputs(c, f);
+    return SARINS_OK;
+}
+
+static int do_step(sarins_ctx *c, double t, double h)
+{
+    sarins_ins_fmu *f = (sarins_ins_fmu *)c->state;
+    char msg[512];
+    double in[SARINS_INS_N_IN];
+    read_inputs(c, in);
+    if (sarins_ins_fmu_do_step(f, in, t, h, msg, sizeof msg) != SARINS_INS_OK) {
+        sarins_log(c, SARINS_ERROR, "%s", msg);
+        return SARINS_ERROR;
+    }
+    write_outputs(c, f);
+    return SARINS_OK;
+}
+
+static void release(sarins_ctx *c) { c->work = NULL; /* nothing allocated: the state struct is all */ }
+
+const sarins_model sarins_model_desc = {
+    .table = &SARINS_TABLE,
+    .state_size = sizeof(sarins_ins_fmu),
+    .state_version = 1,
+    .initialize = initialize,
+    .do_step = do_step,
+    .release = release,
+    .terminate = NULL,
+    .work_state_size = NULL,
+    .save_work_state = NULL,
+    .load_work_state = NULL,
+};
