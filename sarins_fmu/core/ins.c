@@ -489,12 +489,17 @@ int sarins_ins_steps(sarins_ins *s, int64_t k, const double *dtheta, const doubl
         } else if (phase == 1) {
             m = s->n_align - s->steps;
             m = (m < k - i) ? m : k - i;
-            for (int64_t j = 0; j < m; j++) {
-                double hist[SARINS_INS_ALIGN_STATES];
-                sarins_ins_align_steps(1, s->q, s->v, s->pos, dtheta + 3 * (i + j), dv + 3 * (i + j), step,
-                                       s->gyro_comp, s->accel_comp, s->x, s->p, s->q_diag,
-                                       s->config[SARINS_INS_VELOCITY_MEAS_STD] * s->config[SARINS_INS_VELOCITY_MEAS_STD],
-                                       (p_diag != NULL) ? p_diag + SARINS_INS_ALIGN_STATES * (i + j) : hist);
+            double r_var = s->config[SARINS_INS_VELOCITY_MEAS_STD] * s->config[SARINS_INS_VELOCITY_MEAS_STD];
+            if (p_diag != NULL) { /* the whole run at once, the P diagonal into its rows */
+                sarins_ins_align_steps(m, s->q, s->v, s->pos, dtheta + 3 * i, dv + 3 * i, step, s->gyro_comp,
+                                       s->accel_comp, s->x, s->p, s->q_diag, r_var,
+                                       p_diag + SARINS_INS_ALIGN_STATES * i);
+            } else { /* step by step into a scratch row */
+                for (int64_t j = 0; j < m; j++) {
+                    double hist[SARINS_INS_ALIGN_STATES];
+                    sarins_ins_align_steps(1, s->q, s->v, s->pos, dtheta + 3 * (i + j), dv + 3 * (i + j), step,
+                                           s->gyro_comp, s->accel_comp, s->x, s->p, s->q_diag, r_var, hist);
+                }
             }
             if (s->steps + m == s->n_align)
                 s->v[0] = s->v[1] = s->v[2] = 0.0; /* known static start for navigation */
