@@ -149,7 +149,7 @@ def test_fmu_chain_compiled_equals_python_and_in_process_bit_for_bit(fmu_dir, mo
     assert np.array_equal(fast[nav:, 2], ref.attitude[:, 0])
     # from C, do_step ran only where the compiled step declines: the first steps, the coarse
     # alignment and its end, a new random block, the compensation change
-    assert python_steps["Turntable"] <= 2 and python_steps["IMUThermal"] <= 3, python_steps
+    assert "Turntable" not in python_steps and python_steps["IMUThermal"] <= 3, python_steps  # a native FMU
     assert python_steps["StrapdownINS"] <= 300 + 4, python_steps
     assert do_step_calls["IMUThermal"] == n  # with SARINS_FMU_NO_FAST_STEP every step enters Python
 
