@@ -49,6 +49,7 @@ class NativeModel:
 # FMU name -> its native model (one row per native FMU)
 NATIVE = {
     "Turntable": NativeModel("turntable"),
+    "StrapdownINS": NativeModel("strapdown_ins"),
 }
 
 # setup.py's flags (sarins_fmu core) plus hidden visibility: only the fmi2* functions are exported
