@@ -1,4 +1,4 @@
-"""Compiled ``doStep`` of the IMUThermal, StrapdownINS and Turntable slaves (C core).
+"""Compiled ``doStep`` of the IMUThermal and Turntable slaves (C core).
 
 A slave's step in its usual case is one compiled call on preallocated
 state: it reads the inputs from the slave's float64 Real buffer
@@ -12,9 +12,8 @@ compensation value or a queued one taking over, any input or tag the Python
 stays the one place that raises the error messages.
 
 Two ways in, both into the same C function of the core
-(``sarins_imu_fmu_step`` in ``sarins_fmu/core/imu.c``, ``sarins_ins_fmu_step``
-in ``ins_fmu_step.c``, ``sarins_turntable_fmu_step`` in
-``turntable_fmu_step.c``):
+(``sarins_imu_fmu_step`` in ``sarins_fmu/core/imu.c``, ``sarins_turntable_fmu_step``
+in ``turntable_fmu_step.c``; StrapdownINS is a native FMU, fmus/c/strapdown_ins):
 
 * :meth:`FastStep.step`, called first by the slave's Python ``do_step``;
 * the native FMI layer (``fmus/native/core.c``) calls it from ``fmi2DoStep``
@@ -39,7 +38,6 @@ import numpy as np
 
 from fmus.slave_support import real_slots
 from sarins_fmu.core import imu as core_imu
-from sarins_fmu.core import ins as core_ins
 from sarins_fmu.core import turntable as core_turntable
 from sarins_fmu.core._lib import array_table
 
@@ -102,15 +100,6 @@ def imu_context(slave, step: float):
 
 
 # ---------------------------------------------------------------- StrapdownINS
-
-def ins_context(slave):
-    """The StrapdownINS slave's compiled step (every step: the C core's ``sarins_ins_fmu_step`` on the
-    slave's FMU state struct), or None with ``SARINS_FMU_NO_COMPILED_STEP=1``."""
-    if not enabled():
-        return None
-    io = np.concatenate([real_slots(slave, core_ins.FMU_INPUTS), real_slots(slave, core_ins.FMU_OUTPUTS)])
-    return FastStep(core_ins.fmu_step, core_ins.FMU_STEP_ADDRESS, (slave._core.buffer, io.astype(float)))
-
 
 # ------------------------------------------------------------------- Turntable
 

@@ -1,9 +1,11 @@
 """StrapdownINS FMU: alignment and navigation from IMU increments, static start.
 
-A thin adapter: the whole step (time tags, the drift compensation queue,
-the INS) is the C core's ``sarins_ins_fmu_do_step`` on one state struct
-(``sarins_fmu/core/ins_fmu_step.h``); the native FMI layer calls its table
-form without entering Python (:mod:`fmus.compiled_steps`).
+The declaration of the FMU's variables (the native build, fmus/native_fmu.py,
+writes the model description and fmus/c/strapdown_ins/model.c's variable
+table from it) and the same FMU run in process: the whole step (time tags,
+the drift compensation queue, the INS) is the C core's
+``sarins_ins_fmu_do_step`` on one state struct
+(``sarins_fmu/core/ins_fmu_step.h``), which model.c calls too.
 """
 
 import math
@@ -12,7 +14,6 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus import compiled_steps
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_latitude, check_range,
                                 declare, discard_on_error, guarded, real_slots)
 from sarins_fmu import ins
@@ -105,8 +106,6 @@ class StrapdownINS(Fmi2Slave):
         self._start_time = 0.0
         self._in_slots = real_slots(self, core_ins.FMU_INPUTS)
         self._out_slots = real_slots(self, core_ins.FMU_OUTPUTS)
-        self._fast = compiled_steps.ins_context(self)  # the core's step without Python (fmus.compiled_steps)
-        self._fmi_fast_step = None if self._fast is None else self._fast.address
 
     @property
     def phase(self) -> int:
@@ -153,8 +152,6 @@ class StrapdownINS(Fmi2Slave):
 
     @guarded
     def do_step(self, current_time, step_size):
-        if self._fast is not None and self._fast.step(self._fmi_buffer, current_time, step_size):
-            return True
         try:
             self._core.do_step(self._fmi_buffer[self._in_slots], current_time, step_size)
         except ValueError as exc:

@@ -51,8 +51,6 @@ _fmu_do_step = function("sarins_ins_fmu_do_step", _INT, _P, _P, _F64, _F64, ctyp
 _comp_init = function("sarins_ins_comp_init", None, _P, _P, _F64)
 _comp_value_at = function("sarins_ins_comp_value_at", _INT, _P, _P, _F64, _F64, _F64, _P, ctypes.c_char_p, _SIZE)
 _fmu_layout = function("sarins_ins_fmu_layout", _I64, _P)
-FMU_STEP = function("sarins_ins_fmu_step", _INT, _P, _I64, _P, _I64, _F64, _F64)
-FMU_STEP_ADDRESS = ctypes.cast(FMU_STEP, ctypes.c_void_p).value  # for the native FMI layer of the Python slave
 
 
 def _struct_layout(fn, count: int) -> tuple[int, np.ndarray]:
@@ -222,9 +220,3 @@ class CompensationQueue:
             raise ValueError(self._msg.value.decode())
         return tuple(float(x) for x in current)
 
-
-def fmu_step(table, buffer, t: float, h: float) -> int:
-    """The slave's table step (``sarins_ins_fmu_step``): 0 when it did the step, 1 when it changed nothing."""
-    _arrays.table(table)
-    _arrays.written(buffer, np.shape(buffer)[:1], "buffer")
-    return FMU_STEP(table.ctypes.data, table.shape[0], buffer.ctypes.data, buffer.shape[0], float(t), float(h))

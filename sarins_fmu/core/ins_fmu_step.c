@@ -4,7 +4,6 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "fmu_table.h"
 #include "rotations.h"
 
 #define CAP SARINS_INS_COMP_QUEUE
@@ -286,25 +285,4 @@ int64_t sarins_ins_fmu_layout(int64_t *offsets)
     offsets[3] = (int64_t)offsetof(sarins_ins_fmu, comp);
     offsets[4] = (int64_t)(offsetof(sarins_ins_fmu, comp) + offsetof(sarins_ins_comp, count));
     return (int64_t)sizeof(sarins_ins_fmu);
-}
-
-int sarins_ins_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h)
-{
-    enum { IO = SARINS_INS_N_IN + SARINS_INS_N_OUT };
-    int64_t words = (int64_t)((sizeof(sarins_ins_fmu) + sizeof(double) - 1) / sizeof(double));
-    if (table == NULL || buf == NULL || rows != 2 || !sarins_table_shape(table, 0, words, 1)
-        || !sarins_table_shape(table, 1, IO, 1))
-        return 1;
-    const double *io = sarins_table_row(table, 1);
-    if (!sarins_slots_ok(io, IO, n))
-        return 1;
-    sarins_ins_fmu *f = (sarins_ins_fmu *)(void *)sarins_table_row(table, 0);
-    double in[SARINS_INS_N_IN];
-    for (int i = 0; i < SARINS_INS_N_IN; i++)
-        in[i] = buf[(int64_t)io[i]];
-    if (sarins_ins_fmu_do_step(f, in, t, h, NULL, 0) != SARINS_INS_OK)
-        return 1;
-    for (int i = 0; i < SARINS_INS_N_OUT; i++)
-        buf[(int64_t)io[SARINS_INS_N_IN + i]] = f->out[i];
-    return 0;
 }

@@ -1,7 +1,7 @@
 /* The StrapdownINS FMU's step on one state struct: time-tag checks, the
  * azimuth drift compensation queue and its temperature model, the INS
  * (ins.h) and the outputs.  The native FMU (fmus/c/strapdown_ins/model.c)
- * and the Python slave (fmus/strapdown_ins_slave.py) call these functions;
+ * and the in-process slave (fmus/strapdown_ins_slave.py) call these functions;
  * the struct holds no pointer, so copying its bytes copies the FMU's state.
  *
  * Contract (standard FMI timing, explicit time-tagged latency): the inputs
@@ -118,12 +118,5 @@ int sarins_ins_fmu_do_step(sarins_ins_fmu *f, const double *in, double t, double
 /* sizeof(sarins_ins_fmu), and the byte offsets of its out, phase, ins and comp members and of the queue's
  * count in offsets[0..4]. */
 int64_t sarins_ins_fmu_layout(int64_t *offsets);
-
-/* The step for the Python slave's native FMI layer (fmus/compiled_steps.py): table row 0 the struct
- * (as a float64 array of its bytes), row 1 the io row: the buffer slots of the SARINS_INS_N_IN inputs,
- * then of the SARINS_INS_N_OUT outputs.  Reads the inputs from buf (n doubles), runs
- * sarins_ins_fmu_do_step and writes the outputs back; returns 0, or 1 with nothing changed when the
- * step is refused (the slave's Python do_step then reports the reason). */
-int sarins_ins_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h);
 
 #endif
