@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -173,6 +174,7 @@ def test_get_step_set_step_again_is_bit_identical(fmu_dir):
 
 CONTINUE = """
 import sys
+import zipfile
 import numpy as np
 sys.path.insert(0, {tests!r})
 import test_native_strapdown_ins as t
@@ -225,3 +227,53 @@ def test_refused_steps_are_errors_with_the_reason_logged(fmu_dir, fault, text):
         runner.slave.fmu.doStep(700.0, 1.0)
     assert any(text in message for status, _, message in runner.slave.log if status == 3), runner.slave.log[-3:]
     runner.slave.free()
+
+
+# ----------------------------------------------------------------- the C host, no Python reachable
+
+
+@pytest.fixture(scope="module")
+def host(tmp_path_factory):
+    from fmus.native_fmu import fmi_headers_dir
+    from test_native_fmus import HOST_SRC, _cc
+
+    out = tmp_path_factory.mktemp("ins_host") / "host"
+    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", f"-I{fmi_headers_dir()}",
+                    str(HOST_SRC), "-ldl", "-o", str(out)], check=True)
+    return out
+
+
+def _input_rows(name) -> np.ndarray:
+    """The scenario's inputs before every step, in FMU_INPUTS order (the values held between steps)."""
+    sc = SCENARIOS[name]
+    current = {n: 0.0 for n in core_ins.FMU_INPUTS}
+    current["temp_gyro_z"] = 21.0
+    rows = []
+    for i in range(N):
+        current.update(_inputs(i, sc.get("start", 0.0), sc.get("h", 1.0), sc.get("jacobi", False), sc.get("comp")))
+        rows.append([current[n] for n in core_ins.FMU_INPUTS])
+    return np.array(rows)
+
+
+def test_c_host_with_empty_environment_equals_fmpy_and_repeats_after_set_state(fmu_dir, host, tmp_path):
+    """The native INS in the C host (env -i: no Python anywhere), the queued temperature-model run with
+    inputs set before every step: every Real output equals FMPy's bit for bit; fmi2GetFMUstate in the
+    fine alignment, the rest of the run, fmi2SetFMUstate and the rest again: the same bits."""
+    from fmpy import read_model_description
+    from test_native_fmus import bits, run_host, table
+
+    fmu = fmu_dir / "StrapdownINS.fmu"
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    folder = tmp_path / "ins"
+    zipfile.ZipFile(fmu).extractall(folder)
+    _input_rows("queued model").astype("=f8").tofile(tmp_path / "rows.bin")
+    params = [f"r{vr[k]}={v!r}" for k, v in {**ALIGN, "temp_gyro_z": 21.0}.items()]
+    proc = run_host(host, folder / "binaries" / "linux64" / "StrapdownINS.so", md, N, *params,
+                    "in=" + ",".join(str(vr[n]) for n in core_ins.FMU_INPUTS), f"rows={tmp_path / 'rows.bin'}",
+                    "out=" + ",".join(str(vr[n]) for n in OUTPUTS), "roundtrip=700", env={})
+    assert "STATUS" not in proc.stdout, proc.stdout[-2000:]
+    out, again = table(proc), table(proc, "AGAIN")
+    expected = _scenario(lambda p, s: _Native(fmu, p, s), "queued model")
+    assert [out[k] for k in range(N + 1)] == [[bits(x) for x in row[:-1]] for row in expected]
+    assert len(again) == N - 700 and all(again[k] == out[k] for k in again)

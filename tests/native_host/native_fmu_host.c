@@ -10,6 +10,9 @@
  *   save=FILE                        after the last step: serialize the FMU state into FILE
  *   load=FILE                        after initialisation: deserialize FILE and set it, then step on from
  *                                    the time it holds (fmi2GetRealStatus fmi2LastSuccessfulTime)
+ *   in=VR,VR,...                     Real inputs set before every fmi2DoStep from rows=FILE
+ *   rows=FILE                        float64 values, native byte order, one row of len(in) values per step:
+ *                                    row k is set before the step from k steps done to k + 1
  *   allocs                           print "ALLOCS n" = heap allocations counted (tests/native_host/
  *                                    alloc_counter.c, LD_PRELOAD) from after fmi2ExitInitializationMode to
  *                                    before fmi2Terminate (Linux only; "ALLOCS none" without the counter)
@@ -101,9 +104,17 @@ static int print_outputs(const api_t *f, fmi2Component c, const char *tag, long 
     return 1;
 }
 
+static fmi2ValueReference ins[256];
+static size_t n_ins;
+static double *in_rows; /* (rows, n_ins), from rows=FILE */
+static long n_in_rows;
+
 static int steps(const api_t *f, fmi2Component c, double t0, long k0, long n, double h, const char *tag)
 {
     for (long k = 0; k < n; k++) {
+        if (n_ins > 0 && !(k0 + k < n_in_rows
+                           && report("fmi2SetReal", f->set_real(c, ins, n_ins, in_rows + (size_t)(k0 + k) * n_ins))))
+            return 0;
         if (!report("fmi2DoStep", f->step(c, t0 + (double)k * h, h, fmi2False)))
             return 0;
         if (!print_outputs(f, c, tag, k0 + k + 1))
@@ -159,6 +170,24 @@ int main(int argc, char **argv)
                 if (*p == ',')
                     p++;
             }
+        } else if (strncmp(argv[k], "in=", 3) == 0) {
+            for (char *p = argv[k] + 3; *p && n_ins < 256;) {
+                ins[n_ins++] = (fmi2ValueReference)strtoul(p, &p, 10);
+                if (*p == ',')
+                    p++;
+            }
+        } else if (strncmp(argv[k], "rows=", 5) == 0) {
+            FILE *in = fopen(argv[k] + 5, "rb");
+            long bytes = -1;
+            if (in && fseek(in, 0, SEEK_END) == 0)
+                bytes = ftell(in);
+            in_rows = (bytes > 0 && in && fseek(in, 0, SEEK_SET) == 0) ? malloc((size_t)bytes) : NULL;
+            if (in_rows == NULL || fread(in_rows, 1, (size_t)bytes, in) != (size_t)bytes) {
+                fprintf(stderr, "cannot read %s\n", argv[k] + 5);
+                return 2;
+            }
+            fclose(in);
+            n_in_rows = bytes / (long)sizeof(double);
         } else if (strncmp(argv[k], "roundtrip=", 10) == 0) {
             roundtrip = atol(argv[k] + 10);
         } else if (strncmp(argv[k], "save=", 5) == 0) {
@@ -169,6 +198,8 @@ int main(int argc, char **argv)
             allocs = 1;
         }
     }
+    if (n_ins > 0)
+        n_in_rows /= (long)n_ins;
     fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
     fmi2Component c = f.instantiate("host", fmi2CoSimulation, guid, "file:///nonexistent", &cb, fmi2False, fmi2False);
     if (!c) {
@@ -259,6 +290,7 @@ int main(int argc, char **argv)
     if (ok)
         report("fmi2Terminate", f.terminate(c));
     f.free_instance(c);
+    free(in_rows);
     printf("DONE %d\n", ok);
     return 0;
 }
