@@ -255,25 +255,79 @@ def _input_rows(name) -> np.ndarray:
     return np.array(rows)
 
 
-def test_c_host_with_empty_environment_equals_fmpy_and_repeats_after_set_state(fmu_dir, host, tmp_path):
-    """The native INS in the C host (env -i: no Python anywhere), the queued temperature-model run with
-    inputs set before every step: every Real output equals FMPy's bit for bit; fmi2GetFMUstate in the
-    fine alignment, the rest of the run, fmi2SetFMUstate and the rest again: the same bits."""
+def _host_run(host, fmu, tmp_path, *extra, binary=None, env=None, params=None, timeout=300):
+    """The queued temperature-model run of the native INS in the C host (inputs set before every step)."""
     from fmpy import read_model_description
-    from test_native_fmus import bits, run_host, table
+    from test_native_fmus import run_host
 
-    fmu = fmu_dir / "StrapdownINS.fmu"
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
     folder = tmp_path / "ins"
     zipfile.ZipFile(fmu).extractall(folder)
     _input_rows("queued model").astype("=f8").tofile(tmp_path / "rows.bin")
-    params = [f"r{vr[k]}={v!r}" for k, v in {**ALIGN, "temp_gyro_z": 21.0}.items()]
-    proc = run_host(host, folder / "binaries" / "linux64" / "StrapdownINS.so", md, N, *params,
+    values = {**ALIGN, "temp_gyro_z": 21.0, **(params or {})}
+    return run_host(host, binary or folder / "binaries" / "linux64" / "StrapdownINS.so", md, N,
+                    *[f"r{vr[k]}={v!r}" for k, v in values.items()],
                     "in=" + ",".join(str(vr[n]) for n in core_ins.FMU_INPUTS), f"rows={tmp_path / 'rows.bin'}",
-                    "out=" + ",".join(str(vr[n]) for n in OUTPUTS), "roundtrip=700", env={})
+                    "out=" + ",".join(str(vr[n]) for n in OUTPUTS), *extra, env={} if env is None else env,
+                    timeout=timeout)
+
+
+def test_c_host_with_empty_environment_equals_fmpy_and_repeats_after_set_state(fmu_dir, host, tmp_path):
+    """The native INS in the C host (env -i: no Python anywhere), the queued temperature-model run with
+    inputs set before every step: every Real output equals FMPy's bit for bit; fmi2GetFMUstate in the
+    fine alignment, the rest of the run, fmi2SetFMUstate and the rest again: the same bits."""
+    from test_native_fmus import bits, table
+
+    fmu = fmu_dir / "StrapdownINS.fmu"
+    proc = _host_run(host, fmu, tmp_path, "roundtrip=700")
     assert "STATUS" not in proc.stdout, proc.stdout[-2000:]
     out, again = table(proc), table(proc, "AGAIN")
     expected = _scenario(lambda p, s: _Native(fmu, p, s), "queued model")
     assert [out[k] for k in range(N + 1)] == [[bits(x) for x in row[:-1]] for row in expected]
     assert len(again) == N - 700 and all(again[k] == out[k] for k in again)
+
+
+def test_no_heap_allocation_after_initialisation(fmu_dir, host, tmp_path):
+    """The whole run (alignment, navigation, queued models) allocates nothing after fmi2ExitInitializationMode
+    (an LD_PRELOAD counter in the C host)."""
+    import os
+
+    from test_native_fmus import COUNTER_SRC, _cc
+
+    counter = tmp_path / "alloc_counter.so"
+    subprocess.run([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"], check=True)
+    proc = _host_run(host, fmu_dir / "StrapdownINS.fmu", tmp_path, "allocs",
+                     env={"LD_PRELOAD": str(counter), "PATH": os.environ.get("PATH", "")})
+    assert "STATUS" not in proc.stdout, proc.stdout[-2000:]
+    assert "ALLOCS 0" in proc.stdout.splitlines(), proc.stdout[-2000:]
+
+
+@pytest.mark.slow
+def test_sanitized_build_runs_clean_through_the_c_host(fmu_dir, tmp_path):
+    """sources/ built with AddressSanitizer + UndefinedBehaviorSanitizer: the queued run with an FMU state round
+    trip, and a bad parameter; any report fails the run."""
+    import os
+
+    from fmus.native_fmu import CFLAGS, fmi_headers_dir
+    from test_native_fmus import HOST_SRC, _cc
+
+    fmu = fmu_dir / "StrapdownINS.fmu"
+    sources = tmp_path / "src"
+    zipfile.ZipFile(fmu).extractall(sources)
+    sources = sources / "sources"
+    san = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O1"]
+    lib = tmp_path / "StrapdownINS_san.so"
+    subprocess.run([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}",
+                    *sorted(str(p) for p in sources.glob("*.c")), "-lm", "-o", str(lib)], check=True)
+    host = tmp_path / "host_san"
+    subprocess.run([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)],
+                   check=True)
+    env = {"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1", "PATH": os.environ.get("PATH", "")}
+    proc = _host_run(host, fmu, tmp_path, "roundtrip=700", binary=lib, env=env, timeout=600)
+    assert "STATUS" not in proc.stdout and "runtime error" not in proc.stderr, proc.stderr[-3000:]
+    from test_native_fmus import table
+
+    assert len(table(proc, "AGAIN")) == N - 700
+    proc = _host_run(host, fmu, tmp_path, binary=lib, env=env, params={"kf_vrw": -1.0}, timeout=600)
+    assert "STATUS fmi2ExitInitializationMode 3" in proc.stdout and "ERROR" not in proc.stderr, proc.stderr
