@@ -116,3 +116,34 @@ def test_filter_refuses_bad_rows():
         kf.step(np.full((1, 2), np.nan), _standing(np.eye(3), 1))
     with pytest.raises(ValueError, match="89.9"):
         si.IndexedStopFilter(math.radians(95.0))
+
+
+def test_campaign_indexed_stops_pair_with_the_plain_ones_and_match_their_schema():
+    from sarins.campaign import check_fields
+    from sarins.online_rls.campaign import build_tasks
+
+    for profile, least in (("quick", 1), ("paper", 20)):
+        tasks = {t.id: t for t in build_tasks(profile, seed=7)}
+        indexed = sorted(k for k in tasks if k.startswith("stop-indexed-nav-rlg-"))
+        assert len(indexed) >= least
+        for k in indexed:  # the same seed and temperature as the stop without indexing
+            plain = tasks["stop-nav-rlg-" + k.rsplit("-", 1)[1]]
+            assert tasks[k].kwargs == plain.kwargs and tasks[k].fn is simulate_indexed_stop
+            assert tasks[k].schema.keys() == plain.schema.keys() and tasks[k].schema["time"].shape == (T,)
+    task = next(t for t in build_tasks("quick") if t.id == "stop-indexed-nav-rlg-000")
+    check_fields(task.fn(**task.kwargs), task.schema)
+
+
+def test_report_prints_both_distributions_beside_the_bounds():
+    from sarins.online_rls.report import indexed_stop_lines, stop_summary
+
+    errors = {"stop-nav-rlg": [0.01, -0.02, 0.005, 0.001], "stop-indexed-nav-rlg": [0.001, -0.0005, 0.0025, 0.0]}
+    results = {f"{cfg}-{k:03d}": {"error_dph": e, "std_dph": 0.001} for cfg, es in errors.items()
+               for k, e in enumerate(es)}
+    text = "\n".join(indexed_stop_lines(results))
+    assert "| without indexing | 4 | 0.0075 | " in text and "| 1/4 (25 %) |" in text
+    assert "| with indexing | 4 | 7.5e-04 | " in text and "| 3/4 (75 %) |" in text
+    assert "| 0.0266 |" in text and "| 7.9e-04 |" in text  # the bounds without and with indexing
+    s = stop_summary(results)["indexed-nav-rlg"]
+    assert s["within_0.002"] == 3 and s["median_abs_error_dph"] == pytest.approx(0.00075)
+    assert indexed_stop_lines({k: v for k, v in results.items() if "indexed" not in k}) == []
