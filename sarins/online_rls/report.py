@@ -149,7 +149,8 @@ def stop_bound_lines(units=("nav-rlg", "premise")) -> list:
               f"azimuth gyro's random walk and the accelerometer noise to {_fmt(nav['azimuth'])} °/h, and the "
               f"heading random walk read as N/√T would allow {_fmt(nav['heading_walk'])} °/h. It is the tilt "
               "random walk, not the heading random walk, that keeps 0.002 °/h out of reach in 30 min at the "
-              f"preset's noise. The stop filter's own 1σ combines this bound with its prior on the drift "
+              "preset's noise while the azimuth gyro stays vertical (indexing the RINS during the stop changes "
+              f"that, `sarins_fmu.stop_indexing`). The stop filter's own 1σ combines this bound with its prior on the drift "
               f"({nav['prior']:g} °/h): {_fmt(nav['with_prior'])} °/h.", ""]
     return lines
 
