@@ -339,6 +339,7 @@ N_FILTER_STATES = 12
 FILTER_STATE_NAMES = ("phi_e", "phi_n", "phi_u", "dv_e", "dv_n", "eps_x", "eps_y", "eps_z", "nabla_x",
                       "nabla_y", "nabla_z", "d_lat")
 FILTER_EPS_Z = 7  # index of the azimuth gyro's drift (as sarins_fmu.kalman.EPS_Z)
+_CACHE_LIMIT = 20000  # transitions kept by a filter (12 x 12 each, ~23 MB at most)
 
 
 def filter_dynamics(lat: float, mat_nb: np.ndarray) -> np.ndarray:
@@ -419,8 +420,10 @@ class IndexedStopFilter:
         h = self.dt / samples.shape[0]
         phi = None
         for mat in samples:
-            key = mat.tobytes()
+            key = (mat.tobytes(), h)
             if key not in self._cache:
+                if len(self._cache) >= _CACHE_LIMIT:  # moves give new rotations at every part: keep memory bounded
+                    self._cache.clear()
                 self._cache[key] = _expm_series(filter_dynamics(self.lat, mat) * h)
             phi = self._cache[key] if phi is None else self._cache[key] @ phi
         return phi
