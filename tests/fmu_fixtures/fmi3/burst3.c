@@ -3,8 +3,12 @@
  * After doStep(t, h): samples[k] = slope * (t + (k + 1) h / n), k = 0..n-1 (the values
  * at the ends of the n equal sub-intervals), ends = {samples[0], samples[n-1]},
  * y = slope * (t + h), count = steps taken.  At the start time t0 every sample is
- * slope * t0.  n is a structural parameter (1..FIXTURE_DIM_MAX).
+ * slope * t0.  n is a structural parameter (1..FIXTURE_DIM_MAX).  With stop_after > 0
+ * the step that makes count reach stop_after sets terminateSimulation.  label is a String
+ * parameter nothing uses (it is read back as set).
  */
+#include <string.h>
+
 #include "fixture3.h"
 
 typedef struct {
@@ -14,6 +18,8 @@ typedef struct {
     fmi3Float64 ends[2];                   /* m */
     fmi3Float64 y;                         /* m */
     fmi3Int32 count;
+    fmi3Int32 stop_after;
+    char label[FIXTURE_STRING_MAX];
 } Burst;
 
 const char *const MODEL_TOKEN = "{8c1e2f36-3b0a-4d5e-9a61-b3a7f0c2d413}";
@@ -24,6 +30,8 @@ const VarInfo MODEL_VARIABLES[] = {
     {4, T_FLOAT64, R_OUTPUT, offsetof(Burst, ends), 2},
     {5, T_FLOAT64, R_OUTPUT, offsetof(Burst, y), 0},
     {6, T_INT32, R_OUTPUT, offsetof(Burst, count), 0},
+    {7, T_INT32, R_PARAMETER, offsetof(Burst, stop_after), 0},
+    {8, T_STRING, R_PARAMETER, offsetof(Burst, label), 0},
 };
 const size_t MODEL_VARIABLE_COUNT = sizeof MODEL_VARIABLES / sizeof MODEL_VARIABLES[0];
 
@@ -34,6 +42,7 @@ void model_defaults(void *model)
     Burst *b = model;
     b->n = 4;
     b->slope = 1.0;
+    memcpy(b->label, "burst", sizeof "burst");
 }
 
 size_t model_dim(const void *model) { return (size_t)((const Burst *)model)->n; }
@@ -54,7 +63,7 @@ void model_start(void *model, double time)
     b->count = 0;
 }
 
-void model_step(void *model, double time, double step)
+int model_step(void *model, double time, double step)
 {
     Burst *b = model;
     for (size_t k = 0; k < b->n; k++)
@@ -63,4 +72,5 @@ void model_step(void *model, double time, double step)
     b->ends[1] = b->samples[b->n - 1];
     b->y = b->slope * (time + step);
     b->count++;
+    return b->stop_after > 0 && b->count >= b->stop_after;
 }

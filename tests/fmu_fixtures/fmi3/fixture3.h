@@ -14,9 +14,10 @@
 #include "fmi3Functions.h"
 
 #define FIXTURE_DIM_MAX 64
+#define FIXTURE_STRING_MAX 64 /* bytes of a String variable's buffer, terminating zero included */
 #define DIM_STRUCTURAL (-1) /* VarInfo.dim: the array has model_dim() elements */
 
-typedef enum { T_FLOAT64, T_INT32, T_UINT64, T_BOOLEAN } VarType;
+typedef enum { T_FLOAT32, T_FLOAT64, T_INT32, T_UINT64, T_BOOLEAN, T_STRING } VarType; /* T_STRING: char[FIXTURE_STRING_MAX] */
 typedef enum { R_STRUCTURAL, R_PARAMETER, R_INPUT, R_OUTPUT } VarRole;
 
 typedef struct {
@@ -36,6 +37,6 @@ void model_defaults(void *model);
 size_t model_dim(const void *model);          /* the structural dimension */
 const char *model_check(const void *model);   /* NULL, or why the parameters are invalid */
 void model_start(void *model, double time);   /* outputs at the start time */
-void model_step(void *model, double time, double step);
+int model_step(void *model, double time, double step); /* nonzero: the model asks to end the run */
 
 #endif

@@ -48,7 +48,9 @@ static const VarInfo *find(fmi3ValueReference vr)
 static size_t type_size(VarType type)
 {
     switch (type) {
+    case T_FLOAT32: return sizeof(fmi3Float32);
     case T_FLOAT64: return sizeof(fmi3Float64);
+    case T_STRING: return sizeof(fmi3String);
     case T_INT32: return sizeof(fmi3Int32);
     case T_UINT64: return sizeof(fmi3UInt64);
     default: return sizeof(fmi3Boolean);
@@ -95,7 +97,17 @@ static fmi3Status transfer(Instance *c, const char *call, VarType type, const fm
             return fail(c, "%s: nValues %zu is too small for the variables' values", call, nValues);
         char *field = (char *)c->model + v->offset;
         char *outside = (char *)values + done * size;
-        if (!set) {
+        if (type == T_STRING) { /* scalar: a pointer outside, a buffer in the model */
+            if (!set) {
+                ((fmi3String *)values)[done] = field;
+            } else {
+                fmi3String text = ((const fmi3String *)values)[done];
+                if (text == NULL || strlen(text) >= FIXTURE_STRING_MAX)
+                    return fail(c, "%s: value reference %u takes a string of at most %d bytes", call,
+                                vrs[i], FIXTURE_STRING_MAX - 1);
+                memcpy(field, text, strlen(text) + 1);
+            }
+        } else if (!set) {
             memcpy(outside, field, count * size);
         } else if (v->role == R_STRUCTURAL) {
             char previous[sizeof(fmi3UInt64)];
@@ -274,9 +286,9 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     if (eventHandlingNeeded == NULL || terminateSimulation == NULL || earlyReturn == NULL
         || lastSuccessfulTime == NULL)
         return fail(c, "fmi3DoStep: null output argument");
-    model_step(c->model, currentCommunicationPoint, communicationStepSize);
+    *terminateSimulation = model_step(c->model, currentCommunicationPoint, communicationStepSize)
+                           ? fmi3True : fmi3False;
     *eventHandlingNeeded = fmi3False;
-    *terminateSimulation = fmi3False;
     *earlyReturn = fmi3False;
     *lastSuccessfulTime = currentCommunicationPoint + communicationStepSize;
     return fmi3OK;
@@ -319,6 +331,8 @@ SUPPORTED(Float64, fmi3Float64, T_FLOAT64)
 SUPPORTED(Int32, fmi3Int32, T_INT32)
 SUPPORTED(UInt64, fmi3UInt64, T_UINT64)
 SUPPORTED(Boolean, fmi3Boolean, T_BOOLEAN)
+SUPPORTED(Float32, fmi3Float32, T_FLOAT32)
+SUPPORTED(String, fmi3String, T_STRING)
 
 #define ABSENT(Type, ctype)                                                                        \
     fmi3Status fmi3Get##Type(fmi3Instance instance, const fmi3ValueReference valueReferences[],   \
@@ -338,14 +352,12 @@ SUPPORTED(Boolean, fmi3Boolean, T_BOOLEAN)
         return none_of_type(instance, "fmi3Set" #Type, nValueReferences);                          \
     }
 
-ABSENT(Float32, fmi3Float32)
 ABSENT(Int8, fmi3Int8)
 ABSENT(UInt8, fmi3UInt8)
 ABSENT(Int16, fmi3Int16)
 ABSENT(UInt16, fmi3UInt16)
 ABSENT(UInt32, fmi3UInt32)
 ABSENT(Int64, fmi3Int64)
-ABSENT(String, fmi3String)
 
 /* The calls below belong to features this FMU does not provide: each refuses. */
 #pragma GCC diagnostic ignored "-Wunused-parameter"

@@ -2,14 +2,14 @@
  *
  * doStep(t, h): integral += (h / n) * sum(u) (the rectangle rule over n equal
  * sub-intervals; u is held over the step), then scaled = k * mean(u), m_out = m,
- * flag_out = flag (direct feedthrough).  n is a structural parameter (1..FIXTURE_DIM_MAX).
+ * flag_out = flag (direct feedthrough); k is a Float32.  n is a structural parameter (1..FIXTURE_DIM_MAX).
  */
 #include "fixture3.h"
 
 typedef struct {
     fmi3UInt64 n;
     fmi3Float64 u[FIXTURE_DIM_MAX];  /* m */
-    fmi3Float64 k;                   /* mm */
+    fmi3Float32 k;                   /* mm */
     fmi3Int32 m;
     fmi3Boolean flag;
     fmi3Float64 integral;            /* m.s */
@@ -22,7 +22,7 @@ const char *const MODEL_TOKEN = "{5d0b9a7e-61c4-4f2a-8e3d-2c9f1a6b7e05}";
 const VarInfo MODEL_VARIABLES[] = {
     {1, T_UINT64, R_STRUCTURAL, offsetof(Sum, n), 0},
     {2, T_FLOAT64, R_INPUT, offsetof(Sum, u), DIM_STRUCTURAL},
-    {3, T_FLOAT64, R_INPUT, offsetof(Sum, k), 0},
+    {3, T_FLOAT32, R_INPUT, offsetof(Sum, k), 0},
     {4, T_INT32, R_INPUT, offsetof(Sum, m), 0},
     {5, T_BOOLEAN, R_INPUT, offsetof(Sum, flag), 0},
     {6, T_FLOAT64, R_OUTPUT, offsetof(Sum, integral), 0},
@@ -38,7 +38,7 @@ void model_defaults(void *model)
 {
     Sum *s = model;
     s->n = 4;
-    s->k = 1.0;
+    s->k = 1.0f;
 }
 
 size_t model_dim(const void *model) { return (size_t)((const Sum *)model)->n; }
@@ -66,7 +66,7 @@ void model_start(void *model, double time)
     feedthrough(s);
 }
 
-void model_step(void *model, double time, double step)
+int model_step(void *model, double time, double step)
 {
     Sum *s = model;
     double total = 0.0;
@@ -74,4 +74,5 @@ void model_step(void *model, double time, double step)
     for (size_t i = 0; i < s->n; i++) total += s->u[i];
     s->integral += step / (double)s->n * total;
     feedthrough(s);
+    return 0;
 }
