@@ -24,6 +24,7 @@ from orchestration import (Component, Connection, FMUCallError, IncompatibleConn
                            Master, StartValueError, System, SystemDescriptionError,
                            SystemFileError, UnconnectedInputWarning, build_container_fmu,
                            read_system, simulate_system, write_ssp)
+from orchestration.fmitypes import element_names
 from orchestration.fmu import read_description
 
 pytestmark = pytest.mark.integration
@@ -35,7 +36,8 @@ def burst_sum(fmus, n_burst: int = N, n_sum: int = N, **burst) -> System:
     return System("burst_sum",
                   [Component("b", fmus["Burst3"], {"slope": SLOPE, "n": n_burst, **burst}),
                    Component("s", fmus["Sum3"], {"n": n_sum})],
-                  [Connection.between("b.samples", "s.u"), Connection.between("b.count", "s.m")])
+                  [Connection.between("b.samples", "s.u"), Connection.between("b.count", "s.m"),
+                   Connection.between("b.pairs", "s.v")])
 
 
 def run(system, *args, **kwargs):
@@ -66,6 +68,15 @@ def test_gauss_seidel_moves_the_array_in_one_call_and_matches_the_closed_form(fm
     # right Riemann sum of slope * t with step h / n
     assert_allclose(result["s.integral"], SLOPE * (t ** 2 / 2 + t * H / (2 * N)), rtol=1e-13)
     assert_array_equal(result["s.m_out"], np.arange(t.size))
+    # the [n, 2] array: columns row-major, moved whole; Sum3 adds its columns
+    pairs = [name for name in result.dtype.names if name.startswith("b.pairs")]
+    assert pairs[:4] == ["b.pairs[1,1]", "b.pairs[1,2]", "b.pairs[2,1]", "b.pairs[2,2]"]
+    assert len(pairs) == 2 * N
+    assert_allclose(result[f"b.pairs[{N},1]"][1:], t[1:], rtol=1e-14)
+    assert_allclose(result[f"b.pairs[{N},2]"], samples[:, -1])
+    times = N * (t[1:] - H) + H * (N + 1) / 2  # sum of the sub-interval ends of the last step
+    assert_allclose(result["s.v_sum[1]"][1:], times, rtol=1e-13)
+    assert_allclose(result["s.v_sum[2]"][1:], SLOPE * times, rtol=1e-13)
     assert result["b.count"].dtype == np.int32 and result["s.flag_out"].dtype == np.bool_
     assert result.meta["order"] == ["b", "s"]
 
@@ -90,9 +101,8 @@ def test_single_fmus_equal_fmpy_simulate_fmu(fmi3_fmus):
                               start_values=starts)
         assert_allclose(ours["time"], theirs["time"], atol=1e-12)
         for field in theirs.dtype.names[1:]:
-            value = theirs[field].reshape(len(theirs), -1)
-            for k in range(value.shape[1]):
-                column = f"c.{field}[{k + 1}]" if theirs.dtype[field].shape else f"c.{field}"
+            value = theirs[field].reshape(len(theirs), -1)  # row-major, as the master's columns
+            for k, column in enumerate(element_names(f"c.{field}", theirs.dtype[field].shape)):
                 # FMPy steps by differences of communication points (h differs in the last bits)
                 assert_allclose(ours[column], value[:, k], rtol=1e-14, atol=1e-15, err_msg=column)
 

@@ -26,6 +26,7 @@ typedef struct {
     VarRole role;
     size_t offset; /* offsetof(model struct, field) */
     int dim;       /* 0: scalar; > 0: fixed length; DIM_STRUCTURAL */
+    int columns;   /* 0: one dimension; > 0: a second, fixed dimension (row-major [dim][columns]) */
 } VarInfo;
 
 /* provided by each model */

@@ -59,7 +59,8 @@ static size_t type_size(VarType type)
 
 static size_t elements(const Instance *c, const VarInfo *v)
 {
-    return v->dim == 0 ? 1 : v->dim > 0 ? (size_t)v->dim : model_dim(c->model);
+    size_t rows = v->dim == 0 ? 1 : v->dim > 0 ? (size_t)v->dim : model_dim(c->model);
+    return v->columns > 0 ? rows * (size_t)v->columns : rows;
 }
 
 static int settable(State state, VarRole role)
