@@ -222,6 +222,9 @@ def test_refused_where_fmi3_is_not_supported(fmi3_fmus, tmp_path):
         build_container_fmu(burst_sum(fmi3_fmus), tmp_path / "c.fmu")
     with pytest.raises(SystemFileError, match=r"FMI version 3\.0 is not supported \(FMI 2\.0 co-simulation only\)"):
         read_description(fmi3_fmus["Burst3"], "b")  # what the third-party importers read with
+    with_array_start = System("x", [Component("s", fmi3_fmus["Sum3"], {"u": [1.0, 2.0, 3.0, 4.0]})], [])
+    with pytest.raises(SystemFileError, match="cannot be written to SSP 1.0"):
+        write_ssp(with_array_start, tmp_path / "x.ssp")
 
 
 def test_fmu_with_clocks_is_refused(fmi3_fmus, tmp_path):
