@@ -919,8 +919,7 @@ static int generate(const sarins_schedule_params *p, sarins_schedule *s, report 
             s->angle0[j] = 0.0;
             s->rate0[j] = 0.0;
         }
-        strncpy(s->gimbal_axes, chain, sizeof s->gimbal_axes - 1);
-        s->gimbal_axes[sizeof s->gimbal_axes - 1] = '\0';
+        memcpy(s->gimbal_axes, chain, strlen(chain) + 1); /* at most "z,x,y" */
         s->n_times = *n_times;
         s->n_axes = *n_axes;
         s->n_windows = *n_windows;
