@@ -31,6 +31,8 @@ int sarins_core_abi(void);
 #include "filter.h"
 #include "ins.h"
 #include "turntable.h"
+#include "schedule.h"
+#include "ambient.h"
 #include "ins_fmu_step.h"
 #include "turntable_fmu_step.h"
 
