@@ -1,5 +1,7 @@
 """Build the slaves into self-contained FMI 2.0 co-simulation FMUs.
 
+The native FMUs (:data:`fmus.native_fmu.NATIVE`: every FMI call in C, no Python) are built by
+:func:`fmus.native_fmu.build_native_fmu` from the same slave declarations; the others as follows.
 ``build_fmus(out_dir)`` runs pythonfmu's builder on every slave with the
 ``sarins_fmu`` and ``fmus`` packages as resources (so a host Python with
 numpy and scipy, without this project installed, runs them; the built C
@@ -376,7 +378,10 @@ def build_fmus(out_dir: Path | str = DEFAULT_OUT, names=None) -> list[Path]:
     for name in names:
         if name in NEEDS_MODEL:
             raise ValueError(f"{name} needs a trained model to run; build it with {NEEDS_MODEL[name]}")
-    return [build_fmu(SLAVES[n], Path(out_dir)) for n in names]
+    from .native_fmu import NATIVE, build_native_fmu
+
+    return [build_native_fmu(n, SLAVES[n], Path(out_dir)) if n in NATIVE else build_fmu(SLAVES[n], Path(out_dir))
+            for n in names]
 
 
 def fix_fmu_description(path: Path, components=()) -> None:

@@ -1,4 +1,4 @@
-"""Compiled ``doStep`` of the IMUThermal, StrapdownINS and Turntable slaves (C core).
+"""Compiled ``doStep`` of the IMUThermal and StrapdownINS slaves (C core; the Turntable FMU is native).
 
 A slave's step in its usual case is one compiled call on preallocated
 state: it reads the inputs from the slave's float64 Real buffer
@@ -13,8 +13,7 @@ stays the one place that raises the error messages.
 
 Two ways in, both into the same C function of the core
 (``sarins_imu_fmu_step`` in ``sarins_fmu/core/imu.c``, ``sarins_ins_fmu_step``
-in ``ins_fmu_step.c``, ``sarins_turntable_fmu_step`` in
-``turntable_fmu_step.c``):
+in ``ins_fmu_step.c``):
 
 * :meth:`FastStep.step`, called first by the slave's Python ``do_step``;
 * the native FMI layer (``fmus/native/core.c``) calls it from ``fmi2DoStep``
@@ -41,7 +40,6 @@ import numpy as np
 from fmus.slave_support import TAG_TOL, real_slots
 from sarins_fmu.core import imu as core_imu
 from sarins_fmu.core import ins as core_ins
-from sarins_fmu.core import turntable as core_turntable
 from sarins_fmu.core._lib import array_table
 
 
@@ -153,27 +151,3 @@ def ins_context(slave):
         p_history = np.zeros((1, 9))  # no fine alignment: never written
     arrays = (q, v, pos, gyro_comp, accel_comp, steps, io, slave._compensation.state, x, p, q_diag, p_history)
     return FastStep(core_ins.fmu_step, core_ins.FMU_STEP_ADDRESS, arrays)
-
-
-# ------------------------------------------------------------------- Turntable
-
-# io row: expected step, gimbals A, constant ambient (1/0), its value, slots of angle_1..3,
-# rate_1..3, accel_1..3, ambient_temp, ambient_temp_rate, motion_time (the layout of turntable_fmu_step.h)
-_TT_IO = 16
-
-
-def turntable_context(slave):
-    """The Turntable slave's compiled step (constant ambient: the C core's ``sarins_turntable_fmu_step``), or None
-    (a varying ambient, or ``SARINS_FMU_NO_COMPILED_STEP=1``)."""
-    ambient = slave._ambient
-    if not enabled() or ambient.profile is not None or ambient.amplitude != 0.0 or ambient.slope != 0.0:
-        return None
-    io = np.zeros(_TT_IO)
-    io[0:4] = slave._step, slave._schedule.n_axes, 1.0, float(ambient.mean)
-    io[4:13] = slave._out_slots
-    io[13:16] = real_slots(slave, ["ambient_temp", "ambient_temp_rate", "motion_time"])
-    times, angle_bp, rate_bp, accel, angle0, rate0 = slave._schedule.tables()
-    arrays = (np.ascontiguousarray(times), angle_bp, rate_bp, accel, angle0, rate0, io)
-    if any(not a.flags.c_contiguous for a in arrays):
-        return None
-    return FastStep(core_turntable.fmu_step, core_turntable.FMU_STEP_ADDRESS, arrays)

@@ -283,8 +283,11 @@ def order_cases(host: Host):
         "doStep not continuing the previous one": non_contiguous,
         "negative step": lambda f: host.init(f).doStep(0.0, -host.step),
         "NaN step": lambda f: host.init(f).doStep(0.0, math.nan),
-        "getFMUstate": lambda f: host.init(f).getFMUState(),
     }
+    if host.md.coSimulation.canGetAndSetFMUstate:  # a native FMU: a state blob that is not one is refused
+        cases["deSerializeFMUstate of garbage"] = lambda f: host.init(f).deSerializeFMUstate(b"not a state" * 20)
+    else:
+        cases["getFMUstate"] = lambda f: host.init(f).getFMUState()
     yield from _each_refused(host, cases)
     refused, status = _refused(lambda: host.new(guid="{00000000-0000-0000-0000-000000000000}"))
     yield "wrong GUID", "clean" if refused else "silently accepted", status

@@ -12,7 +12,6 @@ import pytest
 from sarins_fmu import earth, ins_kernel
 from sarins_fmu import rotations as rot
 from sarins_fmu.core import ins as core_ins
-from sarins_fmu.core import turntable as core_turntable
 from sarins_fmu.kalman import N_STATES, StopFilterSettings, stop_filter_steps
 from sarins_fmu.turntable.schedule import GimbalSchedule, state_into
 from sarins_fmu.units import DPH_TO_RPS
@@ -182,17 +181,9 @@ def _turntable_table(n_slots=16):
     return s, arrays, array_table(arrays)
 
 
-def test_turntable_fmu_step_writes_the_state_at_the_step_end():
-    s, arrays, table = _turntable_table()
-    buf = np.full(16, -7.0)
-    assert core_turntable.fmu_step(table, buf, 3.0, 1.0) == 0
-    angle, rate, acc = s.state(4.0)
-    assert list(buf[[0, 1, 2, 3, 4, 5]]) == [angle[0, 0], angle[0, 1], rate[0, 0], rate[0, 1], acc[0, 0], acc[0, 1]]
-    assert list(buf[6:9]) == [21.5, 0.0, 4.0]
-
-
 @pytest.mark.parametrize("fault", ["rows", "slot", "step", "gimbals", "time"])
 def test_fmu_steps_refuse_without_changing_anything(fault):
+    """The INS step refuses a table of another layout (a schedule's), however it is damaged."""
     s, arrays, table = _turntable_table()
     buf = np.full(16, -7.0)
     t, h = 3.0, 1.0
@@ -206,9 +197,6 @@ def test_fmu_steps_refuse_without_changing_anything(fault):
         arrays[6][1] = 4.0
     else:
         t = math.inf
-    assert core_turntable.fmu_step(table, buf, t, h) == 1
-    assert np.all(buf == -7.0)
-    # the INS step likewise refuses a table of the wrong layout
     assert core_ins.fmu_step(table, buf, t, h) == 1
     assert np.all(buf == -7.0)
 
@@ -216,7 +204,7 @@ def test_fmu_steps_refuse_without_changing_anything(fault):
 def test_fmu_step_bindings_reject_bad_buffers_and_tables():
     _, _, table = _turntable_table()
     with pytest.raises(ValueError, match="buffer is written in place"):
-        core_turntable.fmu_step(table, np.zeros(16, dtype=np.float32), 0.0, 1.0)
+        core_ins.fmu_step(table, np.zeros(16, dtype=np.float32), 0.0, 1.0)
     with pytest.raises(ValueError, match="state table"):
         core_ins.fmu_step(table.astype(np.int32), np.zeros(16), 0.0, 1.0)
 
@@ -227,9 +215,8 @@ SANITIZED_RUN = """
 import math
 import numpy as np
 from fmus.strapdown_ins_slave import StrapdownINS
-from fmus.turntable_slave import Turntable
 from sarins_fmu import earth, ins_kernel, rotations as rot
-from sarins_fmu.core import _lib, ins as core_ins, turntable as core_turntable
+from sarins_fmu.core import _lib, ins as core_ins
 from sarins_fmu.kalman import StopKalmanFilter
 from sarins_fmu.turntable import single_axis
 from sarins_fmu.core._lib import array_table
@@ -260,8 +247,6 @@ sched.state(np.linspace(-10.0, 4000.0, 3001))
 ins = StrapdownINS(instance_name="ins", resources="/tmp")
 ins.align_time, ins.coarse_time = 300.0, 60.0
 ins.enter_initialization_mode(); ins.exit_initialization_mode()
-tt = Turntable(instance_name="tt", resources="/tmp")
-tt.enter_initialization_mode(); tt.exit_initialization_mode()
 fast = 0
 for n in range(400):
     for i, a in enumerate("xyz"):
@@ -272,15 +257,12 @@ for n in range(400):
         fast += 1
     else:
         ins.do_step(float(n), 1.0)
-    tt.do_step(float(n), 1.0)
-assert fast > 300 and ins._ins.steps == 400 and tt._fast is not None, (fast, ins._ins.steps)
+assert fast > 300 and ins._ins.steps == 400, (fast, ins._ins.steps)
 # bad tables and slots: refused, nothing touched
 table, buf = ins._fast.table, ins._fmi_buffer
 assert core_ins.fmu_step(table[:5].copy(), buf, 400.0, 1.0) == 1
-assert core_turntable.fmu_step(table, buf, 400.0, 1.0) == 1
 io = np.zeros(16); io[0:4] = 1.0, 1, 1.0, 20.0; io[4:] = 1e9
-s_tables = sched.tables()
-assert core_turntable.fmu_step(array_table((*s_tables, io)), np.zeros(8), 0.0, 1.0) == 1
+assert core_ins.fmu_step(array_table((*sched.tables(), io)), np.zeros(8), 0.0, 1.0) == 1
 print("sanitized run ok", fast)
 """
 

@@ -225,7 +225,7 @@ simulate_fmu(str(fixtures['Gain']), stop_time=1.0, step_size=0.5)
 import pythonfmu
 assert 'resources' in pythonfmu.__file__, pythonfmu.__file__  # the FMU's copy was imported
 from fmus.build import build_fmus
-fmu = build_fmus({str(tmp_path / 'out')!r}, names=['Turntable'])[0]
+fmu = build_fmus({str(tmp_path / 'out')!r}, names=['VehicleMotion'])[0]
 names = zipfile.ZipFile(fmu).namelist()
 assert any(n.startswith('binaries/') for n in names)
 assert any(n.endswith('/pythonfmu/fmi2slave.py') for n in names), names

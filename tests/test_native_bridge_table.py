@@ -61,7 +61,7 @@ for mode in ("duplicate", "not-int", "not-tuple", "none"):
 def test_malformed_variable_tables_are_refused(fmu_dir):
     tests = os.path.dirname(__file__)
     script = textwrap.dedent(SCRIPT).format(tests=tests, root=os.path.dirname(tests), patch=PATCH,
-                                            fmu=str(fmu_dir / "Turntable.fmu"))
+                                            fmu=str(fmu_dir / "VehicleMotion.fmu"))
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr[-2000:]
     rows = {line.split(" | ")[0]: line.split(" | ")[1:] for line in proc.stdout.splitlines() if " | " in line}

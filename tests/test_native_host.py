@@ -103,8 +103,8 @@ def test_invalid_value_reference_is_an_error_not_fatal_in_a_c_host(host, unzippe
 
 def test_no_python_found_gives_null_with_a_reason(host, unzipped, tmp_path):
     """With the recorded interpreter gone and nothing on PATH, fmi2Instantiate returns NULL and says why."""
-    folder, md = unzipped["Turntable"]
-    copy = tmp_path / "Turntable"
+    folder, md = unzipped["VehicleMotion"]  # a Python-hosted FMU (the Turntable is native)
+    copy = tmp_path / "VehicleMotion"
     shutil.copytree(folder, copy)
     record = copy / "resources" / "sarins_fmi_runtime.txt"
     record.write_text("version=3.99\nexecutable=/nonexistent/python3.99\nlibpython=/nonexistent/libpython3.99.so\n")

@@ -21,6 +21,7 @@ def register(subparsers) -> None:
 def run(args) -> int:
     from fmus.build import NEEDS_MODEL, build_fmus
     from fmus.native import HOST_REQUIREMENTS
+    from fmus.native_fmu import platform_note
 
     if args.compensator is not None:  # a bad model file fails before anything is built
         from sarins_fmu.identify.compensators import load
@@ -49,5 +50,6 @@ def run(args) -> int:
         from fmus.compensator_export import export_compensator
 
         print(export_compensator(args.compensator, args.out))
-    print(HOST_REQUIREMENTS)
+    print(platform_note())
+    print(f"Python-hosted FMUs: {HOST_REQUIREMENTS}")
     return 0

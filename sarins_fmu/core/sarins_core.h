@@ -34,6 +34,5 @@ int sarins_core_abi(void);
 #include "schedule.h"
 #include "ambient.h"
 #include "ins_fmu_step.h"
-#include "turntable_fmu_step.h"
 
 #endif
