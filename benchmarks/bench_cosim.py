@@ -10,7 +10,7 @@ Reports, in one process, same seed:
   ``N.Nx the in-process run``; the results must be bit-identical (asserted);
 * the same co-simulation with the slaves' compiled steps called through
   their Python ``do_step`` instead of from C (``SARINS_FMU_NO_FAST_STEP=1``);
-* where a co-simulation step goes: the slaves' compiled steps alone (their
+* where a co-simulation step goes: the Python-hosted slaves' compiled steps alone (their
   jitted step functions, minus the cost of a call that returns at once), the
   FMI layer (ctypes + the native layer: a bare loop doing the master's
   get/set/doStep/record calls through the same ctypes pointers, minus the
@@ -124,33 +124,41 @@ def bare_loop(fmu_dir: Path, n: int, align_s: float) -> float:
             s.free()
 
 
-def slave_work_per_step(n: int = 5000, skip: int = 1300) -> dict:
-    """Microseconds per step of each slave's compiled step alone (navigation phase).
+def slave_work_per_step(fmu_dir: Path, n: int = 5000, skip: int = 1300) -> dict:
+    """Microseconds per step of each Python-hosted slave's compiled step alone (navigation phase).
 
-    The slaves are stepped in Python as a chain (values copied between them);
+    The slaves are stepped in Python as a chain (values copied between them),
+    fed by the native Turntable FMU (FMPy; its step is not counted here);
     each compiled step is timed on its own, minus the cost of calling it with
     a step it declines at once (so what remains is the step's own work).
     """
     from fmus.imu_thermal_slave import IMUThermal
     from fmus.strapdown_ins_slave import StrapdownINS
-    from fmus.turntable_slave import Turntable
 
-    tt, imu, ins = Turntable(instance_name="t"), IMUThermal(instance_name="i"), StrapdownINS(instance_name="n")
-    chain = (("Turntable", tt), ("IMUThermal", imu), ("StrapdownINS", ins))
-    tt.align_time, ins.align_time = 1200.0, 1200.0
+    tt = Slave(fmu_dir / "Turntable.fmu", "work_tt")
+    imu, ins = IMUThermal(instance_name="i"), StrapdownINS(instance_name="n")
+    chain = (("IMUThermal", imu), ("StrapdownINS", ins))
+    tt.set(align_time=1200.0)
+    ins.align_time = 1200.0
+    tt.fmu.enterInitializationMode()
+    tt.fmu.exitInitializationMode()
     for _, s in chain:
         s.setup_experiment(0.0)
         s.enter_initialization_mode()
-    for src, dst, names in ((tt, imu, TT_TO_IMU), (imu, ins, IMU_TO_INS)):
-        src.exit_initialization_mode()
-        for v in names:
-            setattr(dst, v, getattr(src, v))
+    for v, value in zip(TT_TO_IMU, tt.get(*TT_TO_IMU)):
+        setattr(imu, v, value)
+    imu.exit_initialization_mode()
+    for v in IMU_TO_INS:
+        setattr(ins, v, getattr(imu, v))
     ins.exit_initialization_mode()
     cost = dict.fromkeys([name for name, _ in chain], 0.0)
     clock = time.perf_counter
     for k in range(n + skip):
         t = float(k)
-        for (name, s), names in zip(chain, (TT_TO_IMU, IMU_TO_INS, ())):
+        tt.fmu.doStep(t, 1.0)
+        for v, value in zip(TT_TO_IMU, tt.get(*TT_TO_IMU)):
+            setattr(imu, v, value)
+        for (name, s), names in zip(chain, (IMU_TO_INS, ())):
             fast = s._fast
             if fast is not None:
                 c0 = clock()
@@ -162,9 +170,9 @@ def slave_work_per_step(n: int = 5000, skip: int = 1300) -> dict:
                     cost[name] += (c1 - c0) - (clock() - c2)
             if fast is None or not done:
                 assert s.do_step(t, 1.0)
-            target = imu if s is tt else ins
             for v in names:
-                setattr(target, v, getattr(s, v))
+                setattr(ins, v, getattr(s, v))
+    tt.free()
     return {key: value / n * 1e6 for key, value in cost.items()}
 
 
@@ -188,12 +196,12 @@ def main():
         res_py, t_cosim_py = cosimulate(system, hours, False)
         n_raw = min(steps, 30000)
         t_raw = bare_loop(fmu_dir, n_raw, align * 3600)
+        work = slave_work_per_step(fmu_dir)
     nav = int(round(align * 3600)) + 1
     for name, out in (("compiled steps from C", res), ("compiled steps through do_step", res_py)):
         for field, series in (("lat_error", ref.lat_error), ("position_error", ref.position_error)):
             got = out[f"ins.{field}"][nav:]
             assert len(got) == len(series) and np.array_equal(got, series), f"{name}: ins.{field} differs"
-    work = slave_work_per_step()
     load = os.getloadavg()
     us = 1e6 / steps
     per_step, work_sum, raw = t_cosim * us, sum(work.values()), t_raw * 1e6

@@ -3,7 +3,9 @@
 Each slave module holds one class deriving from ``Fmi2Slave``; it declares
 the variables, converts between FMI scalars and library arrays, and calls
 the library.  No physics lives here.  ``fmus.build`` turns the slaves into
-self-contained FMUs (the library travels in each FMU's resources).
+self-contained FMUs (the library travels in each FMU's resources).  The
+native FMUs (``fmus.native_fmu.NATIVE``) keep only the declaration here; their
+FMI calls are answered in C (``fmus/c``).
 """
 
 SLAVES = {

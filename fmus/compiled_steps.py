@@ -1,4 +1,4 @@
-"""Compiled ``doStep`` of the IMUThermal and Turntable slaves (C core).
+"""Compiled ``doStep`` of the IMUThermal slave (C core; the Turntable and StrapdownINS FMUs are native).
 
 A slave's step in its usual case is one compiled call on preallocated
 state: it reads the inputs from the slave's float64 Real buffer
@@ -12,8 +12,7 @@ compensation value or a queued one taking over, any input or tag the Python
 stays the one place that raises the error messages.
 
 Two ways in, both into the same C function of the core
-(``sarins_imu_fmu_step`` in ``sarins_fmu/core/imu.c``, ``sarins_turntable_fmu_step``
-in ``turntable_fmu_step.c``; StrapdownINS is a native FMU, fmus/c/strapdown_ins):
+(``sarins_imu_fmu_step`` in ``sarins_fmu/core/imu.c``):
 
 * :meth:`FastStep.step`, called first by the slave's Python ``do_step``;
 * the native FMI layer (``fmus/native/core.c``) calls it from ``fmi2DoStep``
@@ -38,7 +37,6 @@ import numpy as np
 
 from fmus.slave_support import real_slots
 from sarins_fmu.core import imu as core_imu
-from sarins_fmu.core import turntable as core_turntable
 from sarins_fmu.core._lib import array_table
 
 
@@ -97,29 +95,3 @@ def imu_context(slave, step: float):
     io[_IMU_VEHICLE + 1:] = real_slots(slave, ["base_motion_time"] + slave.VEHICLE_INPUTS)
     arrays = slave._sensor.state_arrays() + (io, slave._motion.store, slave._vehicle.store)
     return FastStep(core_imu.fmu_step, core_imu.FMU_STEP_ADDRESS, arrays)
-
-
-# ---------------------------------------------------------------- StrapdownINS
-
-# ------------------------------------------------------------------- Turntable
-
-# io row: expected step, gimbals A, constant ambient (1/0), its value, slots of angle_1..3,
-# rate_1..3, accel_1..3, ambient_temp, ambient_temp_rate, motion_time (the layout of turntable_fmu_step.h)
-_TT_IO = 16
-
-
-def turntable_context(slave):
-    """The Turntable slave's compiled step (constant ambient: the C core's ``sarins_turntable_fmu_step``), or None
-    (a varying ambient, or ``SARINS_FMU_NO_COMPILED_STEP=1``)."""
-    ambient = slave._ambient
-    if not enabled() or ambient.profile is not None or ambient.amplitude != 0.0 or ambient.slope != 0.0:
-        return None
-    io = np.zeros(_TT_IO)
-    io[0:4] = slave._step, slave._schedule.n_axes, 1.0, float(ambient.mean)
-    io[4:13] = slave._out_slots
-    io[13:16] = real_slots(slave, ["ambient_temp", "ambient_temp_rate", "motion_time"])
-    times, angle_bp, rate_bp, accel, angle0, rate0 = slave._schedule.tables()
-    arrays = (np.ascontiguousarray(times), angle_bp, rate_bp, accel, angle0, rate0, io)
-    if any(not a.flags.c_contiguous for a in arrays):
-        return None
-    return FastStep(core_turntable.fmu_step, core_turntable.FMU_STEP_ADDRESS, arrays)

@@ -1,17 +1,16 @@
-"""Turntable FMU: gimbal angles, rates and accelerations of a rotation scheme."""
+"""Turntable FMU: gimbal angles, rates and accelerations of a rotation scheme.
 
+The declaration of the native Turntable FMU: its variables, descriptions, start values and the timing
+contract.  ``fmus/native_fmu.py`` writes the model description and the C variable table from it;
+``fmus/c/turntable/model.c`` computes it (the schedule and ambient builders of the C core).
+"""
 
-import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus import compiled_steps
-from fmus.slave_support import (OUTPUT, PARAMETER, ParameterError, check_finite, check_integer, check_step,
-                                declare, discard_on_error, guarded, real_slots)
-from sarins_fmu import thermal, turntable
-from sarins_fmu.thermal import Ambient
+from fmus.slave_support import OUTPUT, PARAMETER, declare
+from sarins_fmu import turntable
 from sarins_fmu.units import DEG_TO_RAD
-
 
 
 class Turntable(Fmi2Slave):
@@ -81,93 +80,7 @@ class Turntable(Fmi2Slave):
                 "slope of the ambient over the step from motion_time [degC/s]", 0.0)
         declare(self, "real", "motion_time", OUTPUT, "time tag: start of the segment the outputs describe [s]", 0.0)
         declare(self, "integer", "n_gimbals", OUTPUT, "number of gimbals in use [1]", 1)
-        self._schedule = None
-        self._ambient = None
-        self._step = None
-        self._out = np.zeros(9)
-        self._out_slots = real_slots(self, [f"{q}_{j}" for q in ("angle", "rate", "accel") for j in (1, 2, 3)])
-        self._start_time = 0.0
-        self._fast = None  # the compiled step's context (fmus.compiled_steps)
 
-    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
-        self._start_time = float(start_time)
-
-    def enter_initialization_mode(self):
-        try:  # outputs during initialisation; a bad parameter is reported at exit_initialization_mode
-            self._build()
-        except ParameterError:
-            self._schedule = None
-
-    @guarded
-    def exit_initialization_mode(self):
-        self._build()
-
-    def _build(self):
-        check_finite(self, ["rate", "accel", "dwell", "align_time", "align_dwell", "grid", "duration",
-                            "ambient_mean", "ambient_amplitude", "ambient_period", "outer_rate", "outer_accel",
-                            "warmup", "chamber_low", "chamber_high", "chamber_ramp", "chamber_hold", "chamber_step",
-                            "chamber_step_hold"]
-                     + [f"table_{n}_{q}" for n in ("inner", "middle", "outer") for q in ("rate", "accel")],
-                     positive=["grid", "duration", "ambient_period"],
-                     non_negative=["rate", "accel", "dwell", "align_time", "align_dwell", "outer_rate", "outer_accel",
-                                   "warmup", "chamber_hold", "chamber_step", "chamber_step_hold",
-                                   "ambient_amplitude"])
-        if not self.chamber_ramp > 0:
-            raise ParameterError(f"parameter chamber_ramp = {self.chamber_ramp} degC/s must be positive")
-        if self.chamber_first not in ("low", "high"):
-            raise ParameterError(f"parameter chamber_first must be 'low' or 'high', got {self.chamber_first!r}")
-        revolutions = check_integer(self, "revolutions", 1)
-        try:
-            self._schedule = turntable.schedule_for(
-                self.scheme, self.duration, rate_dps=self.rate / DEG_TO_RAD, accel_dps2=self.accel / DEG_TO_RAD,
-                dwell=self.dwell, grid=self.grid, revolutions=revolutions,
-                align_time=self.align_time, align_dwell=self.align_dwell,
-                outer_rate_dps=self.outer_rate / DEG_TO_RAD, outer_accel_dps2=self.outer_accel / DEG_TO_RAD,
-                table_rates_dps=[getattr(self, f"table_{n}_rate") / DEG_TO_RAD for n in ("inner", "middle", "outer")],
-                table_accels_dps2=[getattr(self, f"table_{n}_accel") / DEG_TO_RAD for n in ("inner", "middle", "outer")],
-                warmup=self.warmup)
-        except ValueError as exc:
-            raise ParameterError(f"parameter scheme = {self.scheme!r} with its motion parameters: {exc}") from None
-        try:
-            if self.ambient_mode == "chamber":
-                profile = thermal.chamber_profile(
-                    self.duration, low_c=self.chamber_low, high_c=self.chamber_high,
-                    ramp_c_per_min=self.chamber_ramp * 60.0, hold_min=self.chamber_hold / 60.0,
-                    start_c=self.ambient_mean, first=self.chamber_first, step_c=self.chamber_step,
-                    step_hold_min=self.chamber_step_hold / 60.0)
-                self._ambient = Ambient(profile=profile)
-            elif self.ambient_mode == "sinusoid":
-                self._ambient = Ambient(mean=self.ambient_mean, amplitude=self.ambient_amplitude,
-                                        period=self.ambient_period)
-            else:
-                raise ValueError("ambient_mode must be 'sinusoid' or 'chamber'")
-        except ValueError as exc:
-            raise ParameterError(f"parameter ambient_mode = {self.ambient_mode!r}: {exc}") from None
-        self.n_gimbals = self._schedule.n_axes
-        self._publish(self._start_time)
-
-    def _publish(self, time):
-        angle, rate, acc = (x[0] for x in self._schedule.state(time))
-        n = len(angle)
-        out = self._out  # angle_1..3, rate_1..3, accel_1..3 (0 beyond the gimbals in use)
-        out[0:n], out[3:3 + n], out[6:6 + n] = angle, rate, acc
-        self._fmi_buffer[self._out_slots] = out
-        span = self.grid if self._step is None else self._step
-        self.ambient_temp, self.ambient_temp_rate = thermal.ambient_segment(self._ambient, time, span)
-        self.motion_time = float(time)
-
-    @guarded
     def do_step(self, current_time, step_size):
-        if self._fast is not None and self._fast.step(self._fmi_buffer, current_time, step_size):
-            return True
-        try:
-            if self._step is None:
-                self._schedule.check_grid(step_size)
-            self._step = check_step(self, step_size, self._step)
-            self._publish(current_time + step_size)
-        except ValueError as exc:
-            return discard_on_error(self, exc)
-        if self._fast is None:
-            self._fast = compiled_steps.turntable_context(self)
-            self._fmi_fast_step = None if self._fast is None else self._fast.address
-        return True
+        raise NotImplementedError("the Turntable FMU is native: fmus/c/turntable/model.c computes it (this class "
+                                  "only declares its variables)")

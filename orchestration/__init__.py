@@ -1,9 +1,10 @@
-"""Generic fixed-step co-simulation master for FMI 2.0 co-simulation FMUs.
+"""Generic fixed-step co-simulation master for FMI 2.0 and FMI 3.0 co-simulation FMUs.
 
 Systems are described in SSP 1.0 (``.ssp`` archives or ``SystemStructure.ssd``
 with the FMUs beside it) or built in python (:class:`System`); the master
 (:class:`Master`, :func:`simulate_system`) runs them with FMPy's low-level
-``FMU2Slave`` API under a Gauss-Seidel or Jacobi coupling scheme and returns a
+``FMU2Slave`` / ``FMU3Slave`` API (FMI 3.0 arrays and structural parameters
+included; no event mode, clocks or intermediate update) under a Gauss-Seidel or Jacobi coupling scheme and returns a
 numpy structured array (``time`` first, then ``component.variable`` fields).
 This package knows nothing about the FMUs it runs.
 

@@ -24,7 +24,9 @@ only when it leaves it.
 Start values given in another unit (SSP ``ssv:Real unit``) are converted
 to the variable's unit here, like the master does.  Refused (with the
 connection named): connections that need a unit conversion or a linear
-transformation (the binary copies values as they are).
+transformation (the binary copies values as they are).  Refused (with the
+component named): FMI 3.0 components, which an FMI 2.0 container cannot host
+(run such systems with the master).
 """
 from __future__ import annotations
 
@@ -92,6 +94,12 @@ def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
         for component in system.components:
             path = _unique_copy(system.fmu_path(component), Path(scratch) / "fmus")
             description = read_model_description(str(path), validate=False)
+            if description.fmiVersion != CONTAINER_FMI_VERSION:
+                raise SystemDescriptionError(
+                    f"the container FMU is FMI {CONTAINER_FMI_VERSION} and hosts FMI "
+                    f"{CONTAINER_FMI_VERSION} components only; this one is FMI "
+                    f"{description.fmiVersion} (run the system with the master instead)",
+                    file=str(system.fmu_path(component)), component=component.name)
             components.append(cfg.Component(name=component.name, filename=path,
                                             modelDescription=description))
             variables.append({v.name: v for v in description.modelVariables})

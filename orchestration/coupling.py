@@ -3,7 +3,11 @@
 Connections are checked against the FMUs' model descriptions, then grouped
 into :class:`Link` s: all connections of one value type from one source
 component to one destination component, so that one ``fmi2Get*`` and one
-``fmi2Set*`` call move them per step.
+``fmi2Set*`` call (``fmi3Get*``/``fmi3Set*``) move them per step.
+
+A connection joins an output and an input of one family (float, integer,
+boolean; :func:`orchestration.fmitypes.can_carry`), scalar to scalar or an
+FMI 3.0 array to an array of the same shape.
 """
 from __future__ import annotations
 
@@ -14,21 +18,13 @@ from dataclasses import dataclass
 
 from .errors import (AlgebraicLoopWarning, IncompatibleConnectionError,
                      UnconnectedInputWarning, UnknownComponentError, UnknownVariableError)
+from .fmitypes import VALUE_TYPES, can_carry, family, size_of, value_type
 from .system import Connection
 
 __all__ = ["Link", "VALUE_TYPES", "value_type", "find_variable", "check_connections",
            "check_connector_types",
            "group_links", "gauss_seidel_order", "warn_unconnected", "output_dependencies",
            "algebraic_loops"]
-
-# FMI 2.0 type -> the getter/setter family used for it
-VALUE_TYPES = {"Real": "Real", "Integer": "Integer", "Enumeration": "Integer",
-               "Boolean": "Boolean", "String": "String"}
-
-
-def value_type(variable) -> str:
-    """Return the get/set family (``Real``, ``Integer``, ``Boolean``, ``String``)."""
-    return VALUE_TYPES[variable.type]
 
 
 @dataclass(frozen=True)
@@ -40,7 +36,8 @@ class Link:
     source, target : int
         Component indices in the system's declaration order.
     kind : str
-        ``'Real'``, ``'Integer'`` or ``'Boolean'``.
+        Get kind of the sources (``'Real'``, ``'Integer'``, ``'Boolean'``,
+        ``'Float64'``, ``'Int32'``, ...; :mod:`orchestration.fmitypes`).
     source_vrs, target_vrs : tuple of int
         Value references, element ``i`` of one feeds element ``i`` of the other.
     connections : tuple of Connection
@@ -49,6 +46,12 @@ class Link:
         ``(factor, offset)`` per connection (unit conversion and linear
         transformation: ``target = factor * source + offset``); ``None`` when
         every value is passed unchanged.
+    target_kind : str, optional
+        Set kind of the targets when it differs from ``kind`` (the values are
+        cast, e.g. FMI 2.0 ``Boolean`` to FMI 3.0 ``Boolean``); ``None``: ``kind``.
+    sizes : tuple of int, optional
+        Values per connection (an FMI 3.0 array carries all its elements);
+        ``None``: one each.
     """
 
     source: int
@@ -58,6 +61,13 @@ class Link:
     target_vrs: tuple[int, ...]
     connections: tuple[Connection, ...]
     maps: tuple[tuple[float, float], ...] | None = None
+    target_kind: str | None = None
+    sizes: tuple[int, ...] | None = None
+
+    @property
+    def values(self) -> int:
+        """Number of values the link moves per transfer."""
+        return len(self.source_vrs) if self.sizes is None else sum(self.sizes)
 
 
 def find_variable(variables: Mapping, name: str, *, component: str, file: str | None,
@@ -83,9 +93,20 @@ def _endpoint(component: str, variable: str, index: Mapping[str, int],
     return i, find_variable(variables[i], variable, component=component, file=files[i])
 
 
+def _connector_matches(declared: str, var) -> bool:
+    """An SSP 1.0 connector type against an FMU variable type (FMI 3.0 types by family)."""
+    if var.type in ("Real", "Integer", "Enumeration", "Boolean", "String", "Binary"):
+        return var.type == declared  # FMI 2.0 (and types both versions share)
+    return {"Real": "float", "Integer": "integer", "Enumeration": "integer",
+            "Boolean": "boolean", "String": "string"}.get(declared) == family(value_type(var))
+
+
 def check_connector_types(components: Sequence, variables: Sequence[Mapping],
                           files: Sequence[str], file: str | None) -> None:
     """Refuse an SSD connector whose declared type differs from its FMU variable's type.
+
+    An FMI 3.0 variable matches the SSP 1.0 type of its family (``Real`` for
+    ``Float32``/``Float64``, ``Integer`` for the integer types).
 
     Parameters
     ----------
@@ -106,7 +127,7 @@ def check_connector_types(components: Sequence, variables: Sequence[Mapping],
     for component, known, fmu_file in zip(components, variables, files):
         for connector, declared in getattr(component, "connector_types", {}).items():
             var = known.get(connector)
-            if var is not None and var.type != declared:
+            if var is not None and not _connector_matches(declared, var):
                 raise IncompatibleConnectionError(
                     f"connector '{connector}' is declared {declared} in the system file, but "
                     f"the FMU's variable is {var.type} (FMU '{fmu_file}')", file=file,
@@ -115,16 +136,23 @@ def check_connector_types(components: Sequence, variables: Sequence[Mapping],
 
 def check_connections(connections: Sequence[Connection], names: Sequence[str],
                       variables: Sequence[Mapping], files: Sequence[str],
-                      system_file: str | None = None) -> list[tuple]:
+                      system_file: str | None = None,
+                      shapes: Sequence[Mapping[str, tuple]] | None = None) -> list[tuple]:
     """Check every connection; return ``(src index, src var, dst index, dst var, c)``.
+
+    ``shapes`` gives, per component, ``{name: shape}`` of its FMI 3.0 array
+    variables (from :func:`orchestration.fmitypes.variable_shape`); a variable
+    not in it is a scalar.
 
     Raises
     ------
     UnknownComponentError, UnknownVariableError
         For names not in the system / the FMU.
     IncompatibleConnectionError
-        For a start that is not an output, an end that is not an input, a type
-        mismatch, a String connection, or an input fed twice.
+        For a start that is not an output, an end that is not an input, types
+        that cannot carry each other's values, a String, Binary or Clock
+        connection, an array joined to a scalar or to an array of another
+        shape, or an input fed twice.
     """
     index = {name: i for i, name in enumerate(names)}
     checked = []
@@ -135,6 +163,8 @@ def check_connections(connections: Sequence[Connection], names: Sequence[str],
         j, end = _endpoint(c.end_component, c.end_variable, index, variables, files,
                            system_file, "end")
         _check_pair(c, start, end, files[j])
+        if shapes is not None:
+            _check_shapes(c, shapes[i].get(start.name, ()), shapes[j].get(end.name, ()), files[j])
         if (j, end.name) in fed:
             raise IncompatibleConnectionError(
                 f"input is fed by two connections ({fed[(j, end.name)]} and {c})",
@@ -156,30 +186,52 @@ def _check_pair(c: Connection, start, end, end_file: str) -> None:
         extra = "; give it a start value instead" if end.causality == "parameter" else ""
         fail(f"end variable '{c.end}' has causality '{end.causality}'; only inputs can be "
              f"driven by a connection{extra}")
-    if value_type(start) != value_type(end):
+    kinds = value_type(start), value_type(end)
+    if family(kinds[0]) in ("string", "binary", "clock") or \
+            family(kinds[1]) in ("string", "binary", "clock"):
+        fail(f"{start.type if family(kinds[0]) in ('string', 'binary', 'clock') else end.type} "
+             "connections are not supported")
+    if not can_carry(*kinds):
         fail(f"type mismatch: {start.type} output to {end.type} input")
-    if value_type(start) == "String":
-        fail("String connections are not supported")
 
 
-def group_links(checked, maps: Sequence[tuple[float, float]] | None = None) -> list[Link]:
-    """Group checked connections by (source, target, type), in first-seen order.
+def _check_shapes(c: Connection, start_shape: tuple, end_shape: tuple, end_file: str) -> None:
+    if start_shape == end_shape:
+        return
+
+    def describe(shape: tuple) -> str:
+        return "a scalar" if not shape else f"an array of shape {list(shape)}"
+
+    raise IncompatibleConnectionError(
+        f"connection {c}: dimension mismatch: {c.start} is {describe(start_shape)}, "
+        f"{c.end} is {describe(end_shape)}", file=end_file, component=c.end_component,
+        variable=c.end_variable)
+
+
+def group_links(checked, maps: Sequence[tuple[float, float]] | None = None,
+                shapes: Sequence[Mapping[str, tuple]] | None = None) -> list[Link]:
+    """Group checked connections by (source, target, source type, target type), in first-seen order.
 
     ``maps`` gives ``(factor, offset)`` per checked connection (see
     :mod:`orchestration.unit_links`); a link keeps them only if one differs
-    from the identity.
+    from the identity.  ``shapes`` as in :func:`check_connections`.
     """
-    groups: dict[tuple[int, int, str], list] = {}
+    groups: dict[tuple[int, int, str, str], list] = {}
     for k, (i, start, j, end, c) in enumerate(checked):
         mapping = (1.0, 0.0) if maps is None else maps[k]
-        groups.setdefault((i, j, value_type(start)), []).append((start, end, c, mapping))
+        size = 1 if shapes is None else size_of(shapes[i].get(start.name, ()))
+        groups.setdefault((i, j, value_type(start), value_type(end)), []).append(
+            (start, end, c, mapping, size))
     links = []
-    for (i, j, kind), members in groups.items():
-        mapped = tuple(m for *_, m in members)
-        links.append(Link(i, j, kind, tuple(s.valueReference for s, *_ in members),
-                          tuple(e.valueReference for _, e, *_ in members),
-                          tuple(c for _, _, c, _ in members),
-                          None if all(m == (1.0, 0.0) for m in mapped) else mapped))
+    for (i, j, kind, target_kind), members in groups.items():
+        mapped = tuple(m[3] for m in members)
+        sizes = tuple(m[4] for m in members)
+        links.append(Link(i, j, kind, tuple(m[0].valueReference for m in members),
+                          tuple(m[1].valueReference for m in members),
+                          tuple(m[2] for m in members),
+                          None if all(m == (1.0, 0.0) for m in mapped) else mapped,
+                          None if target_kind == kind else target_kind,
+                          None if all(s == 1 for s in sizes) else sizes))
     return links
 
 

@@ -1,11 +1,17 @@
-"""One FMI 2.0 co-simulation FMU instance, driven through FMPy's ``FMU2Slave``.
+"""One FMI 2.0 or 3.0 co-simulation FMU instance, driven through FMPy's ``FMU2Slave`` /
+``FMU3Slave``.
 
 :class:`FMUInstance` wraps the low-level FMPy object: it installs a logger
 callback that keeps the FMU's recent log messages, turns every failed call
 into an :class:`~orchestration.errors.FMUCallError` that names the component,
-the call and the simulated time, and frees itself according to the FMI 2.0
+the call and the simulated time, and frees itself according to the FMI
 state machine (terminate + free when healthy, free only after an error,
 nothing after a fatal status).
+
+FMI 3.0 FMUs are instantiated for co-simulation without event mode, early
+return or intermediate update (``eventModeUsed = earlyReturnAllowed = false``,
+no intermediate-update callback): an FMU that declares clocks needs event
+mode and is refused when it is read (:func:`read_description`).
 """
 from __future__ import annotations
 
@@ -18,6 +24,7 @@ from pathlib import Path
 from . import fmilog
 from .archive import extract_archive
 from .errors import FMUCallError, FMUFatalError, SystemFileError, status_label
+from .fmitypes import is_fmi3, normalize_fmi3
 
 __all__ = ["read_description", "FMUInstance", "UnpackedFMU", "FMI_FATAL"]
 
@@ -26,7 +33,8 @@ FMI_FATAL = 4
 LOG_MESSAGES_KEPT = 50
 
 
-def read_description(path: Path, component: str | None = None, shown: Path | None = None):
+def read_description(path: Path, component: str | None = None, shown: Path | None = None, *,
+                     fmi3: bool = False):
     """Read and check the model description of a co-simulation FMU.
 
     Parameters
@@ -37,6 +45,11 @@ def read_description(path: Path, component: str | None = None, shown: Path | Non
         Component name, for error messages.
     shown : Path, optional
         The FMU file to name in messages when ``path`` is its extracted folder.
+    fmi3 : bool
+        Accept FMI 3.0 FMUs too (the master does; the container builder and
+        the third-party importers take FMI 2.0 only).  An FMI 3.0 FMU with
+        clocks is refused (they need event mode); its enumerations become
+        ``Int64`` variables (:func:`orchestration.fmitypes.normalize_fmi3`).
 
     Returns
     -------
@@ -45,7 +58,8 @@ def read_description(path: Path, component: str | None = None, shown: Path | Non
     Raises
     ------
     SystemFileError
-        If the file is missing, not an FMU, not FMI 2.0 or not co-simulation.
+        If the file is missing, not an FMU, of an unsupported FMI version,
+        not co-simulation, or an FMI 3.0 FMU with clocks.
     """
     from fmpy import read_model_description
 
@@ -61,13 +75,22 @@ def read_description(path: Path, component: str | None = None, shown: Path | Non
     except Exception as error:  # fmpy raises bare Exception on malformed XML
         raise SystemFileError(f"not a readable FMU: {' '.join(str(error).split())}", file=name,
                               component=component) from None
-    if description.fmiVersion != "2.0":
-        raise SystemFileError(f"FMI version {description.fmiVersion} is not supported "
-                              "(FMI 2.0 co-simulation only)", file=name,
-                              component=component)
+    version = description.fmiVersion
+    if version != "2.0" and not (fmi3 and is_fmi3(description)):
+        supported = "FMI 2.0 and 3.0 co-simulation only" if fmi3 else "FMI 2.0 co-simulation only"
+        raise SystemFileError(f"FMI version {version} is not supported ({supported})",
+                              file=name, component=component)
     if description.coSimulation is None:
         raise SystemFileError("the FMU does not support co-simulation", file=name,
                               component=component)
+    if is_fmi3(description):
+        clocks = [v.name for v in description.modelVariables
+                  if v.type == "Clock" or getattr(v, "clocks", None)]
+        if clocks:
+            raise SystemFileError(f"FMI 3.0 clocks are not supported (they need event mode, "
+                                  f"which the master does not drive): {', '.join(clocks[:5])}",
+                                  file=name, component=component)
+        normalize_fmi3(description)
     return description
 
 
@@ -95,11 +118,13 @@ class UnpackedFMU:
         self.unzipdir = str(extract_archive(self.path, kind="fmu", component=component))
         self._finalizer = weakref.finalize(self, shutil.rmtree, self.unzipdir, True)
         try:
-            self.description = read_description(Path(self.unzipdir), component, shown=self.path)
+            self.description = read_description(Path(self.unzipdir), component, shown=self.path,
+                                                fmi3=True)
         except BaseException:
             self.remove()
             raise
         self.variables = {v.name: v for v in self.description.modelVariables}
+        self.fmi3 = is_fmi3(self.description)
 
     def remove(self) -> None:
         """Delete the extracted folder (also done when the object is garbage collected)."""
@@ -137,27 +162,73 @@ class FMUInstance:
         self.messages.append(f"[{label}]{f' {category}' if category else ''} {text}")
 
     # life cycle -----------------------------------------------------------
+    @property
+    def fmi3(self) -> bool:
+        """True for an FMI 3.0 FMU."""
+        return self.unpacked.fmi3
+
     def instantiate(self) -> None:
-        """Load the shared library and call ``fmi2Instantiate``."""
+        """Load the shared library and call ``fmi2Instantiate`` / ``fmi3InstantiateCoSimulation``."""
         from fmpy.fmi2 import FMU2Slave
+        from fmpy.fmi3 import FMU3Slave
 
         description = self.description
         self.instance_name = fmilog.register(self.name, self._log)
         try:
-            self.slave = FMU2Slave(guid=description.guid, unzipDirectory=self.unpacked.unzipdir,
-                                   modelIdentifier=description.coSimulation.modelIdentifier,
-                                   instanceName=self.instance_name)
+            self.slave = (FMU3Slave if self.fmi3 else FMU2Slave)(
+                guid=description.guid, unzipDirectory=self.unpacked.unzipdir,
+                modelIdentifier=description.coSimulation.modelIdentifier,
+                instanceName=self.instance_name)
         except Exception as error:  # fmpy raises bare Exception when the library is missing
             raise SystemFileError(f"cannot load the FMU's shared library: {error}",
                                   file=str(self.unpacked.path), component=self.name) from None
         self._state = "library"
         try:
-            self.slave.instantiate(callbacks=fmilog.callbacks(), loggingOn=self._logging_on)
+            if self.fmi3:
+                # FMI 3.0 passes the formatted message (no variadic proxy): one callback per instance
+                self.slave.instantiate(loggingOn=self._logging_on, logMessage=self._log3)
+            else:
+                self.slave.instantiate(callbacks=fmilog.callbacks(), loggingOn=self._logging_on)
         except Exception:  # fmpy raises bare Exception when fmi2Instantiate returns NULL
-            self._raise("fmi2Instantiate", FMI_ERROR)
+            self._raise("fmi3InstantiateCoSimulation" if self.fmi3 else "fmi2Instantiate", FMI_ERROR)
         self._state = "instantiated"
         if self._logging_on:
             self._restrict_logging()
+
+    def _log3(self, environment, status, category, message) -> None:
+        """``fmi3LogMessageCallback`` of this instance."""
+        self._log(status, category.decode("utf-8", "replace") if category else "",
+                  message.decode("utf-8", "replace") if message else "")
+
+    def setup(self, start: float, structural: list[tuple[str, int, list]],
+              others: list[tuple[str, int, list]]) -> None:
+        """Apply start values and enter Initialization Mode at ``start`` (s).
+
+        Parameters
+        ----------
+        structural, others : list of (kind, value reference, values)
+            Start values (``values`` a list, one element per array element).
+            FMI 3.0: structural parameters are set in Configuration Mode,
+            the others in Instantiated, then ``fmi3EnterInitializationMode``
+            (no tolerance, no stop time).  FMI 2.0: ``fmi2SetupExperiment``
+            (no stop time), every start value, ``fmi2EnterInitializationMode``.
+        """
+        if self.fmi3:
+            if structural:
+                self.call("enterConfigurationMode")
+                for kind, vr, values in structural:
+                    self.call(f"set{kind}", [vr], values)
+                self.call("exitConfigurationMode")
+            for kind, vr, values in others:
+                self.call(f"set{kind}", [vr], values)
+            self.call("enterInitializationMode", None, start, None)
+            return
+        # no stop time: FMUs such as OpenModelica's refuse a doStep whose t + h passes a
+        # defined stop time by one rounding error
+        self.call("setupExperiment", None, start, None)
+        for kind, vr, values in structural + others:
+            self.call(f"set{kind}", [vr], values)
+        self.call("enterInitializationMode")
 
     def _restrict_logging(self) -> None:
         """Keep only the ``logStatus*`` categories when the FMU declares them.

@@ -1,4 +1,13 @@
-"""Fixed-step co-simulation master for FMI 2.0 co-simulation FMUs.
+"""Fixed-step co-simulation master for FMI 2.0 and FMI 3.0 co-simulation FMUs.
+
+FMI 3.0 FMUs run beside FMI 2.0 ones in the same system: scalars of every
+numeric type, Boolean and String, and arrays (``<Dimension>``, fixed or
+set by a structural parameter) moved by one ``fmi3Get*``/``fmi3Set*`` call
+per link; structural parameters given start values are set in Configuration
+Mode.  No event mode, clocks or intermediate update (see
+:func:`orchestration.fmu.read_description`); an FMU that sets
+``terminateSimulation`` in ``fmi3DoStep`` ends the run after that step
+(``result.meta['terminated_by']``).
 
 Algorithm (per communication step ``[t, t + h]``, ``t = t0 + n h``):
 
@@ -18,7 +27,9 @@ transformation (:mod:`orchestration.unit_links`), if it has one.
 Initialisation: ``fmi2Instantiate``, ``fmi2SetupExperiment`` (start time, no
 stop time: some FMUs, OpenModelica's among them, refuse a step that passes a
 defined stop time by a rounding error), start values,
-``fmi2EnterInitializationMode`` for every component; then, in stepping order,
+``fmi2EnterInitializationMode`` for every component (FMI 3.0:
+``fmi3InstantiateCoSimulation``, structural parameters in Configuration Mode,
+the other start values, ``fmi3EnterInitializationMode`` with the start time); then, in stepping order,
 each component's inputs are set from its sources' outputs and it calls
 ``fmi2ExitInitializationMode`` (so an FMU initialises from the values its
 sources start with, e.g. an IMU from the chamber's start temperature; sources
@@ -48,12 +59,14 @@ import numpy as np
 from . import interrupt
 from .coupling import (algebraic_loops, check_connections, check_connector_types, find_variable,
                        gauss_seidel_order,
-                       group_links, output_dependencies, value_type, warn_unconnected)
+                       group_links, output_dependencies, warn_unconnected)
 from .errors import (DefaultStepWarning, OrchestrationError, ScheduleError, StartValueError,
                      UnknownComponentError)
+from .fmitypes import NUMPY_TYPES, c_type, family, size_of, value_type, variable_shape
 from .fmu import FMUInstance, UnpackedFMU
 from .pacing import Progress, RealTimePacer
-from .rawcalls import FMI_WARNING, NO_SET_PRIOR, count, do_step, getter, handle, setter, value_buffer, vr_array
+from .rawcalls import (FMI_WARNING, DoStep3Flags, do_step, getter, handle, setter, step_args,
+                       value_args, value_buffer, vr_array)
 from .recorder import Recorder, ResultArray, select_variables
 from .schedule import StepSpec, make_schedule
 from .ssp_reader import ANNOTATION_TYPE, read_system
@@ -64,7 +77,7 @@ __all__ = ["Master", "simulate_system", "SCHEMES", "StepCallback"]
 
 SCHEMES = ("gauss-seidel", "jacobi")
 StepCallback = Callable[[float, "Master"], bool | None]
-_SETTABLE_CAUSALITIES = ("parameter", "input")
+_SETTABLE_CAUSALITIES = ("parameter", "structuralParameter", "input")
 MAX_RECORD_BYTES = 2**31  # recorder storage preallocated for one run (rows x values x 8 bytes)
 TEST_SIGNAL_ENV = "ORCHESTRATION_TEST_SIGNAL_AFTER"  # tests only: "N:SIGTERM" raises it after step N
 
@@ -94,34 +107,53 @@ def _check_scheme(scheme: str) -> str:
     return normalized
 
 
-def coerce_value(variable, value, *, component: str, file: str | None) -> StartValue:
-    """Convert ``value`` to the python type matching the FMI type of ``variable``."""
+def coerce_value(variable, value, *, component: str, file: str | None,
+                 shape: tuple[int, ...] = ()) -> StartValue | list:
+    """Convert ``value`` to the python type matching the FMI type of ``variable``.
+
+    For an FMI 3.0 array of ``shape`` (not ``()``), ``value`` is a sequence or
+    array of that shape (or flat, with as many elements) and a flat list of
+    converted elements (row-major) is returned.  Integers must fit the
+    variable's type (``UInt64`` takes no negative value).
+    """
+    if shape:
+        elements = np.asarray(value, dtype=object)
+        if elements.shape not in (shape, (size_of(shape),)):
+            raise StartValueError(f"an array of shape {list(shape)} needs {size_of(shape)} values, "
+                                  f"got {value!r}", file=file, component=component,
+                                  variable=variable.name)
+        return [coerce_value(variable, v, component=component, file=file)
+                for v in elements.ravel().tolist()]
     kind = value_type(variable)
+    kind_family = family(kind)
 
     def fail() -> None:
         raise StartValueError(f"{value!r} is not a valid {variable.type} value",
                               file=file, component=component, variable=variable.name)
 
-    if kind == "Real":
+    if kind_family == "float":
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             fail()
         return float(value)
-    if kind == "Integer":
+    if kind_family == "integer":
         if isinstance(value, bool) or not (isinstance(value, int) or
                                            (isinstance(value, float) and value.is_integer())):
             fail()
+        limits = np.iinfo(NUMPY_TYPES[kind])
+        if not limits.min <= int(value) <= limits.max:
+            fail()
         return int(value)
-    if kind == "Boolean":
+    if kind_family == "boolean":
         if not isinstance(value, (bool, int)) or value not in (0, 1):
             fail()
         return bool(value)
-    if not isinstance(value, str):
+    if kind_family != "string" or not isinstance(value, str):
         fail()
     return value
 
 
 class Master:
-    """Run a system of FMI 2.0 co-simulation FMUs.
+    """Run a system of FMI 2.0 and FMI 3.0 co-simulation FMUs.
 
     Parameters
     ----------
@@ -158,6 +190,7 @@ class Master:
         self.logging_on = logging_on
         self.instances: list[FMUInstance] = []
         self.time: float | None = None
+        self.terminated_by: str | None = None
         self._unpacked: dict[Path, UnpackedFMU] = {}
         try:
             self._prepare(record)
@@ -180,12 +213,13 @@ class Master:
         self.files = [str(u.path) for u in self.units]
         self.variables = [u.variables for u in self.units]
         check_connector_types(system.components, self.variables, self.files, file)
+        self.shapes: list[dict[str, tuple[int, ...]]] = []
         self.start_values = [self._check_start_values(i) for i in range(len(self.names))]
         checked = check_connections(system.connections, self.names, self.variables,
-                                    self.files, file)
+                                    self.files, file, self.shapes)
         descriptions = [u.description for u in self.units]
         maps = connection_maps(checked, descriptions, self.files, system.units, file)
-        self.links = group_links(checked, maps)
+        self.links = group_links(checked, maps, self.shapes)
         self.dependencies = [output_dependencies(d) for d in descriptions]
         if self.scheme == "gauss-seidel":
             self.order, self.broken = gauss_seidel_order(self.names, self.links,
@@ -198,9 +232,33 @@ class Master:
         self.selection = select_variables(self.names, self.variables, record, self.files)
 
     def _check_start_values(self, i: int) -> dict[str, tuple[object, StartValue]]:
+        """Checked start values of component ``i``; appends its array shapes to ``self.shapes``.
+
+        Structural parameters are converted first: their values set the
+        shapes of the arrays whose start values follow.
+        """
+        component = self.system.components[i]
+        variables = self.variables[i]
+        structural = {name: value for name, value in component.parameters.items()
+                      if name in variables and variables[name].causality == "structuralParameter"}
+        starts = self._checked_starts(i, structural, {})
+        shapes = {}
+        for var in variables.values():
+            if getattr(var, "dimensions", None):
+                try:
+                    shapes[var.name] = variable_shape(var, {n: v for n, (_, v) in starts.items()})
+                except ValueError as error:
+                    raise StartValueError(str(error), file=self.files[i], component=component.name,
+                                          variable=var.name) from None
+        self.shapes.append(shapes)
+        others = {name: value for name, value in component.parameters.items()
+                  if name not in structural}
+        return {**starts, **self._checked_starts(i, others, shapes)}
+
+    def _checked_starts(self, i: int, values: dict, shapes: dict) -> dict:
         component = self.system.components[i]
         checked = {}
-        for name, value in component.parameters.items():
+        for name, value in values.items():
             var = find_variable(self.variables[i], name, component=component.name,
                                 file=self.files[i], role="variable (start value)")
             settable = (var.causality in _SETTABLE_CAUSALITIES
@@ -211,7 +269,8 @@ class Master:
                     f"cannot set a start value on a variable with causality "
                     f"'{var.causality}' and variability '{var.variability}'",
                     file=self.files[i], component=component.name, variable=name)
-            value = coerce_value(var, value, component=component.name, file=self.files[i])
+            value = coerce_value(var, value, component=component.name, file=self.files[i],
+                                 shape=shapes.get(name, ()))
             if name in component.parameter_units:
                 value = self._convert_start(i, var, value, component.parameter_units[name])
             checked[name] = (var, value)
@@ -235,13 +294,23 @@ class Master:
                                      "a run (from a step callback)")
         return self.instances[i], var
 
-    def get(self, qualified: str) -> StartValue:
-        """Current value of ``component.variable`` (during a run, e.g. in a callback)."""
+    def get(self, qualified: str) -> StartValue | np.ndarray:
+        """Current value of ``component.variable`` (during a run, e.g. in a callback).
+
+        An FMI 3.0 array comes as a numpy array of its shape.
+        """
         instance, var = self._resolve(qualified)
         kind = value_type(var)
-        value = instance.call(f"get{kind}", [var.valueReference])[0]
+        shape = self.shapes[self.instances.index(instance)].get(var.name, ())
+        if instance.fmi3:
+            values = instance.call(f"get{kind}", [var.valueReference], size_of(shape))
+        else:
+            values = instance.call(f"get{kind}", [var.valueReference])
+        if shape:
+            return np.array(values, dtype=NUMPY_TYPES[kind]).reshape(shape)
+        value = values[0]
         if kind == "String":
-            return value.decode("utf-8")
+            return value.decode("utf-8") if isinstance(value, bytes) else value
         return bool(value) if kind == "Boolean" else value
 
     def set(self, qualified: str, value: StartValue) -> None:
@@ -252,9 +321,11 @@ class Master:
             raise StartValueError("only inputs and tunable parameters can be set during a "
                                   "run", file=str(instance.unpacked.path),
                                   component=instance.name, variable=var.name)
+        shape = self.shapes[self.instances.index(instance)].get(var.name, ())
         value = coerce_value(var, value, component=instance.name,
-                             file=str(instance.unpacked.path))
-        instance.call(f"set{value_type(var)}", [var.valueReference], [value])
+                             file=str(instance.unpacked.path), shape=shape)
+        instance.call(f"set{value_type(var)}", [var.valueReference],
+                      value if shape else [value])
 
     # run ----------------------------------------------------------------------
     def simulate(self, stop_time: float | None = None, step_size: StepSpec | None = None, *,
@@ -317,10 +388,11 @@ class Master:
                                 names=("output_every",))
         self._check_variable_steps(segments)
         total = sum(s.count for s in segments)
-        record_bytes = (total // output_every + 3) * (1 + len(self.selection)) * 8
+        columns = 1 + sum(size_of(self.shapes[i].get(var.name, ())) for i, var in self.selection)
+        record_bytes = (total // output_every + 3) * columns * 8
         if record_bytes > MAX_RECORD_BYTES:
             raise ScheduleError(f"recording {total // output_every + 1} rows of "
-                                f"{1 + len(self.selection)} values needs {record_bytes:.3g} bytes, "
+                                f"{columns} values needs {record_bytes:.3g} bytes, "
                                 f"more than the limit of {MAX_RECORD_BYTES} bytes (MAX_RECORD_BYTES); "
                                 "record fewer rows or variables",
                                 names=("stop_time", "step_size", "output_every"))
@@ -333,7 +405,7 @@ class Master:
         try:
             self._initialize(start)
             recorder = Recorder([inst.slave for inst in self.instances], self.names,
-                                self.selection, total // output_every + 3)
+                                self.selection, total // output_every + 3, self.shapes)
             self._sample(recorder, start)
             if pacer is not None:
                 pacer.start()  # the clock starts once every FMU is loaded and initialised
@@ -349,6 +421,8 @@ class Master:
             self._release()
         meta["steps"] = steps
         meta["stopped_early"] = steps < total
+        if self.terminated_by is not None:
+            meta["terminated_by"] = self.terminated_by
         meta["end_time"] = float(recorder.time[recorder.count - 1])
         if pacer is not None:
             meta["realtime"] = pacer.report()
@@ -416,19 +490,19 @@ class Master:
 
     def _initialize(self, start: float) -> None:
         self.time = None
+        self.terminated_by = None
         for name, unit in zip(self.names, self.units):
             interrupt.check()
             instance = FMUInstance(name, unit, logging_on=self.logging_on)
             self.instances.append(instance)
             instance.instantiate()
         for instance, values in zip(self.instances, self.start_values):
-            # no stop time: FMUs such as OpenModelica's refuse a doStep whose t + h passes a
-            # defined stop time by one rounding error
-            instance.call("setupExperiment", None, start, None)
-            for var, value in values.values():
-                instance.call(f"set{value_type(var)}", [var.valueReference], [value])
-        for instance in self.instances:
-            instance.call("enterInitializationMode")
+            settings = [(var.causality == "structuralParameter",
+                         (value_type(var), var.valueReference,
+                          value if isinstance(value, list) else [value]))
+                        for var, value in values.values()]
+            instance.setup(start, [s for structural, s in settings if structural],
+                           [s for structural, s in settings if not structural])
         self._build_plan()
         # inputs get their sources' initial outputs while still in Initialization Mode (FMI 2.0
         # allows setting inputs there), each component leaving it after its sources did
@@ -445,30 +519,48 @@ class Master:
         """Prepare function pointers, buffers and conversions for the inner loop.
 
         ``self._plan`` is a list of stages ``(gets, sets, steps)``: every get
-        of a stage is made (``fmi2Get*``, then converted) before any set
-        (``fmi2Set*``), then the stage's components are stepped.  Gauss-Seidel
-        has one stage per component in stepping order; Jacobi one stage with
-        every transfer and every component.  The calls' arguments are ctypes
-        objects made here (:mod:`orchestration.rawcalls`).
+        of a stage is made (``fmi2Get*``/``fmi3Get*``, then converted, then
+        cast where the two ends' C types differ) before any set
+        (``fmi2Set*``/``fmi3Set*``), then the stage's components are stepped.
+        Gauss-Seidel has one stage per component in stepping order; Jacobi one
+        stage with every transfer and every component.  The calls' arguments
+        are ctypes objects made here (:mod:`orchestration.rawcalls`).
         """
         slaves = [inst.slave for inst in self.instances]
         handles = [handle(s) for s in slaves]
+        fmi3 = [inst.fmi3 for inst in self.instances]
         self._incoming = {i: ([], []) for i in range(len(slaves))}
         for link in self.links:
-            n = len(link.source_vrs)
-            buffer = value_buffer(link.kind, n)
+            n = link.values
+            source, target = link.source, link.target
+            target_kind = link.target_kind or link.kind
+            buffer = value_buffer(link.kind, n, fmi3[source])
             convert = None
             if link.maps is not None:
                 view = np.ctypeslib.as_array(buffer)
-                factors = np.array([m[0] for m in link.maps])
-                offsets = np.array([m[1] for m in link.maps])
+                sizes = link.sizes or [1] * len(link.maps)
+                factors = np.repeat([m[0] for m in link.maps], sizes)
+                offsets = np.repeat([m[1] for m in link.maps], sizes)
                 convert = (view, factors, offsets)
-            gets, sets = self._incoming[link.target]
-            gets.append((getter(slaves[link.source], link.kind), handles[link.source], vr_array(link.source_vrs),
-                         count(n), buffer, convert, link.source, f"fmi2Get{link.kind}"))
-            sets.append((setter(slaves[link.target], link.kind), handles[link.target], vr_array(link.target_vrs),
-                         count(n), buffer, link.target, f"fmi2Set{link.kind}"))
-        steps = [(do_step(s), handles[i], i) for i, s in enumerate(slaves)]
+            gets, sets = self._incoming[target]
+            gets.append((getter(slaves[source], link.kind),
+                         value_args(slaves[source], handles[source], vr_array(link.source_vrs),
+                                    buffer, n),
+                         convert, source, f"{_api(fmi3[source])}Get{link.kind}"))
+            into = buffer
+            if c_type(target_kind, fmi3[target]) != c_type(link.kind, fmi3[source]):
+                into = value_buffer(target_kind, n, fmi3[target])
+                gets.append((_caster(np.ctypeslib.as_array(buffer), np.ctypeslib.as_array(into)),
+                             (), None, target, f"cast {link.kind} to {target_kind}"))
+            sets.append((setter(slaves[target], target_kind),
+                         value_args(slaves[target], handles[target], vr_array(link.target_vrs),
+                                    into, n),
+                         target, f"{_api(fmi3[target])}Set{target_kind}"))
+        self._c_t, self._c_h = c_double(), c_double()
+        flags = [DoStep3Flags() if f else None for f in fmi3]
+        self._terminate_flags = [(f.terminate, i) for i, f in enumerate(flags) if f is not None]
+        steps = [(do_step(s), step_args(s, handles[i], self._c_t, self._c_h, flags[i]), i,
+                  f"{_api(fmi3[i])}DoStep") for i, s in enumerate(slaves)]
         if self.scheme == "gauss-seidel":
             self._plan = [(*self._incoming[i], [steps[i]]) for i in self.order]
         else:
@@ -477,28 +569,24 @@ class Master:
             self._plan = [(gets, sets, [steps[i] for i in self.order])]
         # the inner loop's calls in order, each (function, arguments, component, call name, conversion);
         # doStep's time and step are the c_doubles self._c_t and self._c_h, updated by the loop
-        self._c_t, self._c_h = c_double(), c_double()
         self._ops = []
         for gets, sets, stage_steps in self._plan:
-            self._ops += [(get, (src, vrs, n, buffer), index, call, convert)
-                          for get, src, vrs, n, buffer, convert, index, call in gets]
-            self._ops += [(set_, (dst, vrs, n, buffer), index, call, None)
-                          for set_, dst, vrs, n, buffer, index, call in sets]
-            self._ops += [(step, (component, self._c_t, self._c_h, NO_SET_PRIOR), index, "fmi2DoStep", None)
-                          for step, component, index in stage_steps]
+            self._ops += [(get, args, index, call, convert) for get, args, convert, index, call in gets]
+            self._ops += [(set_, args, index, call, None) for set_, args, index, call in sets]
+            self._ops += [(step, args, index, call, None) for step, args, index, call in stage_steps]
 
     def _transfer(self, transfers, time: float) -> None:
-        """Make every get of ``transfers = (gets, sets)`` (and convert), then every set."""
+        """Make every get of ``transfers = (gets, sets)`` (and convert, cast), then every set."""
         gets, sets = transfers[0], transfers[1]
-        for get, src, vrs, n, buffer, convert, index, call in gets:
-            if (status := get(src, vrs, n, buffer)) > FMI_WARNING:
+        for get, args, convert, index, call in gets:
+            if (status := get(*args)) > FMI_WARNING:
                 self._fail(index, call, status, time)
             if convert is not None:
                 view, factors, offsets = convert
                 np.multiply(view, factors, out=view)
                 np.add(view, offsets, out=view)
-        for set_, dst, vrs, n, buffer, index, call in sets:
-            if (status := set_(dst, vrs, n, buffer)) > FMI_WARNING:
+        for set_, args, index, call in sets:
+            if (status := set_(*args)) > FMI_WARNING:
                 self._fail(index, call, status, time)
 
     def _fail(self, index: int, call: str, status: int, time: float) -> None:
@@ -510,7 +598,7 @@ class Master:
         block = recorder.sample(time)
         if block >= 0:
             index, kind = recorder.block_owner(block)
-            self._fail(index, f"fmi2Get{kind}", 3, time)
+            self._fail(index, f"{_api(self.instances[index].fmi3)}Get{kind}", 3, time)
 
     def _loop(self, segments, total: int, recorder: Recorder, every: int, bar: Progress,
               pacer: RealTimePacer | None, callback: StepCallback | None) -> int:
@@ -521,6 +609,7 @@ class Master:
         done = 0
         next_record = min(every, total)
         next_tick = bar.next_tick
+        terminate = self._terminate_flags
         for segment in segments:
             begin, h, count_ = segment.begin, segment.step, segment.count
             c_h.value = h
@@ -537,6 +626,10 @@ class Master:
                 done += 1
                 t_end = segment.end if j == count_ - 1 else begin + (j + 1) * h
                 self.time = t_end
+                if terminate and self._terminated(terminate):
+                    if recorder.time[recorder.count - 1] != t_end:
+                        self._sample(recorder, t_end)
+                    return done
                 if done == next_record:
                     if sample(t_end) >= 0:
                         self._sample(recorder, t_end)
@@ -553,6 +646,14 @@ class Master:
                         self._sample(recorder, t_end)
                     return done
         return done
+
+    def _terminated(self, flags) -> bool:
+        """True (and ``self.terminated_by`` set) if an FMI 3.0 FMU's last fmi3DoStep asked to end."""
+        for flag, index in flags:
+            if flag.value:
+                self.terminated_by = self.names[index]
+                return True
+        return False
 
     def _release(self) -> None:
         """Terminate and free every instance as the FMI state machine allows."""
@@ -580,6 +681,21 @@ class Master:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _api(fmi3: bool) -> str:
+    """The C function prefix, for call names in messages."""
+    return "fmi3" if fmi3 else "fmi2"
+
+
+def _caster(source: np.ndarray, target: np.ndarray):
+    """A call for the plan copying ``source`` into ``target`` with a C cast; returns status 0."""
+
+    def cast() -> int:
+        np.copyto(target, source, casting="unsafe")
+        return 0
+
+    return cast
 
 
 def simulate_system(system: System | str | Path, stop_time: float | None = None,

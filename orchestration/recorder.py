@@ -2,7 +2,11 @@
 
 The result has ``time`` (s) as its first field and one field per recorded
 variable, named ``component.variable`` (float64 for Real, int32 for Integer
-and Enumeration, bool for Boolean).  It is a :class:`ResultArray`, a plain
+and Enumeration, bool for Boolean; an FMI 3.0 variable gets the numpy type
+of its own type, ``Float32`` float32 ... ``UInt64`` uint64).  An FMI 3.0
+array gets one field per element, ``component.variable[1]`` ..
+``component.variable[n]`` (``[i,j]`` for more dimensions, row-major), all
+read by the same ``fmi3Get*`` call.  It is a :class:`ResultArray`, a plain
 structured ``ndarray`` that also carries a ``meta`` dictionary (coupling
 scheme, stepping order, step, ...).
 """
@@ -16,13 +20,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .coupling import VALUE_TYPES
 from .errors import UnknownVariableError
-from .rawcalls import C_TYPES, count, getter, handle, value_buffer, vr_array
+from .fmitypes import NUMPY_TYPES, RECORDABLE, VALUE_TYPES, c_type, element_names, size_of
+from .rawcalls import getter, handle, is_fmi3_slave, value_args, value_buffer, vr_array
 
 __all__ = ["ResultArray", "Recorder", "select_variables", "write_csv", "NUMPY_TYPES"]
 
-NUMPY_TYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.bool_}
+
+def _recordable(var) -> bool:
+    return VALUE_TYPES.get(var.type) in RECORDABLE
 
 
 class ResultArray(np.ndarray):
@@ -68,7 +74,7 @@ def select_variables(names: Sequence[str], variables: Sequence[dict],
     seen = set()
 
     def add(i: int, var) -> None:
-        if (i, var.name) not in seen and VALUE_TYPES.get(var.type, "String") != "String":
+        if (i, var.name) not in seen and _recordable(var):
             seen.add((i, var.name))
             chosen.append((i, var))
 
@@ -81,7 +87,7 @@ def select_variables(names: Sequence[str], variables: Sequence[dict],
     for pattern in patterns:
         matched = [(i, var) for i, name in enumerate(names) for var in variables[i].values()
                    if fnmatch.fnmatchcase(f"{name}.{var.name}", pattern)
-                   and VALUE_TYPES.get(var.type, "String") != "String"]
+                   and _recordable(var)]
         if not matched:
             component, _, variable = pattern.partition(".")
             file = files[names.index(component)] if component in names else None
@@ -94,22 +100,25 @@ def select_variables(names: Sequence[str], variables: Sequence[dict],
 
 
 class Recorder:
-    """Preallocated storage filled by one ``fmi2Get*`` call per component and type.
+    """Preallocated storage filled by one ``fmi2Get*`` / ``fmi3Get*`` call per component and type.
 
     Parameters
     ----------
     slaves : sequence
-        FMPy ``FMU2Slave`` per component (instantiated).
+        FMPy ``FMU2Slave`` or ``FMU3Slave`` per component (instantiated).
     names : sequence of str
         Component names.
     selection : list of (int, ModelVariable)
         From :func:`select_variables`.
     rows : int
         Number of rows to preallocate.
+    shapes : sequence of dict, optional
+        Per component, ``{name: shape}`` of its FMI 3.0 array variables.
     """
 
     def __init__(self, slaves: Sequence, names: Sequence[str],
-                 selection: list[tuple[int, object]], rows: int):
+                 selection: list[tuple[int, object]], rows: int,
+                 shapes: Sequence[dict] | None = None):
         self.names = list(names)
         self.selection = selection
         self.time = np.empty(rows)
@@ -120,26 +129,35 @@ class Recorder:
         groups: dict[tuple[int, str], list] = {}
         for i, var in selection:
             groups.setdefault((i, VALUE_TYPES[var.type]), []).append(var)
+        def shape(i: int, var) -> tuple:
+            return () if shapes is None else shapes[i].get(var.name, ())
+
+        position = {}
         for (i, kind), members in groups.items():
-            n = len(members)
-            storage = value_buffer(kind, rows * n)  # fmi2Get* writes rows in place
+            fmi3 = is_fmi3_slave(slaves[i])
+            n = 0
+            for v in members:
+                position[(i, v.name)] = (len(self.blocks), n)
+                n += size_of(shape(i, v))
+            storage = value_buffer(kind, rows * n, fmi3)  # fmi2Get*/fmi3Get* write rows in place
             data = np.ctypeslib.as_array(storage).reshape(rows, n)
             self.storage.append(storage)
-            self.blocks.append((getter(slaves[i], kind), handle(slaves[i]),
-                                vr_array(v.valueReference for v in members), count(n),
-                                ctypes.addressof(storage),
-                                n * ctypes.sizeof(C_TYPES[kind]), data, i, kind, ctypes.c_void_p()))
-        # per block: (function, its arguments (the last one the row's address), that c_void_p,
-        # the storage address, bytes per row, block index)
-        self._calls = [(get, (component, vrs, n, pointer), pointer, address, row_bytes, b)
-                       for b, (get, component, vrs, n, address, row_bytes, _, _, _, pointer)
+            pointer = ctypes.c_void_p()
+            self.blocks.append((getter(slaves[i], kind),
+                                value_args(slaves[i], handle(slaves[i]),
+                                           vr_array(v.valueReference for v in members), pointer, n),
+                                ctypes.addressof(storage), n * ctypes.sizeof(c_type(kind, fmi3)),
+                                data, i, kind, pointer))
+        # per block: (function, its arguments (the values argument is that c_void_p), the
+        # c_void_p, the storage address, bytes per row, block index)
+        self._calls = [(get, args, pointer, address, row_bytes, b)
+                       for b, (get, args, address, row_bytes, _, _, _, pointer)
                        in enumerate(self.blocks)]
         self._times = memoryview(self.time)  # item assignment without numpy's overhead
-        position = {(block[7], v.name): (b, k) for b, block in enumerate(self.blocks)
-                    for k, v in enumerate(groups[(block[7], block[8])])}
         for i, var in selection:
             b, k = position[(i, var.name)]
-            self.columns.append((f"{names[i]}.{var.name}", VALUE_TYPES[var.type], b, k))
+            for offset, field in enumerate(element_names(f"{names[i]}.{var.name}", shape(i, var))):
+                self.columns.append((field, VALUE_TYPES[var.type], b, k + offset))
 
     def sample(self, time: float) -> int:
         """Store the current values as a row at ``time``; return a failing block or -1.
@@ -158,7 +176,7 @@ class Recorder:
 
     def block_owner(self, block: int) -> tuple[int, str]:
         """Component index and kind of a block (for error reports)."""
-        return self.blocks[block][7], self.blocks[block][8]
+        return self.blocks[block][5], self.blocks[block][6]
 
     def result(self, meta: dict) -> ResultArray:
         """Assemble the structured array of the rows recorded so far."""
@@ -168,7 +186,7 @@ class Recorder:
         out = np.empty(n, dtype=dtype)
         out["time"] = self.time[:n]
         for field, _, b, k in self.columns:
-            out[field] = self.blocks[b][6][:n, k]
+            out[field] = self.blocks[b][4][:n, k]
         return ResultArray(out, meta)
 
 

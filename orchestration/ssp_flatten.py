@@ -81,7 +81,7 @@ class _Flattener:
                                   file=self.file, component=name)
         if element.get("implementation") == "ModelExchange":
             raise SystemFileError("implementation 'ModelExchange' is not supported "
-                                  "(FMI 2.0 co-simulation only)", file=self.file,
+                                  "(FMI 2.0 and 3.0 co-simulation only)", file=self.file,
                                   component=name)
         self._connectors(element, name)
         values, units = self.read_bindings(element, name)

@@ -35,7 +35,10 @@ _SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 _SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 _NSMAP = {"ssc": _SSC, "ssd": _SSD, "ssv": _SSV}
 _SSP_TYPES = {"Real": "Real", "Integer": "Integer", "Enumeration": "Integer",
-              "Boolean": "Boolean", "String": "String"}
+              "Boolean": "Boolean", "String": "String",
+              # FMI 3.0 types as the SSP 1.0 type of their family
+              "Float32": "Real", "Float64": "Real", **{t: "Integer" for t in (
+                  "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64")}}
 
 
 def _tag(namespace: str, name: str) -> str:
@@ -122,7 +125,7 @@ def _connector_units(system: System) -> dict[tuple[str, str], str]:
 
 def _component_element(parent, system: System, component, source: str,
                        connector_units: dict) -> None:
-    description = read_description(system.fmu_path(component), component.name)
+    description = read_description(system.fmu_path(component), component.name, fmi3=True)
     variables = {v.name: v for v in description.modelVariables}
     xcomponent = etree.SubElement(parent, _tag(_SSD, "Component"), name=component.name,
                                   type="application/x-fmu-sharedlibrary", source=source)
@@ -149,6 +152,10 @@ def _component_element(parent, system: System, component, source: str,
                             name=START_VALUES_SET)
     parameters = etree.SubElement(pset, _tag(_SSV, "Parameters"))
     for name, value in component.parameters.items():
+        if isinstance(value, (list, tuple)) or getattr(value, "ndim", 0) > 0:
+            raise SystemFileError(f"start value {value!r} cannot be written to SSP 1.0 (scalars "
+                                  "only; an FMI 3.0 array takes its start values in python)",
+                                  component=component.name, variable=name)
         variable = variables.get(name)
         type_name = _SSP_TYPES.get(variable.type, "Real") if variable is not None else \
             _python_type(value)

@@ -14,6 +14,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from .errors import IncompatibleConnectionError, StartValueError
+from .fmitypes import VALUE_TYPES, family
 from .system import Hop
 from .units import IDENTITY, Unit, compose, conversion, units_of_description, variable_unit
 
@@ -94,7 +95,7 @@ def connection_maps(checked, descriptions: Sequence, files: Sequence[str],
                 mapping = compose(mapping, step)
             mapping = compose(mapping, (hop.factor, hop.offset))
             current = target if target is not None else current
-        if mapping != IDENTITY and start.type != "Real":
+        if mapping != IDENTITY and family(VALUE_TYPES[start.type]) != "float":
             fail(f"a linear transformation on a {start.type} connection is not supported")
         maps.append(mapping)
     return maps
@@ -129,7 +130,7 @@ def start_in_variable_unit(value: float, unit_name: str, variable, description, 
     component and variable if the units are incompatible.
     """
     target_name = variable_unit(variable)
-    if target_name is None or variable.type != "Real":
+    if target_name is None or family(VALUE_TYPES[variable.type]) != "float":
         return value
     source = system_units.get(unit_name, Unit(unit_name))
     target = units_of_description(description).get(target_name, system_units.get(target_name, Unit(target_name)))

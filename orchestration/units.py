@@ -1,7 +1,8 @@
 """Units of connected variables: definitions, compatibility and conversion.
 
-A unit is defined as in SSP 1.0 (``ssc:Unit/ssc:BaseUnit``) and FMI 2.0
-(``UnitDefinitions/Unit/BaseUnit``): exponents of the SI base units
+A unit is defined as in SSP 1.0 (``ssc:Unit/ssc:BaseUnit``) and FMI 2.0 / 3.0
+(``UnitDefinitions/Unit/BaseUnit``; an FMI 3.0 ``Float32``/``Float64`` variable
+names its unit in its own ``unit`` attribute or its type definition's): exponents of the SI base units
 (kg, m, s, A, K, mol, cd) and of the derived unit rad, plus a ``factor`` and
 an ``offset`` so that ``value_SI = factor * value + offset``.  Two units are
 compatible when all eight exponents are equal; a value then converts from

@@ -1,16 +1,13 @@
-"""Argument checks shared by the library's profile builders (turntable schedules, chamber profiles)."""
+"""Argument conversion shared by the library's profile builders (turntable schedules, chamber profiles).
 
-import math
+The range checks (finite, positive, ...) are the C core's (``sarins_fmu/core/schedule.h``); this only
+turns a caller's value into a float with a message naming it.
+"""
 
 
-def finite_number(name: str, value, *, positive: bool = False) -> float:
-    """``value`` as a finite float, >= 0 (or > 0 if ``positive``), else ValueError."""
+def number(name: str, value) -> float:
+    """``value`` as a float, else ValueError naming ``name``."""
     try:
-        v = float(value)
+        return float(value)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{name} must be finite, got {v}")
-    if v < 0 or (positive and v == 0):
-        raise ValueError(f"{name} must be {'positive' if positive else 'non-negative'}, got {v}")
-    return v

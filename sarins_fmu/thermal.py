@@ -34,12 +34,12 @@ The exact steps run in the C core (``sarins_fmu/core/thermal.c``,
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .checks import finite_number
+from .checks import number
+from .core import schedule as core_schedule
 from .core.thermal import die_temperatures, exact_steps  # noqa: F401 (die_temperatures: part of this API)
 
 SENSORS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
@@ -97,27 +97,25 @@ class Ambient:
     profile: tuple | None = field(default=None)
 
     def __call__(self, time):
-        t = np.asarray(time, dtype=float)
-        if self.profile is None and self.amplitude == 0.0 and self.slope == 0.0:
-            return np.full(t.shape, float(self.mean)) if t.ndim else float(self.mean)
-        if self.profile is not None:
-            pt, pv = (np.asarray(x, float) for x in self.profile)
-            return np.interp(t, pt, pv)
-        return self.mean + self.amplitude * np.sin(2 * math.pi * t / self.period + self.phase) + self.slope * t
+        """T_amb at ``time`` (s, scalar or array), degC: a float for a scalar, else an array of its shape
+        (the C core's ``sarins_ambient_values``)."""
+        return core_schedule.ambient_values(time, *self._fields())
+
+    def _fields(self) -> tuple:
+        return self.mean, self.amplitude, self.period, self.phase, self.slope, self.profile
 
 
-def ambient_segment(ambient, time: float, span: float) -> tuple[float, float]:
+def ambient_segment(ambient: Ambient, time: float, span: float) -> tuple[float, float]:
     """Ambient at ``time`` and its slope over [time, time + span] (degC, degC/s).
 
     The ambient as an IMU sees it across a co-simulation boundary: sampled on
     a grid of ``span`` s and linear in between (the thermal model's own
     assumption), so value + slope * tau rebuilds it over the step from the
-    start-of-step values alone.
+    start-of-step values alone (the C core's ``sarins_ambient_segment``).
     """
-    if not (span > 0 and math.isfinite(span)):
-        raise ValueError(f"span must be positive and finite, got {span}")
-    a0 = float(ambient(time))
-    return a0, (float(ambient(time + span)) - a0) / span
+    if not isinstance(ambient, Ambient):
+        raise TypeError(f"ambient_segment needs an Ambient, got {type(ambient).__name__}")
+    return core_schedule.ambient_segment(time, span, *ambient._fields())
 
 
 class ThermalModel:
@@ -247,63 +245,19 @@ def chamber_profile(duration: float, *, low_c: float = -25.0, high_c: float = 40
     ------
     ValueError
         On NaN, a non-positive duration or ramp, a negative hold or delay, or
-        low_c >= high_c.
+        low_c >= high_c (the C core's reason, in its units: ramp degC/s,
+        holds s; ``sarins_chamber_build``).
     """
-    duration = finite_number("duration", duration, positive=True)
-    ramp = finite_number("ramp_c_per_min", ramp_c_per_min, positive=True) / 60.0  # degC/s
-    hold = finite_number("hold_min", hold_min) * 60.0  # s
-    delay = finite_number("delay", delay)
-    for name, value in (("low_c", low_c), ("high_c", high_c), ("start_c", start_c)):
-        if not math.isfinite(float(value)):
-            raise ValueError(f"{name} must be finite, got {value}")
-    low_c, high_c, start_c = float(low_c), float(high_c), float(start_c)
-    if not low_c < high_c:
-        raise ValueError(f"low_c must be below high_c, got {low_c} and {high_c}")
-    if low_c <= -273.15:
-        raise ValueError(f"low_c must be above absolute zero, got {low_c}")
-    times, temps = [0.0], [start_c]
-
-    def to(t_next, temp):
-        if t_next > times[-1]:
-            times.append(t_next)
-            temps.append(temp)
-
-    if first not in ("low", "high"):
-        raise ValueError(f"first must be 'low' or 'high', got {first!r}")
-    step_c = finite_number("step_c", step_c)
-    step_hold = finite_number("step_hold_min", step_hold_min) * 60.0
-
-    def ramp_to(target, stops):
-        for point in stops:
-            to(times[-1] + abs(point - temps[-1]) / ramp, point)
-            to(times[-1] + step_hold, point)
-        to(times[-1] + abs(target - temps[-1]) / ramp, target)
-
-    to(delay, start_c)
-    target, stops = (low_c if first == "low" else high_c), ()
-    while times[-1] < duration:
-        ramp_to(target, stops)
-        to(times[-1] + hold, target)
-        stops = _intermediate_stops(target, low_c + high_c - target, step_c)
-        target = high_c if target == low_c else low_c
-    times, temps = np.array(times), np.array(temps)
-    keep = times < duration
-    t_out = np.append(times[keep], duration)
-    return t_out, np.append(temps[keep], np.interp(duration, times, temps))
-
-
-def _intermediate_stops(start: float, end: float, step: float) -> list:
-    """Set points every ``step`` from ``start`` towards ``end``, both ends excluded (none if step is 0)."""
-    if step <= 0:
-        return []
-    n = math.ceil(abs(end - start) / step - 1e-9) - 1
-    return [start + math.copysign(step * (i + 1), end - start) for i in range(max(n, 0))]
+    return core_schedule.chamber_profile(
+        number("duration", duration), number("low_c", low_c), number("high_c", high_c),
+        number("ramp_c_per_min", ramp_c_per_min) / 60.0, number("hold_min", hold_min) * 60.0,
+        number("start_c", start_c), number("delay", delay), first, number("step_c", step_c),
+        number("step_hold_min", step_hold_min) * 60.0)
 
 
 def chamber_cycle_time(*, low_c: float = -25.0, high_c: float = 40.0, ramp_c_per_min: float = 1.0,
                        hold_min: float = 30.0, step_c: float = 0.0, step_hold_min: float = 0.0) -> float:
     """Length of one cycle of :func:`chamber_profile` (end -> other end -> end, holds included), s."""
-    ramp = finite_number("ramp_c_per_min", ramp_c_per_min, positive=True) / 60.0
-    stops = len(_intermediate_stops(low_c, high_c, finite_number("step_c", step_c)))
-    return 2.0 * ((high_c - low_c) / ramp + finite_number("hold_min", hold_min) * 60.0
-                  + stops * finite_number("step_hold_min", step_hold_min) * 60.0)
+    return core_schedule.chamber_cycle_time(
+        number("low_c", low_c), number("high_c", high_c), number("ramp_c_per_min", ramp_c_per_min) / 60.0,
+        number("hold_min", hold_min) * 60.0, number("step_c", step_c), number("step_hold_min", step_hold_min) * 60.0)

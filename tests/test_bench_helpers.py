@@ -54,10 +54,11 @@ def test_start_up_feed_runs_five_real_steps(fmu_dir, c_host, tmp_path, name, hos
     assert value == expected if expected is not None else value > 0, (output, value)
 
 
-def test_out_of_process_slaves_give_the_in_process_outputs(tmp_path):
+def test_out_of_process_slaves_give_the_in_process_outputs(fmu_dir, tmp_path):
     """Direct slave calls vs servers (one round trip per call, and batched): identical rows, servers exit 0."""
     code = f"""
 import json, sys
+from pathlib import Path
 sys.path.insert(0, {str(BENCH)!r})
 import bench_out_of_process as oop
 params = {{"Turntable": {{"align_time": 20.0}}, "IMUThermal": {{"internal_rate": 10.0}},
@@ -65,7 +66,7 @@ params = {{"Turntable": {{"align_time": 20.0}}, "IMUThermal": {{"internal_rate":
 rows, codes = {{}}, {{}}
 for label, kind, method in (("direct", "direct", "run_per_call"), ("per_call", "remote", "run_per_call"),
                             ("batched", "remote", "run_batched")):
-    chain = oop.Chain(kind, params=params)
+    chain = oop.Chain(kind, Path({str(fmu_dir)!r}), params=params)
     rows[label] = [[float(x) for x in r] for r in getattr(chain, method)(30)]
     codes[label] = chain.free()
 print(json.dumps({{"rows": rows, "codes": codes}}))

@@ -12,7 +12,6 @@ import pytest
 from sarins_fmu import earth, ins_kernel
 from sarins_fmu import rotations as rot
 from sarins_fmu.core import ins as core_ins
-from sarins_fmu.core import turntable as core_turntable
 from sarins_fmu.kalman import N_STATES, StopFilterSettings, stop_filter_steps
 from sarins_fmu.turntable.schedule import GimbalSchedule, state_into
 from sarins_fmu.units import DPH_TO_RPS
@@ -294,66 +293,16 @@ def test_ins_and_turntable_bindings_reject_bad_in_place_arrays():
         state_into(t, *s.tables(), np.zeros((2, 1), dtype=np.float32), np.zeros((2, 1)), np.zeros((2, 1)))
 
 
-def _turntable_table(n_slots=16):
-    s = GimbalSchedule(axes=[(0, 0, 1.0), (1.0, 0, 0)], times=[0.0, 10.0, 20.0], accel=[[0.1, -0.2], [0.0, 0.3]],
-                       angle0=[0.0, 1.0], rate0=[0.5, 0.0])
-    io = np.zeros(16)
-    io[0:4] = 1.0, 2, 1.0, 21.5  # step, gimbals, constant ambient, its value
-    io[4:16] = [0, 1, 15, 2, 3, 15, 4, 5, 15, 6, 7, 8]  # slots (the third gimbal's unused)
-    arrays = (*s.tables(), io)
-    from sarins_fmu.core._lib import array_table
-
-    return s, arrays, array_table(arrays)
-
-
-def test_turntable_fmu_step_writes_the_state_at_the_step_end():
-    s, arrays, table = _turntable_table()
-    buf = np.full(16, -7.0)
-    assert core_turntable.fmu_step(table, buf, 3.0, 1.0) == 0
-    angle, rate, acc = s.state(4.0)
-    assert list(buf[[0, 1, 2, 3, 4, 5]]) == [angle[0, 0], angle[0, 1], rate[0, 0], rate[0, 1], acc[0, 0], acc[0, 1]]
-    assert list(buf[6:9]) == [21.5, 0.0, 4.0]
-
-
-@pytest.mark.parametrize("fault", ["rows", "slot", "step", "gimbals", "time"])
-def test_fmu_steps_refuse_without_changing_anything(fault):
-    s, arrays, table = _turntable_table()
-    buf = np.full(16, -7.0)
-    t, h = 3.0, 1.0
-    if fault == "rows":
-        table = table[:6].copy()
-    elif fault == "slot":
-        arrays[6][13] = 16.0  # past the buffer's end
-    elif fault == "step":
-        h = 0.5
-    elif fault == "gimbals":
-        arrays[6][1] = 4.0
-    else:
-        t = math.inf
-    assert core_turntable.fmu_step(table, buf, t, h) == 1
-    assert np.all(buf == -7.0)
-
-
-def test_fmu_step_bindings_reject_bad_buffers_and_tables():
-    _, _, table = _turntable_table()
-    with pytest.raises(ValueError, match="buffer is written in place"):
-        core_turntable.fmu_step(table, np.zeros(16, dtype=np.float32), 0.0, 1.0)
-    with pytest.raises(ValueError, match="state table"):
-        core_turntable.fmu_step(table.astype(np.int32), np.zeros(16), 0.0, 1.0)
-
-
 # ------------------------------------------------------------------ sanitizers
 
 SANITIZED_RUN = """
 import math
 import numpy as np
 from fmus.strapdown_ins_slave import StrapdownINS
-from fmus.turntable_slave import Turntable
 from sarins_fmu import earth, ins_kernel, rotations as rot
-from sarins_fmu.core import _lib, turntable as core_turntable
+from sarins_fmu.core import _lib
 from sarins_fmu.kalman import StopKalmanFilter
 from sarins_fmu.turntable import single_axis
-from sarins_fmu.core._lib import array_table
 
 print("core", _lib.library_path())
 lat = 0.55
@@ -377,34 +326,26 @@ stop.step(1e-3 * rng.standard_normal((k, 2)), 1e-4 * rng.standard_normal((k, 3))
 sched = single_axis("forward-reverse", 3600.0)
 sched.state(np.linspace(-10.0, 4000.0, 3001))
 
-# the FMU steps, through slaves run in process (the INS: the core's whole FMU step; the turntable: its
-# compiled step)
+# the INS FMU's step, through the slave run in process (the core's whole FMU step)
 ins = StrapdownINS(instance_name="ins", resources="/tmp")
 ins.align_time, ins.coarse_time = 300.0, 60.0
 ins.enter_initialization_mode(); ins.exit_initialization_mode()
-tt = Turntable(instance_name="tt", resources="/tmp")
-tt.enter_initialization_mode(); tt.exit_initialization_mode()
 for n in range(400):
     for i, a in enumerate("xyz"):
         setattr(ins, f"dtheta_{a}", float(dth[n, i])); setattr(ins, f"dv_{a}", float(dv[n, i]))
     ins.increment_end_time = n + 1.0
     ins.temp_gyro_z = 25.0
     assert ins.do_step(float(n), 1.0)
-    tt.do_step(float(n), 1.0)
-assert ins.solution_time == 400.0 and ins.phase == 2 and tt._fast is not None, ins.phase
-# refused steps (a skipped interval, another step size) and bad tables: refused, nothing touched
+assert ins.solution_time == 400.0 and ins.phase == 2, ins.phase
+# refused steps (a skipped interval, another step size): refused, nothing touched
 ins.increment_end_time = 402.0
 before = ins._fmi_buffer.copy(), ins._core.buffer.copy()
 assert not ins.do_step(400.0, 1.0) and not ins.do_step(400.0, 2.0)
 assert np.array_equal(ins._fmi_buffer, before[0]) and np.array_equal(ins._core.buffer, before[1])
-assert core_turntable.fmu_step(array_table((ins._fmi_buffer,)), ins._fmi_buffer, 400.0, 1.0) == 1
 # the library's INS across its three phases (coarse alignment's end included)
 from sarins_fmu.ins import InsConfig, StrapdownINS as LibraryINS
 lib_ins = LibraryINS(InsConfig(lat=lat, align_time=300.0, coarse_time=60.0))
 assert np.isfinite(lib_ins.step(dth, dv)).all() and lib_ins.phase == "navigate"
-io = np.zeros(16); io[0:4] = 1.0, 1, 1.0, 20.0; io[4:] = 1e9
-s_tables = sched.tables()
-assert core_turntable.fmu_step(array_table((*s_tables, io)), np.zeros(8), 0.0, 1.0) == 1
 print("sanitized run ok")
 """
 
@@ -426,7 +367,7 @@ def _build_sanitized_core(out_dir):
 
 @pytest.mark.slow
 def test_ins_filter_and_turntable_under_address_and_undefined_behaviour_sanitizers(tmp_path):
-    """The INS, filter and turntable functions and both FMU steps (valid and refused tables) run on a core
+    """The INS, filter and turntable functions and the INS FMU step (valid and refused steps) run on a core
     built with -fsanitize=address,undefined, loaded through SARINS_CORE_LIB in a fresh interpreter with
     libasan preloaded; any sanitizer report fails the run."""
     import os

@@ -357,6 +357,30 @@ def test_state_of_another_instance_with_other_parameters_is_rebuilt_from_its_own
         b.free()
 
 
+def test_state_taken_before_initialisation_restores_values_and_the_state_machine(fmu_dir):
+    slave = Slave(fmu_dir / "Turntable.fmu", "early")
+    try:
+        f, vr = slave.fmu, slave.vr
+        slave.set(rate=0.2)
+        early = f.getFMUstate()  # state 'instantiated'
+        slave.set(rate=0.3)
+        f.setFMUstate(early)
+        assert slave.get("rate") == [0.2]
+        f.enterInitializationMode()
+        f.exitInitializationMode()
+        f.doStep(0.0, 1.0)
+        f.setFMUstate(early)  # back before initialisation: stepping is refused again, by the state machine
+        with pytest.raises(FMICallException, match="status 3"):
+            f.doStep(1.0, 1.0)
+        assert any("not allowed in state 'instantiated'" in text for status, _, text in slave.log if status == 3)
+        f.reset()
+        f.freeFMUstate(early)
+        assert f.getInteger([vr["n_gimbals"]]) == [1]
+    finally:
+        slave.fmu.freeInstance()
+        fmilog.unregister(slave.name)
+
+
 # ----------------------------------------------------------------- allocations and sanitizers
 
 

@@ -60,6 +60,7 @@ def test_quick_campaign_writes_a_report_and_ff_rls_beats_no_update(tmp_path):
     mc = summary["monte_carlo"]["markov-premise-filter"]
     assert mc["runs"] == 8 and mc["mean_s_ff"] < mc["mean_s_none"]
     assert summary["stop_filter"]["nav-rlg"]["runs"] == 4 and summary["stop_filter"]["premise"]["runs"] == 1
+    assert summary["stop_filter"]["indexed-nav-rlg"]["runs"] == 4  # the same stops, the RINS indexed
     veh = summary["vehicle"]["markov-nav-rlg"]
     assert veh["runs"] == 1 and veh["mean_cep_initial"] > 0
     report = (out / "report.md").read_text()
@@ -69,6 +70,7 @@ def test_quick_campaign_writes_a_report_and_ff_rls_beats_no_update(tmp_path):
     assert "| mean S after FF-RLS (°/h·°C), Table 2 | 0.066 |" in report
     assert "**The quick profile is too small to test:** 30-min stop" in report and "Table 5" in report
     assert "## What limits the 30-minute stop" in report
+    assert "## Indexing the dual-axis RINS during the stop (nav-rlg)" in report and "| with indexing | 4 |" in report
     for name in ("stop_convergence.png", "fig4_parameters.png", "fig6_s_values.png", "fig8_position_errors.png"):
         assert (out / name).stat().st_size > 1000
     # resumable: a second call finds every run stored

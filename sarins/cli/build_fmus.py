@@ -51,5 +51,5 @@ def run(args) -> int:
 
         print(export_compensator(args.compensator, args.out))
     print(platform_note())
-    print(HOST_REQUIREMENTS)
+    print(f"Python-hosted FMUs: {HOST_REQUIREMENTS}")
     return 0

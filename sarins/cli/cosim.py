@@ -34,7 +34,7 @@ def register(subparsers) -> argparse.ArgumentParser:
         The ``cosim`` parser; its ``func`` default is :func:`run`.
     """
     parser = subparsers.add_parser(
-        "cosim", help="co-simulate an SSP system of FMI 2.0 co-simulation FMUs",
+        "cosim", help="co-simulate an SSP system of FMI 2.0 / 3.0 co-simulation FMUs",
         description="Run an .ssp archive or SystemStructure.ssd (or its folder) with the "
                     "fixed-step master and print the final values of the recorded outputs.")
     parser.add_argument("system", help="system file: x.ssp, SystemStructure.ssd or its folder")
@@ -196,12 +196,16 @@ def _interrupted(stop: interrupt.Interrupted, output, units: dict) -> str:
 
 def column_units(master, columns) -> dict:
     """{column: unit} of a result's columns from the FMUs' model descriptions
-    ("s" for time, "1" where a variable declares no unit)."""
+    ("s" for time, "1" where a variable declares no unit); each element column
+    ``name[k]`` of an FMI 3.0 array gets the array's unit."""
     units = {"time": "s"}
     index = {name: i for i, name in enumerate(master.names)}
     for column in columns[1:]:
         component, _, variable = column.partition(".")
-        found = master.variables[index[component]].get(variable) if component in index else None
+        known = master.variables[index[component]] if component in index else {}
+        found = known.get(variable)
+        if found is None and variable.endswith("]"):
+            found = known.get(variable[:variable.rfind("[")])
         units[column] = (getattr(found, "unit", None) or "1") if found is not None else "1"
     return units
 

@@ -3,6 +3,8 @@
 Tasks (each one campaign task, stored as it finishes, resumable):
 
 * ``stop-<unit>-<seed>``: one 30-minute stop filter run (convergence, error);
+* ``stop-indexed-<unit>-<seed>``: the same stop (seed, temperature) with the dual-axis RINS indexed
+  through :data:`~sarins_fmu.experiments.online_rls_indexed.STOP_SEQUENCE` and the indexed filter;
 * ``mc-<ageing>-<unit>-<estimate>-<seed>``: one 300-day model-update run;
 * ``veh-<ageing>-<unit>-<seed>``: one vehicle test (a year of online
   updates, then a 6 h drive with the initial and the updated model), in
@@ -33,12 +35,14 @@ PAPER_SCALE = 3.5
 PROFILES = {
     "quick": {
         "stops": {"nav-rlg": 4, "premise": 1},
+        "indexed_stops": {"nav-rlg": 4},
         "mc": [("markov", "nav-rlg", "filter", 8), ("markov", "premise", "filter", 8)],
         "vehicle": [("markov", "nav-rlg", 1)],
         "vehicle_kwargs": {"n_sessions": 8, "year_days": 120.0, "test_day": 170.0, "drive_hours": 1.0},
     },
     "paper": {
         "stops": {"nav-rlg": 40, "premise": 20},
+        "indexed_stops": {"nav-rlg": 40},  # paired with the stops above: the same seeds and temperatures
         "mc": [("markov", "nav-rlg", "filter", 100), ("integrated", "nav-rlg", "filter", 100),
                ("markov", "nav-rlg", "truth", 100), ("integrated", "nav-rlg", "truth", 100),
                ("markov", "premise", "filter", 50),
@@ -80,15 +84,16 @@ def add_arguments(parser) -> None:
                              "(0 .. 2**31-1 minus the runs; default 0)")
 
 
-def stop_schema(kwargs: dict) -> dict:
-    """What :func:`simulate_stop` returns for ``kwargs``: five finite scalars and the stop filter's
-    convergence curves, one row per step of the stop (``round(duration / step)``)."""
+def stop_schema(kwargs: dict, function=None) -> dict:
+    """What ``function`` (default :func:`simulate_stop`; or ``simulate_indexed_stop``) returns for
+    ``kwargs``: five finite scalars and the stop filter's convergence curves, one row per step of
+    the stop (``round(duration / step)``)."""
     import inspect
 
     from sarins.campaign import Field
     from sarins_fmu.experiments.online_rls import simulate_stop
 
-    defaults = {k: p.default for k, p in inspect.signature(simulate_stop).parameters.items()}
+    defaults = {k: p.default for k, p in inspect.signature(function or simulate_stop).parameters.items()}
     n = int(round(kwargs.get("duration", defaults["duration"]) / kwargs.get("step", defaults["step"])))
     scalars = ("truth_dph", "estimate_dph", "error_dph", "std_dph", "mean_temperature")
     return {**{k: Field() for k in scalars}, **{k: Field((n,)) for k in ("time", "estimate_curve_dph",
@@ -102,6 +107,7 @@ def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0, eng
     ``engine`` (``'cosim'``: through the FMUs in ``fmu_dir``)."""
     from sarins.campaign import Task
     from sarins_fmu.experiments import online_rls
+    from sarins_fmu.experiments.online_rls_indexed import simulate_indexed_stop
 
     from .cosim import ENGINES, vehicle_task
 
@@ -112,7 +118,7 @@ def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0, eng
     if not (MIN_LAMBDA <= forgetting_factor <= 1.0):
         raise ValueError(f"--lambda must be in [{MIN_LAMBDA}, 1], got {forgetting_factor}")
     p = PROFILES[profile]
-    most = max(n for _, n in p["stops"].items()) if p["stops"] else 0
+    most = max(list(p["stops"].values()) + list(p.get("indexed_stops", {}).values()) + [0])
     most = max([most] + [row[3] for row in p["mc"]] + [row[2] for row in p["vehicle"]])
     if not 0 <= seed <= 2**31 - most:
         raise ValueError(f"--seed must be in 0 .. {2**31 - most} for the {profile} profile ({most} runs per study), "
@@ -123,6 +129,12 @@ def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0, eng
             kwargs = {"imu": unit, "seed": seed + s, "temperature": 5.0 + 40.0 * ((s * 0.618) % 1.0)}
             tasks.append(Task(f"stop-{unit}-{s:03d}", online_rls.simulate_stop, kwargs,
                               finite=("estimate_dph", "error_dph"), schema=stop_schema(kwargs)))
+    for unit, n in p.get("indexed_stops", {}).items():
+        for s in range(n):  # the seed and temperature of stop-<unit>-<s>
+            kwargs = {"imu": unit, "seed": seed + s, "temperature": 5.0 + 40.0 * ((s * 0.618) % 1.0)}
+            tasks.append(Task(f"stop-indexed-{unit}-{s:03d}", simulate_indexed_stop, kwargs,
+                              finite=("estimate_dph", "error_dph"),
+                              schema=stop_schema(kwargs, simulate_indexed_stop)))
     for ageing, unit, estimate, n, *scale in p["mc"]:
         x = scale[0] if scale else 1.0
         tasks += [Task(f"mc-{ageing}{_scale_tag(x)}-{unit}-{estimate}-{s:03d}", online_rls.model_update_run,

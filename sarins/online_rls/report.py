@@ -16,6 +16,7 @@ import numpy as np
 HEAD_VEHICLE = "veh-markov-nav-rlg"  # configuration shown in Figs 7-8 and Table 4
 HEAD_MC = "mc-markov-nav-rlg-filter"  # configuration shown in Figs 4-6 and Table 1
 HEAD_STOP = "stop-nav-rlg"  # the stop filter's headline unit
+HEAD_STOP_INDEXED = "stop-indexed-nav-rlg"  # the same stops with the RINS indexed (issue 20)
 # seed 002's headline numbers: sec. 2 (stop filter), Table 2 (mean S), Table 5 (vehicle)
 PAPER_STOP_DPH = 0.002
 PAPER_S_FF = 0.066
@@ -34,7 +35,8 @@ def _configs(results: dict, kind: str) -> list:
 
 
 def stop_summary(results: dict) -> dict:
-    """Stop-filter statistics per unit: runs, rms / max error, mean 1σ, within 0.002 °/h."""
+    """Stop-filter statistics per unit ('indexed-<unit>': the indexed stops): runs, rms / max error,
+    mean 1σ, within 0.002 °/h, median abs error and the 5 and 95 % points of the error."""
     out = {}
     for cfg in _configs(results, "stop"):
         runs = _group(results, cfg + "-")
@@ -44,6 +46,8 @@ def stop_summary(results: dict) -> dict:
             "mean_error_dph": float(np.mean(err)), "max_abs_error_dph": float(np.max(np.abs(err))),
             "mean_std_dph": float(np.mean([r["std_dph"] for r in runs])),
             "within_0.002": int(np.sum(np.abs(err) < 0.002)),
+            "median_abs_error_dph": float(np.median(np.abs(err))),
+            "p5_error_dph": float(np.percentile(err, 5.0)), "p95_error_dph": float(np.percentile(err, 95.0)),
         }
     return out
 
@@ -145,8 +149,74 @@ def stop_bound_lines(units=("nav-rlg", "premise")) -> list:
               f"azimuth gyro's random walk and the accelerometer noise to {_fmt(nav['azimuth'])} °/h, and the "
               f"heading random walk read as N/√T would allow {_fmt(nav['heading_walk'])} °/h. It is the tilt "
               "random walk, not the heading random walk, that keeps 0.002 °/h out of reach in 30 min at the "
-              f"preset's noise. The stop filter's own 1σ combines this bound with its prior on the drift "
+              "preset's noise while the azimuth gyro stays vertical (indexing the RINS during the stop changes "
+              f"that, `sarins_fmu.stop_indexing`). The stop filter's own 1σ combines this bound with its prior on the drift "
               f"({nav['prior']:g} °/h): {_fmt(nav['with_prior'])} °/h.", ""]
+    return lines
+
+
+def indexed_stop_bound(unit: str = "nav-rlg", lat_deg: float = BOUND_LAT_DEG, duration: float = BOUND_STOP_S) -> dict:
+    """The bound of :func:`stop_bound` with the RINS indexed through ``STOP_SEQUENCE`` (deg/h):
+    ``full`` (every body-frame gyro drift and accelerometer bias unknown,
+    :func:`sarins_fmu.stop_indexing.indexed_drift_accuracy`), ``gyrocompass`` (N_z / sqrt(T), a drift read
+    from a directly observed tilt), ``with_prior`` (``full`` with the filter's prior on the drift)."""
+    import math
+
+    from sarins_fmu.experiments.online_rls import imu_unit
+    from sarins_fmu.experiments.online_rls_indexed import STOP_SEQUENCE
+    from sarins_fmu.kalman import StopFilterSettings
+    from sarins_fmu.stop_indexing import indexed_drift_accuracy, indexing_schedule, rotation_samples
+    from sarins_fmu.units import DEG_TO_RAD, RPS_TO_DPH
+
+    model = imu_unit(unit)
+    n = int(round(duration))
+    rotations = rotation_samples(indexing_schedule(STOP_SEQUENCE, float(n)), n, substeps=4)
+    acc = indexed_drift_accuracy(lat=lat_deg * DEG_TO_RAD, rotations=rotations, arw=model.gyro.random_walk,
+                                 vrw=model.accel.random_walk)
+    prior = StopFilterSettings.for_model(model).azimuth_drift0_std
+    return {"unit": unit, "full": acc.final_std * RPS_TO_DPH, "gyrocompass": acc.gyrocompass_std * RPS_TO_DPH,
+            "with_prior": 1.0 / math.sqrt(1.0 / acc.final_std**2 + 1.0 / prior**2) * RPS_TO_DPH}
+
+
+def _distribution(errors) -> dict:
+    e = np.asarray(errors, float)
+    p5, p95 = np.percentile(e, [5.0, 95.0])
+    return {"runs": len(e), "median_abs": float(np.median(np.abs(e))), "p5": float(p5), "p95": float(p95),
+            "within": int(np.sum(np.abs(e) < PAPER_STOP_DPH)), "rms": float(np.sqrt(np.mean(e**2)))}
+
+
+def indexed_stop_lines(results: dict, unit: str = "nav-rlg") -> list:
+    """Markdown section: the 30-min stop with and without indexing, the error distributions beside the bounds."""
+    from sarins_fmu.experiments.online_rls_indexed import STOP_SEQUENCE
+
+    plain, indexed = _group(results, f"stop-{unit}-"), _group(results, f"stop-indexed-{unit}-")
+    if not indexed:
+        return []
+    seq = STOP_SEQUENCE
+    positions = ", ".join(f"({o:g}°, {i:g}°)" for o, i in seq.positions_deg)
+    b0, b1 = stop_bound(unit), indexed_stop_bound(unit)
+    lines = [f"## Indexing the dual-axis RINS during the stop ({unit})", "",
+             f"Sequence (outer, inner gimbal angle): {positions}; holds {', '.join(f'{h:g}' for h in seq.holds)} s "
+             f"(the last to the end of the stop), moves at {seq.rate_dps:g} °/s, {seq.accel_dps2:g} °/s², one gimbal "
+             "at a time: the azimuth gyro's axis horizontal to the vehicle's right, left, left, right "
+             "(`sarins_fmu.experiments.online_rls_indexed.STOP_SEQUENCE`). Its drift then tilts the IMU at first "
+             "order (gyrocompass-like) instead of through the Earth rate's t³ path. Same seeds and temperatures "
+             "with and without indexing; without: the forward-reverse azimuth rotation and the 11-state filter; "
+             "with: the 12-state `IndexedStopFilter` fed the known rotations.", "",
+             "| stop | runs | median abs error (°/h) | error 5-95 % (°/h) | rms (°/h) | within 0.002 °/h | "
+             "mean filter 1σ | bound (1σ) | bound with the filter's prior |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for name, runs, bound in (("without indexing", plain, b0), ("with indexing", indexed, b1)):
+        if not runs:
+            continue
+        d = _distribution([r["error_dph"] for r in runs])
+        lines.append(f"| {name} | {d['runs']} | {_fmt(d['median_abs'])} | {_fmt(d['p5'])} .. {_fmt(d['p95'])} | "
+                     f"{_fmt(d['rms'])} | {d['within']}/{d['runs']} ({100.0 * d['within'] / d['runs']:.0f} %) | "
+                     f"{_fmt(float(np.mean([r['std_dph'] for r in runs])))} | {_fmt(bound['full'])} | "
+                     f"{_fmt(bound['with_prior'])} |")
+    lines += ["", f"Bound with indexing: every body-frame gyro drift and accelerometer bias unknown; the "
+              f"gyrocompass limit N/√T (a drift read from a directly observed tilt) is {_fmt(b1['gyrocompass'])} °/h. "
+              f"Without indexing the horizontal gyros' random walk hides the t³ signature ({_fmt(b0['full'])} °/h).", ""]
     return lines
 
 
@@ -161,6 +231,9 @@ def comparison_claims(results: dict) -> list:
     return [
         Claim("30-min stop: abs. azimuth-drift error (°/h), nav-rlg", PAPER_STOP_DPH,
               [abs(r["error_dph"]) for r in stops], paper_text="< 0.002", note="no nav-rlg stops run"),
+        Claim("30-min stop with indexing: abs. azimuth-drift error (°/h), nav-rlg", PAPER_STOP_DPH,
+              [abs(r["error_dph"]) for r in _group(results, HEAD_STOP_INDEXED + "-")], paper_text="< 0.002",
+              note="no indexed nav-rlg stops run"),
         Claim("mean S after FF-RLS (°/h·°C), Table 2", PAPER_S_FF, [r["s_ff"] for r in mc],
               note="no nav-rlg Monte Carlo run"),
         Claim("S after FF-RLS / S without update, Table 2", PAPER_FF_OVER_NONE,
@@ -199,7 +272,7 @@ def _plots(results: dict, out: Path) -> list:
             ax.plot(t, r["std_curve_dph"], "k--", lw=1, label="filter 1σ")
             ax.plot(t, -r["std_curve_dph"], "k--", lw=1)
             ax.axhspan(-0.002, 0.002, color="g", alpha=0.15, label="±0.002 °/h")
-            ax.set_ylim(-0.03, 0.03)
+            ax.set_ylim(*((-0.004, 0.004) if unit.startswith("indexed-") else (-0.03, 0.03)))
             ax.set(xlabel="stop time (min)", ylabel="ε_U estimate − truth (°/h)", title=f"stop filter, {unit}")
             ax.legend(fontsize=7)
         save(fig, "stop_convergence.png")
@@ -294,7 +367,7 @@ def write_report(results: dict, out_dir, *, profile: str, wall_time: float, work
     for unit, s in stops.items():
         lines.append(f"| {unit} | {s['runs']} | {_fmt(s['rms_error_dph'])} | {_fmt(s['mean_error_dph'])} | "
                      f"{_fmt(s['max_abs_error_dph'])} | {_fmt(s['mean_std_dph'])} | {s['within_0.002']}/{s['runs']} |")
-    lines += [""] + stop_bound_lines()
+    lines += [""] + stop_bound_lines() + indexed_stop_lines(results)
     lines += ["## 300-day simulation: mean S over the runs (Table 2 shape, °/h·°C)", "",
               "| configuration (ageing-unit-estimate) | runs | no update | RLS | FF-RLS | FF/no update | FF better in | "
               "calibration residual rms (°/h) | stop error rms (°/h) |", "|---|---|---|---|---|---|---|---|---|"]

@@ -62,9 +62,8 @@ void sarins_format_number(char *buf, size_t len, double x)
             return;
         }
     }
-    if (strpbrk(s, ".e") == NULL) /* a whole number: repr adds ".0" */
-        strncat(s, ".0", sizeof s - strlen(s) - 1);
-    snprintf(buf, len, "%s", s);
+    /* a whole number: repr adds ".0" */
+    snprintf(buf, len, "%s%s", s, strpbrk(s, ".e") == NULL ? ".0" : "");
 }
 
 void sarins_join(char *buf, size_t len, const char *a, const char *b, const char *c, const char *d)

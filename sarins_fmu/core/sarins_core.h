@@ -16,7 +16,7 @@
 #include <stdint.h>
 
 /* ABI version of the library; the binding refuses a library of another one. */
-#define SARINS_CORE_ABI 1
+#define SARINS_CORE_ABI 2
 
 int sarins_core_abi(void);
 
@@ -34,6 +34,5 @@ int sarins_core_abi(void);
 #include "schedule.h"
 #include "ambient.h"
 #include "ins_fmu_step.h"
-#include "turntable_fmu_step.h"
 
 #endif

@@ -169,10 +169,10 @@ int sarins_move_segments(double angle, double rate_max, double accel_max, double
 {
     report r = sarins_report(msg, msg_len);
     *n = 0;
+    if (angle == 0.0) /* no move, whatever the rest */
+        return 0;
     if (!(isfinite(angle) && isfinite(rate_max) && isfinite(accel_max) && isfinite(grid)))
         return sarins_fail(&r, SARINS_SCHEDULE_BAD_PARAM, "angle, rate, acceleration and grid must be finite");
-    if (angle == 0.0)
-        return 0;
     if (!(rate_max > 0 && accel_max > 0 && grid > 0))
         return sarins_fail(&r, SARINS_SCHEDULE_BAD_PARAM, "rate, acceleration and grid must be positive");
     int k = move(&r, angle, rate_max, accel_max, grid, duration, seg_accel);
@@ -612,11 +612,7 @@ static void rate_table_3axis(const sarins_schedule_params *p, sink *k)
         double a = rates[j] / (q * grid);
         /* accel +a for T_q, -a for 2 T_q, +a for T_q: rate 0 -> +max -> -max -> 0, angle back to its start */
         track *t = &tracks[j];
-        t->n = 3;
-        t->steps[0] = q, t->acc[0] = a;
-        t->steps[1] = 2 * q, t->acc[1] = -a;
-        t->steps[2] = q, t->acc[2] = a;
-        t->repeat = ceil(n_motion / (4 * q));
+        *t = (track){3, {q, 2 * q, q}, {a, -a, a}, ceil(n_motion / (4 * q))};
         use[j] = t;
     }
     rest(k, n_warm);
@@ -919,8 +915,7 @@ static int generate(const sarins_schedule_params *p, sarins_schedule *s, report 
             s->angle0[j] = 0.0;
             s->rate0[j] = 0.0;
         }
-        strncpy(s->gimbal_axes, chain, sizeof s->gimbal_axes - 1);
-        s->gimbal_axes[sizeof s->gimbal_axes - 1] = '\0';
+        memcpy(s->gimbal_axes, chain, strlen(chain) + 1); /* at most "z,x,y" */
         s->n_times = *n_times;
         s->n_axes = *n_axes;
         s->n_windows = *n_windows;

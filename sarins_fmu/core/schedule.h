@@ -25,7 +25,10 @@
  * builder allocates nothing, keeps no globals and is reentrant; its output
  * is bit-identical to the former Python generator.  Errors: a non-zero code
  * and a one-line reason written to msg (msg_len bytes, always terminated;
- * msg may be NULL), e.g. "grid must be positive, got 0.0".
+ * msg may be NULL), e.g. "grid must be positive, got 0.0 s".
+ *
+ * Sources: schedule.c, ambient.c and report.c (the reasons); the schedule is
+ * evaluated by turntable.c (sarins_turntable_state).
  */
 #ifndef SARINS_SCHEDULE_H
 #define SARINS_SCHEDULE_H

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from ..checks import number
+from ..core.schedule import UP_NAMES, rate_test_magnitudes_dps
 from ..units import DEG_TO_RAD
 from .schedule import AXIS_X, AXIS_Y, AXIS_Z, GimbalSchedule, chain_matrix
-from .segments import Timeline, ceil_steps, move_steps, number
+from .segments import built
 
 # three-axis rate table (seed 003, TBL-3302-CT): outer about the base vertical
 # z, middle about the outer frame's x, inner about the middle frame's y:
@@ -17,15 +17,11 @@ from .segments import Timeline, ceil_steps, move_steps, number
 RATE_TABLE_AXES = (AXIS_Z, AXIS_X, AXIS_Y)
 
 # seed 003's rate test: 22 rates within +-200 deg/s; the paper does not list
-# them.  Our choice: 11 magnitudes on a 1-2-3-5 pattern (roughly log-spaced,
-# 1 and 2 deg/s in the low-rate region of the MEMS preset (nonlinearity
-# width 2 deg/s), the range end 200),
-# each with both signs.
-RATE_TEST_MAGNITUDES_DPS = (1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 30.0, 50.0, 100.0, 150.0, 200.0)
-
-# body axis pointing up on the three-axis chain, as (middle, inner) angles in
-# quarter turns: Rx(m) Ry(i) e_axis = +-z
-_UP_QUARTERS = {"+z": (0, 0), "-z": (0, 2), "+x": (0, -1), "-x": (0, 1), "+y": (1, 0), "-y": (-1, 0)}
+# them.  Our choice (the C core's default, sarins_rate_test_magnitudes_dps):
+# 11 magnitudes on a 1-2-3-5 pattern (roughly log-spaced, 1 and 2 deg/s in
+# the low-rate region of the MEMS preset (nonlinearity width 2 deg/s), the
+# range end 200), each with both signs.
+RATE_TEST_MAGNITUDES_DPS = rate_test_magnitudes_dps()
 
 TUMBLE_DTYPE = np.dtype([("start", float), ("end", float), ("up", "U2"), ("heading", float),
                          ("angles", float, (3,)), ("up_b", float, (3,))])
@@ -88,27 +84,14 @@ def rate_table_3axis(duration: float, *, inner_rate_dps: float = 1.0, inner_acce
         On NaN or infinite input, negative rates or warm-up, or a
         non-positive duration, acceleration or grid.
     """
-    duration = number("duration", duration, positive=True)
-    grid = number("grid", grid, positive=True)
-    n_warm = ceil_steps(number("warmup", warmup), grid)
-    gimbals = ((outer_rate_dps, outer_accel_dps2, "outer"), (middle_rate_dps, middle_accel_dps2, "middle"),
-               (inner_rate_dps, inner_accel_dps2, "inner"))
-    n_motion = max(ceil_steps(duration, grid) - n_warm, 1)
-    tracks = {}
-    for j, (rate_dps, accel_dps2, name) in enumerate(gimbals):
-        rate = number(f"{name}_rate_dps", rate_dps) * DEG_TO_RAD
-        acc = number(f"{name}_accel_dps2", accel_dps2, positive=True) * DEG_TO_RAD
-        if rate == 0.0:
-            continue
-        q = max(1, ceil_steps(rate / acc, grid))  # quarter period, grid steps
-        a = rate / (q * grid)
-        tracks[j] = [(q, a), (2 * q, -a), (q, a)] * math.ceil(n_motion / (4 * q))
-    tl = Timeline(3)
-    tl.rest(n_warm)
-    tl.parallel(tracks)
-    if tl.now < ceil_steps(duration, grid):  # every gimbal still (all rates 0)
-        tl.rest(ceil_steps(duration, grid) - tl.now)
-    return tl.schedule(RATE_TABLE_AXES, grid)
+    gimbals = {f"table_{name}_{q}": number(f"{name}_{q}_{unit}", value) * DEG_TO_RAD
+               for name, q, unit, value in (
+                   ("outer", "rate", "dps", outer_rate_dps), ("outer", "accel", "dps2", outer_accel_dps2),
+                   ("middle", "rate", "dps", middle_rate_dps), ("middle", "accel", "dps2", middle_accel_dps2),
+                   ("inner", "rate", "dps", inner_rate_dps), ("inner", "accel", "dps2", inner_accel_dps2))}
+    rename = {f"table_{name}_{q}": f"{name}_{q}" for name in ("inner", "middle", "outer") for q in ("rate", "accel")}
+    return built("rate-table-3axis", rename, duration=number("duration", duration), grid=number("grid", grid),
+                 warmup=number("warmup", warmup), **gimbals)[0]
 
 
 def _up_vector_b(angles) -> np.ndarray:
@@ -165,46 +148,11 @@ def tumble_24(*, dwell: float = 180.0, rate_dps: float = 10.0, accel_dps2: float
         On NaN or infinite input, or a non-positive dwell, rate, acceleration
         or grid.
     """
-    grid = number("grid", grid, positive=True)
-    n_dwell = ceil_steps(number("dwell", dwell, positive=True), grid)
-    rate = number("rate_dps", rate_dps, positive=True) * DEG_TO_RAD
-    acc = number("accel_dps2", accel_dps2, positive=True) * DEG_TO_RAD
-    orientations = (("+z", 0, 0), ("+x", 0, -1), ("-z", 0, -2), ("-x", 0, -3), ("+y", 1, -3), ("-y", -1, -3))
-    quarter = 0.5 * math.pi
-    tl = Timeline(3)
-    q = [0, 0, 0]  # current gimbal angles in quarter turns: outer, middle, inner
-    rows = []
-    for i, (up, q_mid, q_in) in enumerate(orientations):
-        tl.parallel({j: move_steps((target - q[j]) * quarter, rate, acc, grid)
-                     for j, target in ((1, q_mid), (2, q_in)) if target != q[j]})
-        q[1], q[2] = q_mid, q_in
-        for heading in ((0, 1, 2, 3) if i % 2 == 0 else (3, 2, 1, 0)):
-            if heading != q[0]:
-                tl.parallel({0: move_steps((heading - q[0]) * quarter, rate, acc, grid)})
-                q[0] = heading
-            start = tl.now
-            tl.rest(n_dwell)
-            angles = np.array(q, float) * quarter
-            rows.append((start * grid, tl.now * grid, up, (q[0] % 4) * quarter, angles, _up_vector_b(angles)))
-    return tl.schedule(RATE_TABLE_AXES, grid), np.array(rows, dtype=TUMBLE_DTYPE)
-
-
-def _whole_revolutions(rate: float, grid: float, min_duration: float, rate_tol: float):
-    """Smallest k revolutions in n grid steps, 2 pi k / (n grid) within rate_tol of |rate|.
-
-    Returns (k, n).  k is at least 1 and at least ``min_duration`` worth of
-    revolutions; n * grid >= min_duration.
-    """
-    steps_per_rev = 2 * math.pi / (abs(rate) * grid)
-    k_min = max(1, math.ceil(min_duration * abs(rate) / (2 * math.pi) - 1e-9))
-    ks = np.arange(k_min, k_min + 100_000)
-    ns = np.maximum(np.rint(ks * steps_per_rev), 1.0)
-    ok = (np.abs(ks * steps_per_rev / ns - 1.0) <= rate_tol) & (ns * grid >= min_duration - 1e-9)
-    if not np.any(ok):
-        raise ValueError(f"cannot fit whole revolutions at {abs(rate) / DEG_TO_RAD:.9g} deg/s on a {grid} s grid "
-                         f"within a relative rate change of {rate_tol}; use a finer grid or a larger rate_tol")
-    i = int(np.argmax(ok))
-    return int(ks[i]), int(ns[i])
+    sched, w = built("tumble-24", dwell=number("dwell", dwell), rate=number("rate_dps", rate_dps) * DEG_TO_RAD,
+                     accel=number("accel_dps2", accel_dps2) * DEG_TO_RAD, grid=number("grid", grid))
+    rows = [(r["start"], r["end"], UP_NAMES[r["up"]], r["heading"], r["angles"], _up_vector_b(r["angles"]))
+            for r in w]
+    return sched, np.array(rows, dtype=TUMBLE_DTYPE)
 
 
 def rate_test(*, rates_dps=None, axis_up=("x", "y", "z"), min_duration: float | None = None,
@@ -277,54 +225,27 @@ def rate_test(*, rates_dps=None, axis_up=("x", "y", "z"), min_duration: float | 
         non-positive acceleration, grid or positioning rate, negative
         durations, or rates that do not fit whole revolutions on the grid.
     """
-    grid = number("grid", grid, positive=True)
-    acc = number("accel_dps2", accel_dps2, positive=True) * DEG_TO_RAD
-    pos_rate = number("position_rate_dps", position_rate_dps, positive=True) * DEG_TO_RAD
-    n_settle = ceil_steps(number("settle", settle), grid)
-    min_duration = 0.0 if min_duration is None else number("min_duration", min_duration)
-    rate_tol = number("rate_tol", rate_tol, positive=True)
-    if rate_tol > 0.1:
-        raise ValueError(f"rate_tol must be at most 0.1, got {rate_tol}")
     if rates_dps is None:
-        rates_dps = [s * m for m in RATE_TEST_MAGNITUDES_DPS for s in (1.0, -1.0)]
-    rates = []
-    for r in np.atleast_1d(np.asarray(rates_dps, dtype=object)).tolist():
-        try:
-            r = float(r)
-        except (TypeError, ValueError):
-            raise ValueError(f"rates_dps must be numbers, got {r!r}") from None
-        if not math.isfinite(r) or r == 0:
-            raise ValueError(f"rates_dps must be finite and non-zero, got {r}")
-        rates.append(r * DEG_TO_RAD)
-    if not rates:
-        raise ValueError("rates_dps must not be empty")
+        rates = None
+    else:
+        rates = []
+        for r in np.atleast_1d(np.asarray(rates_dps, dtype=object)).tolist():
+            try:
+                rates.append(float(r) * DEG_TO_RAD)
+            except (TypeError, ValueError):
+                raise ValueError(f"rates_dps must be numbers, got {r!r}") from None
     if isinstance(axis_up, str):
         axis_up = (axis_up,)
-    axes = []
-    for name in axis_up:
-        key = str(name).strip().lower()
-        key = key if key[:1] in "+-" else "+" + key
-        if key not in _UP_QUARTERS:
-            raise ValueError(f"unknown body axis {name!r} in axis_up; choose from x, y, z, +x, ..., -z")
-        axes.append(key)
-    if not axes:
-        raise ValueError("axis_up must name at least one body axis")
-    fits = [_whole_revolutions(w, grid, min_duration, rate_tol) for w in rates]
-    quarter = 0.5 * math.pi
-    tl = Timeline(3)
-    q_mid, q_in = 0, 0
+    rename = {"rate": "position_rate", "dwell": "settle", "test_rates": "rates", "test_axes": "axis_up",
+              "test_min_duration": "min_duration", "test_rate_tol": "rate_tol"}
+    sched, w = built("rate-test", rename, test_rates=rates, test_axes=",".join(str(a) for a in axis_up),
+                     test_min_duration=0.0 if min_duration is None else number("min_duration", min_duration),
+                     accel=number("accel_dps2", accel_dps2) * DEG_TO_RAD, grid=number("grid", grid),
+                     rate=number("position_rate_dps", position_rate_dps) * DEG_TO_RAD,
+                     dwell=number("settle", settle), test_rate_tol=number("rate_tol", rate_tol))
     rows = []
-    for key in axes:
-        target_mid, target_in = _UP_QUARTERS[key]
-        tl.parallel({j: move_steps((target - now) * quarter, pos_rate, acc, grid)
-                     for j, target, now in ((1, target_mid, q_mid), (2, target_in, q_in)) if target != now})
-        q_mid, q_in = target_mid, target_in
-        up_b = _up_vector_b([0.0, q_mid * quarter, q_in * quarter])
-        for w_nominal, (k, n) in zip(rates, fits):
-            w = math.copysign(2 * math.pi * k / (n * grid), w_nominal)
-            q = max(1, ceil_steps(abs(w) / acc, grid))
-            a = w / (q * grid)
-            start = tl.now + q + n_settle
-            tl.parallel({0: [(q, a), (n_settle + n, 0.0), (q, -a)]})
-            rows.append((start * grid, (start + n) * grid, key, w, w_nominal, k, up_b, w * up_b + 0.0))
-    return tl.schedule(RATE_TABLE_AXES, grid), np.array(rows, dtype=RATE_WINDOW_DTYPE)
+    for r in w:
+        up_b = _up_vector_b(r["angles"])
+        rows.append((r["start"], r["end"], UP_NAMES[r["up"]], r["rate"], r["rate_nominal"], r["revolutions"], up_b,
+                     r["rate"] * up_b + 0.0))
+    return sched, np.array(rows, dtype=RATE_WINDOW_DTYPE)

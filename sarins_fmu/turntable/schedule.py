@@ -14,6 +14,7 @@ import numpy as np
 
 from ..core._arrays import read, written
 from ..core._lib import function
+from ..core.schedule import integrate
 
 AXIS_X = (1.0, 0.0, 0.0)
 AXIS_Y = (0.0, 1.0, 0.0)
@@ -61,10 +62,7 @@ class GimbalSchedule:
         object.__setattr__(self, "accel", accel)
         object.__setattr__(self, "angle0", np.broadcast_to(np.asarray(self.angle0, float), (axes.shape[0],)).copy())
         object.__setattr__(self, "rate0", np.broadcast_to(np.asarray(self.rate0, float), (axes.shape[0],)).copy())
-        dt = np.diff(times)[:, None]
-        rate_bp = self.rate0 + np.concatenate([np.zeros((1, axes.shape[0])), np.cumsum(accel * dt, axis=0)])
-        d_angle = rate_bp[:-1] * dt + 0.5 * accel * dt**2
-        angle_bp = self.angle0 + np.concatenate([np.zeros((1, axes.shape[0])), np.cumsum(d_angle, axis=0)])
+        angle_bp, rate_bp = integrate(times, accel, self.angle0, self.rate0)
         object.__setattr__(self, "_rate_bp", rate_bp)
         object.__setattr__(self, "_angle_bp", angle_bp)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..core.schedule import gimbal_axes
 from .rate_table import rate_table_3axis, rate_test, tumble_24
 from .rins import ROTATION_SCHEMES, dual_axis, single_axis
 from .schedule import GimbalSchedule
@@ -9,17 +10,13 @@ from .schedule import GimbalSchedule
 SCHEMES = ROTATION_SCHEMES + ("dual-axis", "rate-table-3axis", "tumble-24", "rate-test")
 
 
-_GIMBAL_AXES = {"dual-axis": "y,z", "rate-table-3axis": "z,x,y", "tumble-24": "z,x,y", "rate-test": "z,x,y"}
-
-
 def gimbal_axes_of(scheme: str) -> str:
-    """Gimbal chain of a scheme as axis letters, outer first (e.g. 'y,z')."""
-    if scheme in ROTATION_SCHEMES:
-        return "z"
-    try:
-        return _GIMBAL_AXES[scheme]
-    except KeyError:
-        raise ValueError(f"unknown scheme {scheme!r}; known: {', '.join(SCHEMES)}") from None
+    """Gimbal chain of a scheme as axis letters, outer first (e.g. 'y,z'; the core's
+    ``sarins_scheme_gimbal_axes``)."""
+    axes = gimbal_axes(scheme) if isinstance(scheme, str) else None
+    if axes is None:
+        raise ValueError(f"unknown scheme {scheme!r}; known: {', '.join(SCHEMES)}")
+    return axes
 
 
 def schedule_for(scheme: str, duration: float, *, rate_dps: float = 6.0, accel_dps2: float = 6.0,
