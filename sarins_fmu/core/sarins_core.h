@@ -21,6 +21,7 @@
 int sarins_core_abi(void);
 
 /* IMU family (issue 18) */
+#include "rng.h"
 #include "thermal.h"
 #include "correlated.h"
 #include "imu.h"
