@@ -51,7 +51,6 @@ from .core import imu as core_imu
 from .core import rng as core_rng
 from .core._lib import array_table
 from .core.rng import check_seed
-from .imu_correlated import CorrelatedErrors
 from . import imu_step
 from .imu_step import T_REF
 from .thermal import Ambient, ThermalModel, ThermalParams, _check_temperature
@@ -449,45 +448,34 @@ class IMU:
         self.h, self.n_sub = float(output_interval), int(round(n_sub))
         self.seed, self.t0, self.aging_days = check_seed(seed), float(t0), float(aging_days)
         self.thermal = ThermalModel(model.thermal, ambient, thermal_start, t0)
-        poly = model.axial_drift_poly
-        if aging_days > 0 and np.any(model.aging_sigma > 0):
-            poly = aged_drift_poly(model, [aging_days], seed=self.seed)[0]
-        self.drift_poly = poly
-        self._correlated = CorrelatedErrors(model, self.h)
         self._allocate()
+        self.drift_poly = self._state[imu_step.TRIAD][0].copy()  # (a, b, c), aged by aging_days
         self.reset()
 
     def _allocate(self) -> None:
-        """The state tuple of :mod:`sarins_fmu.imu_step` (constants filled here, state in :meth:`reset`)."""
-        m, corr = self.model, self._correlated
-        tau_gm = np.concatenate([m.gyro.bias_corr_time, m.accel.bias_corr_time])
-        gm_std = np.concatenate([m.gyro.bias_instability, m.accel.bias_instability])
-        consts = np.array([self.t0, self.h, m.axial_drift_dtdt, float(corr.die_lag), float(corr.active),
-                           float(self.n_sub), 0.0, 0.0])
-        sensor_par = np.vstack([self.thermal._heat, self.thermal._tau, np.exp(-self.h / tau_gm), gm_std])
-        coef = np.array([row for t in (m.gyro, m.accel)
-                         for row in (t.bias, t.bias_tc1, t.bias_tc2, t.scale_factor, t.scale_factor_tc)])
-        triad = np.vstack([self.drift_poly, m.gyro.quadratic, m.lowrate_gain, m.lowrate_width, m.accel.quadratic,
-                           m.gyro.random_walk, m.accel.random_walk])
-        mats = np.vstack([m.gyro.misalignment, m.g_sensitivity, m.accel.misalignment])
+        """The state tuple of :mod:`sarins_fmu.imu_step`, its constants built by the C core from the model's
+        flat parameters (``sarins_imu_build``; the state in :meth:`reset`)."""
+        from .imu_params import flatten  # (imu_params imports this module)
+
+        m = self.model
+        n_flicker = core_imu.flicker_count(m.flicker_tau_min, m.flicker_tau_max)
         base = np.zeros((2, 3))
         if isinstance(self.base, StaticBase):
             base[0], base[1] = self.base.inertial_rate_t(), self.base.specific_force_t()
-        self._state = (consts, np.zeros(2), sensor_par, np.zeros((2, 6)), coef, triad, mats,
-                       np.ascontiguousarray(self.axes), base, np.zeros((len(core_imu.STREAMS), core_rng.WORDS)),
-                       corr.par, corr.state, corr.phi, corr.q, corr.x_flicker)
+        self._state = (np.zeros(8), np.zeros(2), np.zeros((4, 6)), np.zeros((2, 6)), np.zeros((10, 3)),
+                       np.zeros((7, 3)), np.zeros((9, 3)), np.ascontiguousarray(self.axes), base,
+                       np.zeros((len(core_imu.STREAMS), core_rng.WORDS)), np.zeros((8, 6)), np.zeros((3, 6)),
+                       np.zeros(n_flicker), np.zeros((n_flicker, 6)), np.zeros((n_flicker, 6)))
         self._table = array_table(self._state)  # the same arrays as the C core sees them
+        flat = flatten(m)
+        core_imu.build(self._table, [flat[name] for name in core_imu.param_names()], self.t0, self.h, self.n_sub,
+                       self.aging_days * DAY, self.seed)
 
     def reset(self, ambient0: float | None = None) -> None:
         """Return to the state at construction (time, temperatures, random
         streams); ``ambient0`` (degC) overrides the ambient function at t0."""
-        self.thermal.reset(self.t0, ambient0)
-        s = self._state
-        clock, state = s[imu_step.CLOCK], s[imu_step.STATE]
-        clock[:] = (0.0, self.thermal._ambient_now)
-        state[0] = self.thermal.temperature
-        self._correlated.reset(state[0])
-        core_imu.seed(self._table, self.seed)  # the streams; GM and flicker stationary starts, turn-on bias
+        self.thermal.reset(self.t0, ambient0)  # the ambient at t0, checked
+        core_imu.start(self._table, self.thermal._ambient_now, self.thermal.start == "hot", self.seed)
 
     @property
     def time(self) -> float:

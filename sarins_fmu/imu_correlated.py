@@ -48,8 +48,10 @@ interval midpoint, Tdot its rate over the interval, degC/s)::
   (run-to-run repeatability), from its own stream.
 
 The terms are evaluated per interval in the C core
-(``sarins_fmu/core/correlated.c``), which also draws their random numbers
-(``sarins_imu_seed`` and the step); this module holds their parameters.
+(``sarins_fmu/core/correlated.c``), which also builds their parameters
+(``sarins_imu_build`` in ``imu_build.c``) and draws their random numbers
+(``sarins_imu_seed`` and the step); this module documents them and gives
+their helpers to Python.
 
 Every random term draws from its own stream of the IMU seed (flicker, rate
 random walk, turn-on: ``SARINS_IMU_STREAM_*`` in ``sarins_fmu/core/imu.h``),
@@ -65,13 +67,13 @@ import numpy as np
 
 from .core import imu as core_imu
 
-TERMS_PER_DECADE = 3
+TERMS_PER_DECADE = 3  # SARINS_IMU_FLICKER_PER_DECADE in sarins_fmu/core/imu_build.h
 
 
 def flicker_taus(tau_min: float, tau_max: float) -> np.ndarray:
-    """Log-spaced correlation times (s) of the Gauss-Markov sum, endpoints included."""
-    n = max(2, int(math.ceil(TERMS_PER_DECADE * math.log10(tau_max / tau_min))) + 1)
-    return np.geomspace(tau_min, tau_max, n)
+    """Log-spaced correlation times (s) of the Gauss-Markov sum, endpoints included (the C core's
+    ``sarins_imu_flicker_taus``: max(2, ceil(3 log10(tau_max / tau_min)) + 1) terms)."""
+    return core_imu.flicker_taus(tau_min, tau_max)
 
 
 def flicker_term_std(coefficient: float, taus) -> float:
@@ -87,46 +89,3 @@ def turn_on_bias(model, seed: int) -> np.ndarray:
     """The turn-on bias an IMU of ``model`` draws at power-up with ``seed``: (6,) gyro x, y, z (rad/s),
     accelerometer x, y, z (m/s^2) (the C core's ``sarins_imu_turn_on``, the draw the IMU's step uses)."""
     return core_imu.turn_on(seed, _stack(model, "turn_on_bias"))
-
-
-class CorrelatedErrors:
-    """Parameters and state of the time-correlated terms of one IMU (see the module docstring).
-
-    The arrays are allocated once and updated in place (the IMU's compiled
-    step reads them, see :mod:`sarins_fmu.imu_step`): ``par`` (8, 6) die
-    time constant, c_grad, s_grad, c_hyst, w_hyst, rrw, turn-on bias (drawn
-    by the C core when the IMU is seeded), turn-on std; ``state`` (3, 6) die
-    temperature, play operator, rate random walk; ``phi`` (F,), ``q`` (F, 6)
-    and ``x_flicker`` (F, 6, its stationary start drawn when the IMU is
-    seeded) of the F flicker terms.
-
-    Parameters
-    ----------
-    model : ImuModel
-    h : output interval, s
-    """
-
-    def __init__(self, model, h: float):
-        self.h = float(h)
-        tau_die = np.asarray(model.thermal.die_time_constant, float)
-        c_grad, s_grad = _stack(model, "bias_dtdt"), _stack(model, "scale_factor_dtdt")
-        c_hyst, w_hyst = _stack(model, "hysteresis"), _stack(model, "hysteresis_width")
-        flicker, rrw = _stack(model, "flicker"), _stack(model, "rate_random_walk")
-        self.turn_on_std = _stack(model, "turn_on_bias")
-        taus = flicker_taus(model.flicker_tau_min, model.flicker_tau_max)
-        self.phi = np.exp(-self.h / taus)
-        self.q = np.ascontiguousarray(np.outer(np.full(len(taus), flicker_term_std(1.0, taus)), flicker))  # (F, 6)
-        self.par = np.vstack([tau_die, c_grad, s_grad, c_hyst, w_hyst, rrw, np.zeros(6), self.turn_on_std])
-        self.state = np.zeros((3, 6))
-        self.x_flicker = np.zeros(self.q.shape)
-        self.die_lag = bool(np.any(tau_die > 0))
-        self.active = self.die_lag or any(np.any(x != 0) for x in (
-            c_grad, s_grad, c_hyst, flicker, rrw, self.turn_on_std))
-
-    def reset(self, temperature) -> None:
-        """Initial deterministic state: die at ``temperature`` (6,) degC, play
-        relaxed, RRW at 0 (the flicker terms' start and the turn-on bias are
-        drawn by ``sarins_imu_seed`` after this)."""
-        self.state[0] = temperature
-        self.state[1] = temperature
-        self.state[2] = 0.0

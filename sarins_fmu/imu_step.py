@@ -15,7 +15,9 @@ interval called from C without Python (the IMUThermal FMU's step,
    coning and sculling);
 3. ``sarins_imu_white_noise``: angle / velocity random walk.
 
-Every random number is drawn inside the C step from the seeded streams
+The constant arrays are built by the C core from the model's flat parameters
+(``sarins_imu_build`` in ``imu_build.h``) and a run starts with
+``sarins_imu_start``.  Every random number is drawn inside the C step from the seeded streams
 whose states row 9 holds (``sarins_fmu/core/rng.h``; one stream per purpose,
 ``SARINS_IMU_STREAM_*`` in ``imu.h``); ``sarins_imu_seed`` starts them from
 the IMU seed.  A stream continues where the last step left it, so results

@@ -238,3 +238,86 @@ def aged_poly(value: int, ages, poly, sigma, tau: float) -> np.ndarray:
     _aged_poly(check_seed(value), ages.shape[0], ages.ctypes.data, poly.ctypes.data, sigma.ctypes.data,
                float(tau), out.ctypes.data)
     return out
+
+
+# ------------------------------------------------------------------ construction (imu_build.h, imu_params.h)
+
+_build = function("sarins_imu_build", _INT, _P, _I64, _P, _F64, _F64, _I64, _F64, _U64)
+_start = function("sarins_imu_start", _INT, _P, _I64, _F64, _INT, _U64)
+_flicker_count = function("sarins_imu_flicker_count", _I64, _F64, _F64)
+_flicker_taus = function("sarins_imu_flicker_taus", None, _F64, _F64, _I64, _P)
+_check_params = function("sarins_imu_check_params", _I64, _P, ctypes.POINTER(ctypes.c_char_p))
+_param_name = function("sarins_imu_param_name", ctypes.c_char_p, _I64)
+_preset_name = function("sarins_imu_preset_name", ctypes.c_char_p, _I64)
+_preset_params = function("sarins_imu_preset_params", _INT, ctypes.c_char_p, _P)
+
+
+def param_names() -> tuple:
+    """The flat parameters' names in the C core's order (``imu_params.h``)."""
+    names, i = [], 0
+    while (name := _param_name(i)) is not None:
+        names.append(name.decode())
+        i += 1
+    return tuple(names)
+
+
+N_PARAMS = len(param_names())
+
+
+def preset_names() -> tuple:
+    """The presets the C core holds as data (``imu_params.c``)."""
+    names, i = [], 0
+    while (name := _preset_name(i)) is not None:
+        names.append(name.decode())
+        i += 1
+    return tuple(names)
+
+
+def preset_params(name: str) -> np.ndarray:
+    """The flat parameter vector (N_PARAMS,) of the C core's preset ``name``."""
+    out = np.empty(N_PARAMS)
+    if _preset_params(str(name).encode(), out.ctypes.data) != 0:
+        raise ValueError(f"the C core has no IMU preset {name!r}")
+    return out
+
+
+def check_params(par) -> str | None:
+    """None when the flat parameter vector (N_PARAMS,) is a valid IMU model, else "<name> <rule>"."""
+    par = _arrays.read(par, (N_PARAMS,), "par")
+    reason = ctypes.c_char_p()
+    bad = _check_params(par.ctypes.data, ctypes.byref(reason))
+    return None if bad < 0 else f"{_param_name(bad).decode()} {reason.value.decode()}"
+
+
+def flicker_count(tau_min: float, tau_max: float) -> int:
+    """Number of Gauss-Markov terms of the flicker synthesis for the band [tau_min, tau_max] (s)."""
+    n = _flicker_count(float(tau_min), float(tau_max))
+    if n < 1:
+        raise ValueError("flicker correlation times need 0 < flicker_tau_min < flicker_tau_max (finite)")
+    return n
+
+
+def flicker_taus(tau_min: float, tau_max: float) -> np.ndarray:
+    """The flicker terms' correlation times (F,), s, log-spaced over [tau_min, tau_max]."""
+    out = np.empty(flicker_count(tau_min, tau_max))
+    _flicker_taus(float(tau_min), float(tau_max), out.shape[0], out.ctypes.data)
+    return out
+
+
+def build(table, par, t0: float, h: float, n_sub: int, age: float, value: int) -> None:
+    """Fill the IMU ``table``'s constant arrays from the flat parameters ``par`` (``sarins_imu_build``): start
+    time t0 (s), interval h (s), n_sub minor steps, the drift model aged by ``age`` (s) with seed ``value``."""
+    table = _arrays.table(table)
+    par = _arrays.read(par, (N_PARAMS,), "par")
+    problem = check_params(par)
+    if problem is not None:
+        raise ValueError(f"IMU parameter {problem}")
+    _check(_build(table.ctypes.data, table.shape[0], par.ctypes.data, float(t0), float(h), int(n_sub), float(age),
+                  check_seed(value)))
+
+
+def start(table, ambient0: float, hot: bool, value: int) -> None:
+    """Start a run of the built ``table`` (``sarins_imu_start``): ambient0 degC at the start, hot or cold,
+    the random streams from seed ``value``."""
+    table = _arrays.table(table)
+    _check(_start(table.ctypes.data, table.shape[0], float(ambient0), int(bool(hot)), check_seed(value)))

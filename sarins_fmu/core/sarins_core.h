@@ -25,6 +25,8 @@ int sarins_core_abi(void);
 #include "thermal.h"
 #include "correlated.h"
 #include "imu.h"
+#include "imu_params.h"
+#include "imu_build.h"
 
 /* INS family and turntable (issue 18) */
 #include "earth.h"
