@@ -194,6 +194,11 @@ def test_bad_arrays_are_refused_with_a_clear_error():
     assert all(np.array_equal(a, b) for a, b in zip(before, sensor.state_arrays()))  # nothing changed
     streams[1, 3] -= 1.0
     core_imu.advance(sensor._table, [20.0], temps, *out3)
+    streams[0, 6] = 0.5  # the white-noise stream's (drawn last, after the thermal advance) spare flag
+    before = [a.copy() for a in sensor.state_arrays()]
+    with pytest.raises(ValueError, match="random stream state in it is not one"):
+        core_imu.steps(sensor._table, [[0.0]], [[0.0]], [[0.0]], np.zeros((1, 3)), np.zeros((1, 3)), [20.0])
+    assert all(np.array_equal(a, b) for a, b in zip(before, sensor.state_arrays()))  # nothing changed
     assert core_imu.fmu_step(sensor._table, np.zeros(4), 0.0, 1.0) == 1  # no io rows: nothing done
 
 

@@ -224,7 +224,7 @@ static int has_shape(const int64_t *table, int64_t i, int64_t rows, int64_t cols
 }
 
 /* The IMU arrays of table rows 0..14 with their shapes checked; 0 when they fit. */
-static int imu_view(const int64_t *table, int64_t rows, ImuView *v) {
+static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
     if (table == NULL || rows < SARINS_IMU_N_ARRAYS) return SARINS_IMU_BAD_TABLE;
     v->n_axes = table[3 * SARINS_IMU_AXES + 1];
     v->n_flicker = table[3 * SARINS_IMU_PHI + 1];
@@ -255,6 +255,17 @@ static int imu_view(const int64_t *table, int64_t rows, ImuView *v) {
     v->x_flicker = table_array(table, SARINS_IMU_X_FLICKER);
     /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub */
     if (!(v->consts[1] > 0.0 && v->consts[5] >= 1.0)) return SARINS_IMU_BAD_TABLE;
+    return SARINS_IMU_OK;
+}
+
+/* imu_shapes, and every stream state checked, so that no later load fails after a state has changed. */
+static int imu_view(const int64_t *table, int64_t rows, ImuView *v) {
+    int status = imu_shapes(table, rows, v);
+    if (status != SARINS_IMU_OK) return status;
+    for (int s = 0; s < SARINS_IMU_N_STREAMS; s++) {
+        SarinsRng r;
+        if (!sarins_rng_unpack(v->rng + SARINS_RNG_WORDS * s, &r)) return SARINS_IMU_BAD_TABLE;
+    }
     return SARINS_IMU_OK;
 }
 
@@ -379,7 +390,7 @@ void sarins_imu_turn_on(uint64_t seed, const double *std, double *out) {
 
 int sarins_imu_seed(const int64_t *table, int64_t rows, uint64_t seed) {
     ImuView v;
-    int status = imu_view(table, rows, &v);
+    int status = imu_shapes(table, rows, &v); /* the stream states are written here */
     if (status != SARINS_IMU_OK) return status;
     for (int s = 0; s < SARINS_IMU_N_STREAMS; s++) {
         SarinsRng r;
@@ -525,7 +536,7 @@ int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, do
     double dtheta[3], dv[3], temps[6];
     if (sarins_imu_one_interval(table, rows, motion[0], motion[1], motion[2], amb_end, dtheta, dv, temps)
         != SARINS_IMU_OK)
-        return 1; /* a stream state that is not one: the Python step reports it */
+        return 1; /* not reached: the table and its stream states were checked above */
     for (int i = 0; i < 3; i++) {
         buf[(int64_t)io[IO_OUT + i]] = dtheta[i];
         buf[(int64_t)io[IO_OUT + 3 + i]] = dv[i];
