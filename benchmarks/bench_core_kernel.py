@@ -5,7 +5,10 @@ binding (:func:`sarins_fmu.core.imu.increments`: one gimbal about z, mems-like
 error terms, low-rate nonlinearity on) on one thread and on all threads, beside
 the same arithmetic written as one flat scalar C loop (one gimbal, no
 function-pointer or array-shape generality), compiled here at run time with
-the core's flags and timed in C.  The ratios hold on a noisy machine because
+the core's flags and timed in C.  A last pair of lines times the whole
+``IMU.step`` of the ``mems`` preset on the same motion (thermal model,
+every error term, all its random numbers drawn in the C core) against the
+same yardstick.  The ratios hold on a noisy machine because
 both run in the same minute on the same cores.
 
     python benchmarks/bench_core_kernel.py [--intervals 4000] [--repeat 5]
@@ -24,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from sarins_fmu import imu as imu_mod
 from sarins_fmu.core import imu as core_imu
 
 FLAGS = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-fno-fast-math", "-ffp-contract=off"]  # as setup.py
@@ -171,6 +175,29 @@ def core_ns(n_int: int, repeat: int, threads: int) -> float:
     return best * 1e9 / (n_int * N_SUB)
 
 
+def imu_step_ns(n_int: int, repeat: int, threads: int) -> float:
+    """ns per sample of the whole ``IMU.step`` of the mems preset (one gimbal turning at RATE, static base),
+    a new IMU per timed call (best of ``repeat``); ``threads`` through SARINS_THREADS."""
+    k = np.arange(n_int)
+    angle0, rate0, accel = (RATE * k)[:, None], np.full((n_int, 1), RATE), np.zeros((n_int, 1))
+    saved = os.environ.get("SARINS_THREADS")
+    os.environ["SARINS_THREADS"] = str(threads)
+    try:
+        best = math.inf
+        for _ in range(repeat):
+            sensor = imu_mod.IMU(imu_mod.preset("mems"), imu_mod.StaticBase(0.6), [[0.0, 0.0, 1.0]],
+                                 internal_rate=N_SUB, seed=1)
+            t0 = time.perf_counter()
+            sensor.step(angle0, rate0, accel)
+            best = min(best, time.perf_counter() - t0)
+    finally:
+        if saved is None:
+            del os.environ["SARINS_THREADS"]
+        else:
+            os.environ["SARINS_THREADS"] = saved
+    return best * 1e9 / (n_int * N_SUB)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--intervals", type=int, default=4000, help="1 s intervals per timed call")
@@ -182,11 +209,14 @@ def main() -> None:
     yard = yardstick_ns(args.intervals, args.repeat)
     one = core_ns(args.intervals, args.repeat, 1)
     every = core_ns(args.intervals, args.repeat, threads)
+    step_one = imu_step_ns(args.intervals, args.repeat, 1)
+    step_every = imu_step_ns(args.intervals, args.repeat, threads)
     yard_again = yardstick_ns(args.intervals, args.repeat)  # the machine's load may have changed meanwhile
     yard = min(yard, yard_again)
     print(f"{args.intervals} intervals x {N_SUB} minor steps, best of {args.repeat}; cpu_count {os.cpu_count()}")
     print(f"  {'yardstick (flat scalar C loop)':<34} {yard:8.1f} ns/sample")
-    for label, value in (("core minor loop, 1 thread", one), (f"core minor loop, {threads} threads", every)):
+    for label, value in (("core minor loop, 1 thread", one), (f"core minor loop, {threads} threads", every),
+                         ("IMU.step mems, 1 thread", step_one), (f"IMU.step mems, {threads} threads", step_every)):
         print(f"  {label:<34} {value:8.1f} ns/sample   ratio {value / yard:5.2f}")
 
 

@@ -6,9 +6,8 @@ state: it reads the inputs from the slave's float64 Real buffer
 tags, runs the core's kernels (the same ones the in-process runs use) and
 writes the outputs back to the buffer.  It returns 0 when it did the step,
 and 1 *without having changed any state* when it cannot (the first step,
-alignment phase changes, a block of random numbers to draw, a new drift
-compensation value or a queued one taking over, any input or tag the Python
-``do_step`` would refuse): the Python ``do_step`` then runs as before and
+alignment phase changes, a new drift compensation value or a queued one
+taking over, any input or tag the Python ``do_step`` would refuse): the Python ``do_step`` then runs as before and
 stays the one place that raises the error messages.
 
 Two ways in, both into the same C function of the core

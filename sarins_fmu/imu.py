@@ -27,6 +27,12 @@ every minor-step increment at the internal rate (the C core's minor loop,
   increment with its exact integrated variance (N(0, rw^2 h)); this is the
   same distribution as summing minor-step noise, at a fraction of the cost.
 
+Every random number (white noise, Gauss-Markov, the time-correlated terms,
+turn-on bias, ageing) is drawn in the C core from its own seeded stream
+(``sarins_fmu/core/rng.h``: SplitMix64 streams from (seed, stream id),
+normals by the polar method); the IMU passes its seed, never numbers, so a
+seed gives the same run in process and inside the FMU.
+
 Biases, scale factors and temperatures are evaluated once per output
 interval (the thermal time constants are hours; the GM correlation times
 are minutes or longer); the motion, the linear and nonlinear error terms and
@@ -42,8 +48,9 @@ import numpy as np
 
 from . import earth
 from .core import imu as core_imu
+from .core import rng as core_rng
 from .core._lib import array_table
-from .imu_correlated import CorrelatedErrors
+from .core.rng import check_seed
 from . import imu_step
 from .imu_step import T_REF
 from .thermal import Ambient, ThermalModel, ThermalParams, _check_temperature
@@ -294,11 +301,14 @@ def aged_drift_poly(model: ImuModel, days, seed: int = 0):
 
     Each coefficient is x(t) = x0 + m(t) with m a stationary-increment
     first-order Markov process started at 0 (seed 002 eq. (20)):
-    m_{k+1} = exp(-dt/tau) m_k + sigma sqrt(1 - exp(-2 dt/tau)) w_k.
+    m_{k+1} = exp(-dt/tau) m_k + sigma sqrt(1 - exp(-2 dt/tau)) w_k,
+    w from the ageing stream of ``seed`` (the C core's
+    ``sarins_imu_aged_poly``, the draw an :class:`IMU` of that seed makes).
 
     Parameters
     ----------
     days : array_like (K,), increasing days since calibration
+    seed : int in [0, 2**64)
     Returns
     -------
     (K, 3) coefficients in the units of ``model.axial_drift_poly``.
@@ -306,16 +316,7 @@ def aged_drift_poly(model: ImuModel, days, seed: int = 0):
     days = np.atleast_1d(np.asarray(days, float))
     if np.any(np.diff(days) < 0) or np.any(days < 0):
         raise ValueError("days must be non-negative and increasing")
-    rng = np.random.default_rng(seed)
-    dt = np.diff(np.concatenate([[0.0], days])) * DAY
-    decay = np.exp(-dt / model.aging_corr_time)[:, None]
-    w = rng.standard_normal((len(days), 3)) * model.aging_sigma * np.sqrt(1.0 - decay**2)
-    m = np.zeros(3)
-    out = np.empty((len(days), 3))
-    for k in range(len(days)):  # one step per day sample, not per IMU sample
-        m = decay[k] * m + w[k]
-        out[k] = model.axial_drift_poly + m
-    return out
+    return core_imu.aged_poly(seed, days * DAY, model.axial_drift_poly, model.aging_sigma, model.aging_corr_time)
 
 
 @dataclass(frozen=True)
@@ -417,11 +418,12 @@ class IMU:
     output_interval : float, s (one Delta theta / Delta v per interval)
     internal_rate : float, Hz (minor loop rate; must give a whole number of
         minor steps per interval)
-    seed : int, seeds the noise and bias-instability streams
+    seed : int in [0, 2**64), seeds every random stream (white noise, bias
+        instability, the time-correlated terms, turn-on bias, ageing), drawn
+        in the C core step by step (the same numbers however the run is cut
+        into steps)
     thermal_start : 'hot' or 'cold'; ambient : callable T_amb(t) degC
     aging_days : float, age of the drift model since calibration (days)
-    block_rows : int, intervals of random numbers drawn at once per stream
-        (any value gives the same results; see :mod:`sarins_fmu.imu_step`)
 
     The state a step changes lives in the arrays of :mod:`sarins_fmu.imu_step`
     (``thermal`` gives the parameters, the ambient function and the initial
@@ -430,8 +432,7 @@ class IMU:
 
     def __init__(self, model: ImuModel, base: StaticBase, gimbal_axes=((0.0, 0.0, 1.0),), *,
                  output_interval: float = 1.0, internal_rate: float = 200.0, seed: int = 0,
-                 thermal_start: str = "hot", ambient=Ambient(), aging_days: float = 0.0, t0: float = 0.0,
-                 block_rows: int = 4096):
+                 thermal_start: str = "hot", ambient=Ambient(), aging_days: float = 0.0, t0: float = 0.0):
         if not (output_interval > 0 and math.isfinite(output_interval)):
             raise ValueError(f"output interval must be positive, got {output_interval}")
         if not (internal_rate > 0 and math.isfinite(internal_rate)):
@@ -445,53 +446,36 @@ class IMU:
         self.model, self.base = model, base
         self.axes = np.atleast_2d(np.asarray(gimbal_axes, dtype=float))
         self.h, self.n_sub = float(output_interval), int(round(n_sub))
-        self.seed, self.t0, self.aging_days = int(seed), float(t0), float(aging_days)
+        self.seed, self.t0, self.aging_days = check_seed(seed), float(t0), float(aging_days)
         self.thermal = ThermalModel(model.thermal, ambient, thermal_start, t0)
-        poly = model.axial_drift_poly
-        if aging_days > 0 and np.any(model.aging_sigma > 0):
-            poly = aged_drift_poly(model, [aging_days], seed=self.seed + 7919)[0]
-        self.drift_poly = poly
-        self._correlated = CorrelatedErrors(model, self.h, self.seed)
-        self._allocate(block_rows)
+        self._allocate()
+        self.drift_poly = self._state[imu_step.TRIAD][0].copy()  # (a, b, c), aged by aging_days
         self.reset()
 
-    def _allocate(self, block_rows: int) -> None:
-        """The state tuple of :mod:`sarins_fmu.imu_step` (constants filled here, state in :meth:`reset`)."""
-        m, corr = self.model, self._correlated
-        if not (isinstance(block_rows, int) and block_rows >= 1):
-            raise ValueError(f"block_rows must be a positive integer, got {block_rows!r}")
-        self._block_rows = block_rows
-        tau_gm = np.concatenate([m.gyro.bias_corr_time, m.accel.bias_corr_time])
-        gm_std = np.concatenate([m.gyro.bias_instability, m.accel.bias_instability])
-        consts = np.array([self.t0, self.h, m.axial_drift_dtdt, float(corr.die_lag), float(corr.active),
-                           float(self.n_sub), float(block_rows), 0.0])
-        sensor_par = np.vstack([self.thermal._heat, self.thermal._tau, np.exp(-self.h / tau_gm), gm_std])
-        coef = np.array([row for t in (m.gyro, m.accel)
-                         for row in (t.bias, t.bias_tc1, t.bias_tc2, t.scale_factor, t.scale_factor_tc)])
-        triad = np.vstack([self.drift_poly, m.gyro.quadratic, m.lowrate_gain, m.lowrate_width, m.accel.quadratic,
-                           m.gyro.random_walk, m.accel.random_walk])
-        mats = np.vstack([m.gyro.misalignment, m.g_sensitivity, m.accel.misalignment])
+    def _allocate(self) -> None:
+        """The state tuple of :mod:`sarins_fmu.imu_step`, its constants built by the C core from the model's
+        flat parameters (``sarins_imu_build``; the state in :meth:`reset`)."""
+        from .imu_params import flatten  # (imu_params imports this module)
+
+        m = self.model
+        n_flicker = core_imu.flicker_count(m.flicker_tau_min, m.flicker_tau_max)
         base = np.zeros((2, 3))
         if isinstance(self.base, StaticBase):
             base[0], base[1] = self.base.inertial_rate_t(), self.base.specific_force_t()
-        corr_rows = block_rows if corr.active else 0
-        self._state = (consts, np.zeros(3), sensor_par, np.zeros((2, 6)), coef, triad, mats,
-                       np.ascontiguousarray(self.axes), base, np.zeros((block_rows, 6)), np.zeros((block_rows, 6)),
-                       corr.par, corr.state, corr.phi, corr.q, corr.x_flicker, np.zeros((corr_rows, corr.columns)))
+        self._state = (np.zeros(8), np.zeros(2), np.zeros((4, 6)), np.zeros((2, 6)), np.zeros((10, 3)),
+                       np.zeros((7, 3)), np.zeros((9, 3)), np.ascontiguousarray(self.axes), base,
+                       np.zeros((len(core_imu.STREAMS), core_rng.WORDS)), np.zeros((8, 6)), np.zeros((3, 6)),
+                       np.zeros(n_flicker), np.zeros((n_flicker, 6)), np.zeros((n_flicker, 6)))
         self._table = array_table(self._state)  # the same arrays as the C core sees them
+        flat = flatten(m)
+        core_imu.build(self._table, [flat[name] for name in core_imu.param_names()], self.t0, self.h, self.n_sub,
+                       self.aging_days * DAY, self.seed)
 
     def reset(self, ambient0: float | None = None) -> None:
         """Return to the state at construction (time, temperatures, random
         streams); ``ambient0`` (degC) overrides the ambient function at t0."""
-        self.thermal.reset(self.t0, ambient0)
-        seq = np.random.SeedSequence(self.seed)
-        self._rng_noise, self._rng_gm = (np.random.default_rng(s) for s in seq.spawn(2))
-        s = self._state
-        clock, state = s[imu_step.CLOCK], s[imu_step.STATE]
-        clock[:] = (0.0, self.thermal._ambient_now, self._block_rows)  # random blocks empty
-        state[0] = self.thermal.temperature
-        state[1] = self._rng_gm.standard_normal(6) * s[imu_step.SENSOR_PAR][3]  # GM: stationary start
-        self._correlated.reset(state[0])
+        self.thermal.reset(self.t0, ambient0)  # the ambient at t0, checked
+        core_imu.start(self._table, self.thermal._ambient_now, self.thermal.start == "hot", self.seed)
 
     @property
     def time(self) -> float:
@@ -506,32 +490,6 @@ class IMU:
     def state_arrays(self) -> tuple:
         """The arrays of :mod:`sarins_fmu.imu_step` (updated in place by every step; keep them alive)."""
         return self._state
-
-    def _refill(self, n: int) -> None:
-        """Make the random blocks hold at least n unused rows (n <= block rows).
-
-        Unused rows move to the top; the rest is drawn from each stream in
-        order, so the sequence each stream delivers is the one it would
-        deliver interval by interval.
-        """
-        s = self._state
-        clock = s[imu_step.CLOCK]
-        pos = int(clock[2])
-        rows = self._block_rows
-        if rows - pos >= n:
-            return
-        keep = rows - pos
-        for block, draw in ((s[imu_step.GM_BLOCK], self._rng_gm.standard_normal),
-                            (s[imu_step.WHITE_BLOCK], self._rng_noise.standard_normal),
-                            (s[imu_step.CORR_BLOCK], None)):
-            if block.shape[0] == 0:
-                continue
-            block[:keep] = block[pos:]
-            if draw is None:
-                self._correlated.draw(block[keep:])
-            else:
-                block[keep:] = draw((pos, block.shape[1]))
-        clock[2] = 0.0
 
     def step(self, angle0, rate0, accel, ambient=None):
         """Produce the increments of the next K output intervals.
@@ -561,17 +519,10 @@ class IMU:
         _check_temperature(amb_end)
         w_t, f_t = self.base.base_motion(t_end - self.h, self.h)
         w_t, f_t = (np.ascontiguousarray(x, dtype=float) for x in (w_t, f_t))
-        dtheta, dv, temps = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 6))
-        for k0 in range(0, n, self._block_rows):
-            k1 = min(n, k0 + self._block_rows)
-            self._refill(k1 - k0)
-            dtheta[k0:k1], dv[k0:k1], temps[k0:k1] = self._block(
-                angle0[k0:k1], rate0[k0:k1], accel[k0:k1], w_t[k0:k1], f_t[k0:k1], amb_end[k0:k1])
-        return dtheta, dv, temps
+        return self._intervals(angle0, rate0, accel, w_t, f_t, amb_end)
 
-    def _block(self, angle0, rate0, accel, w_t, f_t, amb_end):
-        """K intervals whose random numbers the blocks hold: one C call for a few, the minor loop over the
-        thread pool for many (the same results)."""
+    def _intervals(self, angle0, rate0, accel, w_t, f_t, amb_end):
+        """K intervals: one C call for a few, the minor loop over the thread pool for many (the same results)."""
         n = amb_end.shape[0]
         if n < core_imu.PARALLEL_MIN:
             return core_imu.steps(self._table, angle0, rate0, accel, w_t, f_t, amb_end)

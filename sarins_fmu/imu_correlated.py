@@ -48,12 +48,15 @@ interval midpoint, Tdot its rate over the interval, degC/s)::
   (run-to-run repeatability), from its own stream.
 
 The terms are evaluated per interval in the C core
-(``sarins_fmu/core/correlated.c``); this module holds their parameters and
-random streams.
+(``sarins_fmu/core/correlated.c``), which also builds their parameters
+(``sarins_imu_build`` in ``imu_build.c``) and draws their random numbers
+(``sarins_imu_seed`` and the step); this module documents them and gives
+their helpers to Python.
 
-Every random term draws from streams spawned from the IMU seed at indices
-that the older terms do not use, so adding these terms never changes the
-noise of a model that has them all at zero (``ideal``, ``nav-rlg``).
+Every random term draws from its own stream of the IMU seed (flicker, rate
+random walk, turn-on: ``SARINS_IMU_STREAM_*`` in ``sarins_fmu/core/imu.h``),
+so these terms never change the noise of the other terms, and a model that
+has them all at zero (``ideal``, ``nav-rlg``) draws nothing for them.
 """
 
 from __future__ import annotations
@@ -62,14 +65,15 @@ import math
 
 import numpy as np
 
-TERMS_PER_DECADE = 3
-_STREAM_TURN_ON, _STREAM_PROCESS = 2, 3  # spawn keys beside the IMU's noise (0) and GM (1) streams
+from .core import imu as core_imu
+
+TERMS_PER_DECADE = 3  # SARINS_IMU_FLICKER_PER_DECADE in sarins_fmu/core/imu_build.h
 
 
 def flicker_taus(tau_min: float, tau_max: float) -> np.ndarray:
-    """Log-spaced correlation times (s) of the Gauss-Markov sum, endpoints included."""
-    n = max(2, int(math.ceil(TERMS_PER_DECADE * math.log10(tau_max / tau_min))) + 1)
-    return np.geomspace(tau_min, tau_max, n)
+    """Log-spaced correlation times (s) of the Gauss-Markov sum, endpoints included (the C core's
+    ``sarins_imu_flicker_taus``: max(2, ceil(3 log10(tau_max / tau_min)) + 1) terms)."""
+    return core_imu.flicker_taus(tau_min, tau_max)
 
 
 def flicker_term_std(coefficient: float, taus) -> float:
@@ -81,63 +85,7 @@ def _stack(model, name):
     return np.concatenate([getattr(model.gyro, name), getattr(model.accel, name)])
 
 
-def _turn_on(seed: int, std: np.ndarray) -> np.ndarray:
-    on = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(_STREAM_TURN_ON,)))
-    return on.standard_normal(6) * std
-
-
 def turn_on_bias(model, seed: int) -> np.ndarray:
     """The turn-on bias an IMU of ``model`` draws at power-up with ``seed``: (6,) gyro x, y, z (rad/s),
-    accelerometer x, y, z (m/s^2)."""
-    return _turn_on(seed, _stack(model, "turn_on_bias"))
-
-
-class CorrelatedErrors:
-    """Parameters and state of the time-correlated terms of one IMU (see the module docstring).
-
-    The arrays are allocated once and updated in place (the IMU's compiled
-    step reads them, see :mod:`sarins_fmu.imu_step`): ``par`` (7, 6) die
-    time constant, c_grad, s_grad, c_hyst, w_hyst, rrw, turn-on bias (drawn
-    at :meth:`reset`); ``state`` (3, 6) die temperature, play operator,
-    rate random walk; ``phi`` (F,), ``q`` (F, 6) and ``x_flicker`` (F, 6)
-    of the F flicker terms.
-
-    Parameters
-    ----------
-    model : ImuModel
-    h : output interval, s
-    seed : int, the IMU seed
-    """
-
-    def __init__(self, model, h: float, seed: int):
-        self.h, self.seed = float(h), int(seed)
-        tau_die = np.asarray(model.thermal.die_time_constant, float)
-        c_grad, s_grad = _stack(model, "bias_dtdt"), _stack(model, "scale_factor_dtdt")
-        c_hyst, w_hyst = _stack(model, "hysteresis"), _stack(model, "hysteresis_width")
-        flicker, rrw = _stack(model, "flicker"), _stack(model, "rate_random_walk")
-        self.turn_on_std = _stack(model, "turn_on_bias")
-        taus = flicker_taus(model.flicker_tau_min, model.flicker_tau_max)
-        self.phi = np.exp(-self.h / taus)
-        self.q = np.ascontiguousarray(np.outer(np.full(len(taus), flicker_term_std(1.0, taus)), flicker))  # (F, 6)
-        self.par = np.vstack([tau_die, c_grad, s_grad, c_hyst, w_hyst, rrw, np.zeros(6)])
-        self.state = np.zeros((3, 6))
-        self.x_flicker = np.zeros(self.q.shape)
-        self.columns = self.q.size + 6  # driving noise per interval
-        self.die_lag = bool(np.any(tau_die > 0))
-        self.active = self.die_lag or any(np.any(x != 0) for x in (
-            c_grad, s_grad, c_hyst, flicker, rrw, self.turn_on_std))
-        self.random = bool(np.any(flicker > 0) or np.any(rrw > 0))
-
-    def reset(self, temperature) -> None:
-        """Initial state: die at ``temperature`` (6,) degC, play relaxed,
-        flicker terms stationary, RRW at 0, a new turn-on bias for the seed."""
-        self.state[0] = temperature
-        self.state[1] = temperature
-        self.state[2] = 0.0
-        self._rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(_STREAM_PROCESS,)))
-        self.par[6] = _turn_on(self.seed, self.turn_on_std)
-        self.x_flicker[:] = self._rng.standard_normal(self.q.shape) * self.q if self.random else 0.0
-
-    def draw(self, out) -> None:
-        """Fill ``out`` (rows, columns) with the next driving noise (zeros when no term is random)."""
-        out[:] = self._rng.standard_normal(out.shape) if self.random else 0.0
+    accelerometer x, y, z (m/s^2) (the C core's ``sarins_imu_turn_on``, the draw the IMU's step uses)."""
+    return core_imu.turn_on(seed, _stack(model, "turn_on_bias"))

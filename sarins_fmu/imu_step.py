@@ -15,19 +15,21 @@ interval called from C without Python (the IMUThermal FMU's step,
    coning and sculling);
 3. ``sarins_imu_white_noise``: angle / velocity random walk.
 
-Random numbers come from the IMU's numpy Generators in blocks of
-``block_rows`` intervals (:meth:`IMU._refill`); a stream drawn in blocks is
-the same sequence as drawn interval by interval (numpy's ``standard_normal``
-fills row-major from one stream), so results do not depend on the block size
-or on how the run is chunked.
+The constant arrays are built by the C core from the model's flat parameters
+(``sarins_imu_build`` in ``imu_build.h``) and a run starts with
+``sarins_imu_start``.  Every random number is drawn inside the C step from the seeded streams
+whose states row 9 holds (``sarins_fmu/core/rng.h``; one stream per purpose,
+``SARINS_IMU_STREAM_*`` in ``imu.h``); ``sarins_imu_seed`` starts them from
+the IMU seed.  A stream continues where the last step left it, so results
+do not depend on how a run is cut into steps.
 
 Array layout (``s`` below, the tuple :meth:`IMU.state_arrays` returns):
 
 ====  =================  =====================================================
  0    consts (8,)        t0, h, drift_dtdt, die_lag, correlated_active, n_sub,
-                         block_rows, (spare)
- 1    clock (3,)         completed intervals k, ambient at the last interval
-                         end (degC), next unused row of the random blocks
+                         (spare), (spare)
+ 1    clock (2,)         completed intervals k, ambient at the last interval
+                         end (degC)
  2    sensor_par (4, 6)  self-heating, thermal time constant, GM phi, GM std
  3    state (2, 6)       reported temperatures (degC), GM bias states
  4    coef (10, 3)       per triad: bias, tc1, tc2, scale factor, sf_tc
@@ -39,24 +41,23 @@ Array layout (``s`` below, the tuple :meth:`IMU.state_arrays` returns):
  8    base (2, 3)        the base frame's inertial rate and specific force
                          (resolved in t) held over the FMU step's interval
                          (a static base's at construction)
- 9    gm_block (B, 6)    Gauss-Markov driving noise
-10    white_block (B, 6) white-noise draws
-11    corr_par (7, 6)    die time constant, gradient bias and scale factor,
+ 9    rng (6, 8)         random stream states (white noise, Gauss-Markov,
+                         flicker, rate random walk, turn-on, ageing), packed
+                         as rng.h's sarins_rng_pack writes them
+10    corr_par (8, 6)    die time constant, gradient bias and scale factor,
                          hysteresis amplitude and width, rate random walk,
-                         turn-on bias
-12    corr_state (3, 6)  die temperatures, play operator, rate random walk
-13    phi (F,)           flicker terms' decay per interval
-14    q (F, 6)           flicker terms' std
-15    x_flicker (F, 6)   flicker terms' states
-16    corr_block (B', C) correlated-terms driving noise (B' = 0 when the
-                         terms are inactive)
+                         turn-on bias (drawn at seeding), turn-on std
+11    corr_state (3, 6)  die temperatures, play operator, rate random walk
+12    phi (F,)           flicker terms' decay per interval
+13    q (F, 6)           flicker terms' std
+14    x_flicker (F, 6)   flicker terms' states
 ====  =================  =====================================================
 """
 
 from __future__ import annotations
 
-CONSTS, CLOCK, SENSOR_PAR, STATE, COEF, TRIAD, MATS, AXES, BASE, GM_BLOCK, WHITE_BLOCK, CORR_PAR, CORR_STATE, \
-    PHI, Q, X_FLICKER, CORR_BLOCK = range(17)
-N_STATE_ARRAYS = 17
+CONSTS, CLOCK, SENSOR_PAR, STATE, COEF, TRIAD, MATS, AXES, BASE, RNG, CORR_PAR, CORR_STATE, PHI, Q, \
+    X_FLICKER = range(15)
+N_STATE_ARRAYS = 15
 T_REF = 25.0  # reference temperature of the linear/quadratic coefficients, degC (SARINS_IMU_T_REF in imu.h)
 ONE_D = (CONSTS, CLOCK, PHI)  # the 1-D members of the tuple (the others are 2-D)

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from sarins_fmu import imu as imu_mod, turntable
+from sarins_fmu import imu as imu_mod, imu_step, turntable
 from sarins_fmu.core import _lib, imu as core_imu, thermal as core_thermal
 from sarins_fmu.imu import IMU, StaticBase
 from sarins_fmu.rotations import mat_to_rotvec, rotvec_to_mat as _rotvec_to_mat
@@ -180,14 +180,25 @@ def test_bad_arrays_are_refused_with_a_clear_error():
     strided = np.zeros(12)[::2]
     with pytest.raises(ValueError, match="not C-contiguous"):
         core_thermal.die_temperatures(np.zeros(6), np.zeros((2, 6)), 1.0, np.zeros(6), strided)
-    sensor = IMU(imu_mod.preset("nav-rlg"), StaticBase(0.6), block_rows=8)
+    sensor = IMU(imu_mod.preset("nav-rlg"), StaticBase(0.6))
     temps, out3 = np.empty((1, 6)), [np.empty((1, 3)) for _ in range(4)]
     with pytest.raises(ValueError, match="state table must be"):
         core_imu.advance(sensor._table.astype(np.int32), [20.0], temps, *out3)
     with pytest.raises(ValueError, match="does not fit the layout"):
         core_imu.advance(sensor._table[:5], [20.0], temps, *out3)
-    with pytest.raises(ValueError, match="fewer unused rows"):  # the random blocks are drawn by IMU.step
+    streams = sensor.state_arrays()[imu_step.RNG]
+    streams[1, 3] += 1.0  # the GM stream's (row 1) increment, low half: made even, not a stream state
+    before = [a.copy() for a in sensor.state_arrays()]
+    with pytest.raises(ValueError, match="random stream state in it is not one"):
         core_imu.advance(sensor._table, [20.0], temps, *out3)
+    assert all(np.array_equal(a, b) for a, b in zip(before, sensor.state_arrays()))  # nothing changed
+    streams[1, 3] -= 1.0
+    core_imu.advance(sensor._table, [20.0], temps, *out3)
+    streams[0, 6] = 0.5  # the white-noise stream's (drawn last, after the thermal advance) spare flag
+    before = [a.copy() for a in sensor.state_arrays()]
+    with pytest.raises(ValueError, match="random stream state in it is not one"):
+        core_imu.steps(sensor._table, [[0.0]], [[0.0]], [[0.0]], np.zeros((1, 3)), np.zeros((1, 3)), [20.0])
+    assert all(np.array_equal(a, b) for a, b in zip(before, sensor.state_arrays()))  # nothing changed
     assert core_imu.fmu_step(sensor._table, np.zeros(4), 0.0, 1.0) == 1  # no io rows: nothing done
 
 
@@ -198,7 +209,7 @@ def test_one_call_one_interval_and_the_threaded_path_agree(monkeypatch):
     for way in ("steps", "threaded", "one_interval"):
         monkeypatch.setattr(core_imu, "PARALLEL_MIN", 0 if way == "threaded" else 64)
         sensor = IMU(imu_mod.preset("mems"), StaticBase(0.6), [[0, 0, 1.0]], seed=4)
-        sensor.step([[0.1]], [[0.2]], [[0.0]])  # draws the random blocks
+        sensor.step([[0.1]], [[0.2]], [[0.0]])  # the streams move on
         if way == "one_interval":
             out = core_imu.one_interval(sensor._table, [0.3], [0.2], [0.01], 20.0)
         else:
@@ -215,7 +226,7 @@ SANITIZED_RUN = textwrap.dedent("""
     assert str(_lib.library_path()) == {lib!r}, _lib.library_path()
     sched = turntable.single_axis("forward-reverse", 300.0, grid=1.0, align_time=0.0)
     for preset in ("ideal", "nav-rlg", "mems"):
-        s = IMU(imu.preset(preset), StaticBase(0.6), sched.axes, seed=1, block_rows=100)
+        s = IMU(imu.preset(preset), StaticBase(0.6), sched.axes, seed=1)
         for k0, k1 in ((0, 150), (150, 151), (151, 250)):
             out = s.step(*sched.state(np.arange(k0, k1) * 1.0))
             assert all(np.isfinite(x).all() for x in out)

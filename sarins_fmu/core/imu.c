@@ -172,7 +172,7 @@ void sarins_imu_increments(int64_t k0, int64_t k1, int64_t n_axes, const double 
 
 void sarins_imu_interval_terms(int64_t n_steps, const double *temp0, const double *temps, double h,
                                const double *coef, const double *drift_poly, double drift_dtdt, double *gm,
-                               const double *gm_phi, const double *gm_std, const double *gm_noise,
+                               const double *gm_phi, const double *gm_std, SarinsRng *gm_rng,
                                double *g_bias, double *g_sf, double *a_bias, double *a_sf) {
     double prev[6];
     memcpy(prev, temp0, sizeof prev);
@@ -180,7 +180,8 @@ void sarins_imu_interval_terms(int64_t n_steps, const double *temp0, const doubl
         const double *now = temps + 6 * k;
         for (int j = 0; j < 6; j++) {
             /* Gauss-Markov exact step x_k = phi x_{k-1} + std sqrt(1 - phi^2) w_k */
-            gm[j] = gm_phi[j] * gm[j] + gm_std[j] * sqrt(1.0 - gm_phi[j] * gm_phi[j]) * gm_noise[6 * k + j];
+            double w = gm_rng != NULL ? sarins_rng_normal(gm_rng) : 0.0;
+            gm[j] = gm_phi[j] * gm[j] + gm_std[j] * sqrt(1.0 - gm_phi[j] * gm_phi[j]) * w;
         }
         for (int t = 0; t < 2; t++) {
             for (int i = 0; i < 3; i++) {
@@ -211,9 +212,9 @@ void sarins_imu_interval_terms(int64_t n_steps, const double *temp0, const doubl
 /* ------------------------------------------------------ the state table */
 
 typedef struct {
-    double *consts, *clock, *sensor_par, *state, *coef, *triad, *mats, *axes, *base, *gm_block, *white_block,
-        *corr_par, *corr_state, *phi, *q, *x_flicker, *corr_block;
-    int64_t n_axes, block_rows, n_flicker, corr_cols;
+    double *consts, *clock, *sensor_par, *state, *coef, *triad, *mats, *axes, *base, *rng, *corr_par, *corr_state,
+        *phi, *q, *x_flicker;
+    int64_t n_axes, n_flicker;
 } ImuView;
 
 static double *table_array(const int64_t *table, int64_t i) { return (double *)(intptr_t)table[3 * i]; }
@@ -222,25 +223,20 @@ static int has_shape(const int64_t *table, int64_t i, int64_t rows, int64_t cols
     return table[3 * i + 1] == rows && table[3 * i + 2] == cols && (rows == 0 || table[3 * i] != 0);
 }
 
-/* The IMU arrays of table rows 0..16 with their shapes checked; 0 when they fit. */
-static int imu_view(const int64_t *table, int64_t rows, ImuView *v) {
+/* The IMU arrays of table rows 0..14 with their shapes checked; 0 when they fit. */
+static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
     if (table == NULL || rows < SARINS_IMU_N_ARRAYS) return SARINS_IMU_BAD_TABLE;
     v->n_axes = table[3 * SARINS_IMU_AXES + 1];
-    v->block_rows = table[3 * SARINS_IMU_GM_BLOCK + 1];
     v->n_flicker = table[3 * SARINS_IMU_PHI + 1];
-    v->corr_cols = 6 * v->n_flicker + 6;
-    int64_t corr_rows = table[3 * SARINS_IMU_CORR_BLOCK + 1];
-    if (!(has_shape(table, SARINS_IMU_CONSTS, 8, 1) && has_shape(table, SARINS_IMU_CLOCK, 3, 1)
+    if (!(has_shape(table, SARINS_IMU_CONSTS, 8, 1) && has_shape(table, SARINS_IMU_CLOCK, 2, 1)
           && has_shape(table, SARINS_IMU_SENSOR_PAR, 4, 6) && has_shape(table, SARINS_IMU_STATE, 2, 6)
           && has_shape(table, SARINS_IMU_COEF, 10, 3) && has_shape(table, SARINS_IMU_TRIAD, 7, 3)
           && has_shape(table, SARINS_IMU_MATS, 9, 3) && v->n_axes >= 1
           && has_shape(table, SARINS_IMU_AXES, v->n_axes, 3) && has_shape(table, SARINS_IMU_BASE, 2, 3)
-          && v->block_rows >= 1 && has_shape(table, SARINS_IMU_GM_BLOCK, v->block_rows, 6)
-          && has_shape(table, SARINS_IMU_WHITE_BLOCK, v->block_rows, 6)
-          && has_shape(table, SARINS_IMU_CORR_PAR, 7, 6) && has_shape(table, SARINS_IMU_CORR_STATE, 3, 6)
+          && has_shape(table, SARINS_IMU_RNG, SARINS_IMU_N_STREAMS, SARINS_RNG_WORDS)
+          && has_shape(table, SARINS_IMU_CORR_PAR, 8, 6) && has_shape(table, SARINS_IMU_CORR_STATE, 3, 6)
           && v->n_flicker >= 0 && has_shape(table, SARINS_IMU_PHI, v->n_flicker, 1)
-          && has_shape(table, SARINS_IMU_Q, v->n_flicker, 6) && has_shape(table, SARINS_IMU_X_FLICKER, v->n_flicker, 6)
-          && has_shape(table, SARINS_IMU_CORR_BLOCK, corr_rows, v->corr_cols)))
+          && has_shape(table, SARINS_IMU_Q, v->n_flicker, 6) && has_shape(table, SARINS_IMU_X_FLICKER, v->n_flicker, 6)))
         return SARINS_IMU_BAD_TABLE;
     v->consts = table_array(table, SARINS_IMU_CONSTS);
     v->clock = table_array(table, SARINS_IMU_CLOCK);
@@ -251,26 +247,43 @@ static int imu_view(const int64_t *table, int64_t rows, ImuView *v) {
     v->mats = table_array(table, SARINS_IMU_MATS);
     v->axes = table_array(table, SARINS_IMU_AXES);
     v->base = table_array(table, SARINS_IMU_BASE);
-    v->gm_block = table_array(table, SARINS_IMU_GM_BLOCK);
-    v->white_block = table_array(table, SARINS_IMU_WHITE_BLOCK);
+    v->rng = table_array(table, SARINS_IMU_RNG);
     v->corr_par = table_array(table, SARINS_IMU_CORR_PAR);
     v->corr_state = table_array(table, SARINS_IMU_CORR_STATE);
     v->phi = table_array(table, SARINS_IMU_PHI);
     v->q = table_array(table, SARINS_IMU_Q);
     v->x_flicker = table_array(table, SARINS_IMU_X_FLICKER);
-    v->corr_block = table_array(table, SARINS_IMU_CORR_BLOCK);
-    /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub, block_rows */
-    if (!(v->consts[1] > 0.0 && v->consts[5] >= 1.0 && v->consts[6] == (double)v->block_rows))
-        return SARINS_IMU_BAD_TABLE;
-    if (v->consts[4] != 0.0 && corr_rows != v->block_rows) return SARINS_IMU_BAD_TABLE;
+    /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub */
+    if (!(v->consts[1] > 0.0 && v->consts[5] >= 1.0)) return SARINS_IMU_BAD_TABLE;
     return SARINS_IMU_OK;
 }
 
-/* Unused rows of the random blocks from the clock's row position, or -1 when the position is out of range. */
-static int64_t unused_rows(const ImuView *v) {
-    double pos = v->clock[2];
-    if (!(pos >= 0.0 && pos <= (double)v->block_rows)) return -1;
-    return v->block_rows - (int64_t)pos;
+/* imu_shapes, and every stream state checked, so that no later load fails after a state has changed. */
+static int imu_view(const int64_t *table, int64_t rows, ImuView *v) {
+    int status = imu_shapes(table, rows, v);
+    if (status != SARINS_IMU_OK) return status;
+    for (int s = 0; s < SARINS_IMU_N_STREAMS; s++) {
+        SarinsRng r;
+        if (!sarins_rng_unpack(v->rng + SARINS_RNG_WORDS * s, &r)) return SARINS_IMU_BAD_TABLE;
+    }
+    return SARINS_IMU_OK;
+}
+
+/* 1 when any of x[0..n) is not zero */
+static int any_nonzero(const double *x, int64_t n) {
+    for (int64_t i = 0; i < n; i++) {
+        if (x[i] != 0.0) return 1;
+    }
+    return 0;
+}
+
+/* The stream of the table's RNG row `stream` into r; 0 when the row is not a stream state. */
+static int load_stream(const ImuView *v, int stream, SarinsRng *r) {
+    return sarins_rng_unpack(v->rng + SARINS_RNG_WORDS * stream, r);
+}
+
+static void store_stream(const ImuView *v, int stream, const SarinsRng *r) {
+    sarins_rng_pack(r, (uint64_t)stream, v->rng + SARINS_RNG_WORDS * stream);
 }
 
 int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, const double *amb_end, double *temps,
@@ -278,9 +291,14 @@ int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, cons
     ImuView v;
     int status = imu_view(table, rows, &v);
     if (status != SARINS_IMU_OK) return status;
-    if (n_steps < 1 || unused_rows(&v) < n_steps) return SARINS_IMU_NO_ROWS;
+    if (n_steps < 1) return SARINS_IMU_BAD_TABLE;
+    SarinsRng gm_rng, flicker_rng, rrw_rng;
+    if (!(load_stream(&v, SARINS_IMU_STREAM_GM, &gm_rng) && load_stream(&v, SARINS_IMU_STREAM_FLICKER, &flicker_rng)
+          && load_stream(&v, SARINS_IMU_STREAM_RRW, &rrw_rng)))
+        return SARINS_IMU_BAD_TABLE;
+    int gm_on = any_nonzero(v.sensor_par + 18, 6);
+    int flicker_on = any_nonzero(v.q, 6 * v.n_flicker), rrw_on = any_nonzero(v.corr_par + 30, 6);
     double h = v.consts[1];
-    int64_t pos = (int64_t)v.clock[2];
     double *temperature = v.state; /* reported temperatures, row 0 */
     double start[6];
     memcpy(start, temperature, sizeof start);
@@ -297,11 +315,15 @@ int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, cons
         die_t = die;
     }
     sarins_imu_interval_terms(n_steps, die0, die_t, h, v.coef, v.triad, v.consts[2], v.state + 6,
-                              v.sensor_par + 12, v.sensor_par + 18, v.gm_block + 6 * pos, g_bias, g_sf, a_bias,
+                              v.sensor_par + 12, v.sensor_par + 18, gm_on ? &gm_rng : NULL, g_bias, g_sf, a_bias,
                               a_sf);
+    store_stream(&v, SARINS_IMU_STREAM_GM, &gm_rng);
     if (v.consts[4] != 0.0) {
         sarins_correlated_terms(n_steps, die0, die_t, h, v.corr_par, v.corr_state, v.n_flicker, v.phi, v.q,
-                                v.x_flicker, v.corr_block + v.corr_cols * pos, g_bias, g_sf, a_bias, a_sf);
+                                v.x_flicker, flicker_on ? &flicker_rng : NULL, rrw_on ? &rrw_rng : NULL, g_bias,
+                                g_sf, a_bias, a_sf);
+        store_stream(&v, SARINS_IMU_STREAM_FLICKER, &flicker_rng);
+        store_stream(&v, SARINS_IMU_STREAM_RRW, &rrw_rng);
     }
     return SARINS_IMU_OK;
 }
@@ -310,20 +332,23 @@ int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, 
     ImuView v;
     int status = imu_view(table, rows, &v);
     if (status != SARINS_IMU_OK) return status;
-    if (n_steps < 0 || unused_rows(&v) < n_steps) return SARINS_IMU_NO_ROWS;
-    int64_t pos = (int64_t)v.clock[2];
+    SarinsRng rng;
+    if (n_steps < 0 || !load_stream(&v, SARINS_IMU_STREAM_WHITE, &rng)) return SARINS_IMU_BAD_TABLE;
     double sqrt_h = sqrt(v.consts[1]);
     const double *rw_g = v.triad + 15, *rw_a = v.triad + 18; /* triad rows 5 and 6 */
-    for (int64_t k = 0; k < n_steps; k++) {
-        const double *w = v.white_block + 6 * (pos + k);
-        for (int i = 0; i < 3; i++) {
-            /* N(0, rw^2 h): the random walk integrated over the interval */
-            dtheta[3 * k + i] += w[i] * sqrt_h * rw_g[i];
-            dv[3 * k + i] += w[3 + i] * sqrt_h * rw_a[i];
+    if (any_nonzero(rw_g, 6)) { /* rows 5 and 6 are adjacent */
+        for (int64_t k = 0; k < n_steps; k++) {
+            double w[6];
+            for (int i = 0; i < 6; i++) w[i] = sarins_rng_normal(&rng);
+            for (int i = 0; i < 3; i++) {
+                /* N(0, rw^2 h): the random walk integrated over the interval */
+                dtheta[3 * k + i] += w[i] * sqrt_h * rw_g[i];
+                dv[3 * k + i] += w[3 + i] * sqrt_h * rw_a[i];
+            }
         }
+        store_stream(&v, SARINS_IMU_STREAM_WHITE, &rng);
     }
     v.clock[0] += (double)n_steps;
-    v.clock[2] = (double)(pos + n_steps);
     return SARINS_IMU_OK;
 }
 
@@ -333,7 +358,7 @@ int sarins_imu_steps(const int64_t *table, int64_t rows, int64_t n_steps, const 
     ImuView v;
     int status = imu_view(table, rows, &v);
     if (status != SARINS_IMU_OK) return status;
-    if (n_steps < 1 || unused_rows(&v) < n_steps) return SARINS_IMU_NO_ROWS;
+    if (n_steps < 1) return SARINS_IMU_BAD_TABLE;
     double *g_bias = work, *g_sf = work + 3 * n_steps, *a_bias = work + 6 * n_steps, *a_sf = work + 9 * n_steps;
     status = sarins_imu_advance(table, rows, n_steps, amb_end, temps, work + 12 * n_steps, g_bias, g_sf, a_bias,
                                 a_sf);
@@ -353,6 +378,49 @@ int sarins_imu_one_interval(const int64_t *table, int64_t rows, const double *an
     if (base == NULL) return SARINS_IMU_BAD_TABLE;
     return sarins_imu_steps(table, rows, 1, angle0, rate0, accel, base, base + 3, &amb_end, dtheta, dv, temps,
                             work);
+}
+
+/* ------------------------------------------------------ seeding and ageing */
+
+void sarins_imu_turn_on(uint64_t seed, const double *std, double *out) {
+    SarinsRng r;
+    sarins_rng_stream(&r, seed, SARINS_IMU_STREAM_TURN_ON);
+    for (int j = 0; j < 6; j++) out[j] = std[j] * sarins_rng_normal(&r);
+}
+
+int sarins_imu_seed(const int64_t *table, int64_t rows, uint64_t seed) {
+    ImuView v;
+    int status = imu_shapes(table, rows, &v); /* the stream states are written here */
+    if (status != SARINS_IMU_OK) return status;
+    for (int s = 0; s < SARINS_IMU_N_STREAMS; s++) {
+        SarinsRng r;
+        sarins_rng_stream(&r, seed, (uint64_t)s);
+        if (s == SARINS_IMU_STREAM_GM) { /* stationary start of the Gauss-Markov biases */
+            const double *gm_std = v.sensor_par + 18;
+            for (int j = 0; j < 6; j++) v.state[6 + j] = gm_std[j] * sarins_rng_normal(&r);
+        } else if (s == SARINS_IMU_STREAM_FLICKER) { /* stationary start of the flicker terms */
+            for (int64_t i = 0; i < 6 * v.n_flicker; i++) v.x_flicker[i] = v.q[i] * sarins_rng_normal(&r);
+        }
+        store_stream(&v, s, &r);
+    }
+    sarins_imu_turn_on(seed, v.corr_par + 42, v.corr_par + 36);
+    return SARINS_IMU_OK;
+}
+
+void sarins_imu_aged_poly(uint64_t seed, int64_t n, const double *t, const double *poly, const double *sigma,
+                          double tau, double *out) {
+    SarinsRng r;
+    sarins_rng_stream(&r, seed, SARINS_IMU_STREAM_AGEING);
+    double m[3] = {0.0, 0.0, 0.0}, prev = 0.0;
+    for (int64_t k = 0; k < n; k++) {
+        double d = exp(-(t[k] - prev) / tau);
+        for (int i = 0; i < 3; i++) {
+            /* m <- d m + sigma sqrt(1 - d^2) w */
+            m[i] = d * m[i] + sigma[i] * sqrt(1.0 - d * d) * sarins_rng_normal(&r);
+            out[3 * k + i] = poly[i] + m[i];
+        }
+        prev = t[k];
+    }
 }
 
 /* ------------------------------------------------------ the FMU's step */
@@ -416,7 +484,6 @@ int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, do
     double *v_held = table_array(table, SARINS_IMU_N_ARRAYS + 2);
     const double *consts = v.consts, *clock = v.clock;
     if (!(fabs(h - io[IO_STEP]) <= 1e-9 * io[IO_STEP])) return 1;
-    if (clock[2] >= consts[6]) return 1; /* random blocks used up: the Python step draws the next ones */
     if (!same_time(consts[0] + clock[0] * consts[1] + io[IO_START], t, h)) return 1;
     if (!(io[IO_GIMBALS] >= 1.0 && io[IO_GIMBALS] <= 3.0)) return 1;
     int na = (int)io[IO_GIMBALS];
@@ -469,7 +536,7 @@ int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, do
     double dtheta[3], dv[3], temps[6];
     if (sarins_imu_one_interval(table, rows, motion[0], motion[1], motion[2], amb_end, dtheta, dv, temps)
         != SARINS_IMU_OK)
-        return 1; /* not reached: the table and the random blocks were checked above */
+        return 1; /* not reached: the table and its stream states were checked above */
     for (int i = 0; i < 3; i++) {
         buf[(int64_t)io[IO_OUT + i]] = dtheta[i];
         buf[(int64_t)io[IO_OUT + 3 + i]] = dv[i];

@@ -25,24 +25,44 @@
  *
  * The IMU's state (sarins_fmu/imu_step.py docstring) reaches C as an array
  * table: int64 rows (address, rows, columns), one per float64 array, rows 0
- * to 16 in the order SARINS_IMU_CONSTS .. SARINS_IMU_CORR_BLOCK.
+ * to 14 in the order SARINS_IMU_CONSTS .. SARINS_IMU_X_FLICKER.  Every random
+ * number is drawn here, inside the step, from the streams of rng.h whose
+ * states the table holds; sarins_imu_seed starts them from the IMU seed.
  */
 #ifndef SARINS_IMU_H
 #define SARINS_IMU_H
 
 #include <stdint.h>
 
+#include "rng.h"
+
 enum {
     SARINS_IMU_CONSTS, SARINS_IMU_CLOCK, SARINS_IMU_SENSOR_PAR, SARINS_IMU_STATE, SARINS_IMU_COEF,
-    SARINS_IMU_TRIAD, SARINS_IMU_MATS, SARINS_IMU_AXES, SARINS_IMU_BASE, SARINS_IMU_GM_BLOCK,
-    SARINS_IMU_WHITE_BLOCK, SARINS_IMU_CORR_PAR, SARINS_IMU_CORR_STATE, SARINS_IMU_PHI, SARINS_IMU_Q,
-    SARINS_IMU_X_FLICKER, SARINS_IMU_CORR_BLOCK, SARINS_IMU_N_ARRAYS
+    SARINS_IMU_TRIAD, SARINS_IMU_MATS, SARINS_IMU_AXES, SARINS_IMU_BASE, SARINS_IMU_RNG, SARINS_IMU_CORR_PAR,
+    SARINS_IMU_CORR_STATE, SARINS_IMU_PHI, SARINS_IMU_Q, SARINS_IMU_X_FLICKER, SARINS_IMU_N_ARRAYS
+};
+
+/* The IMU's random streams (rng.h), one per purpose, all from the IMU seed;
+ * their states are the rows of the SARINS_IMU_RNG array, in this order.
+ * Draws per output interval, in this order within each stream:
+ *   WHITE    6: angle / velocity random walk, gyro x y z, accel x y z (when
+ *            a random walk is not zero);
+ *   GM       6 at seeding (the stationary start), then 6 per interval (when
+ *            a Gauss-Markov std is not zero);
+ *   FLICKER  6 F at seeding (stationary start, term-major), then 6 F per
+ *            interval (sensor-major) when a flicker term is not zero and the
+ *            correlated terms are on;
+ *   RRW      6 per interval (rate random walk, when not zero and on);
+ *   TURN_ON  6 at seeding (the turn-on bias);
+ *   AGEING   3 per ageing step (sarins_imu_aged_poly), drawn at construction. */
+enum {
+    SARINS_IMU_STREAM_WHITE, SARINS_IMU_STREAM_GM, SARINS_IMU_STREAM_FLICKER, SARINS_IMU_STREAM_RRW,
+    SARINS_IMU_STREAM_TURN_ON, SARINS_IMU_STREAM_AGEING, SARINS_IMU_N_STREAMS
 };
 
 /* return codes of the table functions */
 #define SARINS_IMU_OK 0
-#define SARINS_IMU_BAD_TABLE 1  /* a missing row or an array of the wrong shape */
-#define SARINS_IMU_NO_ROWS 2    /* the random blocks hold fewer unused rows than intervals asked for */
+#define SARINS_IMU_BAD_TABLE 1  /* a missing row, an array of the wrong shape or a stream state that is not one */
 
 #define SARINS_IMU_MAX_AXES 8   /* gimbals the one-interval step accepts */
 
@@ -82,23 +102,27 @@ void sarins_imu_increments(int64_t k0, int64_t k1, int64_t n_axes, const double 
  * (degC); coef (10, 3): per triad (gyro rows 0-4, accel rows 5-9) bias,
  * tc1, tc2, scale factor, sf tc about SARINS_IMU_T_REF; drift_poly[3] the
  * azimuth drift eps(T) = (a T + b) T + c (rad/s); drift_dtdt (rad/degC);
- * gm[6] Gauss-Markov states (updated), gm_phi[6], gm_std[6], gm_noise (K, 6). */
+ * gm[6] Gauss-Markov states (updated), gm_phi[6], gm_std[6]; gm_rng the
+ * stream of their driving noise (6 draws per interval), or NULL for none
+ * (every gm_std zero). */
 void sarins_imu_interval_terms(int64_t n_steps, const double *temp0, const double *temps, double h,
                                const double *coef, const double *drift_poly, double drift_dtdt, double *gm,
-                               const double *gm_phi, const double *gm_std, const double *gm_noise,
+                               const double *gm_phi, const double *gm_std, SarinsRng *gm_rng,
                                double *g_bias, double *g_sf, double *a_bias, double *a_sf);
 
 /* Advance the thermal and error states of the IMU table over K intervals:
  * amb_end[K] ambient at the interval ends (degC, checked by the caller);
  * temps (K, 6) out: reported temperatures at the ends; die (K, 6) scratch;
- * g_bias, g_sf, a_bias, a_sf (K, 3) out.  Consumes K rows of the random
- * blocks but leaves the clock: sarins_imu_white_noise moves it on.
+ * g_bias, g_sf, a_bias, a_sf (K, 3) out.  Draws the GM, FLICKER and RRW
+ * streams' numbers of K intervals but leaves the clock:
+ * sarins_imu_white_noise moves it on.
  * Returns SARINS_IMU_OK, or an error code without touching any state. */
 int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, const double *amb_end, double *temps,
                        double *die, double *g_bias, double *g_sf, double *a_bias, double *a_sf);
 
-/* Add the angle / velocity random walk (exact variance rw^2 h) to K
- * intervals' dtheta, dv (K, 3) and move the clock on by K intervals. */
+/* Add the angle / velocity random walk (exact variance rw^2 h, from the
+ * WHITE stream) to K intervals' dtheta, dv (K, 3) and move the clock on by K
+ * intervals. */
 int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, double *dtheta, double *dv);
 
 /* K intervals on the calling thread: sarins_imu_advance, the minor loop over
@@ -111,12 +135,31 @@ int sarins_imu_steps(const int64_t *table, int64_t rows, int64_t n_steps, const 
 
 /* One output interval with the base motion of the table's base row:
  * angle0, rate0, accel [A]; amb_end ambient at its end (degC); dtheta[3],
- * dv[3], temps[6] out.  The random blocks must hold one unused row. */
+ * dv[3], temps[6] out. */
 int sarins_imu_one_interval(const int64_t *table, int64_t rows, const double *angle0, const double *rate0,
                             const double *accel, double amb_end, double *dtheta, double *dv, double *temps);
 
+/* Start the random streams of the table from seed (a restart of the IMU):
+ * every stream at its start, then the draws made at power-up: the
+ * Gauss-Markov states' stationary start (state row 1 = N(0, gm_std^2)), the
+ * flicker terms' (x_flicker = N(0, q^2)), the turn-on bias (corr_par row 6
+ * = N(0, std^2) with corr_par row 7 the std).  The other states are the
+ * caller's (reset before this call). */
+int sarins_imu_seed(const int64_t *table, int64_t rows, uint64_t seed);
+
+/* The turn-on bias an IMU with seed draws at power-up: out[j] = std[j] w_j,
+ * w the first 6 draws of the TURN_ON stream (gyro x y z rad/s, accel m/s^2). */
+void sarins_imu_turn_on(uint64_t seed, const double *std, double *out);
+
+/* Ageing of the azimuth-drift coefficients (a, b, c): first-order Markov
+ * m_{k+1} = d_k m_k + sigma sqrt(1 - d_k^2) w_k, d_k = exp(-(t_k - t_{k-1}) / tau),
+ * m_0 = 0 at t_0 = 0, w from the AGEING stream of seed (3 per step, a b c);
+ * out (K, 3) = poly + m_k at the K increasing ages t (s). */
+void sarins_imu_aged_poly(uint64_t seed, int64_t n, const double *t, const double *poly, const double *sigma,
+                          double tau, double *out);
+
 /* The IMUThermal FMU's step (fmus/compiled_steps.py, imu_context): table
- * rows 0-16 the IMU state, 17 the io row, 18 the held motion set, 19 the
+ * rows 0-14 the IMU state, 15 the io row, 16 the held motion set, 17 the
  * held vehicle set; buf[n] the slave's Real buffer; t, h the communication
  * point and step (s).  Returns 0 when it did the step, 1 when it changed
  * nothing (the Python do_step then runs and reports any error). */

@@ -1,4 +1,5 @@
-"""ctypes binding of the IMU kernels (``imu.h``): the minor loop, the state advance, the FMU's step.
+"""ctypes binding of the IMU kernels (``imu.h``): the minor loop, the state advance, the random streams'
+seeding, the FMU's step.
 
 Units and frames as in ``imu.h`` and :mod:`sarins_fmu.imu`.  A batch of K
 intervals runs in parallel threads (ctypes releases the GIL): the K
@@ -19,8 +20,9 @@ import numpy as np
 
 from . import _arrays
 from ._lib import function
+from .rng import check_seed
 
-_I64, _F64, _P, _INT = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p, ctypes.c_int
+_I64, _F64, _P, _INT, _U64 = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p, ctypes.c_int, ctypes.c_uint64
 
 _truth = function("sarins_imu_truth", None, _I64, _P, _P, _P, _P, _F64, _P, _P, _P)
 _increments = function("sarins_imu_increments", None, _I64, _I64, _I64, _P, _P, _P, _P, _P, _P, _F64, _I64,
@@ -29,13 +31,17 @@ _advance = function("sarins_imu_advance", _INT, _P, _I64, _I64, *([_P] * 7))
 _white_noise = function("sarins_imu_white_noise", _INT, _P, _I64, _I64, _P, _P)
 _steps = function("sarins_imu_steps", _INT, _P, _I64, _I64, *([_P] * 10))
 _one_interval = function("sarins_imu_one_interval", _INT, _P, _I64, _P, _P, _P, _F64, _P, _P, _P)
+_seed = function("sarins_imu_seed", _INT, _P, _I64, _U64)
+_turn_on = function("sarins_imu_turn_on", None, _U64, _P, _P)
+_aged_poly = function("sarins_imu_aged_poly", None, _U64, _I64, _P, _P, _P, _F64, _P)
 FMU_STEP = function("sarins_imu_fmu_step", _INT, _P, _I64, _P, _I64, _F64, _F64)
 FMU_STEP_ADDRESS = ctypes.cast(FMU_STEP, ctypes.c_void_p).value  # for the native FMI layer
 
 PARALLEL_MIN = 64  # intervals; below this a thread hand-off costs more than it saves
 _CPUS = os.cpu_count() or 1  # (os.cpu_count() takes tens of microseconds: asked once)
-_ERRORS = {1: "the IMU state table does not fit the layout of sarins_fmu.imu_step (imu.h)",
-           2: "the IMU's random blocks hold fewer unused rows than intervals asked for"}
+_ERRORS = {1: "the IMU state table does not fit the layout of sarins_fmu.imu_step (imu.h), or a random stream "
+              "state in it is not one"}
+STREAMS = ("white", "gm", "flicker", "rrw", "turn_on", "ageing")  # stream ids 0.. (SARINS_IMU_STREAM_* in imu.h)
 _POOLS: dict[tuple, ThreadPoolExecutor] = {}
 _POOLS_LOCK = threading.Lock()
 
@@ -203,3 +209,115 @@ def fmu_step(table, buffer, t: float, h: float) -> int:
     table = _arrays.table(table)
     _arrays.written(buffer, np.shape(buffer)[:1], "buffer")
     return FMU_STEP(table.ctypes.data, table.shape[0], buffer.ctypes.data, buffer.shape[0], float(t), float(h))
+
+
+def seed(table, value: int) -> None:
+    """Start the random streams of the IMU ``table`` from the seed ``value`` (``sarins_imu_seed``): the streams
+    at their start, the Gauss-Markov and flicker states' stationary start, the turn-on bias."""
+    table = _arrays.table(table)
+    _check(_seed(table.ctypes.data, table.shape[0], check_seed(value)))
+
+
+def turn_on(value: int, std) -> np.ndarray:
+    """The turn-on bias (6,) an IMU with seed ``value`` draws: std (6,) times the TURN_ON stream's first 6
+    draws (gyro rad/s, accelerometer m/s^2)."""
+    std = _arrays.read(std, (6,), "std")
+    out = np.empty(6)
+    _turn_on(check_seed(value), std.ctypes.data, out.ctypes.data)
+    return out
+
+
+def aged_poly(value: int, ages, poly, sigma, tau: float) -> np.ndarray:
+    """(K, 3) azimuth-drift coefficients poly + m(t_k) at the increasing ages (K,) (s), m the first-order Markov
+    ageing of std sigma (3,) and correlation time tau (s) from the AGEING stream of seed ``value``."""
+    ages = _arrays.read(ages, np.shape(ages)[:1], "ages")
+    poly, sigma = _arrays.read(poly, (3,), "poly"), _arrays.read(sigma, (3,), "sigma")
+    if not float(tau) > 0:
+        raise ValueError(f"the ageing correlation time must be positive, got {tau}")
+    out = np.empty((ages.shape[0], 3))
+    _aged_poly(check_seed(value), ages.shape[0], ages.ctypes.data, poly.ctypes.data, sigma.ctypes.data,
+               float(tau), out.ctypes.data)
+    return out
+
+
+# ------------------------------------------------------------------ construction (imu_build.h, imu_params.h)
+
+_build = function("sarins_imu_build", _INT, _P, _I64, _P, _F64, _F64, _I64, _F64, _U64)
+_start = function("sarins_imu_start", _INT, _P, _I64, _F64, _INT, _U64)
+_flicker_count = function("sarins_imu_flicker_count", _I64, _F64, _F64)
+_flicker_taus = function("sarins_imu_flicker_taus", None, _F64, _F64, _I64, _P)
+_check_params = function("sarins_imu_check_params", _I64, _P, ctypes.POINTER(ctypes.c_char_p))
+_param_name = function("sarins_imu_param_name", ctypes.c_char_p, _I64)
+_preset_name = function("sarins_imu_preset_name", ctypes.c_char_p, _I64)
+_preset_params = function("sarins_imu_preset_params", _INT, ctypes.c_char_p, _P)
+
+
+def param_names() -> tuple:
+    """The flat parameters' names in the C core's order (``imu_params.h``)."""
+    names, i = [], 0
+    while (name := _param_name(i)) is not None:
+        names.append(name.decode())
+        i += 1
+    return tuple(names)
+
+
+N_PARAMS = len(param_names())
+
+
+def preset_names() -> tuple:
+    """The presets the C core holds as data (``imu_params.c``)."""
+    names, i = [], 0
+    while (name := _preset_name(i)) is not None:
+        names.append(name.decode())
+        i += 1
+    return tuple(names)
+
+
+def preset_params(name: str) -> np.ndarray:
+    """The flat parameter vector (N_PARAMS,) of the C core's preset ``name``."""
+    out = np.empty(N_PARAMS)
+    if _preset_params(str(name).encode(), out.ctypes.data) != 0:
+        raise ValueError(f"the C core has no IMU preset {name!r}")
+    return out
+
+
+def check_params(par) -> str | None:
+    """None when the flat parameter vector (N_PARAMS,) is a valid IMU model, else "<name> <rule>"."""
+    par = _arrays.read(par, (N_PARAMS,), "par")
+    reason = ctypes.c_char_p()
+    bad = _check_params(par.ctypes.data, ctypes.byref(reason))
+    return None if bad < 0 else f"{_param_name(bad).decode()} {reason.value.decode()}"
+
+
+def flicker_count(tau_min: float, tau_max: float) -> int:
+    """Number of Gauss-Markov terms of the flicker synthesis for the band [tau_min, tau_max] (s)."""
+    n = _flicker_count(float(tau_min), float(tau_max))
+    if n < 1:
+        raise ValueError("flicker correlation times need 0 < flicker_tau_min < flicker_tau_max (finite)")
+    return n
+
+
+def flicker_taus(tau_min: float, tau_max: float) -> np.ndarray:
+    """The flicker terms' correlation times (F,), s, log-spaced over [tau_min, tau_max]."""
+    out = np.empty(flicker_count(tau_min, tau_max))
+    _flicker_taus(float(tau_min), float(tau_max), out.shape[0], out.ctypes.data)
+    return out
+
+
+def build(table, par, t0: float, h: float, n_sub: int, age: float, value: int) -> None:
+    """Fill the IMU ``table``'s constant arrays from the flat parameters ``par`` (``sarins_imu_build``): start
+    time t0 (s), interval h (s), n_sub minor steps, the drift model aged by ``age`` (s) with seed ``value``."""
+    table = _arrays.table(table)
+    par = _arrays.read(par, (N_PARAMS,), "par")
+    problem = check_params(par)
+    if problem is not None:
+        raise ValueError(f"IMU parameter {problem}")
+    _check(_build(table.ctypes.data, table.shape[0], par.ctypes.data, float(t0), float(h), int(n_sub), float(age),
+                  check_seed(value)))
+
+
+def start(table, ambient0: float, hot: bool, value: int) -> None:
+    """Start a run of the built ``table`` (``sarins_imu_start``): ambient0 degC at the start, hot or cold,
+    the random streams from seed ``value``."""
+    table = _arrays.table(table)
+    _check(_start(table.ctypes.data, table.shape[0], float(ambient0), int(bool(hot)), check_seed(value)))

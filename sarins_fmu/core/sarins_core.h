@@ -21,9 +21,12 @@
 int sarins_core_abi(void);
 
 /* IMU family (issue 18) */
+#include "rng.h"
 #include "thermal.h"
 #include "correlated.h"
 #include "imu.h"
+#include "imu_params.h"
+#include "imu_build.h"
 
 /* INS family and turntable (issue 18) */
 #include "earth.h"
