@@ -50,6 +50,7 @@ class NativeModel:
 NATIVE = {
     "Turntable": NativeModel("turntable"),
     "StrapdownINS": NativeModel("strapdown_ins"),
+    "IMUThermal": NativeModel("imu_thermal"),
 }
 
 # setup.py's flags (sarins_fmu core) plus hidden visibility: only the fmi2* functions are exported

@@ -201,7 +201,8 @@ static fmi2Status model_status(sarins_glue *g, int status, unsigned long problem
 static size_t off_int(const sarins_table *t) { return t->n_real * sizeof(double); }
 static size_t off_bool(const sarins_table *t) { return off_int(t) + t->n_integer * sizeof(int); }
 static size_t off_string(const sarins_table *t) { return off_bool(t) + t->n_boolean * sizeof(int); }
-static size_t values_size(const sarins_table *t) { return off_string(t) + t->n_string * SARINS_STRING_MAX; }
+static size_t off_set(const sarins_table *t) { return off_string(t) + t->n_string * SARINS_STRING_MAX; }
+static size_t values_size(const sarins_table *t) { return off_set(t) + t->n_vars; } /* + one set flag per vr */
 
 static void point_ctx(sarins_glue *g)
 {
@@ -210,6 +211,7 @@ static void point_ctx(sarins_glue *g)
     g->ctx.i = (int *)(void *)(g->values + off_int(t));
     g->ctx.b = (int *)(void *)(g->values + off_bool(t));
     g->ctx.s = (char(*)[SARINS_STRING_MAX])(void *)(g->values + off_string(t));
+    g->ctx.set = g->values + off_set(t);
 }
 
 static void set_start_values(sarins_glue *g)
@@ -563,8 +565,10 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     REQUIRE(g, "fmi2SetReal", SET_STATES);
     if (!check_args(g, "fmi2SetReal", vr, nvr, value, SARINS_REAL, 1))
         return fmi2Error;
-    for (size_t k = 0; k < nvr; k++)
+    for (size_t k = 0; k < nvr; k++) {
         g->ctx.r[g->by_vr[vr[k]]->slot] = value[k];
+        g->ctx.set[g->by_vr[vr[k]] - g->table->vars] = 1; /* its row = its vr (native_fmu.py) */
+    }
     return fmi2OK;
 }
 
@@ -574,8 +578,10 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     REQUIRE(g, "fmi2SetInteger", SET_STATES);
     if (!check_args(g, "fmi2SetInteger", vr, nvr, value, SARINS_INTEGER, 1))
         return fmi2Error;
-    for (size_t k = 0; k < nvr; k++)
+    for (size_t k = 0; k < nvr; k++) {
         g->ctx.i[g->by_vr[vr[k]]->slot] = value[k];
+        g->ctx.set[g->by_vr[vr[k]] - g->table->vars] = 1; /* its row = its vr (native_fmu.py) */
+    }
     return fmi2OK;
 }
 
@@ -585,8 +591,10 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
     REQUIRE(g, "fmi2SetBoolean", SET_STATES);
     if (!check_args(g, "fmi2SetBoolean", vr, nvr, value, SARINS_BOOLEAN, 1))
         return fmi2Error;
-    for (size_t k = 0; k < nvr; k++)
+    for (size_t k = 0; k < nvr; k++) {
         g->ctx.b[g->by_vr[vr[k]]->slot] = value[k] ? 1 : 0;
+        g->ctx.set[g->by_vr[vr[k]] - g->table->vars] = 1; /* its row = its vr (native_fmu.py) */
+    }
     return fmi2OK;
 }
 
@@ -604,8 +612,10 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
             return fail(g, "fmi2SetString: the value of %s is %llu bytes long, at most %d are allowed", v->name,
                         (unsigned long long)strlen(value[k]), SARINS_STRING_MAX - 1);
     }
-    for (size_t k = 0; k < nvr; k++)
+    for (size_t k = 0; k < nvr; k++) {
         snprintf(g->ctx.s[g->by_vr[vr[k]]->slot], SARINS_STRING_MAX, "%s", value[k]);
+        g->ctx.set[g->by_vr[vr[k]] - g->table->vars] = 1; /* its row = its vr (native_fmu.py) */
+    }
     return fmi2OK;
 }
 
@@ -893,7 +903,8 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
             case SARINS_BOOLEAN: off = off_bool(g->table) + v->slot * sizeof(int); n = sizeof(int); break;
             default: off = off_string(g->table) + v->slot * (size_t)SARINS_STRING_MAX; n = SARINS_STRING_MAX; break;
             }
-            same = memcmp(g->built + off, values + off, n) == 0;
+            same = memcmp(g->built + off, values + off, n) == 0
+                   && g->built[off_set(g->table) + k] == values[off_set(g->table) + k]; /* its set flag */
         }
         if (!same) {
             memcpy(g->values, values, g->values_size);

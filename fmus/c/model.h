@@ -39,6 +39,13 @@
  * c->work that is a function of the parameters only (a schedule) is not part of the state.  state_version
  * goes into serialized states: change it whenever the layout of c->state or of the work state changes.
  *
+ * Set flags.  c->set[vr] (by value reference; the table's variables are numbered 0, 1, ... in that order)
+ * is 1 once the host has set the variable with an fmi2Set* call since fmi2Instantiate or the last
+ * fmi2Reset, else 0 (a start value is not "set").  A model uses it where the declaration says that setting
+ * a parameter changes its meaning ("a coefficient that is set overrides the preset").  The flags travel
+ * with the values: they are in the FMU state and compared like values when fmi2SetFMUstate decides whether
+ * initialize() must rebuild c->work.
+ *
  * No globals: the descriptor is const data, every mutable thing is per instance; instances are
  * independent and may run in different threads.
  */
@@ -90,6 +97,8 @@ typedef struct {
     double start_time;               /* s: fmi2SetupExperiment's start time (0 if it was not called) */
     int quiet;                       /* 1 during the initialize() call of fmi2EnterInitializationMode */
     sarins_glue *glue;
+    unsigned char *set;              /* set[vr] = 1 once the host set variable vr (any fmi2Set*) since
+                                      * instantiation or the last reset; see "Set flags" above */
 } sarins_ctx;
 
 typedef struct {
