@@ -1,4 +1,4 @@
-"""The slaves' compiled steps (fmus.compiled_steps): the same outputs as the Python
+"""The physics FMUs' steps (native now: fmus/c): the same outputs as the Python
 do_step bit for bit, called from C (no Python) or through do_step, the same as the
 in-process library, and every error still reported by the Python do_step at the call
 that caused it."""
