@@ -1,6 +1,6 @@
 """Native FMUs: every FMI 2.0 call answered in C, no Python in the binary (issue 18 item 3, issue 19 items 1-2).
 
-A native FMU is the shared glue ``fmus/c/fmi2_glue.c`` (interface ``fmus/c/model.h``), the model's
+A native FMU is the shared glue ``fmus/c/fmi2_glue.c`` + ``fmus/c/glue_core.c`` (interface ``fmus/c/model.h``), the model's
 ``fmus/c/<folder>/model.c`` and the C core files it needs (``sarins_fmu/core``), compiled by the build
 with setup.py's flags.  The declaration stays in one place, the slave class (``fmus/<x>_slave.py``): the
 build instantiates it and writes from the same objects
@@ -179,7 +179,8 @@ def fmi_headers_dir() -> Path:
 def write_sources(name: str, folder: Path, variables_h: str) -> list[str]:
     """Write the FMU's ``sources/`` into ``folder``; returns the .c file names (for ``<SourceFiles>``)."""
     model = NATIVE[name]
-    c_files = [C_DIR / "fmi2_glue.c", C_DIR / model.folder / "model.c", *(CORE_DIR / f for f in model.extra_core)]
+    c_files = [C_DIR / "fmi2_glue.c", C_DIR / "glue_core.c", C_DIR / model.folder / "model.c",
+               *(CORE_DIR / f for f in model.extra_core)]
     missing = [str(p) for p in c_files if not p.is_file()]
     if missing:
         raise RuntimeError(f"{name}: sources missing: {', '.join(missing)}")
