@@ -32,13 +32,7 @@
 
 #define GET_STATES SG_ANY_STATE
 #define SET_STATES (S_INSTANTIATED | S_INIT | S_STEP_COMPLETE)
-#define REQUIRE(g, fn, allowed)                                                                              \
-    do {                                                                                                     \
-        if ((g) == NULL)                                                                                     \
-            return fmi2Error;                                                                                \
-        if (!((g)->state & (allowed)))                                                                       \
-            return (fmi2Status)sg_bad_state((g), (fn));                                                     \
-    } while (0)
+#define REQUIRE SG_REQUIRE
 
 typedef struct {
     sarins_glue core; /* first: a sarins_glue * is a glue2 * */

@@ -63,10 +63,12 @@ void sg_log(sarins_glue *g, int status, const char *fmt, ...) SG_PRINTF(3, 4);
 int sg_fail(sarins_glue *g, const char *fmt, ...) SG_PRINTF(2, 3);
 int sg_bad_state(sarins_glue *g, const char *fn);
 
+/* in an fmiXStatus function: the instance exists and is in one of the allowed states (the int converts to
+ * the version's status type, whose values SARINS_* are) */
 #define SG_REQUIRE(g, fn, allowed)                                                                           \
     do {                                                                                                     \
         if ((g) == NULL)                                                                                     \
-            return SARINS_ERROR;                                                                             \
+            return (int)SARINS_ERROR;                                                                        \
         if (!((g)->state & (allowed)))                                                                       \
             return sg_bad_state((g), (fn));                                                                  \
     } while (0)
