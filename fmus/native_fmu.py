@@ -368,16 +368,17 @@ def _documentation(name: str, description: str, identifier: str, win64: bool, fm
             f"{contract}</p></body></html>")
 
 
-def build_native_fmu(name: str, slave_file: str, out_dir: Path, fmi: int = 2) -> Path:
+def build_native_fmu(name: str, slave_file: str, out_dir: Path, fmi: int = 2, win64: bool | None = None) -> Path:
     """Build the native FMU ``name`` (declared by ``fmus/<slave_file>``) for FMI ``fmi``.0 (2 or 3) into
-    ``out_dir``; returns its path.  Both versions come from the same declaration and the same model.c."""
+    ``out_dir``; returns its path.  Both versions come from the same declaration and the same model.c.
+    ``win64``: also the Windows binary (default: when mingw-w64 is on PATH)."""
     if fmi not in GLUE:
         raise ValueError(f"fmi = {fmi}: the native FMUs are built for FMI 2 or 3")
     compiler()  # fail early, with the reason, without a C compiler
     slave = slave_instance(slave_file)
     identifier = slave.modelName
     dependencies = dict(getattr(slave, "_output_dependencies", {}))
-    win64 = win64_compiler() is not None
+    win64 = win64_compiler() is not None if win64 is None else win64
     linux, windows = PLATFORMS[fmi]
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
