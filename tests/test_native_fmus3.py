@@ -162,8 +162,16 @@ def test_fmu_state_and_serialization_round_trip(turntables, unzipped):
         with pytest.raises(FMICallException):
             b.slave.deserializeFMUState(bad)
         assert reason in b.errors()
+    # the state passed where its address belongs (fmusim c8d4e6d does so at --final-fmu-state-file): refused
+    free = b.slave.dll["fmi3FreeFMUState"]
+    free.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+    assert free(b.slave.component, restored.value) == 3
+    assert "the FMU state itself" in b.errors()
+    b.slave.reset()
+    a.slave.freeFMUState(state)
+    b.slave.freeFMUState(restored)
+    assert not restored.value  # freeing sets the variable to NULL
     for slave in (a.slave, b.slave):
-        slave.freeFMUState(state) if slave is a.slave else slave.freeFMUState(restored)
         slave.freeInstance()
 
 

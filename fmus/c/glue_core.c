@@ -524,10 +524,23 @@ int sg_set_string(sarins_glue *g, const char *fn, const unsigned vr[], size_t n,
  * value block, model state size 8, model state, work-state size 8, work state */
 #define FIXED_PAYLOAD (4 + 4 + 8 + 8 + 4 * 8)
 
-typedef struct {
-    size_t size;           /* bytes of data */
-    unsigned char data[]; /* header + payload */
+/* In memory a state points to itself first: a pointer that is not a live state of this glue (freed, or the
+ * state passed where the address of the variable holding it is expected) is refused instead of used. */
+typedef struct fmu_state {
+    struct fmu_state *self; /* == the state while it lives; NULL once freed */
+    size_t size;            /* bytes of data */
+    unsigned char data[];   /* header + payload: the serialized bytes */
 } fmu_state;
+
+static const char *not_a_state(const void *p)
+{
+    const fmu_state *s = (const fmu_state *)p;
+    if (s == NULL)
+        return "FMUState is NULL";
+    if (s->self != s)
+        return "FMUState is not a live FMU state of this FMU (freed, or not one)";
+    return NULL;
+}
 
 static uint64_t fnv1a(const unsigned char *p, size_t n)
 {
@@ -567,12 +580,18 @@ int sg_get_state(sarins_glue *g, void **FMUstate, const char *fn)
     size_t total = HEADER_BYTES + (size_t)payload;
     /* an existing state of this model is overwritten in place when it has the size (FMI 2.0 allows reuse) */
     fmu_state *s = (fmu_state *)*FMUstate;
+    if (s != NULL && not_a_state(s) != NULL)
+        return sg_fail(g, "%s: *FMUState is not NULL and %s", fn, not_a_state(s));
     if (s == NULL || s->size != total) {
         fmu_state *fresh = malloc(sizeof(fmu_state) + total);
         if (fresh == NULL)
             return sg_fail(g, "%s: out of memory (%llu bytes)", fn, (unsigned long long)total);
-        free(s);
+        if (s != NULL) {
+            s->self = NULL;
+            free(s);
+        }
         s = fresh;
+        s->self = s;
         s->size = total;
     }
     unsigned char *p = s->data;
@@ -666,8 +685,8 @@ static const char *refuse_blob(const sarins_glue *g, const unsigned char *b, siz
 int sg_set_state(sarins_glue *g, const void *FMUstate, const char *fn)
 {
     const fmu_state *s = (const fmu_state *)FMUstate;
-    if (s == NULL)
-        return sg_fail(g, "%s: FMUstate is NULL", fn);
+    if (not_a_state(s) != NULL)
+        return sg_fail(g, "%s: %s", fn, not_a_state(s));
     const char *why = refuse_blob(g, s->data, s->size);
     if (why != NULL)
         return sg_fail(g, "%s: the state is refused: %s", fn, why);
@@ -733,15 +752,24 @@ int sg_free_state(sarins_glue *g, void **FMUstate, const char *fn)
 {
     if (FMUstate == NULL)
         return sg_fail(g, "%s: FMUstate is NULL", fn);
-    free(*FMUstate);
+    fmu_state *s = (fmu_state *)*FMUstate;
+    if (s == NULL)
+        return SARINS_OK;
+    if ((void *)FMUstate == (void *)s) /* the state itself, not the address of the variable holding it */
+        return sg_fail(g, "%s: the argument is the FMU state itself; pass the address of the variable that holds "
+                       "it", fn);
+    if (not_a_state(s) != NULL)
+        return sg_fail(g, "%s: %s", fn, not_a_state(s));
+    s->self = NULL;
+    free(s);
     *FMUstate = NULL;
     return SARINS_OK;
 }
 
 int sg_state_size(sarins_glue *g, const void *FMUstate, size_t *size, const char *fn)
 {
-    if (FMUstate == NULL || size == NULL)
-        return sg_fail(g, "%s: FMUstate or size is NULL", fn);
+    if (size == NULL || not_a_state(FMUstate) != NULL)
+        return sg_fail(g, "%s: %s", fn, size == NULL ? "size is NULL" : not_a_state(FMUstate));
     *size = ((const fmu_state *)FMUstate)->size;
     return SARINS_OK;
 }
@@ -749,8 +777,8 @@ int sg_state_size(sarins_glue *g, const void *FMUstate, size_t *size, const char
 int sg_serialize(sarins_glue *g, const void *FMUstate, unsigned char *dst, size_t size, const char *fn)
 {
     const fmu_state *s = (const fmu_state *)FMUstate;
-    if (s == NULL || dst == NULL)
-        return sg_fail(g, "%s: FMUstate or serializedState is NULL", fn);
+    if (dst == NULL || not_a_state(s) != NULL)
+        return sg_fail(g, "%s: %s", fn, dst == NULL ? "serializedState is NULL" : not_a_state(s));
     if (size < s->size)
         return sg_fail(g, "%s: %llu bytes given, the state needs %llu (%sSerializedFMUstateSize)", fn,
                        (unsigned long long)size, (unsigned long long)s->size, g->prefix);
@@ -768,6 +796,7 @@ int sg_deserialize(sarins_glue *g, const unsigned char *src, size_t size, void *
     fmu_state *s = malloc(sizeof(fmu_state) + size);
     if (s == NULL)
         return sg_fail(g, "%s: out of memory (%llu bytes)", fn, (unsigned long long)size);
+    s->self = s;
     s->size = size;
     memcpy(s->data, src, size);
     *FMUstate = s;
