@@ -46,6 +46,21 @@ class NativeModel:
     extra_core: tuple[str, ...] = ()
 
 
+@dataclass(frozen=True)
+class ArrayVariable:
+    """A Float64 array of the FMI 3.0 variant (FMI 2.0 has none): ``dimension`` names the Integer parameter
+    that gives its length (it becomes a structural parameter); ``depends_on`` the inputs an output depends on
+    (``()``: none, a state output; ``None``: unknown).  Declared by a slave class in ``fmi3_arrays``."""
+
+    name: str
+    dimension: str
+    causality: str  # "output" or "input"
+    description: str
+    depends_on: tuple[str, ...] | None = ()
+
+
+MAX_DIM = 100_000  # largest length of an array (a structural parameter's upper bound)
+
 # FMU name -> its native model (one row per native FMU)
 NATIVE = {
     "Turntable": NativeModel("turntable"),
@@ -115,8 +130,27 @@ def _c_double(value: float) -> str:
     return text if any(c in text for c in ".e") else text + ".0"
 
 
+def fmi3_arrays(slave) -> tuple[ArrayVariable, ...]:
+    """The slave's FMI 3.0 arrays (``fmi3_arrays``), checked against its variables."""
+    arrays = tuple(getattr(slave, "fmi3_arrays", ()))
+    by_name = {v.name: v for v in slave.vars.values()}
+    for a in arrays:
+        dim = by_name.get(a.dimension)
+        if dim is None or type(dim).__name__ != "Integer" or dim.causality.name != "parameter":
+            raise ValueError(f"array {a.name}: its dimension {a.dimension} must be an Integer parameter")
+        if a.causality not in ("output", "input") or a.name in by_name:
+            raise ValueError(f"array {a.name}: causality output/input and a name of its own")
+        if not 1 <= int(dim.getter()) <= MAX_DIM:
+            raise ValueError(f"array {a.name}: the start value of {a.dimension} must be in 1 .. {MAX_DIM}")
+    return arrays
+
+
 def variables_header(slave, guid: str, identifier: str) -> str:
-    """``variables.h``: the model's variable table from the declared slave (start values as declared)."""
+    """``variables.h``: the model's variable table from the declared slave (start values as declared) and,
+    after its variables, the FMI 3.0 arrays it declares (``fmi3_arrays``)."""
+    arrays = fmi3_arrays(slave)
+    structural = {a.dimension for a in arrays}
+    int_slot = {}
     rows, defines, counts = [], [], dict.fromkeys(TYPES, 0)
     letter = {"Real": "R", "Integer": "I", "Boolean": "B", "String": "S"}
     for vr, var in slave.vars.items():
@@ -135,9 +169,18 @@ def variables_header(slave, guid: str, identifier: str) -> str:
             integer = str(int(start))
         else:
             string = _c_string(str(start))
-        rows.append(f"    {{{_c_string(var.name)}, {vr}u, {TYPES[kind]}, {CAUSALITIES.index(var.causality.name)}, "
-                    f"{VARIABILITIES.index(var.variability.name)}, {slot}u, {real}, {integer}, {string}}},")
+        causality = 6 if var.name in structural else CAUSALITIES.index(var.causality.name)
+        rows.append(f"    {{{_c_string(var.name)}, {vr}u, {TYPES[kind]}, {causality}, "
+                    f"{VARIABILITIES.index(var.variability.name)}, {slot}u, {real}, {integer}, {string}, -1}},")
         defines.append(f"#define SARINS_{letter[kind]}_{var.name} {slot}")
+        if kind == "Integer":
+            int_slot[var.name] = slot
+    for k, a in enumerate(arrays):
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", a.name):
+            raise ValueError(f"{a.name}: not a C identifier")
+        rows.append(f"    {{{_c_string(a.name)}, {len(slave.vars) + k}u, 0, {CAUSALITIES.index(a.causality)}, "
+                    f"{VARIABILITIES.index('continuous')}, {k}u, 0.0, 0, NULL, {int_slot[a.dimension]}}},")
+        defines.append(f"#define SARINS_A_{a.name} {k}")
     if [var.value_reference for var in slave.vars.values()] != list(range(len(slave.vars))):
         raise ValueError("value references must be 0, 1, ... in declaration order")
     categories = ", ".join(_c_string(c) for c in slave.log_categories)
@@ -151,7 +194,7 @@ def variables_header(slave, guid: str, identifier: str) -> str:
         "static const sarins_table SARINS_TABLE = {",
         f"    {_c_string(identifier)}, {_c_string(guid)}, SARINS_VARIABLES, {len(rows)},",
         f"    {counts['Real']}, {counts['Integer']}, {counts['Boolean']}, {counts['String']},",
-        f"    SARINS_CATEGORIES, {len(slave.log_categories)}}};", "", "#endif", ""])
+        f"    SARINS_CATEGORIES, {len(slave.log_categories)}, {len(arrays)}, {MAX_DIM}}};", "", "#endif", ""])
 
 
 def _needed_headers(files: list[Path]) -> list[Path]:
@@ -182,10 +225,11 @@ def fmi_headers_dir(fmi: int = 2) -> Path:
     return path
 
 
-def write_sources(name: str, folder: Path, variables_h: str, fmi: int = 2) -> list[str]:
+def write_sources(name: str, folder: Path, variables_h: str, fmi: int = 2, model: NativeModel | None = None
+                  ) -> list[str]:
     """Write the FMU's ``sources/`` into ``folder`` (the glue and headers of FMI ``fmi``.0); returns the .c
     file names (for ``<SourceFiles>`` / buildDescription.xml)."""
-    model = NATIVE[name]
+    model = model or NATIVE[name]
     c_files = [C_DIR / GLUE[fmi], C_DIR / "glue_core.c", C_DIR / model.folder / "model.c",
                *(CORE_DIR / f for f in model.extra_core)]
     missing = [str(p) for p in c_files if not p.is_file()]
@@ -252,12 +296,14 @@ def model_description(slave, dependencies: dict, source_files: list[str]) -> byt
 FMI3_TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": "String"}
 
 
-def model_description3(md2: bytes) -> bytes:
+def model_description3(md2: bytes, arrays: tuple[ArrayVariable, ...] = ()) -> bytes:
     """The FMI 3.0 co-simulation model description of the same model, from its FMI 2.0 one (so both come from
     the one declaration): Real -> Float64, Integer -> Int32; causality, variability, initial, start, unit and
     description kept; the independent variable ``time`` added with the value reference one past the last
     (the FMI 3.0 glue answers it); ModelStructure by value reference; FMU state as in FMI 2.0; no Event Mode,
-    no intermediate update.  The source files are listed in ``sources/buildDescription.xml`` instead."""
+    no intermediate update.  The source files are listed in ``sources/buildDescription.xml`` instead.
+    ``arrays`` (the slave's ``fmi3_arrays``) are added after the variables as Float64 arrays whose
+    ``<Dimension>`` is their structural parameter (UInt64 here, an Integer parameter in FMI 2.0)."""
     from pythonfmu import __version__ as pythonfmu_version
 
     old = ET.fromstring(md2)
@@ -283,7 +329,9 @@ def model_description3(md2: bytes) -> bytes:
         if node is not None:
             root.append(node)
     variables = ET.SubElement(root, "ModelVariables")
+    structural = {a.dimension for a in arrays}
     vrs = []
+    vr_of = {}
     for sv in old.find("ModelVariables"):
         typed = sv[0]
         attrs = {k: sv.get(k) for k in ("name", "valueReference", "description", "causality", "variability",
@@ -292,13 +340,28 @@ def model_description3(md2: bytes) -> bytes:
         start = typed.get("start")
         if start is not None and typed.tag != "String":
             attrs["start"] = start
-        node = ET.SubElement(variables, FMI3_TYPES[typed.tag], attrs)
+        kind = FMI3_TYPES[typed.tag]
+        if sv.get("name") in structural:
+            kind, attrs["causality"] = "UInt64", "structuralParameter"
+            attrs["min"], attrs["max"] = "1", str(MAX_DIM)
+        node = ET.SubElement(variables, kind, attrs)
         if start is not None and typed.tag == "String":
             ET.SubElement(node, "Start", value=start)
         vrs.append(sv.get("valueReference"))
-    time_vr = str(max(int(v) for v in vrs) + 1)
-    ET.SubElement(variables, "Float64", name="time", valueReference=time_vr, causality="independent",
-                  variability="continuous", description="simulation time [s]", unit="s")
+        vr_of[sv.get("name")] = sv.get("valueReference")
+    for k, a in enumerate(arrays):
+        vr_of[a.name] = str(len(vrs) + k)
+        attrs = {"name": a.name, "valueReference": vr_of[a.name], "description": a.description,
+                 "causality": a.causality, "variability": "continuous"}
+        if a.causality == "input":
+            attrs["start"] = "0"
+        node = ET.SubElement(variables, "Float64", attrs)
+        ET.SubElement(node, "Dimension", valueReference=vr_of[a.dimension])
+    time_vr = str(len(vrs) + len(arrays))
+    time = ET.SubElement(variables, "Float64", name="time", valueReference=time_vr, causality="independent",
+                         variability="continuous", description="simulation time [s]")
+    if root.find("UnitDefinitions/Unit[@name='s']") is not None:
+        time.set("unit", "s")
     structure = ET.SubElement(root, "ModelStructure")
     old_structure = old.find("ModelStructure")
 
@@ -313,6 +376,12 @@ def model_description3(md2: bytes) -> bytes:
                 if unknown.get("dependenciesKind") is not None:
                     attrs["dependenciesKind"] = unknown.get("dependenciesKind")
             ET.SubElement(structure, tag, attrs)
+        for a in arrays:
+            if a.causality == "output":
+                attrs = {"valueReference": vr_of[a.name]}
+                if a.depends_on is not None and tag == "Output":
+                    attrs["dependencies"] = " ".join(vr_of[n] for n in a.depends_on)
+                ET.SubElement(structure, tag, attrs)
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
@@ -368,14 +437,17 @@ def _documentation(name: str, description: str, identifier: str, win64: bool, fm
             f"{contract}</p></body></html>")
 
 
-def build_native_fmu(name: str, slave_file: str, out_dir: Path, fmi: int = 2, win64: bool | None = None) -> Path:
+def build_native_fmu(name: str, slave_file: str | None, out_dir: Path, fmi: int = 2, win64: bool | None = None,
+                     model: NativeModel | None = None, slave=None) -> Path:
     """Build the native FMU ``name`` (declared by ``fmus/<slave_file>``) for FMI ``fmi``.0 (2 or 3) into
     ``out_dir``; returns its path.  Both versions come from the same declaration and the same model.c.
-    ``win64``: also the Windows binary (default: when mingw-w64 is on PATH)."""
+    ``win64``: also the Windows binary (default: when mingw-w64 is on PATH).  ``model`` and ``slave`` (an
+    instance of the declaring class) replace ``NATIVE[name]`` and ``slave_file`` (tests build models that
+    are not shipped)."""
     if fmi not in GLUE:
         raise ValueError(f"fmi = {fmi}: the native FMUs are built for FMI 2 or 3")
     compiler()  # fail early, with the reason, without a C compiler
-    slave = slave_instance(slave_file)
+    slave = slave if slave is not None else slave_instance(slave_file)
     identifier = slave.modelName
     dependencies = dict(getattr(slave, "_output_dependencies", {}))
     win64 = win64_compiler() is not None if win64 is None else win64
@@ -387,12 +459,12 @@ def build_native_fmu(name: str, slave_file: str, out_dir: Path, fmi: int = 2, wi
         sources = tmp / "sources"
         md = model_description(slave, dependencies, [])  # the GUID, before the sources name it
         guid = ET.fromstring(md).get("guid")
-        c_files = write_sources(name, sources, variables_header(slave, guid, identifier), fmi)
+        c_files = write_sources(name, sources, variables_header(slave, guid, identifier), fmi, model)
         md = model_description(slave, dependencies, c_files)
         if ET.fromstring(md).get("guid") != guid:
             raise RuntimeError(f"{name}: the GUID changed between two writes of the model description")
         if fmi == 3:
-            md = model_description3(md)
+            md = model_description3(md, fmi3_arrays(slave))
             (sources / "buildDescription.xml").write_bytes(build_description(identifier, c_files))
         binaries = {f"binaries/{linux}/{identifier}.so": compile_sources(sources, identifier, tmp)}
         if win64:

@@ -201,7 +201,7 @@ def test_bad_calls_return_fmi3_error_with_a_logged_reason(turntables, unzipped):
     refused(lambda: s.getFloat32([vr_out]), "fmi3GetFloat32", "no Float32 variables")
     values = (fmi3Float64 * 2)(1.0, 2.0)
     refused(lambda: s.fmi3SetFloat64(s.component, (fmi3ValueReference * 1)(t.vr["rate"]), 1, values, 2),
-            "2 values for 1 scalar value references")
+            "2 values for value references holding 1")
     # a bad parameter is refused at fmi3ExitInitializationMode with the model's reason
     s.setFloat64([t.vr["grid"]], [-1.0])
     s.enterInitializationMode()

@@ -51,25 +51,41 @@ static void emit3(const sarins_glue *g, int status, const char *category, const 
         g3->logger(g3->env, (fmi3Status)status, category, text);
 }
 
-/* FMI 3.0 setting rules (section 2.4.7.4 / the state machine): nothing but structural parameters in
- * (Re)Configuration Mode, otherwise as FMI 2.0. */
+/* FMI 3.0 setting rules (the state machine): structural parameters in Configuration Mode only (tunable ones
+ * also in Reconfiguration Mode), nothing else there; otherwise as FMI 2.0. */
 static int settable3(const sarins_glue *g, const sarins_var *v)
 {
-    if (g->state == S_CONFIG || g->state == S_RECONFIG)
-        return 0;
-    return sg_settable_default(g, v);
+    int structural = v->causality == SARINS_STRUCTURAL_PARAMETER;
+    if (g->state == S_CONFIG)
+        return structural && v->variability != SARINS_CONSTANT;
+    if (g->state == S_RECONFIG)
+        return structural && v->variability == SARINS_TUNABLE;
+    return !structural && sg_settable_default(g, v);
 }
 
-/* The number of values must match the value references (scalars: one each). */
-static int check_count(sarins_glue *g, const char *fn, size_t nvr, size_t n_values)
+static int has_structural(const sarins_table *t)
 {
-    if (n_values != nvr) {
-        sg_fail(g, "%s: %llu values for %llu scalar value references", fn, (unsigned long long)n_values,
-                (unsigned long long)nvr);
-        return 0;
+    for (size_t k = 0; k < t->n_vars; k++)
+        if (t->vars[k].causality == SARINS_STRUCTURAL_PARAMETER)
+            return 1;
+    return 0;
+}
+
+/* Integers are Int32 except the structural parameters, which are UInt64 (FMI 3.0 array dimensions). */
+static int check_int_kind(sarins_glue *g, const char *fn, const fmi3ValueReference vr[], size_t n, int structural)
+{
+    for (size_t k = 0; k < n; k++) {
+        const sarins_var *v = g->by_vr[vr[k]];
+        if ((v->causality == SARINS_STRUCTURAL_PARAMETER) != structural) {
+            sg_fail(g, "%s: %s (value reference %u) is a%s", fn, v->name, (unsigned)vr[k],
+                    structural ? "n Int32, not a UInt64" : " UInt64 (structural parameter), not an Int32");
+            return 0;
+        }
     }
     return 1;
 }
+
+#define check_count(g, fn, vr, nvr, n_values) sg_check_count((g), (fn), (vr), (nvr), (n_values))
 
 /* ------------------------------------------------------------- instances */
 
@@ -103,6 +119,7 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
         return NULL;
     }
     g->core.time_vr = (unsigned)g->core.n_vr; /* one past the model's last value reference */
+    g->core.arrays_visible = 1;
     const char *why = eventModeUsed ? "eventModeUsed is true but this FMU has no Event Mode (hasEventMode=false)"
                       : nRequiredIntermediateVariables > 0 ? "intermediate variables are required but this FMU "
                                                              "provides no intermediate update"
@@ -161,8 +178,7 @@ fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
 {
     sarins_glue *g = (sarins_glue *)instance;
     SG_REQUIRE(g, "fmi3EnterConfigurationMode", S_INSTANTIATED | S_STEP_COMPLETE);
-    int structural = 0; /* model.h declares no structural parameters yet: nothing to configure */
-    if (!structural)
+    if (!has_structural(g->table))
         return (fmi3Status)sg_fail(g, "fmi3EnterConfigurationMode: this FMU has no structural parameters");
     g->state = g->state == S_INSTANTIATED ? S_CONFIG : S_RECONFIG;
     return fmi3OK;
@@ -172,6 +188,8 @@ fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
 {
     sarins_glue *g = (sarins_glue *)instance;
     SG_REQUIRE(g, "fmi3ExitConfigurationMode", S_CONFIG | S_RECONFIG);
+    if (sg_size_arrays(g, "fmi3ExitConfigurationMode") != SARINS_OK)
+        return fmi3Error;
     g->state = g->state == S_CONFIG ? S_INSTANTIATED : S_STEP_COMPLETE;
     return fmi3OK;
 }
@@ -223,7 +241,7 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
 {
     sarins_glue *g = (sarins_glue *)instance;
     SG_REQUIRE(g, "fmi3GetFloat64", GET_STATES);
-    if (!check_count(g, "fmi3GetFloat64", nValueReferences, nValues))
+    if (!check_count(g, "fmi3GetFloat64", valueReferences, nValueReferences, nValues))
         return fmi3Error;
     return (fmi3Status)sg_get_real(g, "fmi3GetFloat64", valueReferences, nValueReferences, values);
 }
@@ -233,7 +251,9 @@ fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueRef
 {
     sarins_glue *g = (sarins_glue *)instance;
     SG_REQUIRE(g, "fmi3GetInt32", GET_STATES);
-    if (!check_count(g, "fmi3GetInt32", nValueReferences, nValues))
+    if (!check_count(g, "fmi3GetInt32", valueReferences, nValueReferences, nValues)
+        || !sg_check_args(g, "fmi3GetInt32", valueReferences, nValueReferences, values, SARINS_INTEGER, NULL)
+        || !check_int_kind(g, "fmi3GetInt32", valueReferences, nValueReferences, 0))
         return fmi3Error;
     return (fmi3Status)sg_get_int(g, "fmi3GetInt32", valueReferences, nValueReferences, values);
 }
@@ -243,7 +263,7 @@ fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference valueR
 {
     sarins_glue *g = (sarins_glue *)instance;
     SG_REQUIRE(g, "fmi3GetBoolean", GET_STATES);
-    if (!check_count(g, "fmi3GetBoolean", nValueReferences, nValues)
+    if (!check_count(g, "fmi3GetBoolean", valueReferences, nValueReferences, nValues)
         || !sg_check_args(g, "fmi3GetBoolean", valueReferences, nValueReferences, values, SARINS_BOOLEAN, NULL))
         return fmi3Error;
     for (size_t k = 0; k < nValueReferences; k++)
@@ -256,7 +276,7 @@ fmi3Status fmi3GetString(fmi3Instance instance, const fmi3ValueReference valueRe
 {
     sarins_glue *g = (sarins_glue *)instance;
     SG_REQUIRE(g, "fmi3GetString", GET_STATES);
-    if (!check_count(g, "fmi3GetString", nValueReferences, nValues))
+    if (!check_count(g, "fmi3GetString", valueReferences, nValueReferences, nValues))
         return fmi3Error;
     return (fmi3Status)sg_get_string(g, "fmi3GetString", valueReferences, nValueReferences, values);
 }
@@ -266,7 +286,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
 {
     sarins_glue *g = (sarins_glue *)instance;
     SG_REQUIRE(g, "fmi3SetFloat64", SET_STATES);
-    if (!check_count(g, "fmi3SetFloat64", nValueReferences, nValues))
+    if (!check_count(g, "fmi3SetFloat64", valueReferences, nValueReferences, nValues))
         return fmi3Error;
     return (fmi3Status)sg_set_real(g, "fmi3SetFloat64", valueReferences, nValueReferences, values, settable3);
 }
@@ -276,9 +296,44 @@ fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference valueRef
 {
     sarins_glue *g = (sarins_glue *)instance;
     SG_REQUIRE(g, "fmi3SetInt32", SET_STATES);
-    if (!check_count(g, "fmi3SetInt32", nValueReferences, nValues))
+    if (!check_count(g, "fmi3SetInt32", valueReferences, nValueReferences, nValues)
+        || !sg_check_args(g, "fmi3SetInt32", valueReferences, nValueReferences, values, SARINS_INTEGER, NULL)
+        || !check_int_kind(g, "fmi3SetInt32", valueReferences, nValueReferences, 0))
         return fmi3Error;
     return (fmi3Status)sg_set_int(g, "fmi3SetInt32", valueReferences, nValueReferences, values, settable3);
+}
+
+fmi3Status fmi3GetUInt64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                         size_t nValueReferences, fmi3UInt64 values[], size_t nValues)
+{
+    sarins_glue *g = (sarins_glue *)instance;
+    SG_REQUIRE(g, "fmi3GetUInt64", GET_STATES);
+    if (!check_count(g, "fmi3GetUInt64", valueReferences, nValueReferences, nValues)
+        || !sg_check_args(g, "fmi3GetUInt64", valueReferences, nValueReferences, values, SARINS_INTEGER, NULL)
+        || !check_int_kind(g, "fmi3GetUInt64", valueReferences, nValueReferences, 1))
+        return fmi3Error;
+    for (size_t k = 0; k < nValueReferences; k++)
+        values[k] = (fmi3UInt64)g->ctx.i[g->by_vr[valueReferences[k]]->slot];
+    return fmi3OK;
+}
+
+fmi3Status fmi3SetUInt64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                         size_t nValueReferences, const fmi3UInt64 values[], size_t nValues)
+{
+    sarins_glue *g = (sarins_glue *)instance;
+    SG_REQUIRE(g, "fmi3SetUInt64", SET_STATES);
+    if (!check_count(g, "fmi3SetUInt64", valueReferences, nValueReferences, nValues)
+        || !sg_check_args(g, "fmi3SetUInt64", valueReferences, nValueReferences, values, SARINS_INTEGER, settable3)
+        || !check_int_kind(g, "fmi3SetUInt64", valueReferences, nValueReferences, 1))
+        return fmi3Error;
+    for (size_t k = 0; k < nValueReferences; k++)
+        if (values[k] < 1 || values[k] > (fmi3UInt64)g->table->max_dim)
+            return (fmi3Status)sg_fail(g, "fmi3SetUInt64: %s = %llu must be in 1 .. %d",
+                                       g->by_vr[valueReferences[k]]->name, (unsigned long long)values[k],
+                                       g->table->max_dim);
+    for (size_t k = 0; k < nValueReferences; k++)
+        g->ctx.i[g->by_vr[valueReferences[k]]->slot] = (int)values[k];
+    return fmi3OK;
 }
 
 fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference valueReferences[],
@@ -286,7 +341,7 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference valueR
 {
     sarins_glue *g = (sarins_glue *)instance;
     SG_REQUIRE(g, "fmi3SetBoolean", SET_STATES);
-    if (!check_count(g, "fmi3SetBoolean", nValueReferences, nValues)
+    if (!check_count(g, "fmi3SetBoolean", valueReferences, nValueReferences, nValues)
         || !sg_check_args(g, "fmi3SetBoolean", valueReferences, nValueReferences, values, SARINS_BOOLEAN, settable3))
         return fmi3Error;
     for (size_t k = 0; k < nValueReferences; k++)
@@ -299,7 +354,7 @@ fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueReference valueRe
 {
     sarins_glue *g = (sarins_glue *)instance;
     SG_REQUIRE(g, "fmi3SetString", SET_STATES);
-    if (!check_count(g, "fmi3SetString", nValueReferences, nValues))
+    if (!check_count(g, "fmi3SetString", valueReferences, nValueReferences, nValues))
         return fmi3Error;
     return (fmi3Status)sg_set_string(g, "fmi3SetString", valueReferences, nValueReferences, values, settable3);
 }
@@ -405,7 +460,6 @@ NO_TYPE(Int16, fmi3Int16)
 NO_TYPE(UInt16, fmi3UInt16)
 NO_TYPE(UInt32, fmi3UInt32)
 NO_TYPE(Int64, fmi3Int64)
-NO_TYPE(UInt64, fmi3UInt64)
 
 fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                          size_t valueSizes[], fmi3Binary values[], size_t nValues)

@@ -18,7 +18,7 @@
 
 static const char *const TYPE_NAMES[] = {"Real", "Integer", "Boolean", "String"};
 static const char *const CAUSALITY_NAMES[] = {"parameter", "calculatedParameter", "input", "output", "local",
-                                              "independent"};
+                                              "independent", "structuralParameter"};
 static const char *const VARIABILITY_NAMES[] = {"constant", "fixed", "tunable", "discrete", "continuous"};
 
 /* ---------------------------------------------------------------- logging */
@@ -199,8 +199,67 @@ int sg_check_outputs(sarins_glue *g, const char *fn)
 {
     for (size_t k = 0; k < g->table->n_vars; k++) {
         const sarins_var *v = &g->table->vars[k];
-        if (v->type == SARINS_REAL && v->causality == SARINS_OUTPUT && !isfinite(g->ctx.r[v->slot]))
+        if (v->type != SARINS_REAL || v->causality != SARINS_OUTPUT)
+            continue;
+        if (v->dim < 0 && !isfinite(g->ctx.r[v->slot]))
             return sg_fail(g, "%s: output %s = %g is not finite", fn, v->name, g->ctx.r[v->slot]);
+        for (size_t e = 0; v->dim >= 0 && e < sg_length(g, v); e++)
+            if (!isfinite(g->ctx.a[v->slot][e]))
+                return sg_fail(g, "%s: output %s[%llu] = %g is not finite", fn, v->name, (unsigned long long)e + 1,
+                               g->ctx.a[v->slot][e]);
+    }
+    return SARINS_OK;
+}
+
+size_t sg_length(const sarins_glue *g, const sarins_var *v)
+{
+    return v->dim < 0 ? 1 : (size_t)g->ctx.i[v->dim];
+}
+
+/* NULL if every structural parameter sizing an array is in 1 .. max_dim, else the first bad one */
+static const sarins_var *bad_dimension(const sarins_table *t, const int *ints)
+{
+    for (size_t k = 0; k < t->n_vars; k++) {
+        const sarins_var *v = &t->vars[k];
+        if (v->dim >= 0 && (ints[v->dim] < 1 || ints[v->dim] > t->max_dim))
+            return v;
+    }
+    return NULL;
+}
+
+int sg_size_arrays(sarins_glue *g, const char *fn)
+{
+    const sarins_table *t = g->table;
+    if (t->n_array == 0)
+        return SARINS_OK;
+    const sarins_var *bad = bad_dimension(t, g->ctx.i);
+    if (bad != NULL) {
+        const sarins_var *n = NULL;
+        for (size_t k = 0; k < t->n_vars && n == NULL; k++)
+            if (t->vars[k].type == SARINS_INTEGER && (int)t->vars[k].slot == bad->dim)
+                n = &t->vars[k];
+        return sg_fail(g, "%s: structural parameter %s = %d (the length of %s) must be in 1 .. %d", fn,
+                       n ? n->name : "?", g->ctx.i[bad->dim], bad->name, t->max_dim);
+    }
+    size_t total = 0;
+    for (size_t k = 0; k < t->n_vars; k++)
+        if (t->vars[k].dim >= 0)
+            total += sg_length(g, &t->vars[k]);
+    if (total != g->array_doubles || g->array_block == NULL) {
+        double *block = calloc(total, sizeof(double));
+        if (block == NULL)
+            return sg_fail(g, "%s: out of memory (%llu array elements)", fn, (unsigned long long)total);
+        free(g->array_block);
+        g->array_block = block;
+        g->array_doubles = total;
+    } /* same lengths: the values stay (inputs set before initialisation) */
+    size_t at = 0;
+    for (size_t k = 0; k < t->n_vars; k++) {
+        const sarins_var *v = &t->vars[k];
+        if (v->dim >= 0) {
+            g->ctx.a[v->slot] = g->array_block + at;
+            at += sg_length(g, v);
+        }
     }
     return SARINS_OK;
 }
@@ -216,6 +275,15 @@ static void release_work(sarins_glue *g)
 static int run_initialize(sarins_glue *g, int quiet)
 {
     release_work(g);
+    if (g->table->n_array > 0) {
+        int saved = g->state;
+        if (quiet && bad_dimension(g->table, g->ctx.i) != NULL)
+            return SARINS_ERROR; /* reported when initialisation mode ends */
+        if (sg_size_arrays(g, "initialize") != SARINS_OK) {
+            g->state = saved; /* the caller decides; the reason is logged */
+            return SARINS_ERROR;
+        }
+    }
     g->ctx.quiet = quiet;
     int status = g->model->initialize(&g->ctx);
     g->ctx.quiet = 0;
@@ -252,6 +320,8 @@ void sg_free(sarins_glue *g)
     if (g->ctx.work != NULL)
         g->model->release(&g->ctx);
     free(g->ctx.state);
+    free(g->ctx.a);
+    free(g->array_block);
     free(g->values);
     free(g->built);
     free((void *)g->by_vr);
@@ -284,7 +354,8 @@ int sg_init(sarins_glue *g, const char *instance_name, const char *token, int lo
     g->values = calloc(g->values_size ? g->values_size : 1, 1);
     g->built = calloc(g->values_size ? g->values_size : 1, 1);
     g->ctx.state = calloc(g->model->state_size ? g->model->state_size : 1, 1);
-    if (!g->name || !g->cat_on || !g->by_vr || !g->values || !g->built || !g->ctx.state) {
+    g->ctx.a = calloc(t->n_array ? t->n_array : 1, sizeof(double *));
+    if (!g->name || !g->cat_on || !g->by_vr || !g->values || !g->built || !g->ctx.state || !g->ctx.a) {
         if (g->emit)
             g->emit(g, SARINS_ERROR, "logStatusError", "out of memory");
         return 0;
@@ -305,6 +376,8 @@ int sg_init(sarins_glue *g, const char *instance_name, const char *token, int lo
     point_ctx(g);
     set_start_values(g);
     g->state = S_INSTANTIATED;
+    if (sg_size_arrays(g, fn) != SARINS_OK)
+        return 0; /* the declared start values are out of range: a build fault, logged */
     return 1;
 }
 
@@ -348,6 +421,9 @@ void sg_reset(sarins_glue *g)
     g->have_time = 0;
     g->t_next = 0.0;
     g->state = S_INSTANTIATED; /* debug-logging settings survive a reset */
+    (void)sg_size_arrays(g, "reset"); /* start values: in range (checked at instantiation) */
+    if (g->array_block != NULL)
+        memset(g->array_block, 0, g->array_doubles * sizeof(double));
 }
 
 double sg_time(const sarins_glue *g) { return g->have_time ? g->t_next : g->ctx.start_time; }
@@ -385,9 +461,10 @@ int sg_settable_default(const sarins_glue *g, const sarins_var *v)
 {
     if (v->variability == SARINS_CONSTANT)
         return 0;
+    int parameter = v->causality == SARINS_PARAMETER || v->causality == SARINS_STRUCTURAL_PARAMETER;
     if (g->state == S_INSTANTIATED || g->state == S_INIT)
-        return v->causality == SARINS_PARAMETER || v->causality == SARINS_INPUT;
-    return v->causality == SARINS_INPUT || (v->causality == SARINS_PARAMETER && v->variability == SARINS_TUNABLE);
+        return parameter || v->causality == SARINS_INPUT;
+    return v->causality == SARINS_INPUT || (parameter && v->variability == SARINS_TUNABLE);
 }
 
 /* One value reference: known, of this type, and (settable given) settable in this state. */
@@ -401,6 +478,8 @@ static const sarins_var *check_vr(sarins_glue *g, const char *fn, unsigned vr, i
         return NULL;
     }
     const sarins_var *v = (size_t)vr < g->n_vr ? g->by_vr[vr] : NULL;
+    if (v != NULL && v->dim >= 0 && !g->arrays_visible)
+        v = NULL; /* arrays are FMI 3.0 only */
     if (v == NULL) {
         sg_fail(g, "%s: unknown value reference %u", fn, vr);
         return NULL;
@@ -436,19 +515,46 @@ int sg_check_args(sarins_glue *g, const char *fn, const unsigned vr[], size_t n,
     return 1;
 }
 
+int sg_check_count(sarins_glue *g, const char *fn, const unsigned vr[], size_t n, size_t n_values)
+{
+    size_t want = 0;
+    for (size_t k = 0; k < n && vr != NULL; k++) {
+        const sarins_var *v = (size_t)vr[k] < g->n_vr ? g->by_vr[vr[k]] : NULL;
+        want += (v != NULL && v->dim >= 0 && g->arrays_visible) ? sg_length(g, v) : 1;
+    }
+    if (n_values != want) {
+        sg_fail(g, "%s: %llu values for value references holding %llu", fn, (unsigned long long)n_values,
+                (unsigned long long)want);
+        return 0;
+    }
+    return 1;
+}
+
 int sg_get_real(sarins_glue *g, const char *fn, const unsigned vr[], size_t n, double value[])
 {
     if (!sg_check_args(g, fn, vr, n, value, SARINS_REAL, NULL))
         return SARINS_ERROR;
+    size_t at = 0; /* arrays: the values of one variable follow each other */
     for (size_t k = 0; k < n; k++) {
         if (vr[k] == g->time_vr) {
-            value[k] = sg_time(g);
+            value[at++] = sg_time(g);
             continue;
         }
         const sarins_var *v = g->by_vr[vr[k]];
-        value[k] = g->ctx.r[v->slot];
-        if (v->causality == SARINS_OUTPUT && !isfinite(value[k]))
-            return sg_fail(g, "%s: output %s = %g is not finite", fn, v->name, value[k]);
+        if (v->dim >= 0) {
+            size_t n_el = sg_length(g, v);
+            memcpy(value + at, g->ctx.a[v->slot], n_el * sizeof(double));
+            for (size_t e = 0; e < n_el; e++)
+                if (v->causality == SARINS_OUTPUT && !isfinite(value[at + e]))
+                    return sg_fail(g, "%s: output %s[%llu] = %g is not finite", fn, v->name,
+                                   (unsigned long long)e + 1, value[at + e]);
+            at += n_el;
+            continue;
+        }
+        value[at] = g->ctx.r[v->slot];
+        if (v->causality == SARINS_OUTPUT && !isfinite(value[at]))
+            return sg_fail(g, "%s: output %s = %g is not finite", fn, v->name, value[at]);
+        at++;
     }
     return SARINS_OK;
 }
@@ -476,8 +582,16 @@ int sg_set_real(sarins_glue *g, const char *fn, const unsigned vr[], size_t n, c
 {
     if (!sg_check_args(g, fn, vr, n, value, SARINS_REAL, settable))
         return SARINS_ERROR;
-    for (size_t k = 0; k < n; k++)
-        g->ctx.r[g->by_vr[vr[k]]->slot] = value[k];
+    size_t at = 0;
+    for (size_t k = 0; k < n; k++) {
+        const sarins_var *v = g->by_vr[vr[k]];
+        if (v->dim >= 0) {
+            memcpy(g->ctx.a[v->slot], value + at, sg_length(g, v) * sizeof(double));
+            at += sg_length(g, v);
+        } else {
+            g->ctx.r[v->slot] = value[at++];
+        }
+    }
     return SARINS_OK;
 }
 
@@ -512,7 +626,7 @@ int sg_set_string(sarins_glue *g, const char *fn, const unsigned vr[], size_t n,
 /* ------------------------------------------------------------ FMU state */
 
 #define STATE_MAGIC "SARINSst"
-#define STATE_FORMAT 1u
+#define STATE_FORMAT 2u /* 2: the arrays after the work state */
 #define BYTE_ORDER_MARK 0x01020304u
 #define GUID_BYTES 64
 /* header: magic 8, format 4, model state version 4, byte-order mark 4, string size 4, GUID 64,
@@ -521,7 +635,7 @@ int sg_set_string(sarins_glue *g, const char *fn, const unsigned vr[], size_t n,
 #define OFF_PAYLOAD_SIZE (8 + 4 + 4 + 4 + 4 + GUID_BYTES)
 #define OFF_CHECKSUM (OFF_PAYLOAD_SIZE + 8)
 /* payload: FMI state 4, have_time 4, t_next 8, start_time 8, n_real/n_integer/n_boolean/n_string 4 x 8,
- * value block, model state size 8, model state, work-state size 8, work state */
+ * value block, model state size 8, model state, work-state size 8, work state, array elements 8, arrays */
 #define FIXED_PAYLOAD (4 + 4 + 8 + 8 + 4 * 8)
 
 /* In memory a state points to itself first: a pointer that is not a live state of this glue (freed, or the
@@ -576,7 +690,8 @@ int sg_get_state(sarins_glue *g, void **FMUstate, const char *fn)
     uint64_t work_n = 0;
     if (post_init(g->state) && m->work_state_size != NULL && g->ctx.work != NULL)
         work_n = (uint64_t)m->work_state_size(&g->ctx);
-    uint64_t payload = FIXED_PAYLOAD + g->values_size + 8 + m->state_size + 8 + work_n;
+    uint64_t array_n = g->array_doubles;
+    uint64_t payload = FIXED_PAYLOAD + g->values_size + 8 + m->state_size + 8 + work_n + 8 + 8 * array_n;
     size_t total = HEADER_BYTES + (size_t)payload;
     /* an existing state of this model is overwritten in place when it has the size (FMI 2.0 allows reuse) */
     fmu_state *s = (fmu_state *)*FMUstate;
@@ -625,6 +740,9 @@ int sg_get_state(sarins_glue *g, void **FMUstate, const char *fn)
     p = put(p, &work_n, 8);
     if (work_n > 0)
         m->save_work_state(&g->ctx, p);
+    p += work_n;
+    p = put(p, &array_n, 8);
+    p = put(p, g->array_block, 8 * (size_t)array_n);
     uint64_t sum = fnv1a(body, (size_t)payload);
     memcpy(s->data + OFF_CHECKSUM, &sum, 8);
     *FMUstate = s;
@@ -660,7 +778,7 @@ static const char *refuse_blob(const sarins_glue *g, const unsigned char *b, siz
         return "its size does not match its header (truncated?)";
     if (fnv1a(b + HEADER_BYTES, (size_t)payload) != sum)
         return "its checksum does not match (corrupted)";
-    uint64_t fixed = FIXED_PAYLOAD + g->values_size + 8 + g->model->state_size + 8;
+    uint64_t fixed = FIXED_PAYLOAD + g->values_size + 8 + g->model->state_size + 8 + 8;
     if (payload < fixed)
         return "its payload is too short for this model";
     const unsigned char *p = b + HEADER_BYTES;
@@ -673,8 +791,22 @@ static const char *refuse_blob(const sarins_glue *g, const unsigned char *b, siz
     if (counts[0] != g->table->n_real || counts[1] != g->table->n_integer || counts[2] != g->table->n_boolean
         || counts[3] != g->table->n_string || state_n != g->model->state_size)
         return "its variables or model state do not fit this model";
-    if (payload != fixed + work_n)
+    if (payload < fixed + work_n)
         return "its work-state size does not match its payload";
+    uint64_t array_n, want = 0;
+    memcpy(&array_n, p + fixed - 8 + work_n, 8);
+    for (size_t k = 0; k < g->table->n_vars; k++) {
+        const sarins_var *v = &g->table->vars[k];
+        if (v->dim < 0)
+            continue;
+        int d; /* the blob's value of the structural parameter */
+        memcpy(&d, p + FIXED_PAYLOAD + off_int(g->table) + (size_t)v->dim * sizeof(int), sizeof d);
+        if (d < 1 || d > g->table->max_dim)
+            return "a structural parameter in it is out of range";
+        want += (uint64_t)d;
+    }
+    if (array_n != want || payload != fixed + work_n + 8 * array_n)
+        return "its arrays do not match its structural parameters or its payload";
     if (!(state == S_INSTANTIATED || state == S_INIT || post_init(state)))
         return "it holds an unknown FMI state";
     if (work_n > 0 && (!post_init(state) || g->model->load_work_state == NULL))
@@ -709,7 +841,7 @@ int sg_set_state(sarins_glue *g, const void *FMUstate, const char *fn)
         int same = g->have_built && g->built_start == start_time;
         for (size_t k = 0; same && k < g->table->n_vars; k++) {
             const sarins_var *v = &g->table->vars[k];
-            if (v->causality != SARINS_PARAMETER)
+            if (v->causality != SARINS_PARAMETER && v->causality != SARINS_STRUCTURAL_PARAMETER)
                 continue;
             size_t off, n;
             switch (v->type) {
@@ -735,6 +867,9 @@ int sg_set_state(sarins_glue *g, const void *FMUstate, const char *fn)
         release_work(g); /* before initialisation the model holds nothing */
     }
     memcpy(g->values, values, g->values_size);
+    if (sg_size_arrays(g, fn) != SARINS_OK) /* checked in refuse_blob: only out of memory */
+        return SARINS_ERROR;
+    memcpy(g->array_block, work + work_n + 8, 8 * g->array_doubles);
     memcpy(g->ctx.state, model_state, m->state_size);
     g->ctx.start_time = start_time;
     g->have_time = have_time ? 1 : 0;

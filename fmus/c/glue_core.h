@@ -50,6 +50,9 @@ struct sarins_glue {
     int have_time;
     double t_next;
     unsigned long problems; /* messages logged with status >= Discard (so a failure is never silent) */
+    int arrays_visible;     /* FMI 3.0: array variables have value references (FMI 2.0: unknown there) */
+    double *array_block;    /* every array's elements, one block */
+    size_t array_doubles;   /* its length */
 };
 
 #if defined(__GNUC__)
@@ -82,6 +85,15 @@ void sg_free(sarins_glue *g);
 int sg_set_debug_logging(sarins_glue *g, int on, size_t n, const char *const categories[], const char *fn);
 int sg_model_status(sarins_glue *g, int status, unsigned long problems_before, const char *fn);
 int sg_check_outputs(sarins_glue *g, const char *fn);
+/* (Re)size the arrays from the structural parameters (allocates when a length changed; each in
+ * 1 .. max_dim, else SARINS_ERROR with the reason).  Called at instantiation, at the end of Configuration
+ * Mode, before initialize() and at set-state. */
+int sg_size_arrays(sarins_glue *g, const char *fn);
+/* elements of a variable: 1 for a scalar, its structural parameter's value for an array */
+size_t sg_length(const sarins_glue *g, const sarins_var *v);
+/* the number of values for these value references (arrays: their lengths); 0 and a logged error if n_values
+ * differs */
+int sg_check_count(sarins_glue *g, const char *fn, const unsigned vr[], size_t n, size_t n_values);
 
 /* Lifecycle steps shared by both versions (the caller has checked the state). */
 void sg_enter_init(sarins_glue *g);
