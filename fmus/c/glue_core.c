@@ -869,7 +869,8 @@ int sg_set_state(sarins_glue *g, const void *FMUstate, const char *fn)
     memcpy(g->values, values, g->values_size);
     if (sg_size_arrays(g, fn) != SARINS_OK) /* checked in refuse_blob: only out of memory */
         return SARINS_ERROR;
-    memcpy(g->array_block, work + work_n + 8, 8 * g->array_doubles);
+    if (g->array_doubles > 0)
+        memcpy(g->array_block, work + work_n + 8, 8 * g->array_doubles);
     memcpy(g->ctx.state, model_state, m->state_size);
     g->ctx.start_time = start_time;
     g->have_time = have_time ? 1 : 0;
