@@ -162,6 +162,8 @@ def test_state_round_trip_keeps_the_arrays_and_their_length(bursts):
     state = a.s.getFMUState()
     blob = a.s.serializeFMUState(state)
     mark = a.s.getFloat64([SAMPLES, W, WSUM], 15)
+    # the declared start values (slope 2, u 0): step [2, 3] in 7 intervals
+    assert mark[:7] == [2.0 * (2.0 + (k + 1) / 7) for k in range(7)] and mark[-1] == 21.0
     a.s.setFloat64([W], [9.0] * 7)
     a.s.doStep(3.0, 1.0)
     a.s.setFMUState(state)

@@ -182,6 +182,8 @@ static void set_start_values(sarins_glue *g)
     memset(g->values, 0, g->values_size);
     for (size_t k = 0; k < g->table->n_vars; k++) {
         const sarins_var *v = &g->table->vars[k];
+        if (v->dim >= 0)
+            continue; /* an array: its slot is in c->a, zeroed when it is sized */
         switch (v->type) {
         case SARINS_REAL: g->ctx.r[v->slot] = v->start_real; break;
         case SARINS_INTEGER: g->ctx.i[v->slot] = v->start_int; break;
