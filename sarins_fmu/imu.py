@@ -135,6 +135,16 @@ class ImuModel:
         rad/s/degC^2, rad/s/degC, rad/s (T in degC)
     axial_drift_dtdt : float, z-gyro drift per unit temperature rate,
         rad/s per degC/s (= rad/degC)
+    axial_drift_grad : float, z-gyro drift per degC of block gradient
+        T_z - T_block, rad/s/degC (``sarins_imu_axial_thermal_terms``)
+    axial_block_time_constant : float, s, lag of the block node behind the
+        z-gyro temperature (0: no lag, no gradient)
+    axial_hysteresis : float, rad/s, half-height H of the heating/cooling
+        loop of the z-gyro drift (heating branch +H, cooling branch -H)
+    axial_hysteresis_width : float, degC (> 0), temperature reversal that
+        takes the loop from one branch to the other is 2 w
+    axial_hysteresis_relax_time : float, s, relaxation of the loop at rest
+        (0: none)
     aging_sigma : (3,) stationary std of the Markov ageing of (a, b, c)
     aging_corr_time : float, s (seed 002: 360 days)
     flicker_tau_min, flicker_tau_max : float, s, band of correlation times
@@ -149,6 +159,11 @@ class ImuModel:
     lowrate_width: np.ndarray = field(default_factory=lambda: np.ones(3))
     axial_drift_poly: np.ndarray = field(default_factory=lambda: np.zeros(3))
     axial_drift_dtdt: float = 0.0
+    axial_drift_grad: float = 0.0
+    axial_block_time_constant: float = 0.0
+    axial_hysteresis: float = 0.0
+    axial_hysteresis_width: float = 1.0
+    axial_hysteresis_relax_time: float = 0.0
     aging_sigma: np.ndarray = field(default_factory=lambda: np.zeros(3))
     aging_corr_time: float = 360 * DAY
     flicker_tau_min: float = 1.0
@@ -166,6 +181,14 @@ class ImuModel:
             raise ValueError("lowrate_width must be positive")
         if not (math.isfinite(self.axial_drift_dtdt) and self.aging_corr_time > 0):
             raise ValueError("axial_drift_dtdt must be finite and aging_corr_time positive")
+        for name in ("axial_drift_grad", "axial_hysteresis"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"{name} must be finite")
+        for name in ("axial_block_time_constant", "axial_hysteresis_relax_time"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
+                raise ValueError(f"{name} must be a non-negative number of seconds")
+        if not (math.isfinite(self.axial_hysteresis_width) and self.axial_hysteresis_width > 0):
+            raise ValueError("axial_hysteresis_width must be positive (degC)")
         if not (0 < self.flicker_tau_min < self.flicker_tau_max < math.inf):
             raise ValueError("flicker correlation times need 0 < flicker_tau_min < flicker_tau_max (finite)")
 
@@ -175,7 +198,13 @@ class ImuModel:
                        bias_tc1=np.array([*self.gyro.bias_tc1[:2], 0.0]),
                        bias_tc2=np.array([*self.gyro.bias_tc2[:2], 0.0]))
         return replace(self, gyro=gyro, axial_drift_poly=np.array([0.0, 0.0, drift]),
-                       axial_drift_dtdt=0.0, aging_sigma=np.zeros(3))
+                       axial_drift_dtdt=0.0, axial_drift_grad=0.0, axial_hysteresis=0.0, aging_sigma=np.zeros(3))
+
+    @property
+    def axial_thermal_par(self) -> np.ndarray:
+        """The five parameters of ``sarins_imu_axial_thermal_terms`` (SI): k_g, tau_b, H, w, tau_r."""
+        return np.array([self.axial_drift_grad, self.axial_block_time_constant, self.axial_hysteresis,
+                         self.axial_hysteresis_width, self.axial_hysteresis_relax_time])
 
 
 def _mis(arcsec):
@@ -189,10 +218,11 @@ def _mis(arcsec):
 # of 0.002 deg/h, our (a, b, c) give 0.0021..0.0037 deg/h over 20..60 degC.
 # Accelerometer figures (30-50 ug bias, 5 ug/sqrt(Hz)) are those of quartz
 # pendulous accelerometers in such units (Titterton & Weston table 4.3).
-# The papers imply no die lag, gradient, hysteresis, flicker floor, rate
-# random walk or turn-on bias for this unit (seed 000 models the axial drift
-# by T and dT/dt; seed 002 by a quadratic in T), so those terms are zero
-# here and the seeds' results stay what they were.
+# The papers imply no die lag, per-axis gradient or hysteresis, flicker
+# floor, rate random walk or turn-on bias for this unit (seed 000 models the
+# axial drift by T and dT/dt; seed 002 by a quadratic in T), so those terms
+# are zero here; the azimuth gyro has the block-gradient and heating/cooling
+# terms real RLGs show (issue 20, the axial_* fields below).
 NAV_RLG = ImuModel(
     gyro=TriadErrors(
         bias=np.array([0.003, -0.003, 0.0]) * DPH_TO_RPS,
@@ -213,6 +243,16 @@ NAV_RLG = ImuModel(
     ),
     axial_drift_poly=np.array([1.0e-6, -4.0e-5, 0.0025]) * DPH_TO_RPS,
     axial_drift_dtdt=1.0e-4 * DPH_TO_RPS * 3600.0,  # 1e-4 deg/h per degC/h
+    # azimuth gyro beyond T and dT/dt (docs/imu-presets.md gives the sources): the block node lags the gyro
+    # temperature by the first diffusion mode of a 0.1 m ZERODUR block (L^2 / (pi^2 alpha), alpha = 7.2e-7
+    # m^2/s from SCHOTT's conductivity, density and heat capacity); the drift per degC of that gradient is
+    # taken equal to the campaign unit's per degC of uniform change; a heating/cooling loop of half-height
+    # the unit's in-run bias instability, taken up over 2 degC, not relaxing
+    axial_drift_grad=2.0e-4 * DPH_TO_RPS,
+    axial_block_time_constant=1400.0,
+    axial_hysteresis=1.0e-4 * DPH_TO_RPS,
+    axial_hysteresis_width=2.0,
+    axial_hysteresis_relax_time=0.0,
     # ageing (seed 002 eq. (20): first-order Markov, 360-day correlation time): the constant term's
     # stationary std is the HG9900 brochure's gyro bias, 0.0035 deg/h 1 sigma, read as the bias a
     # navigation-grade RLG wanders over its calibration life; a and b have no public source
@@ -464,7 +504,7 @@ class IMU:
         tau_gm = np.concatenate([m.gyro.bias_corr_time, m.accel.bias_corr_time])
         gm_std = np.concatenate([m.gyro.bias_instability, m.accel.bias_instability])
         consts = np.array([self.t0, self.h, m.axial_drift_dtdt, float(corr.die_lag), float(corr.active),
-                           float(self.n_sub), float(block_rows), 0.0])
+                           float(self.n_sub), float(block_rows), 0.0, *m.axial_thermal_par])
         sensor_par = np.vstack([self.thermal._heat, self.thermal._tau, np.exp(-self.h / tau_gm), gm_std])
         coef = np.array([row for t in (m.gyro, m.accel)
                          for row in (t.bias, t.bias_tc1, t.bias_tc2, t.scale_factor, t.scale_factor_tc)])
@@ -475,7 +515,7 @@ class IMU:
         if isinstance(self.base, StaticBase):
             base[0], base[1] = self.base.inertial_rate_t(), self.base.specific_force_t()
         corr_rows = block_rows if corr.active else 0
-        self._state = (consts, np.zeros(3), sensor_par, np.zeros((2, 6)), coef, triad, mats,
+        self._state = (consts, np.zeros(3), sensor_par, np.zeros((3, 6)), coef, triad, mats,
                        np.ascontiguousarray(self.axes), base, np.zeros((block_rows, 6)), np.zeros((block_rows, 6)),
                        corr.par, corr.state, corr.phi, corr.q, corr.x_flicker, np.zeros((corr_rows, corr.columns)))
         self._table = array_table(self._state)  # the same arrays as the C core sees them
@@ -492,6 +532,8 @@ class IMU:
         state[0] = self.thermal.temperature
         state[1] = self._rng_gm.standard_normal(6) * s[imu_step.SENSOR_PAR][3]  # GM: stationary start
         self._correlated.reset(state[0])
+        state[2] = 0.0
+        state[2, :2] = state[0, 2]  # z block node and play operator at the z temperature: no gradient, loop at 0
 
     @property
     def time(self) -> float:

@@ -24,12 +24,17 @@ or on how the run is chunked.
 Array layout (``s`` below, the tuple :meth:`IMU.state_arrays` returns):
 
 ====  =================  =====================================================
- 0    consts (8,)        t0, h, drift_dtdt, die_lag, correlated_active, n_sub,
-                         block_rows, (spare)
+ 0    consts (13,)       t0, h, drift_dtdt, die_lag, correlated_active, n_sub,
+                         block_rows, (spare), azimuth-gyro thermal terms:
+                         gradient coefficient, block time constant,
+                         hysteresis, its width and relaxation time
+                         (``sarins_imu_axial_thermal_terms``)
  1    clock (3,)         completed intervals k, ambient at the last interval
                          end (degC), next unused row of the random blocks
  2    sensor_par (4, 6)  self-heating, thermal time constant, GM phi, GM std
- 3    state (2, 6)       reported temperatures (degC), GM bias states
+ 3    state (3, 6)       reported temperatures (degC), GM bias states,
+                         z block node temperature and z play operator
+                         (degC; columns 0 and 1 of the last row)
  4    coef (10, 3)       per triad: bias, tc1, tc2, scale factor, sf_tc
  5    triad (7, 3)       drift poly (a, b, c), gyro quadratic, low-rate gain,
                          low-rate width, accel quadratic, gyro and accel

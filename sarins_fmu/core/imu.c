@@ -208,6 +208,33 @@ void sarins_imu_interval_terms(int64_t n_steps, const double *temp0, const doubl
     }
 }
 
+/* ------------------------------------------ azimuth-gyro thermal terms */
+
+void sarins_imu_axial_thermal_terms(int64_t n_steps, double temp0, const double *temps, int64_t t_stride, double h,
+                                    const double *par, double *state, double *bias, int64_t b_stride) {
+    double k_grad = par[0], tau_b = par[1], hyst = par[2], width = par[3], tau_r = par[4];
+    if (k_grad == 0.0 && hyst == 0.0) return;
+    double e_b = tau_b > 0.0 ? exp(-h / tau_b) : 0.0;
+    double e_r = tau_r > 0.0 ? exp(-h / tau_r) : 1.0;
+    double prev = temp0;
+    for (int64_t k = 0; k < n_steps; k++) {
+        double now = temps[k * t_stride];
+        double grad0 = prev - state[0];
+        if (tau_b > 0.0) { /* T linear over the interval (slope s): T_b <- e T_b + (T0 - s tau)(1 - e) + s h */
+            double slope = (now - prev) / h;
+            state[0] = e_b * state[0] + (prev - slope * tau_b) * (1.0 - e_b) + slope * h;
+        } else {
+            state[0] = now;
+        }
+        double grad = 0.5 * (grad0 + (now - state[0]));
+        double mid = 0.5 * (prev + now);
+        double play = fmax(mid - width, fmin(mid + width, state[1]));
+        state[1] = mid + (play - mid) * e_r;
+        bias[k * b_stride] += k_grad * grad + hyst * (mid - state[1]) / width;
+        prev = now;
+    }
+}
+
 /* ------------------------------------------------------ the state table */
 
 typedef struct {
@@ -230,8 +257,8 @@ static int imu_view(const int64_t *table, int64_t rows, ImuView *v) {
     v->n_flicker = table[3 * SARINS_IMU_PHI + 1];
     v->corr_cols = 6 * v->n_flicker + 6;
     int64_t corr_rows = table[3 * SARINS_IMU_CORR_BLOCK + 1];
-    if (!(has_shape(table, SARINS_IMU_CONSTS, 8, 1) && has_shape(table, SARINS_IMU_CLOCK, 3, 1)
-          && has_shape(table, SARINS_IMU_SENSOR_PAR, 4, 6) && has_shape(table, SARINS_IMU_STATE, 2, 6)
+    if (!(has_shape(table, SARINS_IMU_CONSTS, SARINS_IMU_N_CONSTS, 1) && has_shape(table, SARINS_IMU_CLOCK, 3, 1)
+          && has_shape(table, SARINS_IMU_SENSOR_PAR, 4, 6) && has_shape(table, SARINS_IMU_STATE, 3, 6)
           && has_shape(table, SARINS_IMU_COEF, 10, 3) && has_shape(table, SARINS_IMU_TRIAD, 7, 3)
           && has_shape(table, SARINS_IMU_MATS, 9, 3) && v->n_axes >= 1
           && has_shape(table, SARINS_IMU_AXES, v->n_axes, 3) && has_shape(table, SARINS_IMU_BASE, 2, 3)
@@ -259,7 +286,8 @@ static int imu_view(const int64_t *table, int64_t rows, ImuView *v) {
     v->q = table_array(table, SARINS_IMU_Q);
     v->x_flicker = table_array(table, SARINS_IMU_X_FLICKER);
     v->corr_block = table_array(table, SARINS_IMU_CORR_BLOCK);
-    /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub, block_rows */
+    /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub, block_rows, (spare), the five
+     * parameters of sarins_imu_axial_thermal_terms */
     if (!(v->consts[1] > 0.0 && v->consts[5] >= 1.0 && v->consts[6] == (double)v->block_rows))
         return SARINS_IMU_BAD_TABLE;
     if (v->consts[4] != 0.0 && corr_rows != v->block_rows) return SARINS_IMU_BAD_TABLE;
@@ -299,6 +327,7 @@ int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, cons
     sarins_imu_interval_terms(n_steps, die0, die_t, h, v.coef, v.triad, v.consts[2], v.state + 6,
                               v.sensor_par + 12, v.sensor_par + 18, v.gm_block + 6 * pos, g_bias, g_sf, a_bias,
                               a_sf);
+    sarins_imu_axial_thermal_terms(n_steps, die0[2], die_t + 2, 6, h, v.consts + 8, v.state + 12, g_bias + 2, 3);
     if (v.consts[4] != 0.0) {
         sarins_correlated_terms(n_steps, die0, die_t, h, v.corr_par, v.corr_state, v.n_flicker, v.phi, v.q,
                                 v.x_flicker, v.corr_block + v.corr_cols * pos, g_bias, g_sf, a_bias, a_sf);
