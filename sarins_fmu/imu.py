@@ -637,19 +637,23 @@ class IMU:
 def deterministic_axial_drift(model: ImuModel, temperature, dt: float) -> np.ndarray:
     """Deterministic z-gyro drift (rad/s) along a temperature series.
 
-    eps_z = b + b1 (T - T_REF) + b2 (T - T_REF)^2 + a T^2 + b T + c + d dT/dt
-    (the z-gyro terms of ``sarins_imu_interval_terms`` (``sarins_fmu/core/imu.h``) without the Gauss-Markov
-    bias instability and the white noise; ageing as in ``model``).
+    eps_z = b + b1 (T - T_REF) + b2 (T - T_REF)^2 + a T^2 + b T + c + d dT/dt + block gradient + hysteresis
+    (the z-gyro terms of ``sarins_imu_interval_terms`` and ``sarins_imu_axial_thermal_terms``
+    (``sarins_fmu/core/imu.h``) without the Gauss-Markov bias instability and the white noise; ageing as in
+    ``model``; the block node and the loop start in equilibrium at the first sample).
 
     Parameters
     ----------
     temperature : (K,) z-gyro temperature on a uniform grid, degC
     dt : grid step, s (dT/dt by central differences)
     """
+    from .core.axial import thermal_terms
+
     temperature = np.asarray(temperature, dtype=float)
     d = temperature - T_REF
     g = model.gyro
     poly = model.axial_drift_poly
     rate = np.gradient(temperature, dt) if temperature.size > 1 else np.zeros_like(temperature)
     return (g.bias[2] + g.bias_tc1[2] * d + g.bias_tc2[2] * d * d
-            + (poly[0] * temperature + poly[1]) * temperature + poly[2] + model.axial_drift_dtdt * rate)
+            + (poly[0] * temperature + poly[1]) * temperature + poly[2] + model.axial_drift_dtdt * rate
+            + (thermal_terms(temperature[0], temperature, dt, model.axial_thermal_par) if temperature.size else 0.0))

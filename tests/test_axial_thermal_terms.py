@@ -124,3 +124,17 @@ def test_the_nav_rlg_preset_carries_the_terms_and_the_ideal_preset_does_not():
     assert nav.axial_drift_grad > 0 and nav.axial_block_time_constant > 0 and nav.axial_hysteresis > 0
     assert ideal.axial_drift_grad == 0 and ideal.axial_hysteresis == 0
     assert nav.with_axial_drift(1e-8).axial_thermal_par[[0, 2]].tolist() == [0.0, 0.0]
+
+
+def test_the_deterministic_axial_drift_includes_the_terms():
+    """imu.deterministic_axial_drift (the demo's drift history) = the T and dT/dt law + the new terms."""
+    nav = imu_mod.preset("nav-rlg")
+    temps = 20.0 + np.arange(600) * 60.0 * 5.0 / 3600.0  # 5 degC/h for 10 h on a 60 s grid
+    law = imu_mod.deterministic_axial_drift(nav.with_axial_drift(0.0), temps, 60.0)
+    full = imu_mod.deterministic_axial_drift(nav, temps, 60.0)
+    poly = nav.axial_drift_poly
+    rate = nav.axial_drift_dtdt * 5.0 / 3600.0
+    assert np.allclose(full - law, (poly[0] * temps + poly[1]) * temps + poly[2] + rate
+                       + thermal_terms(temps[0], temps, 60.0, nav.axial_thermal_par), rtol=1e-12, atol=1e-22)
+    assert full[-1] - ((poly[0] * temps[-1] + poly[1]) * temps[-1] + poly[2] + rate) == pytest.approx(
+        nav.axial_hysteresis + nav.axial_drift_grad * 5.0 / 3600.0 * nav.axial_block_time_constant, rel=1e-3)
