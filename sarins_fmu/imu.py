@@ -141,8 +141,8 @@ class ImuModel:
         z-gyro temperature (0: no lag, no gradient)
     axial_hysteresis : float, rad/s, half-height H of the heating/cooling
         loop of the z-gyro drift (heating branch +H, cooling branch -H)
-    axial_hysteresis_width : float, degC (> 0), temperature reversal that
-        takes the loop from one branch to the other is 2 w
+    axial_hysteresis_width : float, degC (> 0), half the temperature
+        reversal that takes the loop from one branch to the other
     axial_hysteresis_relax_time : float, s, relaxation of the loop at rest
         (0: none)
     aging_sigma : (3,) stationary std of the Markov ageing of (a, b, c)
