@@ -1,6 +1,6 @@
 """Native FMUs: every FMI 2.0 call answered in C, no Python in the binary (issue 18 item 3, issue 19 items 1-2).
 
-A native FMU is the shared glue ``fmus/c/fmi2_glue.c`` (interface ``fmus/c/model.h``), the model's
+A native FMU is the shared glue ``fmus/c/fmi2_glue.c`` + ``fmus/c/glue_core.c`` (interface ``fmus/c/model.h``), the model's
 ``fmus/c/<folder>/model.c`` and the C core files it needs (``sarins_fmu/core``), compiled by the build
 with setup.py's flags.  The declaration stays in one place, the slave class (``fmus/<x>_slave.py``): the
 build instantiates it and writes from the same objects
@@ -46,6 +46,21 @@ class NativeModel:
     extra_core: tuple[str, ...] = ()
 
 
+@dataclass(frozen=True)
+class ArrayVariable:
+    """A Float64 array of the FMI 3.0 variant (FMI 2.0 has none): ``dimension`` names the Integer parameter
+    that gives its length (it becomes a structural parameter); ``depends_on`` the inputs an output depends on
+    (``()``: none, a state output; ``None``: unknown).  Declared by a slave class in ``fmi3_arrays``."""
+
+    name: str
+    dimension: str
+    causality: str  # "output" or "input"
+    description: str
+    depends_on: tuple[str, ...] | None = ()
+
+
+MAX_DIM = 100_000  # largest length of an array (a structural parameter's upper bound)
+
 # FMU name -> its native model (one row per native FMU)
 NATIVE = {
     "Turntable": NativeModel("turntable"),
@@ -58,6 +73,12 @@ CFLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-fno-fast-math", "-
           "-fvisibility=hidden")
 MINGW = "x86_64-w64-mingw32-gcc"
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+FMI3_HEADERS = ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
+# FMI version -> (glue file, headers, platform folders linux/windows, default output folder)
+GLUE = {2: "fmi2_glue.c", 3: "fmi3_glue.c"}
+HEADERS = {2: FMI_HEADERS, 3: FMI3_HEADERS}
+PLATFORMS = {2: ("linux64", "win64"), 3: ("x86_64-linux", "x86_64-windows")}
+DEFAULT_OUT3 = Path("build") / "fmus3"
 TYPES = {"Real": 0, "Integer": 1, "Boolean": 2, "String": 3}
 CAUSALITIES = ("parameter", "calculatedParameter", "input", "output", "local", "independent")
 VARIABILITIES = ("constant", "fixed", "tunable", "discrete", "continuous")
@@ -111,8 +132,27 @@ def _c_double(value: float) -> str:
     return text if any(c in text for c in ".e") else text + ".0"
 
 
+def fmi3_arrays(slave) -> tuple[ArrayVariable, ...]:
+    """The slave's FMI 3.0 arrays (``fmi3_arrays``), checked against its variables."""
+    arrays = tuple(getattr(slave, "fmi3_arrays", ()))
+    by_name = {v.name: v for v in slave.vars.values()}
+    for a in arrays:
+        dim = by_name.get(a.dimension)
+        if dim is None or type(dim).__name__ != "Integer" or dim.causality.name != "parameter":
+            raise ValueError(f"array {a.name}: its dimension {a.dimension} must be an Integer parameter")
+        if a.causality not in ("output", "input") or a.name in by_name:
+            raise ValueError(f"array {a.name}: causality output/input and a name of its own")
+        if not 1 <= int(dim.getter()) <= MAX_DIM:
+            raise ValueError(f"array {a.name}: the start value of {a.dimension} must be in 1 .. {MAX_DIM}")
+    return arrays
+
+
 def variables_header(slave, guid: str, identifier: str) -> str:
-    """``variables.h``: the model's variable table from the declared slave (start values as declared)."""
+    """``variables.h``: the model's variable table from the declared slave (start values as declared) and,
+    after its variables, the FMI 3.0 arrays it declares (``fmi3_arrays``)."""
+    arrays = fmi3_arrays(slave)
+    structural = {a.dimension for a in arrays}
+    int_slot = {}
     rows, defines, counts = [], [], dict.fromkeys(TYPES, 0)
     letter = {"Real": "R", "Integer": "I", "Boolean": "B", "String": "S"}
     for vr, var in slave.vars.items():
@@ -131,9 +171,18 @@ def variables_header(slave, guid: str, identifier: str) -> str:
             integer = str(int(start))
         else:
             string = _c_string(str(start))
-        rows.append(f"    {{{_c_string(var.name)}, {vr}u, {TYPES[kind]}, {CAUSALITIES.index(var.causality.name)}, "
-                    f"{VARIABILITIES.index(var.variability.name)}, {slot}u, {real}, {integer}, {string}}},")
+        causality = 6 if var.name in structural else CAUSALITIES.index(var.causality.name)
+        rows.append(f"    {{{_c_string(var.name)}, {vr}u, {TYPES[kind]}, {causality}, "
+                    f"{VARIABILITIES.index(var.variability.name)}, {slot}u, {real}, {integer}, {string}, -1}},")
         defines.append(f"#define SARINS_{letter[kind]}_{var.name} {slot}")
+        if kind == "Integer":
+            int_slot[var.name] = slot
+    for k, a in enumerate(arrays):
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", a.name):
+            raise ValueError(f"{a.name}: not a C identifier")
+        rows.append(f"    {{{_c_string(a.name)}, {len(slave.vars) + k}u, 0, {CAUSALITIES.index(a.causality)}, "
+                    f"{VARIABILITIES.index('continuous')}, {k}u, 0.0, 0, NULL, {int_slot[a.dimension]}}},")
+        defines.append(f"#define SARINS_A_{a.name} {k}")
     if [var.value_reference for var in slave.vars.values()] != list(range(len(slave.vars))):
         raise ValueError("value references must be 0, 1, ... in declaration order")
     categories = ", ".join(_c_string(c) for c in slave.log_categories)
@@ -147,7 +196,7 @@ def variables_header(slave, guid: str, identifier: str) -> str:
         "static const sarins_table SARINS_TABLE = {",
         f"    {_c_string(identifier)}, {_c_string(guid)}, SARINS_VARIABLES, {len(rows)},",
         f"    {counts['Real']}, {counts['Integer']}, {counts['Boolean']}, {counts['String']},",
-        f"    SARINS_CATEGORIES, {len(slave.log_categories)}}};", "", "#endif", ""])
+        f"    SARINS_CATEGORIES, {len(slave.log_categories)}, {len(arrays)}, {MAX_DIM}}};", "", "#endif", ""])
 
 
 def _needed_headers(files: list[Path]) -> list[Path]:
@@ -156,7 +205,7 @@ def _needed_headers(files: list[Path]) -> list[Path]:
     todo = list(files)
     while todo:
         for name in _INCLUDE.findall(todo.pop().read_text()):
-            if name in seen or name == "variables.h" or name in FMI_HEADERS:
+            if name in seen or name == "variables.h" or name in FMI_HEADERS or name in FMI3_HEADERS:
                 continue
             for folder in (C_DIR, CORE_DIR):
                 if (folder / name).is_file():
@@ -168,20 +217,23 @@ def _needed_headers(files: list[Path]) -> list[Path]:
     return sorted(seen.values())
 
 
-def fmi_headers_dir() -> Path:
-    """The FMI 2.0 headers (the standard's, as FMPy ships them)."""
+def fmi_headers_dir(fmi: int = 2) -> Path:
+    """The FMI 2.0 or 3.0 headers (the standard's, as FMPy ships them in fmpy/c-code)."""
     import fmpy
 
     path = Path(fmpy.__file__).parent / "c-code"
-    if not all((path / h).is_file() for h in FMI_HEADERS):
-        raise RuntimeError(f"FMI 2.0 headers not found in {path}")
+    if not all((path / h).is_file() for h in HEADERS[fmi]):
+        raise RuntimeError(f"FMI {fmi}.0 headers not found in {path}")
     return path
 
 
-def write_sources(name: str, folder: Path, variables_h: str) -> list[str]:
-    """Write the FMU's ``sources/`` into ``folder``; returns the .c file names (for ``<SourceFiles>``)."""
-    model = NATIVE[name]
-    c_files = [C_DIR / "fmi2_glue.c", C_DIR / model.folder / "model.c", *(CORE_DIR / f for f in model.extra_core)]
+def write_sources(name: str, folder: Path, variables_h: str, fmi: int = 2, model: NativeModel | None = None
+                  ) -> list[str]:
+    """Write the FMU's ``sources/`` into ``folder`` (the glue and headers of FMI ``fmi``.0); returns the .c
+    file names (for ``<SourceFiles>`` / buildDescription.xml)."""
+    model = model or NATIVE[name]
+    c_files = [C_DIR / GLUE[fmi], C_DIR / "glue_core.c", C_DIR / model.folder / "model.c",
+               *(CORE_DIR / f for f in model.extra_core)]
     missing = [str(p) for p in c_files if not p.is_file()]
     if missing:
         raise RuntimeError(f"{name}: sources missing: {', '.join(missing)}")
@@ -194,8 +246,8 @@ def write_sources(name: str, folder: Path, variables_h: str) -> list[str]:
     folder.mkdir(parents=True, exist_ok=True)
     for path in c_files + _needed_headers(c_files):
         shutil.copy2(path, folder / path.name)
-    for header in FMI_HEADERS:
-        shutil.copy2(fmi_headers_dir() / header, folder / header)
+    for header in HEADERS[fmi]:
+        shutil.copy2(fmi_headers_dir(fmi) / header, folder / header)
     (folder / "variables.h").write_text(variables_h)
     return [p.name for p in c_files]
 
@@ -242,37 +294,166 @@ def model_description(slave, dependencies: dict, source_files: list[str]) -> byt
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def _documentation(name: str, description: str, identifier: str, win64: bool) -> str:
+# FMI 2.0 type element -> FMI 3.0 variable element
+FMI3_TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": "String"}
+
+
+def model_description3(md2: bytes, arrays: tuple[ArrayVariable, ...] = ()) -> bytes:
+    """The FMI 3.0 co-simulation model description of the same model, from its FMI 2.0 one (so both come from
+    the one declaration): Real -> Float64, Integer -> Int32; causality, variability, initial, start, unit and
+    description kept; the independent variable ``time`` added with the value reference one past the last
+    (the FMI 3.0 glue answers it); ModelStructure by value reference; FMU state as in FMI 2.0; no Event Mode,
+    no intermediate update.  The source files are listed in ``sources/buildDescription.xml`` instead.
+    ``arrays`` (the slave's ``fmi3_arrays``) are added after the variables as Float64 arrays whose
+    ``<Dimension>`` is their structural parameter (UInt64 here, an Integer parameter in FMI 2.0)."""
+    from pythonfmu import __version__ as pythonfmu_version
+
+    old = ET.fromstring(md2)
+    cosim = old.find("CoSimulation")
+    root = ET.Element("fmiModelDescription", {
+        "fmiVersion": "3.0", "modelName": old.get("modelName"), "instantiationToken": old.get("guid"),
+        "description": old.get("description", ""), "author": old.get("author", ""),
+        "generationTool": f"sarins-fmu native FMI 3.0 glue (fmus/c) over a PythonFMU {pythonfmu_version} declaration",
+        "generationDateAndTime": old.get("generationDateAndTime", ""),
+        "variableNamingConvention": old.get("variableNamingConvention", "flat")})
+    ET.SubElement(root, "CoSimulation", {
+        "modelIdentifier": cosim.get("modelIdentifier"), "needsExecutionTool": "false",
+        "canBeInstantiatedOnlyOncePerProcess": "false",
+        "canGetAndSetFMUState": "true", "canSerializeFMUState": "true",
+        "providesDirectionalDerivatives": "false", "providesAdjointDerivatives": "false",
+        "providesPerElementDependencies": "false",
+        "canHandleVariableCommunicationStepSize": cosim.get("canHandleVariableCommunicationStepSize", "false"),
+        "maxOutputDerivativeOrder": "0", "providesIntermediateUpdate": "false",
+        "mightReturnEarlyFromDoStep": "false", "canReturnEarlyAfterIntermediateUpdate": "false",
+        "hasEventMode": "false", "providesEvaluateDiscreteStates": "false"})
+    for tag in ("UnitDefinitions", "LogCategories", "DefaultExperiment"):
+        node = old.find(tag)
+        if node is not None:
+            root.append(node)
+    variables = ET.SubElement(root, "ModelVariables")
+    structural = {a.dimension for a in arrays}
+    vrs = []
+    vr_of = {}
+    for sv in old.find("ModelVariables"):
+        typed = sv[0]
+        attrs = {k: sv.get(k) for k in ("name", "valueReference", "description", "causality", "variability",
+                                          "initial") if sv.get(k) is not None}
+        attrs.update({k: v for k, v in typed.attrib.items() if k in ("unit", "displayUnit", "min", "max", "nominal")})
+        start = typed.get("start")
+        if start is not None and typed.tag != "String":
+            attrs["start"] = start
+        kind = FMI3_TYPES[typed.tag]
+        if sv.get("name") in structural:
+            kind, attrs["causality"] = "UInt64", "structuralParameter"
+            attrs["min"], attrs["max"] = "1", str(MAX_DIM)
+        node = ET.SubElement(variables, kind, attrs)
+        if start is not None and typed.tag == "String":
+            ET.SubElement(node, "Start", value=start)
+        vrs.append(sv.get("valueReference"))
+        vr_of[sv.get("name")] = sv.get("valueReference")
+    for k, a in enumerate(arrays):
+        vr_of[a.name] = str(len(vrs) + k)
+        attrs = {"name": a.name, "valueReference": vr_of[a.name], "description": a.description,
+                 "causality": a.causality, "variability": "continuous"}
+        if a.causality == "input":
+            attrs["start"] = "0"
+        node = ET.SubElement(variables, "Float64", attrs)
+        ET.SubElement(node, "Dimension", valueReference=vr_of[a.dimension])
+    time_vr = str(len(vrs) + len(arrays))
+    time = ET.SubElement(variables, "Float64", name="time", valueReference=time_vr, causality="independent",
+                         variability="continuous", description="simulation time [s]")
+    if root.find("UnitDefinitions/Unit[@name='s']") is not None:
+        time.set("unit", "s")
+    structure = ET.SubElement(root, "ModelStructure")
+    old_structure = old.find("ModelStructure")
+
+    def vr_list(text):
+        return " ".join(vrs[int(i) - 1] for i in text.split())
+
+    for section, tag in (("Outputs", "Output"), ("InitialUnknowns", "InitialUnknown")):
+        for unknown in old_structure.findall(f"{section}/Unknown"):
+            attrs = {"valueReference": vrs[int(unknown.get("index")) - 1]}
+            if unknown.get("dependencies") is not None:
+                attrs["dependencies"] = vr_list(unknown.get("dependencies"))
+                if unknown.get("dependenciesKind") is not None:
+                    attrs["dependenciesKind"] = unknown.get("dependenciesKind")
+            ET.SubElement(structure, tag, attrs)
+        for a in arrays:
+            if a.causality == "output":
+                attrs = {"valueReference": vr_of[a.name]}
+                if a.depends_on is not None and tag == "Output":
+                    attrs["dependencies"] = " ".join(vr_of[n] for n in a.depends_on)
+                ET.SubElement(structure, tag, attrs)
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def build_description(identifier: str, c_files: list[str]) -> bytes:
+    """``sources/buildDescription.xml`` of an FMI 3.0 FMU: the C files and the include folder."""
+    root = ET.Element("fmiBuildDescription", fmiVersion="3.0")
+    config = ET.SubElement(root, "BuildConfiguration", modelIdentifier=identifier)
+    files = ET.SubElement(config, "SourceFileSet", language="C11")
+    for name in c_files:
+        ET.SubElement(files, "SourceFile", name=name)
+    ET.SubElement(config, "Library", name="m")
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+_CONTRACT2 = ("<h2>FMI 2.0 contract</h2><p>Calls out of the order of FMI 2.0 section 4.2.4, unknown value "
+              "references and type mismatches return fmi2Error with a logged message (never fmi2Fatal); parameters "
+              "are checked at fmi2ExitInitializationMode; non-finite Real outputs are never returned with fmi2OK; "
+              "the first step starts at the start time; messages with status Discard or worse always reach the "
+              "logger, others when debug logging is on for their category. Co-simulation only, no derivatives. FMU "
+              "state: fmi2GetFMUstate/SetFMUstate and serialisation are supported; a serialized state carries a "
+              "header (magic, format version, GUID, payload size, checksum) and a wrong, truncated or foreign one is "
+              "refused with fmi2Error. Nothing allocates after fmi2ExitInitializationMode except the FMU-state calls.")
+_CONTRACT3 = ("<h2>FMI 3.0 contract</h2><p>Co-simulation only, no Event Mode, no clocks, no intermediate update. "
+              "Calls out of the order of the FMI 3.0 co-simulation state machine, unknown value references, type "
+              "mismatches and wrong value counts return fmi3Error with a logged message (never fmi3Fatal); "
+              "parameters are checked at fmi3ExitInitializationMode; non-finite Float64 outputs are never returned "
+              "with fmi3OK; the first step starts at the start time of fmi3EnterInitializationMode; Real variables are "
+              "Float64, Integer ones Int32; the independent variable time is readable with fmi3GetFloat64. Getters "
+              "and setters of the other FMI 3.0 types, derivatives, clocks and Model Exchange return fmi3Error with "
+              "the reason. FMU state: fmi3GetFMUState/SetFMUState and serialisation are supported (the blob of the "
+              "FMI 2.0 variant: magic, format version, GUID, payload size, checksum); a wrong, truncated or foreign "
+              "one is refused with fmi3Error. Nothing allocates after fmi3ExitInitializationMode except the "
+              "FMU-state calls. sources/buildDescription.xml lists the sources.")
+
+
+def _documentation(name: str, description: str, identifier: str, win64: bool, fmi: int = 2) -> str:
     line = " ".join(compile_line(identifier))
     wline = " ".join(compile_line(identifier, MINGW, win64=True))
-    platforms = ("binaries/linux64 (x86-64 Linux) and binaries/win64 (x86-64 Windows, built with mingw-w64)"
-                 if win64 else f"binaries/linux64 (x86-64 Linux) only: {MINGW} was not on PATH when this FMU was "
+    linux, windows = PLATFORMS[fmi]
+    platforms = (f"binaries/{linux} (x86-64 Linux) and binaries/{windows} (x86-64 Windows, built with mingw-w64)"
+                 if win64 else f"binaries/{linux} (x86-64 Linux) only: {MINGW} was not on PATH when this FMU was "
                  "built; compile sources/ for other platforms")
+    contract = _CONTRACT3 if fmi == 3 else _CONTRACT2
     return (f"<html><head><title>{html.escape(name)}</title></head><body><h1>{html.escape(name)}</h1>"
             f"<p>{html.escape(description)}</p><p>Units: each variable's description ends in [unit; display unit].</p>"
-            "<h2>Requirements</h2><p>None: a native FMU. Every FMI 2.0 call is answered in C (C11 + libm); the "
+            "<h2>Requirements</h2><p>None: a native FMU. Every FMI call is answered in C (C11 + libm); the "
             "binary loads no interpreter and needs no Python.</p>"
             f"<h2>Platforms</h2><p>{html.escape(platforms)}.</p>"
             "<h2>Building from sources/</h2><p>In the sources folder, with any C11 compiler:</p>"
             f"<pre>{html.escape(line)}</pre><p>Windows (mingw-w64):</p><pre>{html.escape(wline)}</pre>"
-            "<h2>FMI 2.0 contract</h2><p>Calls out of the order of FMI 2.0 section 4.2.4, unknown value references "
-            "and type mismatches return fmi2Error with a logged message (never fmi2Fatal); parameters are checked "
-            "at fmi2ExitInitializationMode; non-finite Real outputs are never returned with fmi2OK; the first step "
-            "starts at the start time; messages with status Discard or worse always reach the logger, others when "
-            "debug logging is on for their category. Co-simulation only, no derivatives. FMU state: "
-            "fmi2GetFMUstate/SetFMUstate and serialisation are supported; a serialized state carries a header "
-            "(magic, format version, GUID, payload size, checksum) and a wrong, truncated or foreign one is refused "
-            "with fmi2Error. Nothing allocates after fmi2ExitInitializationMode except the FMU-state calls."
-            "</p></body></html>")
+            f"{contract}</p></body></html>")
 
 
-def build_native_fmu(name: str, slave_file: str, out_dir: Path) -> Path:
-    """Build the native FMU ``name`` (declared by ``fmus/<slave_file>``) into ``out_dir``; returns its path."""
+def build_native_fmu(name: str, slave_file: str | None, out_dir: Path, fmi: int = 2, win64: bool | None = None,
+                     model: NativeModel | None = None, slave=None) -> Path:
+    """Build the native FMU ``name`` (declared by ``fmus/<slave_file>``) for FMI ``fmi``.0 (2 or 3) into
+    ``out_dir``; returns its path.  Both versions come from the same declaration and the same model.c.
+    ``win64``: also the Windows binary (default: when mingw-w64 is on PATH).  ``model`` and ``slave`` (an
+    instance of the declaring class) replace ``NATIVE[name]`` and ``slave_file`` (tests build models that
+    are not shipped)."""
+    if fmi not in GLUE:
+        raise ValueError(f"fmi = {fmi}: the native FMUs are built for FMI 2 or 3")
     compiler()  # fail early, with the reason, without a C compiler
-    slave = slave_instance(slave_file)
+    slave = slave if slave is not None else slave_instance(slave_file)
     identifier = slave.modelName
     dependencies = dict(getattr(slave, "_output_dependencies", {}))
-    win64 = win64_compiler() is not None
+    win64 = win64_compiler() is not None if win64 is None else win64
+    linux, windows = PLATFORMS[fmi]
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="sarins_native_fmu_") as tmp:
@@ -280,13 +461,16 @@ def build_native_fmu(name: str, slave_file: str, out_dir: Path) -> Path:
         sources = tmp / "sources"
         md = model_description(slave, dependencies, [])  # the GUID, before the sources name it
         guid = ET.fromstring(md).get("guid")
-        c_files = write_sources(name, sources, variables_header(slave, guid, identifier))
+        c_files = write_sources(name, sources, variables_header(slave, guid, identifier), fmi, model)
         md = model_description(slave, dependencies, c_files)
         if ET.fromstring(md).get("guid") != guid:
             raise RuntimeError(f"{name}: the GUID changed between two writes of the model description")
-        binaries = {f"binaries/linux64/{identifier}.so": compile_sources(sources, identifier, tmp)}
+        if fmi == 3:
+            md = model_description3(md, fmi3_arrays(slave))
+            (sources / "buildDescription.xml").write_bytes(build_description(identifier, c_files))
+        binaries = {f"binaries/{linux}/{identifier}.so": compile_sources(sources, identifier, tmp)}
         if win64:
-            binaries[f"binaries/win64/{identifier}.dll"] = compile_sources(sources, identifier, tmp, win64=True)
+            binaries[f"binaries/{windows}/{identifier}.dll"] = compile_sources(sources, identifier, tmp, win64=True)
         target = out_dir / f"{identifier}.fmu"
         with zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("modelDescription.xml", md)
@@ -299,5 +483,16 @@ def build_native_fmu(name: str, slave_file: str, out_dir: Path) -> Path:
                 z.write(path, f"sources/{path.name}")
             root = ET.fromstring(md)
             z.writestr("documentation/index.html",
-                       _documentation(root.get("modelName"), root.get("description", ""), identifier, win64))
+                       _documentation(root.get("modelName"), root.get("description", ""), identifier, win64, fmi))
     return target
+
+
+def build_native_fmus3(out_dir: Path | str = DEFAULT_OUT3, names=None) -> list[Path]:
+    """The FMI 3.0 variants of the native FMUs (default: all of :data:`NATIVE`) into ``out_dir``."""
+    from . import SLAVES
+
+    names = list(NATIVE) if names is None else list(names)
+    unknown = [n for n in names if n not in NATIVE]
+    if unknown:
+        raise ValueError(f"no native FMI 3.0 variant of {unknown}; native FMUs: {', '.join(NATIVE)}")
+    return [build_native_fmu(n, SLAVES[n], Path(out_dir), fmi=3) for n in names]

@@ -142,6 +142,16 @@ class ImuModel:
         rad/s/degC^2, rad/s/degC, rad/s (T in degC)
     axial_drift_dtdt : float, z-gyro drift per unit temperature rate,
         rad/s per degC/s (= rad/degC)
+    axial_drift_grad : float, z-gyro drift per degC of block gradient
+        T_z - T_block, rad/s/degC (``sarins_imu_axial_thermal_terms``)
+    axial_block_time_constant : float, s, lag of the block node behind the
+        z-gyro temperature (0: no lag, no gradient)
+    axial_hysteresis : float, rad/s, half-height H of the heating/cooling
+        loop of the z-gyro drift (heating branch +H, cooling branch -H)
+    axial_hysteresis_width : float, degC (> 0), half the temperature
+        reversal that takes the loop from one branch to the other
+    axial_hysteresis_relax_time : float, s, relaxation of the loop at rest
+        (0: none)
     aging_sigma : (3,) stationary std of the Markov ageing of (a, b, c)
     aging_corr_time : float, s (seed 002: 360 days)
     flicker_tau_min, flicker_tau_max : float, s, band of correlation times
@@ -156,6 +166,11 @@ class ImuModel:
     lowrate_width: np.ndarray = field(default_factory=lambda: np.ones(3))
     axial_drift_poly: np.ndarray = field(default_factory=lambda: np.zeros(3))
     axial_drift_dtdt: float = 0.0
+    axial_drift_grad: float = 0.0
+    axial_block_time_constant: float = 0.0
+    axial_hysteresis: float = 0.0
+    axial_hysteresis_width: float = 1.0
+    axial_hysteresis_relax_time: float = 0.0
     aging_sigma: np.ndarray = field(default_factory=lambda: np.zeros(3))
     aging_corr_time: float = 360 * DAY
     flicker_tau_min: float = 1.0
@@ -173,6 +188,14 @@ class ImuModel:
             raise ValueError("lowrate_width must be positive")
         if not (math.isfinite(self.axial_drift_dtdt) and self.aging_corr_time > 0):
             raise ValueError("axial_drift_dtdt must be finite and aging_corr_time positive")
+        for name in ("axial_drift_grad", "axial_hysteresis"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"{name} must be finite")
+        for name in ("axial_block_time_constant", "axial_hysteresis_relax_time"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
+                raise ValueError(f"{name} must be a non-negative number of seconds")
+        if not (math.isfinite(self.axial_hysteresis_width) and self.axial_hysteresis_width > 0):
+            raise ValueError("axial_hysteresis_width must be positive (degC)")
         if not (0 < self.flicker_tau_min < self.flicker_tau_max < math.inf):
             raise ValueError("flicker correlation times need 0 < flicker_tau_min < flicker_tau_max (finite)")
 
@@ -182,7 +205,13 @@ class ImuModel:
                        bias_tc1=np.array([*self.gyro.bias_tc1[:2], 0.0]),
                        bias_tc2=np.array([*self.gyro.bias_tc2[:2], 0.0]))
         return replace(self, gyro=gyro, axial_drift_poly=np.array([0.0, 0.0, drift]),
-                       axial_drift_dtdt=0.0, aging_sigma=np.zeros(3))
+                       axial_drift_dtdt=0.0, axial_drift_grad=0.0, axial_hysteresis=0.0, aging_sigma=np.zeros(3))
+
+    @property
+    def axial_thermal_par(self) -> np.ndarray:
+        """The five parameters of ``sarins_imu_axial_thermal_terms`` (SI): k_g, tau_b, H, w, tau_r."""
+        return np.array([self.axial_drift_grad, self.axial_block_time_constant, self.axial_hysteresis,
+                         self.axial_hysteresis_width, self.axial_hysteresis_relax_time])
 
 
 def _mis(arcsec):
@@ -196,10 +225,11 @@ def _mis(arcsec):
 # of 0.002 deg/h, our (a, b, c) give 0.0021..0.0037 deg/h over 20..60 degC.
 # Accelerometer figures (30-50 ug bias, 5 ug/sqrt(Hz)) are those of quartz
 # pendulous accelerometers in such units (Titterton & Weston table 4.3).
-# The papers imply no die lag, gradient, hysteresis, flicker floor, rate
-# random walk or turn-on bias for this unit (seed 000 models the axial drift
-# by T and dT/dt; seed 002 by a quadratic in T), so those terms are zero
-# here and the seeds' results stay what they were.
+# The papers imply no die lag, per-axis gradient or hysteresis, flicker
+# floor, rate random walk or turn-on bias for this unit (seed 000 models the
+# axial drift by T and dT/dt; seed 002 by a quadratic in T), so those terms
+# are zero here; the azimuth gyro has the block-gradient and heating/cooling
+# terms real RLGs show (issue 20, the axial_* fields below).
 NAV_RLG = ImuModel(
     gyro=TriadErrors(
         bias=np.array([0.003, -0.003, 0.0]) * DPH_TO_RPS,
@@ -220,6 +250,16 @@ NAV_RLG = ImuModel(
     ),
     axial_drift_poly=np.array([1.0e-6, -4.0e-5, 0.0025]) * DPH_TO_RPS,
     axial_drift_dtdt=1.0e-4 * DPH_TO_RPS * 3600.0,  # 1e-4 deg/h per degC/h
+    # azimuth gyro beyond T and dT/dt (docs/imu-presets.md gives the sources): the block node lags the gyro
+    # temperature by the first diffusion mode of a 0.1 m ZERODUR block (L^2 / (pi^2 alpha), alpha = 7.2e-7
+    # m^2/s from SCHOTT's conductivity, density and heat capacity); the drift per degC of that gradient is
+    # taken equal to the campaign unit's per degC of uniform change; a heating/cooling loop of half-height
+    # the unit's in-run bias instability, taken up over 2 degC, not relaxing
+    axial_drift_grad=2.0e-4 * DPH_TO_RPS,
+    axial_block_time_constant=1400.0,
+    axial_hysteresis=1.0e-4 * DPH_TO_RPS,
+    axial_hysteresis_width=2.0,
+    axial_hysteresis_relax_time=0.0,
     # ageing (seed 002 eq. (20): first-order Markov, 360-day correlation time): the constant term's
     # stationary std is the HG9900 brochure's gyro bias, 0.0035 deg/h 1 sigma, read as the bias a
     # navigation-grade RLG wanders over its calibration life; a and b have no public source
@@ -462,7 +502,7 @@ class IMU:
         base = np.zeros((2, 3))
         if isinstance(self.base, StaticBase):
             base[0], base[1] = self.base.inertial_rate_t(), self.base.specific_force_t()
-        self._state = (np.zeros(8), np.zeros(2), np.zeros((4, 6)), np.zeros((2, 6)), np.zeros((10, 3)),
+        self._state = (np.zeros(imu_step.N_CONSTS), np.zeros(2), np.zeros((4, 6)), np.zeros((3, 6)), np.zeros((10, 3)),
                        np.zeros((7, 3)), np.zeros((9, 3)), np.ascontiguousarray(self.axes), base,
                        np.zeros((len(core_imu.STREAMS), core_rng.WORDS)), np.zeros((8, 6)), np.zeros((3, 6)),
                        np.zeros(n_flicker), np.zeros((n_flicker, 6)), np.zeros((n_flicker, 6)))
@@ -546,19 +586,23 @@ class IMU:
 def deterministic_axial_drift(model: ImuModel, temperature, dt: float) -> np.ndarray:
     """Deterministic z-gyro drift (rad/s) along a temperature series.
 
-    eps_z = b + b1 (T - T_REF) + b2 (T - T_REF)^2 + a T^2 + b T + c + d dT/dt
-    (the z-gyro terms of ``sarins_imu_interval_terms`` (``sarins_fmu/core/imu.h``) without the Gauss-Markov
-    bias instability and the white noise; ageing as in ``model``).
+    eps_z = b + b1 (T - T_REF) + b2 (T - T_REF)^2 + a T^2 + b T + c + d dT/dt + block gradient + hysteresis
+    (the z-gyro terms of ``sarins_imu_interval_terms`` and ``sarins_imu_axial_thermal_terms``
+    (``sarins_fmu/core/imu.h``) without the Gauss-Markov bias instability and the white noise; ageing as in
+    ``model``; the block node and the loop start in equilibrium at the first sample).
 
     Parameters
     ----------
     temperature : (K,) z-gyro temperature on a uniform grid, degC
     dt : grid step, s (dT/dt by central differences)
     """
+    from .core.axial import thermal_terms
+
     temperature = np.asarray(temperature, dtype=float)
     d = temperature - T_REF
     g = model.gyro
     poly = model.axial_drift_poly
     rate = np.gradient(temperature, dt) if temperature.size > 1 else np.zeros_like(temperature)
     return (g.bias[2] + g.bias_tc1[2] * d + g.bias_tc2[2] * d * d
-            + (poly[0] * temperature + poly[1]) * temperature + poly[2] + model.axial_drift_dtdt * rate)
+            + (poly[0] * temperature + poly[1]) * temperature + poly[2] + model.axial_drift_dtdt * rate
+            + (thermal_terms(temperature[0], temperature, dt, model.axial_thermal_par) if temperature.size else 0.0))

@@ -35,6 +35,8 @@ _TRIAD_UNITS = {  # field -> (gyro unit, accelerometer unit)
     "rate_random_walk": ("rad/s/sqrt(s)", "m/s2/sqrt(s)"),
     "turn_on_bias": ("rad/s", "m/s2"),
 }
+_AXIAL_SCALARS = ("axial_drift_grad", "axial_block_time_constant", "axial_hysteresis", "axial_hysteresis_width",
+                  "axial_hysteresis_relax_time")  # scalar ImuModel fields of the azimuth gyro's thermal terms
 _OFF_DIAGONAL = [(i, j) for i in range(3) for j in range(3) if i != j]
 
 
@@ -57,6 +59,11 @@ def _names():
         out.append((f"axial_drift_{coef}", unit, ("axial_drift_poly", i)))
         out.append((f"aging_sigma_{coef}", unit, ("aging_sigma", i)))
     out.append(("axial_drift_dtdt", "rad/degC", ("axial_drift_dtdt",)))
+    out.append(("axial_drift_grad", "rad/s/degC", ("axial_drift_grad",)))
+    out.append(("axial_block_time_constant", "s", ("axial_block_time_constant",)))
+    out.append(("axial_hysteresis", "rad/s", ("axial_hysteresis",)))
+    out.append(("axial_hysteresis_width", "degC", ("axial_hysteresis_width",)))
+    out.append(("axial_hysteresis_relax_time", "s", ("axial_hysteresis_relax_time",)))
     out.append(("aging_corr_time", "s", ("aging_corr_time",)))
     out.append(("flicker_tau_min", "s", ("flicker_tau_min",)))
     out.append(("flicker_tau_max", "s", ("flicker_tau_max",)))
@@ -101,7 +108,7 @@ def apply_overrides(model: ImuModel, overrides: dict) -> ImuModel:
         "thermal": {f.name: list(getattr(model.thermal, f.name)) for f in fields(ThermalParams)},
         "top": {name: np.array(getattr(model, name), float) for name in
                 ("g_sensitivity", "lowrate_gain", "lowrate_width", "axial_drift_poly", "aging_sigma",
-                 "axial_drift_dtdt", "aging_corr_time", "flicker_tau_min", "flicker_tau_max")},
+                 "axial_drift_dtdt", "aging_corr_time", "flicker_tau_min", "flicker_tau_max", *_AXIAL_SCALARS)},
     }
     for name, value in overrides.items():
         value = float(value)
@@ -124,6 +131,7 @@ def apply_overrides(model: ImuModel, overrides: dict) -> ImuModel:
         axial_drift_poly=top["axial_drift_poly"], aging_sigma=top["aging_sigma"],
         axial_drift_dtdt=float(top["axial_drift_dtdt"]), aging_corr_time=float(top["aging_corr_time"]),
         flicker_tau_min=float(top["flicker_tau_min"]), flicker_tau_max=float(top["flicker_tau_max"]),
+        **{name: float(top[name]) for name in _AXIAL_SCALARS},
     )
 
 

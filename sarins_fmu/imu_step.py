@@ -26,12 +26,17 @@ do not depend on how a run is cut into steps.
 Array layout (``s`` below, the tuple :meth:`IMU.state_arrays` returns):
 
 ====  =================  =====================================================
- 0    consts (8,)        t0, h, drift_dtdt, die_lag, correlated_active, n_sub,
-                         (spare), (spare)
+ 0    consts (13,)       t0, h, drift_dtdt, die_lag, correlated_active, n_sub,
+                         (spare), (spare), azimuth-gyro thermal terms:
+                         gradient coefficient, block time constant,
+                         hysteresis, its width and relaxation time
+                         (``sarins_imu_axial_thermal_terms``)
  1    clock (2,)         completed intervals k, ambient at the last interval
                          end (degC)
  2    sensor_par (4, 6)  self-heating, thermal time constant, GM phi, GM std
- 3    state (2, 6)       reported temperatures (degC), GM bias states
+ 3    state (3, 6)       reported temperatures (degC), GM bias states,
+                         z block node temperature and z play operator
+                         (degC; columns 0 and 1 of the last row)
  4    coef (10, 3)       per triad: bias, tc1, tc2, scale factor, sf_tc
  5    triad (7, 3)       drift poly (a, b, c), gyro quadratic, low-rate gain,
                          low-rate width, accel quadratic, gyro and accel
@@ -59,5 +64,6 @@ from __future__ import annotations
 CONSTS, CLOCK, SENSOR_PAR, STATE, COEF, TRIAD, MATS, AXES, BASE, RNG, CORR_PAR, CORR_STATE, PHI, Q, \
     X_FLICKER = range(15)
 N_STATE_ARRAYS = 15
+N_CONSTS = 13  # length of consts (SARINS_IMU_N_CONSTS in imu.h)
 T_REF = 25.0  # reference temperature of the linear/quadratic coefficients, degC (SARINS_IMU_T_REF in imu.h)
 ONE_D = (CONSTS, CLOCK, PHI)  # the 1-D members of the tuple (the others are 2-D)

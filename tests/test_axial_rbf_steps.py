@@ -111,13 +111,18 @@ def test_multitemperature_table_interpolates_holds_and_round_trips(tmp_path):
 def test_calibration_of_a_noise_free_unit_recovers_its_steady_drift_law():
     """No noise, no misalignment or scale factor on z: each point reads the
     unit's law eps0 + k1 (T - 40) + k2 (T - 40)^2 at the measured temperature
-    (the rate term has died out after 20 h of settling: < 4e-6 deg/h)."""
+    (the rate and block-gradient terms of the last e^-4 of the approach, after
+    20 h of settling, leave < 2e-5 deg/h), plus the hysteresis loop's heating
+    branch +H at the points approached from below (the first point is where the
+    unit starts, its loop at 0)."""
     unit = s0.calibration_unit(seed=1, noise_scale=0.0)
     clean = {"gyro_misalignment_zx": 0.0, "gyro_misalignment_zy": 0.0, "gyro_scale_factor_z": 0.0}
     model = apply_overrides(s0.imu_model(unit), clean)
     tab = calibrate_axial_drift(model, points_c=[10.0, 40.0, 60.0], lat_deg=s0.SITE_LAT_DEG, settle_hours=20.0,
                                 average_hours=0.5, ramp_hours=0.5)
-    assert np.allclose(tab.drift_dph, s0.steady_drift_dph(0.0, tab.temp_c), atol=1e-5, rtol=0)
+    assert s0.hysteresis_dph() > 2e-5
+    branch = np.array([0.0, 1.0, 1.0]) * s0.hysteresis_dph()
+    assert np.allclose(tab.drift_dph, s0.steady_drift_dph(0.0, tab.temp_c) + branch, atol=2e-5, rtol=0)
     assert np.allclose(tab.temp_c, [10.0, 40.0, 60.0], atol=0.5)
     with pytest.raises(ValueError):
         calibrate_axial_drift(model, points_c=[10.0], lat_deg=0.0)
@@ -143,7 +148,9 @@ def test_residual_truth_is_the_true_drift_minus_the_table_mean():
     residual = e.drift_dph - s0.window_mean_table_dph(e, law)
     temp, sel = s0.window_temperature(e, 0.0, s0.NAV_HOURS)
     rate_term = s0.DTDT_DPH_PER_CPH * np.mean((np.gradient(temp, s0.TRUTH_GRID) * HOUR)[sel])
-    assert residual == pytest.approx(e.eps0_dph + rate_term, abs=2e-6)  # 1 degC grid: linear-interpolation error
+    thermal = np.mean(s0.thermal_terms_dph(temp, s0.TRUTH_GRID, s0.switch_on_temperature(e))[sel])
+    assert abs(thermal) > 2e-5  # a cold start ends on the heating branch with the block still lagging
+    assert residual == pytest.approx(e.eps0_dph + rate_term + thermal, abs=2e-6)  # 1 degC grid: interpolation
 
 
 # ---------------------------------------------------------------- sweep

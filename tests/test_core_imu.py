@@ -186,6 +186,11 @@ def test_bad_arrays_are_refused_with_a_clear_error():
         core_imu.advance(sensor._table.astype(np.int32), [20.0], temps, *out3)
     with pytest.raises(ValueError, match="does not fit the layout"):
         core_imu.advance(sensor._table[:5], [20.0], temps, *out3)
+    consts = sensor.state_arrays()[imu_step.CONSTS]
+    consts[11] = 0.0  # the azimuth gyro's hysteresis width: it divides
+    with pytest.raises(ValueError, match="does not fit the layout"):
+        core_imu.advance(sensor._table, [20.0], temps, *out3)
+    consts[11] = imu_mod.preset("nav-rlg").axial_hysteresis_width
     streams = sensor.state_arrays()[imu_step.RNG]
     streams[1, 3] += 1.0  # the GM stream's (row 1) increment, low half: made even, not a stream state
     before = [a.copy() for a in sensor.state_arrays()]

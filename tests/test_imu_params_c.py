@@ -43,7 +43,9 @@ BAD = [("gyro_random_walk_y", -1e-6, "must be non-negative"), ("accel_bias_insta
        ("aging_corr_time", -5.0, "positive"), ("flicker_tau_min", 0.0, "positive"),
        ("flicker_tau_max", 0.5, "must exceed flicker_tau_min"), ("time_constant_accel_z", 0.0, "positive"),
        ("die_time_constant_gyro_y", -1.0, "non-negative"), ("g_sensitivity_zx", math.inf, "must be finite"),
-       ("gyro_bias_x", math.nan, "must be finite")]
+       ("gyro_bias_x", math.nan, "must be finite"), ("axial_block_time_constant", -1.0, "non-negative"),
+       ("axial_hysteresis_width", 0.0, "must be positive"), ("axial_hysteresis_relax_time", -3.0, "non-negative"),
+       ("axial_drift_grad", math.inf, "must be finite")]
 
 
 @pytest.mark.parametrize("name, value, rule", BAD)
@@ -80,7 +82,7 @@ def test_the_c_built_table_holds_the_model(preset):
     s = IMU(m, StaticBase(0.6), output_interval=h, internal_rate=200.0, seed=2).state_arrays()
     cat = np.concatenate
     assert np.array_equal(s[imu_step.CONSTS], [0.0, h, m.axial_drift_dtdt, float(m.thermal.has_die_lag),
-                                               float(preset == "mems"), 100.0, 0.0, 0.0])
+                                               float(preset == "mems"), 100.0, 0.0, 0.0, *m.axial_thermal_par])
     tau_gm = cat([m.gyro.bias_corr_time, m.accel.bias_corr_time])
     assert np.array_equal(s[imu_step.SENSOR_PAR][:2], [m.thermal.self_heating, m.thermal.time_constant])
     np.testing.assert_allclose(s[imu_step.SENSOR_PAR][2], np.exp(-h / tau_gm), rtol=2e-16, atol=0)
@@ -110,6 +112,7 @@ def test_a_run_starts_at_the_ambient_plus_the_self_heating_when_hot(start):
     expected = 17.25 + (np.asarray(m.thermal.self_heating) if start == "hot" else np.zeros(6))
     assert np.array_equal(s[imu_step.CLOCK], [0.0, 17.25])
     assert np.array_equal(s[imu_step.STATE][0], expected)
+    assert np.array_equal(s[imu_step.STATE][2], [expected[2], expected[2], 0, 0, 0, 0])  # z block node, play
     assert np.array_equal(s[imu_step.CORR_STATE], [expected, expected, np.zeros(6)])
     assert not np.any(s[imu_step.X_FLICKER] == 0.0)  # the flicker terms' stationary start is drawn
 

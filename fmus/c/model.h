@@ -46,6 +46,16 @@
  * with the values: they are in the FMU state and compared like values when fmi2SetFMUstate decides whether
  * initialize() must rebuild c->work.
  *
+ * Arrays (FMI 3.0).  A declaration may add Real array variables whose length is a structural parameter (an
+ * Integer, causality SARINS_STRUCTURAL_PARAMETER, 1 .. table->max_dim): variables.h then defines
+ * SARINS_A_<name> slots, and c->a[SARINS_A_<name>] holds c->i[SARINS_I_<n>] doubles.  The glue allocates
+ * the arrays (at instantiation, when Configuration Mode ends, before every initialize(), at
+ * fmi3SetFMUState), zeroes them, checks the structural parameters (a value out of range is an error with
+ * the reason) and keeps the arrays in the FMU state; do_step reads array inputs and writes array outputs in
+ * place, never allocating; output arrays are checked finite like scalar outputs.  The FMI 2.0 variant has
+ * no arrays (their value references are unknown there; c->a[k] still exists, sized by the parameter, so a
+ * model needs no #ifdef) and its structural parameters are fixed Integer parameters.
+ *
  * No globals: the descriptor is const data, every mutable thing is per instance; instances are
  * independent and may run in different threads.
  */
@@ -60,7 +70,9 @@
 enum { SARINS_OK = 0, SARINS_WARNING = 1, SARINS_DISCARD = 2, SARINS_ERROR = 3 }; /* = fmi2Status values */
 enum { SARINS_REAL = 0, SARINS_INTEGER = 1, SARINS_BOOLEAN = 2, SARINS_STRING = 3 };
 enum { SARINS_PARAMETER = 0, SARINS_CALCULATED_PARAMETER = 1, SARINS_INPUT = 2, SARINS_OUTPUT = 3,
-       SARINS_LOCAL = 4, SARINS_INDEPENDENT = 5 };
+       SARINS_LOCAL = 4, SARINS_INDEPENDENT = 5,
+       SARINS_STRUCTURAL_PARAMETER = 6 /* an Integer sizing arrays: FMI 3.0 structuralParameter (UInt64),
+                                        * FMI 2.0 a fixed Integer parameter */ };
 enum { SARINS_CONSTANT = 0, SARINS_FIXED = 1, SARINS_TUNABLE = 2, SARINS_DISCRETE = 3, SARINS_CONTINUOUS = 4 };
 
 typedef struct {
@@ -73,6 +85,8 @@ typedef struct {
     double start_real;        /* start value of a Real */
     int start_int;            /* start value of an Integer or Boolean (0/1) */
     const char *start_string; /* start value of a String, else NULL */
+    int dim;                  /* -1: a scalar; else a Real array (FMI 3.0 only) whose length is the Integer
+                               * c->i[dim] (a structural parameter) and slot its SARINS_A_* index */
 } sarins_var;
 
 typedef struct {
@@ -83,6 +97,8 @@ typedef struct {
     size_t n_real, n_integer, n_boolean, n_string; /* sizes of the value arrays */
     const char *const *categories;                  /* log categories of modelDescription.xml */
     size_t n_categories;
+    size_t n_array; /* Real array variables (SARINS_A_* slots) */
+    int max_dim;    /* largest value a structural parameter may take (arrays: 1 .. max_dim elements) */
 } sarins_table;
 
 typedef struct sarins_glue sarins_glue; /* the glue's instance, opaque to models */
@@ -99,6 +115,7 @@ typedef struct {
     sarins_glue *glue;
     unsigned char *set;              /* set[vr] = 1 once the host set variable vr (any fmi2Set*) since
                                       * instantiation or the last reset; see "Set flags" above */
+    double **a;                      /* Real arrays, by SARINS_A_* slot: c->a[k][0 .. c->i[dim] - 1] */
 } sarins_ctx;
 
 typedef struct {

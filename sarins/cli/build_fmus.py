@@ -9,7 +9,10 @@ from . import UsageError
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("build-fmus", help="build the FMI 2.0 co-simulation FMUs")
-    p.add_argument("--out", type=Path, default=Path("build") / "fmus", help="output folder (default build/fmus)")
+    p.add_argument("--out", type=Path, default=None,
+                   help="output folder (default build/fmus; with --fmi 3 build/fmus3)")
+    p.add_argument("--fmi", type=int, choices=(2, 3), default=2,
+                   help="FMI version: 2 (every FMU) or 3 (the FMI 3.0 variants of the native FMUs only)")
     p.add_argument("--only", nargs="+", metavar="NAME", help="build only these FMUs")
     p.add_argument("--system", action="store_true",
                    help="also write the standard static system as one FMU (FMPy container, FMI 2.0)")
@@ -18,11 +21,29 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+def run_fmi3(args) -> int:
+    """``--fmi 3``: the FMI 3.0 co-simulation variants of the native (Python-free) FMUs."""
+    from fmus.native_fmu import DEFAULT_OUT3, NATIVE, build_native_fmus3
+
+    for option, given in (("--system", args.system), ("--compensator", args.compensator is not None)):
+        if given:
+            raise UsageError(f"{option}: not available with --fmi 3 (only the native FMUs have FMI 3.0 variants)")
+    others = [n for n in args.only or [] if n not in NATIVE]
+    if others:
+        raise UsageError(f"--only {' '.join(others)}: no FMI 3.0 variant (native FMUs: {', '.join(NATIVE)})")
+    for path in build_native_fmus3(args.out or DEFAULT_OUT3, args.only):
+        print(path)
+    return 0
+
+
 def run(args) -> int:
+    if args.fmi == 3:
+        return run_fmi3(args)
     from fmus.build import NEEDS_MODEL, build_fmus
     from fmus.native import HOST_REQUIREMENTS
     from fmus.native_fmu import platform_note
 
+    args.out = args.out or Path("build") / "fmus"
     if args.compensator is not None:  # a bad model file fails before anything is built
         from sarins_fmu.identify.compensators import load
 

@@ -209,6 +209,33 @@ void sarins_imu_interval_terms(int64_t n_steps, const double *temp0, const doubl
     }
 }
 
+/* ------------------------------------------ azimuth-gyro thermal terms */
+
+void sarins_imu_axial_thermal_terms(int64_t n_steps, double temp0, const double *temps, int64_t t_stride, double h,
+                                    const double *par, double *state, double *bias, int64_t b_stride) {
+    double k_grad = par[0], tau_b = par[1], hyst = par[2], width = par[3], tau_r = par[4];
+    if (k_grad == 0.0 && hyst == 0.0) return;
+    double e_b = tau_b > 0.0 ? exp(-h / tau_b) : 0.0;
+    double e_r = tau_r > 0.0 ? exp(-h / tau_r) : 1.0;
+    double prev = temp0;
+    for (int64_t k = 0; k < n_steps; k++) {
+        double now = temps[k * t_stride];
+        double grad0 = prev - state[0];
+        if (tau_b > 0.0) { /* T linear over the interval (slope s): T_b <- e T_b + (T0 - s tau)(1 - e) + s h */
+            double slope = (now - prev) / h;
+            state[0] = e_b * state[0] + (prev - slope * tau_b) * (1.0 - e_b) + slope * h;
+        } else {
+            state[0] = now;
+        }
+        double grad = 0.5 * (grad0 + (now - state[0]));
+        double mid = 0.5 * (prev + now);
+        double play = fmax(mid - width, fmin(mid + width, state[1]));
+        state[1] = mid + (play - mid) * e_r;
+        bias[k * b_stride] += k_grad * grad + hyst * (mid - state[1]) / width;
+        prev = now;
+    }
+}
+
 /* ------------------------------------------------------ the state table */
 
 typedef struct {
@@ -228,8 +255,8 @@ static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
     if (table == NULL || rows < SARINS_IMU_N_ARRAYS) return SARINS_IMU_BAD_TABLE;
     v->n_axes = table[3 * SARINS_IMU_AXES + 1];
     v->n_flicker = table[3 * SARINS_IMU_PHI + 1];
-    if (!(has_shape(table, SARINS_IMU_CONSTS, 8, 1) && has_shape(table, SARINS_IMU_CLOCK, 2, 1)
-          && has_shape(table, SARINS_IMU_SENSOR_PAR, 4, 6) && has_shape(table, SARINS_IMU_STATE, 2, 6)
+    if (!(has_shape(table, SARINS_IMU_CONSTS, SARINS_IMU_N_CONSTS, 1) && has_shape(table, SARINS_IMU_CLOCK, 2, 1)
+          && has_shape(table, SARINS_IMU_SENSOR_PAR, 4, 6) && has_shape(table, SARINS_IMU_STATE, 3, 6)
           && has_shape(table, SARINS_IMU_COEF, 10, 3) && has_shape(table, SARINS_IMU_TRIAD, 7, 3)
           && has_shape(table, SARINS_IMU_MATS, 9, 3) && v->n_axes >= 1
           && has_shape(table, SARINS_IMU_AXES, v->n_axes, 3) && has_shape(table, SARINS_IMU_BASE, 2, 3)
@@ -253,8 +280,11 @@ static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
     v->phi = table_array(table, SARINS_IMU_PHI);
     v->q = table_array(table, SARINS_IMU_Q);
     v->x_flicker = table_array(table, SARINS_IMU_X_FLICKER);
-    /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub */
-    if (!(v->consts[1] > 0.0 && v->consts[5] >= 1.0)) return SARINS_IMU_BAD_TABLE;
+    /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub, (spare), (spare), the five parameters of
+     * sarins_imu_axial_thermal_terms (block and relaxation times >= 0, width > 0) */
+    if (!(v->consts[1] > 0.0 && v->consts[5] >= 1.0 && v->consts[9] >= 0.0 && v->consts[11] > 0.0
+          && v->consts[12] >= 0.0))
+        return SARINS_IMU_BAD_TABLE;
     return SARINS_IMU_OK;
 }
 
@@ -318,6 +348,7 @@ int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, cons
                               v.sensor_par + 12, v.sensor_par + 18, gm_on ? &gm_rng : NULL, g_bias, g_sf, a_bias,
                               a_sf);
     store_stream(&v, SARINS_IMU_STREAM_GM, &gm_rng);
+    sarins_imu_axial_thermal_terms(n_steps, die0[2], die_t + 2, 6, h, v.consts + 8, v.state + 12, g_bias + 2, 3);
     if (v.consts[4] != 0.0) {
         sarins_correlated_terms(n_steps, die0, die_t, h, v.corr_par, v.corr_state, v.n_flicker, v.phi, v.q,
                                 v.x_flicker, flicker_on ? &flicker_rng : NULL, rrw_on ? &rrw_rng : NULL, g_bias,

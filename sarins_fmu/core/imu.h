@@ -65,6 +65,7 @@ enum {
 #define SARINS_IMU_BAD_TABLE 1  /* a missing row, an array of the wrong shape or a stream state that is not one */
 
 #define SARINS_IMU_MAX_AXES 8   /* gimbals the one-interval step accepts */
+#define SARINS_IMU_N_CONSTS 13  /* length of the consts row (sarins_fmu/imu_step.py) */
 
 /* Reference temperature of the linear/quadratic coefficients, degC. */
 #define SARINS_IMU_T_REF 25.0
@@ -109,6 +110,25 @@ void sarins_imu_interval_terms(int64_t n_steps, const double *temp0, const doubl
                                const double *coef, const double *drift_poly, double drift_dtdt, double *gm,
                                const double *gm_phi, const double *gm_std, SarinsRng *gm_rng,
                                double *g_bias, double *g_sf, double *a_bias, double *a_sf);
+
+/* Azimuth-gyro thermal terms beyond eps(T) and d dT/dt, added to the z-gyro
+ * bias of K intervals of length h (s):
+ *   gradient    k_g G,  G = T - T_b the difference between the z-gyro node and
+ *               its block node, dT_b/dt = (T - T_b) / tau_b (exact for T
+ *               linear over each interval; G is the mean of its values at the
+ *               interval's start and end; tau_b = 0: no block lag, G = 0);
+ *   hysteresis  H (T_m - P) / w,  P_k = max(T_m - w, min(T_m + w, P_{k-1})) the
+ *               play operator of width w (degC, > 0) on the interval-mean
+ *               temperature T_m, then relaxed towards T_m,
+ *               P <- T_m + (P - T_m) exp(-h / tau_r) (tau_r = 0: no relaxation).
+ * Heating by more than w puts the term on its +H branch, cooling on its -H
+ * branch; at rest it decays as exp(-t / tau_r).
+ * temp0: z temperature at the start (degC); temps[k * t_stride] at the ends;
+ * par[5] = k_g (rad/s/degC), tau_b (s), H (rad/s), w (degC), tau_r (s);
+ * state[2] = T_b, P (degC), advanced in place; bias[k * b_stride] += the terms
+ * (rad/s).  Nothing happens when k_g and H are both 0. */
+void sarins_imu_axial_thermal_terms(int64_t n_steps, double temp0, const double *temps, int64_t t_stride, double h,
+                                    const double *par, double *state, double *bias, int64_t b_stride);
 
 /* Advance the thermal and error states of the IMU table over K intervals:
  * amb_end[K] ambient at the interval ends (degC, checked by the caller);

@@ -79,6 +79,9 @@ int64_t sarins_imu_check_params(const double *par, const char **reason) {
         {SARINS_IMU_P_FLICKER_TAU_MIN, 1, 1, POSITIVE, "must be positive"},
         {SARINS_IMU_P_TIME_CONSTANT_GYRO_X, 6, 3, POSITIVE, "must be positive"},
         {SARINS_IMU_P_DIE_TIME_CONSTANT_GYRO_X, 6, 3, NON_NEGATIVE, "must be non-negative"},
+        {SARINS_IMU_P_AXIAL_BLOCK_TIME_CONSTANT, 1, 1, NON_NEGATIVE, "must be non-negative"},
+        {SARINS_IMU_P_AXIAL_HYSTERESIS_WIDTH, 1, 1, POSITIVE, "must be positive"},
+        {SARINS_IMU_P_AXIAL_HYSTERESIS_RELAX_TIME, 1, 1, NON_NEGATIVE, "must be non-negative"},
     };
     for (size_t r = 0; r < sizeof RULES / sizeof RULES[0]; r++) {
         int64_t bad = first_bad(par, RULES[r].first, RULES[r].count, RULES[r].stride, RULES[r].rule);
@@ -106,10 +109,10 @@ typedef struct {
 
 static int arrays_of(const int64_t *table, int64_t rows, int64_t n_flicker, Arrays *a) {
     if (table == NULL || rows < SARINS_IMU_N_ARRAYS) return 0;
-    a->consts = row_array(table, SARINS_IMU_CONSTS, 8, 1);
+    a->consts = row_array(table, SARINS_IMU_CONSTS, SARINS_IMU_N_CONSTS, 1);
     a->clock = row_array(table, SARINS_IMU_CLOCK, 2, 1);
     a->sensor_par = row_array(table, SARINS_IMU_SENSOR_PAR, 4, 6);
-    a->state = row_array(table, SARINS_IMU_STATE, 2, 6);
+    a->state = row_array(table, SARINS_IMU_STATE, 3, 6);
     a->coef = row_array(table, SARINS_IMU_COEF, 10, 3);
     a->triad = row_array(table, SARINS_IMU_TRIAD, 7, 3);
     a->mats = row_array(table, SARINS_IMU_MATS, 9, 3);
@@ -152,8 +155,14 @@ int sarins_imu_build(const int64_t *table, int64_t rows, const double *par, doub
     for (size_t k = 0; k < sizeof CORRELATED / sizeof CORRELATED[0]; k++) {
         active |= any_set(par, CORRELATED[k], 3, 1) || any_set(par, CORRELATED[k] + TRIAD_STRIDE, 3, 1);
     }
-    /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub, (spare), (spare) */
-    double consts[8] = {t0, h, par[SARINS_IMU_P_AXIAL_DRIFT_DTDT], die_lag, active, (double)n_sub, 0.0, 0.0};
+    /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub, (spare), (spare), the five parameters of
+       sarins_imu_axial_thermal_terms (gradient coefficient, block time constant, hysteresis, its width and
+       relaxation time) */
+    double consts[SARINS_IMU_N_CONSTS] = {t0, h, par[SARINS_IMU_P_AXIAL_DRIFT_DTDT], die_lag, active, (double)n_sub,
+                                          0.0, 0.0, par[SARINS_IMU_P_AXIAL_DRIFT_GRAD],
+                                          par[SARINS_IMU_P_AXIAL_BLOCK_TIME_CONSTANT], par[SARINS_IMU_P_AXIAL_HYSTERESIS],
+                                          par[SARINS_IMU_P_AXIAL_HYSTERESIS_WIDTH],
+                                          par[SARINS_IMU_P_AXIAL_HYSTERESIS_RELAX_TIME]};
     memcpy(a.consts, consts, sizeof consts);
     for (int j = 0; j < 6; j++) {
         int t = j / 3, i = j % 3;
@@ -236,6 +245,9 @@ int sarins_imu_start(const int64_t *table, int64_t rows, double ambient0, int ho
         a.corr_state[j] = temperature;      /* die */
         a.corr_state[6 + j] = temperature;  /* play operator, relaxed */
         a.corr_state[12 + j] = 0.0;         /* rate random walk */
+        a.state[12 + j] = 0.0;
     }
+    /* the z gyro's block node and play operator at its temperature: no gradient, the loop at 0 */
+    a.state[12] = a.state[13] = a.state[2];
     return sarins_imu_seed(table, rows, seed); /* the GM and flicker states, the turn-on bias */
 }

@@ -37,8 +37,9 @@ int sarins_imu_build(const int64_t *table, int64_t rows, const double *par, doub
                      double age, uint64_t seed);
 
 /* Start a run of a built table: clock (0, ambient0), reported temperatures ambient0 (+ the self-heating
- * when hot), the die at them, the play operators relaxed, the rate random walks and the flicker states
- * at 0, then sarins_imu_seed(seed).  ambient0 degC, finite and above -273.15 (else SARINS_IMU_BAD_TABLE,
+ * when hot), the die at them, the play operators relaxed, the z gyro's block node and play operator
+ * (state row 2, sarins_imu_axial_thermal_terms) at its temperature, the rate random walks and the flicker
+ * states at 0, then sarins_imu_seed(seed).  ambient0 degC, finite and above -273.15 (else SARINS_IMU_BAD_TABLE,
  * nothing written). */
 int sarins_imu_start(const int64_t *table, int64_t rows, double ambient0, int hot, uint64_t seed);
 

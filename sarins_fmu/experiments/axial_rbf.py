@@ -58,6 +58,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from .. import imu as imu_mod
+from ..core.axial import thermal_terms as axial_terms
 from ..identify.latitude_kf import estimate_drift, measurement_row
 from ..imu_params import apply_overrides
 from ..thermal import Ambient, SENSORS, ThermalModel
@@ -155,12 +156,39 @@ def gyro_z_temperature(exp: Experiment, times: np.ndarray) -> np.ndarray:
     return model.advance(times)[:, 2]
 
 
-def drift_series_dph(exp_or_eps0, temperature: np.ndarray, dt: float) -> np.ndarray:
-    """Deterministic azimuth drift eps(T) + d dT/dt, deg/h, of a temperature
-    series (degC) on a grid of ``dt`` s (the rate by central differences)."""
+def drift_series_dph(exp_or_eps0, temperature: np.ndarray, dt: float, temp0_c: float | None = None) -> np.ndarray:
+    """Deterministic azimuth drift eps(T) + d dT/dt + gradient + hysteresis, deg/h, of a
+    temperature series (degC) on a grid of ``dt`` s (the rate by central differences).
+
+    ``temp0_c``: z temperature one step before the series' first sample, where the unit
+    was switched on (the block node and the loop start there, :func:`thermal_terms_dph`);
+    default the first sample."""
     eps0 = exp_or_eps0.eps0_dph if isinstance(exp_or_eps0, Experiment) else float(exp_or_eps0)
     rate_cph = np.gradient(temperature, dt) * HOUR
-    return steady_drift_dph(eps0, temperature) + DTDT_DPH_PER_CPH * rate_cph
+    return (steady_drift_dph(eps0, temperature) + DTDT_DPH_PER_CPH * rate_cph
+            + thermal_terms_dph(temperature, dt, temp0_c))
+
+
+def thermal_terms_dph(temperature: np.ndarray, dt: float, temp0_c: float | None = None) -> np.ndarray:
+    """The block-gradient and heating/cooling hysteresis terms of the unit's azimuth drift (deg/h)
+    along a z temperature series (degC) on a grid of ``dt`` s, from switch-on at ``temp0_c`` (one
+    step before the first sample; default the first sample): the C core's
+    ``sarins_imu_axial_thermal_terms`` with the nav-rlg preset's coefficients (the campaign's unit
+    keeps them), each value the term's mean over the step that ends at the sample."""
+    temperature = np.asarray(temperature, float)
+    t0 = float(temperature[0] if temp0_c is None else temp0_c)
+    par = imu_mod.preset("nav-rlg").axial_thermal_par
+    return axial_terms(t0, temperature, float(dt), par) / DPH_TO_RPS
+
+
+def hysteresis_dph() -> float:
+    """Half-height of the unit's heating/cooling loop, deg/h (heating branch +, cooling branch -)."""
+    return float(imu_mod.preset("nav-rlg").axial_hysteresis / DPH_TO_RPS)
+
+
+def switch_on_temperature(exp: Experiment) -> float:
+    """z-gyro temperature at switch-on (t = 0), degC."""
+    return float(ThermalModel(imu_model(exp).thermal, ambient(exp), start=exp.start).temperature[2])
 
 
 def steady_drift_dph(eps0_dph: float, temperature) -> np.ndarray:
@@ -182,7 +210,7 @@ def window_mean_drift_dph(exp: Experiment, start_h: float, end_h: float) -> floa
     """Simulated true drift: time mean of the deterministic drift (deg/h)
     over ``[start_h, end_h]`` hours of navigation."""
     temp, sel = window_temperature(exp, start_h, end_h)
-    return float(np.mean(drift_series_dph(exp, temp, TRUTH_GRID)[sel]))
+    return float(np.mean(drift_series_dph(exp, temp, TRUTH_GRID, switch_on_temperature(exp))[sel]))
 
 
 def window_mean_table_dph(exp: Experiment, table, start_h: float = 0.0, end_h: float = NAV_HOURS) -> float:
@@ -255,7 +283,7 @@ def deterministic_errors(exp: Experiment, hours: float = IDENTIFY_HOURS) -> tupl
     from ..static_errors import drift_history_errors
 
     temp, sel = window_temperature(exp, 0.0, hours)
-    eps = drift_series_dph(exp, temp, TRUTH_GRID)[sel] * DPH_TO_RPS
+    eps = drift_series_dph(exp, temp, TRUTH_GRID, switch_on_temperature(exp))[sel] * DPH_TO_RPS
     tau = np.arange(eps.size) * TRUTH_GRID
     return drift_history_errors(hours * HOUR, tau, eps, exp.lat_deg * DEG_TO_RAD)
 

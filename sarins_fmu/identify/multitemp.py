@@ -25,8 +25,10 @@ module implements the reading stated here:
 * **Real-time compensation**: the table's drift at the reported z-gyro
   temperature is subtracted from every z angle increment, from switch-on
   (``run_static(axial_table=...)``).  What remains for the network is the
-  turn-on constant, the temperature-rate part of the drift (zero at the
-  calibration's steady points) and the calibration's own error.
+  turn-on constant, the temperature-rate and block-gradient parts of the
+  drift (zero at the calibration's steady points), the hysteresis loop's
+  branch (the calibration approaches its points from below, on the heating
+  branch) and the calibration's own error.
 
 Units: temperatures degC, drifts deg/h in the table (the seed's units),
 rad/s from :meth:`MultiTemperatureTable.correction`.

@@ -224,7 +224,7 @@ static double *place(imu_work *w, int i, int64_t rows, int64_t cols, size_t *use
 static void layout(imu_work *w, int64_t n_axes, int64_t n_flicker)
 {
     static const int64_t shapes[SARINS_IMU_N_ARRAYS][2] = {
-        {8, 1}, {2, 1}, {4, 6}, {2, 6}, {10, 3}, {7, 3}, {9, 3}, {0, 3}, {2, 3}, {SARINS_IMU_N_STREAMS,
+        {SARINS_IMU_N_CONSTS, 1}, {2, 1}, {4, 6}, {3, 6}, {10, 3}, {7, 3}, {9, 3}, {0, 3}, {2, 3}, {SARINS_IMU_N_STREAMS,
         SARINS_RNG_WORDS}, {8, 6}, {3, 6}, {0, 1}, {0, 6}, {0, 6}};
     size_t used = 0;
     for (int i = 0; i < SARINS_IMU_N_ARRAYS; i++) {
