@@ -423,3 +423,21 @@ def test_win64_dll_under_wine_matches_linux64(unzipped, host, tmp_path):
         print(f"win64 vs linux64 ({values}): identical={np.array_equal(a, b)}, largest relative difference "
               f"{worst:.3g}")
         assert worst < 1e-9
+
+
+def test_sources_compiled_with_the_documented_line_give_the_shipped_outputs(unzipped, host, tmp_path):
+    """sources/ built with nothing but documentation/index.html's compile line runs the mems case like the
+    shipped linux64 binary, bit for bit (issue 19 item 2)."""
+    from fmus.native_fmu import compile_line
+
+    folder, md = unzipped
+    sources = tmp_path / "sources"
+    shutil.copytree(folder / "sources", sources)
+    cmd = [_cc() if a == "cc" else a for a in compile_line("IMUThermal")]
+    subprocess.run(" ".join(cmd), shell=True, cwd=sources, check=True)
+    values = HOST_CASES["mems x,z"]
+    mine = run_host(host, sources / "IMUThermal.so", md, 200, *ops(md, values, outputs=OUTPUTS))
+    shipped = run_host(host, folder / "binaries" / "linux64" / "IMUThermal.so", md, 200,
+                       *ops(md, values, outputs=OUTPUTS))
+    assert table(mine) == table(shipped) and len(table(mine)) == 201
+    assert len({tuple(row) for row in table(mine).values()}) > 100  # the increments move

@@ -367,3 +367,23 @@ def test_win64_dll_under_wine_runs_and_repeats_after_set_state(fmu_dir, host, tm
         return np.array([[struct.unpack("<d", struct.pack("<Q", x))[0] for x in rows[k]] for k in sorted(rows)])
 
     np.testing.assert_allclose(values(table(win)), values(table(lin)), rtol=1e-8, atol=1e-15)
+
+
+def test_sources_compiled_with_the_documented_line_give_the_shipped_outputs(fmu_dir, host, tmp_path):
+    """sources/ built with nothing but documentation/index.html's compile line runs the queued
+    temperature-model run like the shipped linux64 binary, bit for bit (issue 19 item 2)."""
+    import shutil
+
+    from fmus.native_fmu import compile_line
+    from test_native_fmus import _cc, table
+
+    fmu = fmu_dir / "StrapdownINS.fmu"
+    unpacked = tmp_path / "unpacked"
+    zipfile.ZipFile(fmu).extractall(unpacked)
+    sources = tmp_path / "sources"
+    shutil.copytree(unpacked / "sources", sources)
+    cmd = [_cc() if a == "cc" else a for a in compile_line("StrapdownINS")]
+    subprocess.run(" ".join(cmd), shell=True, cwd=sources, check=True)
+    mine = table(_host_run(host, fmu, tmp_path, binary=sources / "StrapdownINS.so"))
+    shipped = table(_host_run(host, fmu, tmp_path))
+    assert mine == shipped and len(mine) == N + 1
