@@ -13,7 +13,9 @@ interval called from C without Python (the IMUThermal FMU's step,
    and scale-factor errors held over each interval;
 2. ``sarins_imu_increments``: the minor loop (true motion, sensor errors,
    coning and sculling);
-3. ``sarins_imu_white_noise``: angle / velocity random walk.
+3. ``sarins_imu_dynamics``: the output dynamics with memory (size effect,
+   rate hysteresis, output filter; :mod:`sarins_fmu.imu_dynamics`);
+4. ``sarins_imu_white_noise``: angle / velocity random walk.
 
 Random numbers come from the IMU's numpy Generators in blocks of
 ``block_rows`` intervals (:meth:`IMU._refill`); a stream drawn in blocks is
@@ -50,13 +52,19 @@ Array layout (``s`` below, the tuple :meth:`IMU.state_arrays` returns):
 15    x_flicker (F, 6)   flicker terms' states
 16    corr_block (B', C) correlated-terms driving noise (B' = 0 when the
                          terms are inactive)
+17    dyn_par (8, 6)     output dynamics (``sarins_fmu/core/dynamics.h``):
+                         filter time constant, rate hysteresis amplitude,
+                         width, relaxation time, temperature coefficient,
+                         accelerometer lever arm x, y, z
+18    dyn_state (4, 6)   filter outputs, play operators, previous gyro means,
+                         started flags
 ====  =================  =====================================================
 """
 
 from __future__ import annotations
 
 CONSTS, CLOCK, SENSOR_PAR, STATE, COEF, TRIAD, MATS, AXES, BASE, GM_BLOCK, WHITE_BLOCK, CORR_PAR, CORR_STATE, \
-    PHI, Q, X_FLICKER, CORR_BLOCK = range(17)
-N_STATE_ARRAYS = 17
+    PHI, Q, X_FLICKER, CORR_BLOCK, DYN_PAR, DYN_STATE = range(19)
+N_STATE_ARRAYS = 19
 T_REF = 25.0  # reference temperature of the linear/quadratic coefficients, degC (SARINS_IMU_T_REF in imu.h)
 ONE_D = (CONSTS, CLOCK, PHI)  # the 1-D members of the tuple (the others are 2-D)
