@@ -57,9 +57,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--rbf-samples", type=bounded_int(1, 1_000_000), default=None,
                         help="RBF training samples, evenly spaced, 1 .. 10**6 (quick 10000, paper 50000)")
     parser.add_argument("--ablation", default="none",
-                        help="time-correlated error terms to switch off one at a time, comma-separated, from "
-                             "die-lag,gradient,hysteresis,flicker,rate-random-walk,turn-on,all ('all': every "
-                             "term at once), or 'every' or 'none' (default)")
+                        help="time-correlated error terms and output dynamics to switch off one at a time, "
+                             "comma-separated, from die-lag,gradient,hysteresis,flicker,rate-random-walk,turn-on,"
+                             "rate-hysteresis,output-filter,size-effect,all ('all': every term at once), or 'every' "
+                             "or 'none' (default)")
     parser.add_argument("--ablation-models", default=DEFAULT_ABLATION_MODELS,
                         help=f"models fitted again for each ablation (default {DEFAULT_ABLATION_MODELS})")
     parser.add_argument("--seed", type=seed_value, default=3,
