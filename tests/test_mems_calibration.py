@@ -146,8 +146,8 @@ def test_profiles_record_at_the_papers_200_hz():
 
 def test_an_ablation_changes_only_its_term():
     """Same seed, one term off: the measured outputs differ by that term alone (white noise identical)."""
-    prof = mems_calibration.with_profile(QUICK, warmup=20.0, test=dict(ramp_c_per_min=30.0, hold_min=0.5,
-                                                                        step_hold_min=0.2))
+    prof = mems_calibration.with_profile(QUICK, step=0.05, warmup=20.0,
+                                         test=dict(ramp_c_per_min=30.0, hold_min=0.5, step_hold_min=0.2))
     rec = {a: mems_calibration.record_in_process("heldout", prof, seed=4,
                                                  model=mems_calibration.recording_model("same-session", 3, a))
            for a in (None, "hysteresis", "flicker")}
@@ -341,8 +341,9 @@ def test_recurrent_without_torch_names_the_extra(monkeypatch):
 # --------------------------------------------------------------- co-simulation
 @pytest.mark.integration
 def test_cosimulated_recording_equals_in_process(fmu_dir, tmp_path):
-    prof = mems_calibration.with_profile(QUICK, warmup=20.0, test=dict(ramp_c_per_min=30.0, hold_min=0.5,
-                                                                        step_hold_min=0.2))
+    # a 50 ms step keeps the test short; the output dynamics' state still carries from step to step
+    prof = mems_calibration.with_profile(QUICK, step=0.05, warmup=20.0,
+                                         test=dict(ramp_c_per_min=30.0, hold_min=0.5, step_hold_min=0.2))
     overrides = mems_calibration.recording_overrides("heldout", 5, "hysteresis")
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # e.g. no unconnected-input warning
@@ -356,7 +357,7 @@ def test_cosimulated_recording_equals_in_process(fmu_dir, tmp_path):
 
 def _campaign(out: Path, *extra: str, timeout: int = 900) -> dict:
     cmd = [sys.executable, "-m", "sarins", "campaign", "mems-calibration", "--profile", "quick", "--out", str(out),
-           "--workers", "2", "--no-progress", *extra]
+           "--workers", "2", "--no-progress", "--engine", "inprocess", *extra]  # 200 Hz: in process (same numbers)
     done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=timeout,
                           env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})
     assert done.returncode == 0, done.stderr[-3000:]
@@ -698,3 +699,10 @@ def test_recording_records_name_the_ablation_and_the_run():
     assert base == record(fmu_dir="elsewhere")
     assert len({str(r) for r in (base, record(ablation="flicker"), record(ablation="all"), record(kind="repowered"),
                                  record(seed=4), record(profile_name="paper"))}) == 6
+
+
+def test_record_task_refuses_an_unknown_engine():
+    from sarins.mems_calibration.recording import record_task
+
+    with pytest.raises(ValueError, match="engine"):
+        record_task("tumble", "quick", "unused", engine="warp")

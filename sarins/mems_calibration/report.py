@@ -454,8 +454,11 @@ def markdown(summary: dict, fit_tables: str, figures: list[str]) -> str:
     s = summary
     lines = [
         "# Seed 003: dynamic calibration of a MEMS IMU (co-simulation)", "",
-        f"Profile **{s['profile']}**; recordings co-simulated through the project's master "
-        "(Turntable FMU -> IMUThermal FMU, preset `mems` with its time-correlated errors, 200 Hz minor loop, "
+        f"Profile **{s['profile']}**; " + ("recordings co-simulated through the project's master (Turntable FMU -> "
+                                           "IMUThermal FMU, " if s.get("engine", "cosim") == "cosim" else
+                                           "recordings run in process on the library functions the FMUs call (the "
+                                           "same numbers as the co-simulation; ")
+        + "preset `mems` with its time-correlated errors and output dynamics, 200 Hz minor loop, "
         f"Gauss-Seidel); dynamic step {s['step']} s, calibration step {s['cal_step']} s. The networks are trained "
         "on the training run and tested on a **held-out run with another table and chamber programme** "
         "(same kind of protocol, every setting inside the training envelope, none repeated):", "",
