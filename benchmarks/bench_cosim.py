@@ -10,11 +10,9 @@ Reports, in one process, same seed:
   ``N.Nx the in-process run``; the results must be bit-identical (asserted);
 * the same co-simulation with the slaves' compiled steps called through
   their Python ``do_step`` instead of from C (``SARINS_FMU_NO_FAST_STEP=1``);
-* where a co-simulation step goes: the Python-hosted slaves' compiled steps alone (their
-  jitted step functions, minus the cost of a call that returns at once), the
-  FMI layer (ctypes + the native layer: a bare loop doing the master's
-  get/set/doStep/record calls through the same ctypes pointers, minus the
-  slave work), and the master's own work (master minus the bare loop).
+* where a co-simulation step goes: the FMU calls (a bare loop doing the master's
+  get/set/doStep/record calls through the same ctypes pointers; the three FMUs
+  are native) and the master's own work (master minus the bare loop).
 
 Usage: ``python benchmarks/bench_cosim.py [--hours 88]``
 """
@@ -124,58 +122,6 @@ def bare_loop(fmu_dir: Path, n: int, align_s: float) -> float:
             s.free()
 
 
-def slave_work_per_step(fmu_dir: Path, n: int = 5000, skip: int = 1300) -> dict:
-    """Microseconds per step of each Python-hosted slave's compiled step alone (navigation phase).
-
-    The slaves are stepped in Python as a chain (values copied between them),
-    fed by the native Turntable FMU (FMPy; its step is not counted here);
-    each compiled step is timed on its own, minus the cost of calling it with
-    a step it declines at once (so what remains is the step's own work).
-    """
-    from fmus.imu_thermal_slave import IMUThermal
-    from fmus.strapdown_ins_slave import StrapdownINS
-
-    tt = Slave(fmu_dir / "Turntable.fmu", "work_tt")
-    imu, ins = IMUThermal(instance_name="i"), StrapdownINS(instance_name="n")
-    chain = (("IMUThermal", imu), ("StrapdownINS", ins))
-    tt.set(align_time=1200.0)
-    ins.align_time = 1200.0
-    tt.fmu.enterInitializationMode()
-    tt.fmu.exitInitializationMode()
-    for _, s in chain:
-        s.setup_experiment(0.0)
-        s.enter_initialization_mode()
-    for v, value in zip(TT_TO_IMU, tt.get(*TT_TO_IMU)):
-        setattr(imu, v, value)
-    imu.exit_initialization_mode()
-    for v in IMU_TO_INS:
-        setattr(ins, v, getattr(imu, v))
-    ins.exit_initialization_mode()
-    cost = dict.fromkeys([name for name, _ in chain], 0.0)
-    clock = time.perf_counter
-    for k in range(n + skip):
-        t = float(k)
-        tt.fmu.doStep(t, 1.0)
-        for v, value in zip(TT_TO_IMU, tt.get(*TT_TO_IMU)):
-            setattr(imu, v, value)
-        for (name, s), names in zip(chain, (IMU_TO_INS, ())):
-            fast = s._fast
-            if fast is not None:
-                c0 = clock()
-                done = fast._step(fast.table, s._fmi_buffer, t, 1.0) == 0
-                c1 = clock()
-                if k >= skip:
-                    c2 = clock()
-                    fast._step(fast.table, s._fmi_buffer, t, 2.0)  # declined at its first check
-                    cost[name] += (c1 - c0) - (clock() - c2)
-            if fast is None or not done:
-                assert s.do_step(t, 1.0)
-            for v in names:
-                setattr(ins, v, getattr(s, v))
-    tt.free()
-    return {key: value / n * 1e6 for key, value in cost.items()}
-
-
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--hours", type=float, default=88.0)
@@ -196,7 +142,6 @@ def main():
         res_py, t_cosim_py = cosimulate(system, hours, False)
         n_raw = min(steps, 30000)
         t_raw = bare_loop(fmu_dir, n_raw, align * 3600)
-        work = slave_work_per_step(fmu_dir)
     nav = int(round(align * 3600)) + 1
     for name, out in (("compiled steps from C", res), ("compiled steps through do_step", res_py)):
         for field, series in (("lat_error", ref.lat_error), ("position_error", ref.position_error)):
@@ -204,7 +149,7 @@ def main():
             assert len(got) == len(series) and np.array_equal(got, series), f"{name}: ins.{field} differs"
     load = os.getloadavg()
     us = 1e6 / steps
-    per_step, work_sum, raw = t_cosim * us, sum(work.values()), t_raw * 1e6
+    per_step, raw = t_cosim * us, t_raw * 1e6
     print(f"{hours:g} h, {steps} steps of 1 s (load average {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f})")
     print(f"in process     : {t_inproc:7.2f} s = {t_inproc * us:5.1f} us/step (run_static, core threads); "
           f"single thread {t_serial:.2f} s = {t_serial * us:.1f} us/step")
@@ -212,11 +157,8 @@ def main():
           f"run ({t_cosim / t_serial:.1f}x the single-thread one); results bit-identical")
     print(f"  same, compiled steps through the Python do_step (SARINS_FMU_NO_FAST_STEP=1): {t_cosim_py:.2f} s = "
           f"{t_cosim_py * us:.1f} us/step, {t_cosim_py / t_inproc:.1f}x")
-    print(f"per step       : slave work {work_sum:5.1f} us ("
-          + ", ".join(f"{k} {v:.1f}" for k, v in work.items())
-          + f"); FMI layer (ctypes + native layer, 8 calls) {raw - work_sum:.1f} us; "
-          f"master's own work {per_step - raw:.1f} us (bare loop of the same calls {raw:.1f} us)")
-
+    print(f"per step       : FMU calls (a bare loop of the master's get/set/doStep/record calls; the three FMUs "
+          f"are native) {raw:.1f} us; master's own work {per_step - raw:.1f} us")
 
 if __name__ == "__main__":
     main()

@@ -65,6 +65,7 @@ MAX_DIM = 100_000  # largest length of an array (a structural parameter's upper 
 NATIVE = {
     "Turntable": NativeModel("turntable"),
     "StrapdownINS": NativeModel("strapdown_ins"),
+    "IMUThermal": NativeModel("imu_thermal"),
 }
 
 # setup.py's flags (sarins_fmu core) plus hidden visibility: only the fmi2* functions are exported

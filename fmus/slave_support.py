@@ -204,59 +204,6 @@ def same_time(a: float, b: float, step: float) -> bool:
     return abs(a - b) <= TAG_TOL * step
 
 
-class StartOfStepInputs:
-    """Chooses, at ``doStep(t, h)``, the input set that describes the step's start.
-
-    A time-tagged upstream output set (tag = the time it describes) arrives
-    with tag t under Jacobi (every FMU reads the others' outputs from the
-    start of the step) and with tag t + h under Gauss-Seidel (the upstream
-    FMU was stepped first).  The slave keeps the set it read at its previous
-    step (or at initialisation) and uses whichever of the two is tagged t;
-    any other tag is an error, never a silent shift of the motion.
-
-    A set is a flat float64 array of ``size`` values.  The kept set lives in
-    ``store`` (``[kept (0/1), tag, values...]``), a fixed array that a
-    compiled step may read and update in place.
-    """
-
-    def __init__(self, what: str, tag_name: str, size: int):
-        self.what, self.tag_name = what, tag_name
-        self.store = np.zeros(2 + int(size))
-
-    @property
-    def held_tag(self):
-        """Tag of the set kept from the previous step (None before initialisation)."""
-        return float(self.store[1]) if self.store[0] else None
-
-    def _keep(self, tag: float, values) -> None:
-        self.store[2:] = values
-        self.store[1] = tag
-        self.store[0] = 1.0
-
-    def prime(self, tag: float, values) -> None:
-        """Keep the set read at initialisation."""
-        self._keep(float(tag), values)
-
-    def select(self, time: float, step: float, tag: float, values):
-        """The set tagged ``time`` among the current one and the held one (a copy)."""
-        tag = float(tag)
-        held = self.held_tag
-        if not math.isfinite(tag):
-            raise ValueError(f"{self.tag_name} is not finite")
-        if same_time(tag, time, step):
-            chosen = np.array(values, dtype=float)
-        elif held is not None and same_time(held, time, step):
-            chosen = self.store[2:].copy()
-        else:
-            before = "none" if held is None else f"{held:.9g} s"
-            raise ValueError(
-                f"no {self.what} for the step starting at t={time:.9g} s: the input {self.tag_name} is "
-                f"{tag:.9g} s and the previous set was tagged {before}; the inputs must be the values at t "
-                "(Jacobi) or at t + h (Gauss-Seidel, upstream stepped first)")
-        self._keep(tag, values)
-        return chosen
-
-
 class TaggedHistory:
     """The last ``size`` sets of a time-tagged input, to pair them by tag with another input stream.
 

@@ -5,8 +5,8 @@ fixed tuple of float64 arrays (the table below, updated in place, never
 rebound), handed to the C core (``sarins_fmu/core/imu.c``, binding
 :mod:`sarins_fmu.core.imu`) as an array table, so that the same compiled
 functions serve a batch of K intervals (the in-process runs) and one
-interval called from C without Python (the IMUThermal FMU's step,
-``sarins_imu_fmu_step``):
+interval called from C without Python (the native IMUThermal FMU's step,
+``sarins_imu_fmu_step``, fmus/c/imu_thermal/model.c):
 
 1. ``sarins_imu_advance``: thermal model, die temperatures, Gauss-Markov
    bias instability, the time-correlated terms, and from them the biases

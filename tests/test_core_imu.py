@@ -204,7 +204,6 @@ def test_bad_arrays_are_refused_with_a_clear_error():
     with pytest.raises(ValueError, match="random stream state in it is not one"):
         core_imu.steps(sensor._table, [[0.0]], [[0.0]], [[0.0]], np.zeros((1, 3)), np.zeros((1, 3)), [20.0])
     assert all(np.array_equal(a, b) for a, b in zip(before, sensor.state_arrays()))  # nothing changed
-    assert core_imu.fmu_step(sensor._table, np.zeros(4), 0.0, 1.0) == 1  # no io rows: nothing done
 
 
 def test_one_call_one_interval_and_the_threaded_path_agree(monkeypatch):

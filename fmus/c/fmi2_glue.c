@@ -195,8 +195,10 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
     REQUIRE(g, "fmi2SetBoolean", SET_STATES);
     if (!sg_check_args(g, "fmi2SetBoolean", vr, nvr, value, SARINS_BOOLEAN, sg_settable_default))
         return fmi2Error;
-    for (size_t k = 0; k < nvr; k++)
+    for (size_t k = 0; k < nvr; k++) {
         g->ctx.b[g->by_vr[vr[k]]->slot] = value[k] ? 1 : 0;
+        g->ctx.set[g->by_vr[vr[k]] - g->table->vars] = 1; /* its row = its vr (native_fmu.py) */
+    }
     return fmi2OK;
 }
 

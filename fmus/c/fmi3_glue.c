@@ -344,8 +344,10 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference valueR
     if (!check_count(g, "fmi3SetBoolean", valueReferences, nValueReferences, nValues)
         || !sg_check_args(g, "fmi3SetBoolean", valueReferences, nValueReferences, values, SARINS_BOOLEAN, settable3))
         return fmi3Error;
-    for (size_t k = 0; k < nValueReferences; k++)
+    for (size_t k = 0; k < nValueReferences; k++) {
         g->ctx.b[g->by_vr[valueReferences[k]]->slot] = values[k] ? 1 : 0;
+        g->ctx.set[g->by_vr[valueReferences[k]] - g->table->vars] = 1; /* its row = its vr (native_fmu.py) */
+    }
     return fmi3OK;
 }
 

@@ -166,7 +166,8 @@ int sg_model_status(sarins_glue *g, int status, unsigned long problems_before, c
 static size_t off_int(const sarins_table *t) { return t->n_real * sizeof(double); }
 static size_t off_bool(const sarins_table *t) { return off_int(t) + t->n_integer * sizeof(int); }
 static size_t off_string(const sarins_table *t) { return off_bool(t) + t->n_boolean * sizeof(int); }
-static size_t values_size(const sarins_table *t) { return off_string(t) + t->n_string * SARINS_STRING_MAX; }
+static size_t off_set(const sarins_table *t) { return off_string(t) + t->n_string * SARINS_STRING_MAX; }
+static size_t values_size(const sarins_table *t) { return off_set(t) + t->n_vars; } /* + one set flag per vr */
 
 static void point_ctx(sarins_glue *g)
 {
@@ -175,6 +176,7 @@ static void point_ctx(sarins_glue *g)
     g->ctx.i = (int *)(void *)(g->values + off_int(t));
     g->ctx.b = (int *)(void *)(g->values + off_bool(t));
     g->ctx.s = (char(*)[SARINS_STRING_MAX])(void *)(g->values + off_string(t));
+    g->ctx.set = g->values + off_set(t);
 }
 
 static void set_start_values(sarins_glue *g)
@@ -593,6 +595,7 @@ int sg_set_real(sarins_glue *g, const char *fn, const unsigned vr[], size_t n, c
         } else {
             g->ctx.r[v->slot] = value[at++];
         }
+        g->ctx.set[g->by_vr[vr[k]] - g->table->vars] = 1; /* its row = its vr (native_fmu.py) */
     }
     return SARINS_OK;
 }
@@ -602,8 +605,10 @@ int sg_set_int(sarins_glue *g, const char *fn, const unsigned vr[], size_t n, co
 {
     if (!sg_check_args(g, fn, vr, n, value, SARINS_INTEGER, settable))
         return SARINS_ERROR;
-    for (size_t k = 0; k < n; k++)
+    for (size_t k = 0; k < n; k++) {
         g->ctx.i[g->by_vr[vr[k]]->slot] = value[k];
+        g->ctx.set[g->by_vr[vr[k]] - g->table->vars] = 1; /* its row = its vr (native_fmu.py) */
+    }
     return SARINS_OK;
 }
 
@@ -620,8 +625,10 @@ int sg_set_string(sarins_glue *g, const char *fn, const unsigned vr[], size_t n,
             return sg_fail(g, "%s: the value of %s is %llu bytes long, at most %d are allowed", fn, v->name,
                            (unsigned long long)strlen(value[k]), SARINS_STRING_MAX - 1);
     }
-    for (size_t k = 0; k < n; k++)
+    for (size_t k = 0; k < n; k++) {
         snprintf(g->ctx.s[g->by_vr[vr[k]]->slot], SARINS_STRING_MAX, "%s", value[k]);
+        g->ctx.set[g->by_vr[vr[k]] - g->table->vars] = 1; /* its row = its vr (native_fmu.py) */
+    }
     return SARINS_OK;
 }
 
@@ -852,7 +859,8 @@ int sg_set_state(sarins_glue *g, const void *FMUstate, const char *fn)
             case SARINS_BOOLEAN: off = off_bool(g->table) + v->slot * sizeof(int); n = sizeof(int); break;
             default: off = off_string(g->table) + v->slot * (size_t)SARINS_STRING_MAX; n = SARINS_STRING_MAX; break;
             }
-            same = memcmp(g->built + off, values + off, n) == 0;
+            same = memcmp(g->built + off, values + off, n) == 0
+                   && g->built[off_set(g->table) + k] == values[off_set(g->table) + k]; /* its set flag */
         }
         if (!same) {
             memcpy(g->values, values, g->values_size);

@@ -39,6 +39,13 @@
  * c->work that is a function of the parameters only (a schedule) is not part of the state.  state_version
  * goes into serialized states: change it whenever the layout of c->state or of the work state changes.
  *
+ * Set flags.  c->set[vr] (by value reference; the table's variables are numbered 0, 1, ... in that order)
+ * is 1 once the host has set the variable with an fmi2Set* call since fmi2Instantiate or the last
+ * fmi2Reset, else 0 (a start value is not "set").  A model uses it where the declaration says that setting
+ * a parameter changes its meaning ("a coefficient that is set overrides the preset").  The flags travel
+ * with the values: they are in the FMU state and compared like values when fmi2SetFMUstate decides whether
+ * initialize() must rebuild c->work.
+ *
  * Arrays (FMI 3.0).  A declaration may add Real array variables whose length is a structural parameter (an
  * Integer, causality SARINS_STRUCTURAL_PARAMETER, 1 .. table->max_dim): variables.h then defines
  * SARINS_A_<name> slots, and c->a[SARINS_A_<name>] holds c->i[SARINS_I_<n>] doubles.  The glue allocates
@@ -106,6 +113,8 @@ typedef struct {
     double start_time;               /* s: fmi2SetupExperiment's start time (0 if it was not called) */
     int quiet;                       /* 1 during the initialize() call of fmi2EnterInitializationMode */
     sarins_glue *glue;
+    unsigned char *set;              /* set[vr] = 1 once the host set variable vr (any fmi2Set*) since
+                                      * instantiation or the last reset; see "Set flags" above */
     double **a;                      /* Real arrays, by SARINS_A_* slot: c->a[k][0 .. c->i[dim] - 1] */
 } sarins_ctx;
 

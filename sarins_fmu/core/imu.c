@@ -474,15 +474,13 @@ void sarins_imu_aged_poly(uint64_t seed, int64_t n, const double *t, const doubl
 
 /* ------------------------------------------------------ the FMU's step */
 
-#define TAG_TOL 1e-6    /* of a step: two time tags closer than this name the same point (fmus.slave_support) */
-#define NO_TAG (-1.0e9) /* start value of a time-tag input: not connected */
-#define VEHICLE_SET 15  /* yaw, pitch, roll; their rates; their accelerations; base rate e n u; force e n u */
-
-/* io row (fmus/compiled_steps.py): expected step, start time, gimbals A, slots of motion_time,
- * ambient_temp, ambient_temp_rate, angle_1..3, rate_1..3, accel_1..3, the 12 outputs, increment_end_time;
- * moving base (1/0), slots of base_motion_time and of the 15 vehicle inputs */
-enum { IO_STEP = 0, IO_START = 1, IO_GIMBALS = 2, IO_MOTION_TIME = 3, IO_AMBIENT = 4, IO_MOTION = 6,
-       IO_OUT = 15, IO_END_TIME = 27, IO_VEHICLE = 28, IO_SIZE = IO_VEHICLE + 2 + VEHICLE_SET };
+#define TAG_TOL SARINS_IMU_TAG_TOL
+#define NO_TAG SARINS_IMU_NO_TAG
+#define VEHICLE_SET SARINS_IMU_VEHICLE_SET
+enum { IO_STEP = SARINS_IMU_IO_STEP, IO_START = SARINS_IMU_IO_START, IO_GIMBALS = SARINS_IMU_IO_GIMBALS,
+       IO_MOTION_TIME = SARINS_IMU_IO_MOTION_TIME, IO_AMBIENT = SARINS_IMU_IO_AMBIENT, IO_MOTION = SARINS_IMU_IO_MOTION,
+       IO_OUT = SARINS_IMU_IO_OUT, IO_END_TIME = SARINS_IMU_IO_END_TIME, IO_VEHICLE = SARINS_IMU_IO_VEHICLE,
+       IO_SIZE = SARINS_IMU_IO_SIZE };
 
 static int same_time(double a, double b, double step) { return fabs(a - b) <= TAG_TOL * step; }
 

@@ -186,11 +186,23 @@ void sarins_imu_turn_on(uint64_t seed, const double *std, double *out);
 void sarins_imu_aged_poly(uint64_t seed, int64_t n, const double *t, const double *poly, const double *sigma,
                           double tau, double *out);
 
-/* The IMUThermal FMU's step (fmus/compiled_steps.py, imu_context): table
+/* The IMUThermal FMU's step (fmus/c/imu_thermal/model.c): table
  * rows 0-16 the IMU state, 17 the io row, 18 the held motion set, 19 the
- * held vehicle set; buf[n] the slave's Real buffer; t, h the communication
+ * held vehicle set; buf[n] the FMU's Real values; t, h the communication
  * point and step (s).  Returns 0 when it did the step, 1 when it changed
- * nothing (the Python do_step then runs and reports any error). */
+ * nothing (the caller then finds and reports the reason). */
 int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h);
+
+/* The io row of sarins_imu_fmu_step: the expected step (s), the start time (s), the gimbal count A (1-3),
+ * the buf slots of motion_time, ambient_temp, ambient_temp_rate, angle_1..3, rate_1..3, accel_1..3, the 12
+ * outputs (dtheta x y z, dv x y z, the six temperatures), increment_end_time; moving base (1/0), the slots of
+ * base_motion_time and of the SARINS_IMU_VEHICLE_SET vehicle inputs (yaw, pitch, roll; their rates; their
+ * accelerations; base rate e n u; base force e n u).  A held set is [kept (0/1), tag, values...]. */
+#define SARINS_IMU_VEHICLE_SET 15
+#define SARINS_IMU_NO_TAG (-1.0e9) /* start value of a time-tag input: not connected */
+#define SARINS_IMU_TAG_TOL 1e-6    /* of a step: two time tags closer than this name the same point */
+enum { SARINS_IMU_IO_STEP = 0, SARINS_IMU_IO_START = 1, SARINS_IMU_IO_GIMBALS = 2, SARINS_IMU_IO_MOTION_TIME = 3,
+       SARINS_IMU_IO_AMBIENT = 4, SARINS_IMU_IO_MOTION = 6, SARINS_IMU_IO_OUT = 15, SARINS_IMU_IO_END_TIME = 27,
+       SARINS_IMU_IO_VEHICLE = 28, SARINS_IMU_IO_SIZE = SARINS_IMU_IO_VEHICLE + 2 + SARINS_IMU_VEHICLE_SET };
 
 #endif

@@ -35,8 +35,6 @@ _one_interval = function("sarins_imu_one_interval", _INT, _P, _I64, _P, _P, _P, 
 _seed = function("sarins_imu_seed", _INT, _P, _I64, _U64)
 _turn_on = function("sarins_imu_turn_on", None, _U64, _P, _P)
 _aged_poly = function("sarins_imu_aged_poly", None, _U64, _I64, _P, _P, _P, _F64, _P)
-FMU_STEP = function("sarins_imu_fmu_step", _INT, _P, _I64, _P, _I64, _F64, _F64)
-FMU_STEP_ADDRESS = ctypes.cast(FMU_STEP, ctypes.c_void_p).value  # for the native FMI layer
 
 PARALLEL_MIN = 64  # intervals; below this a thread hand-off costs more than it saves
 _CPUS = os.cpu_count() or 1  # (os.cpu_count() takes tens of microseconds: asked once)
@@ -214,13 +212,6 @@ def one_interval(table, angle0, rate0, accel, amb_end: float):
     _check(_one_interval(table.ctypes.data, table.shape[0], angle0.ctypes.data, rate0.ctypes.data,
                          accel.ctypes.data, float(amb_end), dtheta.ctypes.data, dv.ctypes.data, temps.ctypes.data))
     return dtheta, dv, temps
-
-
-def fmu_step(table, buffer, t: float, h: float) -> int:
-    """The IMUThermal FMU's step (``sarins_imu_fmu_step``): 0 when it did the step, 1 when it changed nothing."""
-    table = _arrays.table(table)
-    _arrays.written(buffer, np.shape(buffer)[:1], "buffer")
-    return FMU_STEP(table.ctypes.data, table.shape[0], buffer.ctypes.data, buffer.shape[0], float(t), float(h))
 
 
 def seed(table, value: int) -> None:
