@@ -51,6 +51,7 @@ from .core import imu as core_imu
 from .core import rng as core_rng
 from .core._lib import array_table
 from .core.rng import check_seed
+from . import imu_dynamics
 from . import imu_step
 from .imu_step import T_REF
 from .thermal import Ambient, ThermalModel, ThermalParams, _check_temperature
@@ -67,6 +68,8 @@ def _vec3(value, name):
 
 CORRELATED_FIELDS = ("bias_dtdt", "scale_factor_dtdt", "hysteresis", "hysteresis_width", "flicker",
                      "rate_random_walk", "turn_on_bias")
+DYNAMICS_FIELDS = ("filter_time_constant", "rate_hysteresis", "rate_hysteresis_width", "rate_hysteresis_time",
+                   "rate_hysteresis_tc")
 
 
 @dataclass(frozen=True)
@@ -89,6 +92,12 @@ class TriadErrors:
     rate_random_walk : (3,) per sqrt(s) (rad/s/sqrt(s) or m/s^2/sqrt(s))
     turn_on_bias : (3,) std of the per-seed constant bias
     (time-correlated terms: see :mod:`sarins_fmu.imu_correlated`)
+    filter_time_constant : (3,) s, first-order output low-pass (0: none)
+    rate_hysteresis : (3,) amplitude c of the input hysteresis (rad/s or m/s^2)
+    rate_hysteresis_width : (3,) its half-width w in input units (rad/s or m/s^2)
+    rate_hysteresis_time : (3,) s, its relaxation time (0: none, a pure play)
+    rate_hysteresis_tc : (3,) 1/degC, relative change of c with temperature
+    (output dynamics: see :mod:`sarins_fmu.imu_dynamics`)
     """
 
     bias: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -108,11 +117,22 @@ class TriadErrors:
     flicker: np.ndarray = field(default_factory=lambda: np.zeros(3))
     rate_random_walk: np.ndarray = field(default_factory=lambda: np.zeros(3))
     turn_on_bias: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    filter_time_constant: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rate_hysteresis: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rate_hysteresis_width: np.ndarray = field(default_factory=lambda: np.ones(3))
+    rate_hysteresis_time: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rate_hysteresis_tc: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self):
         for name in ("bias", "scale_factor", "random_walk", "bias_instability", "bias_corr_time",
-                     "bias_tc1", "bias_tc2", "scale_factor_tc", "quadratic", *CORRELATED_FIELDS):
+                     "bias_tc1", "bias_tc2", "scale_factor_tc", "quadratic", *CORRELATED_FIELDS,
+                     *DYNAMICS_FIELDS):
             object.__setattr__(self, name, _vec3(getattr(self, name), name))
+        for name in ("filter_time_constant", "rate_hysteresis_time"):
+            if np.any(getattr(self, name) < 0):
+                raise ValueError(f"{name} must be non-negative")
+        if np.any(self.rate_hysteresis_width <= 0):
+            raise ValueError("rate_hysteresis_width must be positive")
         for name in ("flicker", "rate_random_walk", "turn_on_bias"):
             if np.any(getattr(self, name) < 0):
                 raise ValueError(f"{name} must be non-negative")
@@ -157,6 +177,8 @@ class ImuModel:
     flicker_tau_min, flicker_tau_max : float, s, band of correlation times
         of the flicker bias instability (see :mod:`imu_correlated`)
     thermal : ThermalParams
+    accel_lever_arm : (3, 3) m, row i the position of accelerometer i from
+        the reference point, body axes (size effect, :mod:`imu_dynamics`)
     """
 
     gyro: TriadErrors = field(default_factory=TriadErrors)
@@ -176,8 +198,13 @@ class ImuModel:
     flicker_tau_min: float = 1.0
     flicker_tau_max: float = 10000.0
     thermal: ThermalParams = field(default_factory=ThermalParams)
+    accel_lever_arm: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
 
     def __post_init__(self):
+        arm = np.asarray(self.accel_lever_arm, dtype=float)
+        if arm.shape != (3, 3) or not np.isfinite(arm).all():
+            raise ValueError("accel_lever_arm must be a finite (3, 3) matrix (row i: accelerometer i's position, m)")
+        object.__setattr__(self, "accel_lever_arm", arm)
         for name in ("lowrate_gain", "lowrate_width", "axial_drift_poly", "aging_sigma"):
             object.__setattr__(self, name, _vec3(getattr(self, name), name))
         gs = np.asarray(self.g_sensitivity, dtype=float)
@@ -268,24 +295,36 @@ NAV_RLG = ImuModel(
 )
 
 # Consumer/tactical MEMS unit like seed 003's MIMU: bias ~10 deg/h with strong
-# temperature dependence, 0.3 deg/sqrt(h), percent-level low-rate
-# nonlinearity, g-sensitivity 0.01 deg/s/g, accelerometer bias 2 mg.
-# Time-correlated terms (seed 003 gives no figures; values of the class of
-# tactical MEMS data sheets and of the thermal-calibration literature):
-# flicker bias instability B = 5 deg/h and 50 ug (Allan floors 3.3 deg/h,
-# 33 ug from ~20 s on), rate random walk 3 deg/h/sqrt(h) and
+# temperature dependence, ARW 0.15 deg/sqrt(h) (ADIS16465), percent-level low-rate
+# nonlinearity, g-sensitivity 0.015 deg/s/g (ADIS16445), accelerometer bias 2 mg.
+# Time-correlated terms (seed 003 gives no figures; docs/imu-presets.md gives each source):
+# flicker bias instability B = 3.0 deg/h and 5.4 ug (Allan floors 2 deg/h and
+# 3.6 ug, the ADIS16465's in-run bias stability), rate random walk 3 deg/h/sqrt(h) and
 # 0.5 ug/sqrt(s) (the +1/2 slope takes over past ~1e4 s), turn-on
 # repeatability 8 deg/h and 0.5 mg, die lagging the reported temperature by
 # 3 and 2 min, thermal-gradient sensitivity 5 deg/h and 100 ug at 1 degC/min
 # (scale factor 200 and 100 ppm at 1 degC/min), hysteresis loops +-3 deg/h
-# and +-100 ug taken up over 2 degC.
+# and +-100 ug taken up over 2 degC.  Output dynamics (sarins_fmu.imu_dynamics): a
+# 2.5 ms output filter, a rate hysteresis relaxing in 2 s, accelerometers a few mm
+# off the reference point (size effect).
+# Sizes from public sources (docs/imu-presets.md gives each row's source):
+# Allan floor of a flicker bias is sqrt(2 ln 2 / pi) B = 0.664 B (IEEE Std 952-1997 annex C), so a
+# datasheet's in-run bias stability S is the flicker coefficient B = S / 0.664: ADIS16465-1 gyro 2 deg/h
+# -> B = 3.0 deg/h, accelerometer 3.6 ug -> B = 5.4 ug (to 2 digits)
+GYRO_FLICKER_DPH = 3.0
+ACCEL_FLICKER_UG = 5.4
+G_SENSITIVITY_DPS_PER_G = 0.015  # ADIS16445 data sheet, linear-acceleration effect on gyro bias, +-0.015 deg/s/g
+# output filter: an averaging decimation filter to a 200 Hz output has a group delay of 0.5 / f_out = 2.5 ms
+# (KVH 1775 IMU manual sec. 12.3.3; the ADIS1646x decimation filter averages the same way): the first-order
+# filter with that low-frequency group delay
+OUTPUT_FILTER_S = 0.5 / 200.0
 _PER_DEGC_PER_MIN = 60.0  # (x per degC/min) * this = x per degC/s
 MEMS = ImuModel(
     gyro=TriadErrors(
         bias=np.array([10.0, -8.0, 12.0]) * DPH_TO_RPS,
         scale_factor=np.array([500.0, -400.0, 600.0]) * PPM,
         misalignment=_mis(300.0),
-        random_walk=np.full(3, 0.3 * DPSH_TO_RPSS),
+        random_walk=np.full(3, 0.15 * DPSH_TO_RPSS),  # ADIS16465 ARW
         bias_tc1=np.array([0.004, -0.003, 0.005]) * DEG_TO_RAD,
         bias_tc2=np.array([6e-5, 5e-5, -7e-5]) * DEG_TO_RAD,
         scale_factor_tc=np.full(3, 100 * PPM),
@@ -294,9 +333,14 @@ MEMS = ImuModel(
         scale_factor_dtdt=np.full(3, 200 * PPM * _PER_DEGC_PER_MIN),
         hysteresis=np.array([3.0, -2.5, 3.5]) * DPH_TO_RPS,
         hysteresis_width=np.full(3, 2.0),
-        flicker=np.full(3, 5.0 * DPH_TO_RPS),
+        flicker=np.full(3, GYRO_FLICKER_DPH * DPH_TO_RPS),
         rate_random_walk=np.full(3, 3.0 * DPH_TO_RPS / 60.0),
         turn_on_bias=np.full(3, 8.0 * DPH_TO_RPS),
+        filter_time_constant=np.full(3, OUTPUT_FILTER_S),
+        rate_hysteresis=np.array([0.01, -0.008, 0.012]) * DEG_TO_RAD,
+        rate_hysteresis_width=np.full(3, 1.0 * DEG_TO_RAD),
+        rate_hysteresis_time=np.full(3, 2.0),
+        rate_hysteresis_tc=np.full(3, 0.01),
     ),
     accel=TriadErrors(
         bias=np.array([2.0, -1.5, 2.5]) * 1e3 * UG_TO_MPS2,
@@ -311,11 +355,18 @@ MEMS = ImuModel(
         scale_factor_dtdt=np.full(3, 100 * PPM * _PER_DEGC_PER_MIN),
         hysteresis=np.array([100.0, -80.0, 120.0]) * UG_TO_MPS2,
         hysteresis_width=np.full(3, 2.0),
-        flicker=np.full(3, 50.0 * UG_TO_MPS2),
+        flicker=np.full(3, ACCEL_FLICKER_UG * UG_TO_MPS2),
         rate_random_walk=np.full(3, 0.5 * UG_TO_MPS2),
         turn_on_bias=np.full(3, 500.0 * UG_TO_MPS2),
+        filter_time_constant=np.full(3, OUTPUT_FILTER_S),
+        rate_hysteresis=np.array([100.0, -80.0, 120.0]) * UG_TO_MPS2,
+        rate_hysteresis_width=np.full(3, 0.01 * earth.GAMMA_E),
+        rate_hysteresis_time=np.full(3, 2.0),
+        rate_hysteresis_tc=np.full(3, 0.01),
     ),
-    g_sensitivity=np.array([[1.0, 0.3, -0.2], [-0.2, 1.0, 0.3], [0.3, -0.2, 1.0]]) * 0.01 * DEG_TO_RAD / earth.GAMMA_E,
+    g_sensitivity=(np.array([[1.0, 0.3, -0.2], [-0.2, 1.0, 0.3], [0.3, -0.2, 1.0]]) * G_SENSITIVITY_DPS_PER_G
+                   * DEG_TO_RAD / earth.GAMMA_E),
+    accel_lever_arm=np.array([[2.0, -3.0, 1.0], [-2.0, 2.0, -1.0], [1.0, 1.0, 3.0]]) * 1e-3,
     lowrate_gain=np.full(3, 0.02),
     lowrate_width=np.full(3, 2.0 * DEG_TO_RAD),
     flicker_tau_min=1.0,
@@ -505,7 +556,8 @@ class IMU:
         self._state = (np.zeros(imu_step.N_CONSTS), np.zeros(2), np.zeros((4, 6)), np.zeros((3, 6)), np.zeros((10, 3)),
                        np.zeros((7, 3)), np.zeros((9, 3)), np.ascontiguousarray(self.axes), base,
                        np.zeros((len(core_imu.STREAMS), core_rng.WORDS)), np.zeros((8, 6)), np.zeros((3, 6)),
-                       np.zeros(n_flicker), np.zeros((n_flicker, 6)), np.zeros((n_flicker, 6)))
+                       np.zeros(n_flicker), np.zeros((n_flicker, 6)), np.zeros((n_flicker, 6)),
+                       np.zeros((imu_dynamics.PAR_ROWS, 6)), np.zeros((imu_dynamics.STATE_ROWS, 6)))
         self._table = array_table(self._state)  # the same arrays as the C core sees them
         flat = flatten(m)
         core_imu.build(self._table, [flat[name] for name in core_imu.param_names()], self.t0, self.h, self.n_sub,
@@ -574,6 +626,7 @@ class IMU:
         dtheta, dv = core_imu.increments(
             s[imu_step.AXES], angle0, rate0, accel, w_t, f_t, self.h, self.n_sub, g_sf, mats[0:3], g_bias,
             triad[1], triad[2], triad[3], mats[3:6], a_sf, mats[6:9], a_bias, triad[4])
+        core_imu.dynamics(self._table, temps, dtheta, dv)
         core_imu.white_noise(self._table, dtheta, dv)
         return dtheta, dv, temps
 

@@ -34,6 +34,11 @@ _TRIAD_UNITS = {  # field -> (gyro unit, accelerometer unit)
     "flicker": ("rad/s", "m/s2"),
     "rate_random_walk": ("rad/s/sqrt(s)", "m/s2/sqrt(s)"),
     "turn_on_bias": ("rad/s", "m/s2"),
+    "filter_time_constant": ("s", "s"),
+    "rate_hysteresis": ("rad/s", "m/s2"),
+    "rate_hysteresis_width": ("rad/s", "m/s2"),
+    "rate_hysteresis_time": ("s", "s"),
+    "rate_hysteresis_tc": ("1/degC", "1/degC"),
 }
 _AXIAL_SCALARS = ("axial_drift_grad", "axial_block_time_constant", "axial_hysteresis", "axial_hysteresis_width",
                   "axial_hysteresis_relax_time")  # scalar ImuModel fields of the azimuth gyro's thermal terms
@@ -52,6 +57,9 @@ def _names():
     for i in range(3):
         for j in range(3):
             out.append((f"g_sensitivity_{AXES[i]}{AXES[j]}", "rad/s/(m/s2)", ("g_sensitivity", (i, j))))
+    for i in range(3):
+        for j in range(3):  # accelerometer i's position, component j
+            out.append((f"accel_lever_arm_{AXES[i]}{AXES[j]}", "m", ("accel_lever_arm", (i, j))))
     for i, ax in enumerate(AXES):
         out.append((f"lowrate_gain_{ax}", "1", ("lowrate_gain", i)))
         out.append((f"lowrate_width_{ax}", "rad/s", ("lowrate_width", i)))
@@ -107,8 +115,9 @@ def apply_overrides(model: ImuModel, overrides: dict) -> ImuModel:
         "accel": {f.name: np.array(getattr(model.accel, f.name), float) for f in fields(TriadErrors)},
         "thermal": {f.name: list(getattr(model.thermal, f.name)) for f in fields(ThermalParams)},
         "top": {name: np.array(getattr(model, name), float) for name in
-                ("g_sensitivity", "lowrate_gain", "lowrate_width", "axial_drift_poly", "aging_sigma",
-                 "axial_drift_dtdt", "aging_corr_time", "flicker_tau_min", "flicker_tau_max", *_AXIAL_SCALARS)},
+                ("g_sensitivity", "accel_lever_arm", "lowrate_gain", "lowrate_width", "axial_drift_poly",
+                 "aging_sigma", "axial_drift_dtdt", "aging_corr_time", "flicker_tau_min", "flicker_tau_max",
+                 *_AXIAL_SCALARS)},
     }
     for name, value in overrides.items():
         value = float(value)
@@ -127,7 +136,8 @@ def apply_overrides(model: ImuModel, overrides: dict) -> ImuModel:
         gyro=TriadErrors(**arrays["gyro"]),
         accel=TriadErrors(**arrays["accel"]),
         thermal=ThermalParams(**{k: tuple(v) for k, v in arrays["thermal"].items()}),
-        g_sensitivity=top["g_sensitivity"], lowrate_gain=top["lowrate_gain"], lowrate_width=top["lowrate_width"],
+        g_sensitivity=top["g_sensitivity"], accel_lever_arm=top["accel_lever_arm"],
+        lowrate_gain=top["lowrate_gain"], lowrate_width=top["lowrate_width"],
         axial_drift_poly=top["axial_drift_poly"], aging_sigma=top["aging_sigma"],
         axial_drift_dtdt=float(top["axial_drift_dtdt"]), aging_corr_time=float(top["aging_corr_time"]),
         flicker_tau_min=float(top["flicker_tau_min"]), flicker_tau_max=float(top["flicker_tau_max"]),

@@ -41,7 +41,12 @@ def test_mems_random_walk_and_bias_instability_read_within_10_percent():
         for i in range(3):
             r = allan.readouts(taus, adev[:, 3 * j + i], duration)
             assert r.random_walk == pytest.approx(spec["random_walk"][i], rel=0.10), (triad, i)
-            assert r.bias_instability == pytest.approx(spec["bias_instability"][i], rel=0.10), (triad, i)
+            if triad == "gyro":
+                assert r.bias_instability == pytest.approx(spec["bias_instability"][i], rel=0.10), (triad, i)
+            else:
+                # the ADIS16465's 3.6 ug floor (B = 5.4 ug) lies under the unsourced velocity random walk
+                # (85 ug/sqrt(Hz)) and rate random walk (0.5 ug/sqrt(s)) curves: the minimum reads up to 2 B
+                assert 0.8 * spec["bias_instability"][i] < r.bias_instability < 2.0 * spec["bias_instability"][i]
 
 
 def test_nav_rlg_random_walk_and_gauss_markov_bias_instability():
@@ -132,7 +137,7 @@ def test_allan_command_on_a_recorded_log(tmp_path, capsys):
     assert main(["allan", "--log", str(log), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["source"].startswith("log ") and "random_walk_spec" not in out["channels"][0]
-    assert out["channels"][0]["random_walk"] == pytest.approx(0.3, rel=0.1)  # deg/sqrt(h)
+    assert out["channels"][0]["random_walk"] == pytest.approx(0.15, rel=0.1)  # deg/sqrt(h), the mems preset's ARW
 
 
 # -- our overlapping Allan deviation (issue 21: allantools dropped, it pulled Sphinx and numpydoc in) --

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sarins_fmu import imu, imu_params, imu_step
+from sarins_fmu import imu, imu_dynamics, imu_params, imu_step
 from sarins_fmu.core import imu as core_imu
 from sarins_fmu.imu import IMU, StaticBase
 from sarins_fmu.imu_correlated import flicker_term_std
@@ -45,7 +45,9 @@ BAD = [("gyro_random_walk_y", -1e-6, "must be non-negative"), ("accel_bias_insta
        ("die_time_constant_gyro_y", -1.0, "non-negative"), ("g_sensitivity_zx", math.inf, "must be finite"),
        ("gyro_bias_x", math.nan, "must be finite"), ("axial_block_time_constant", -1.0, "non-negative"),
        ("axial_hysteresis_width", 0.0, "must be positive"), ("axial_hysteresis_relax_time", -3.0, "non-negative"),
-       ("axial_drift_grad", math.inf, "must be finite")]
+       ("axial_drift_grad", math.inf, "must be finite"),
+       ("gyro_filter_time_constant_y", -1e-3, "non-negative"), ("accel_rate_hysteresis_width_x", 0.0, "positive"),
+       ("gyro_rate_hysteresis_time_z", -1.0, "non-negative"), ("accel_lever_arm_zy", math.nan, "must be finite")]
 
 
 @pytest.mark.parametrize("name, value, rule", BAD)
@@ -103,6 +105,22 @@ def test_the_c_built_table_holds_the_model(preset):
     np.testing.assert_allclose(s[imu_step.PHI], np.exp(-h / taus), rtol=2e-16, atol=0)
     assert np.array_equal(s[imu_step.Q], np.outer(np.full(taus.shape[0], flicker_term_std(1.0, taus)),
                                                    stack("flicker")))
+    assert np.array_equal(s[imu_step.DYN_PAR], imu_dynamics.parameters(m))  # the output dynamics' rows
+    assert np.array_equal(s[imu_step.DYN_STATE], np.zeros((imu_dynamics.STATE_ROWS, 6)))
+
+
+def test_a_restart_puts_the_output_dynamics_back_at_rest():
+    """reset() after a run: the same outputs as a fresh IMU (the dynamics' filter, play and started rows too)."""
+    m = imu.preset("mems")
+    a = IMU(m, StaticBase(0.6), output_interval=0.005, seed=4)
+    rate = np.full((30, 1), 0.3)
+    first = a.step(np.cumsum(rate, axis=0) * 0.005, rate, np.zeros((30, 1)))
+    assert np.any(a.state_arrays()[imu_step.DYN_STATE] != 0.0)
+    a.reset()
+    assert np.array_equal(a.state_arrays()[imu_step.DYN_STATE], np.zeros((imu_dynamics.STATE_ROWS, 6)))
+    again = a.step(np.cumsum(rate, axis=0) * 0.005, rate, np.zeros((30, 1)))
+    for x, y in zip(first, again):
+        assert np.array_equal(x, y)
 
 
 @pytest.mark.parametrize("start", ["hot", "cold"])

@@ -31,6 +31,7 @@ UNITS = {
     "deg/h per degC/h": DPH_TO_RPS * 3600.0, "deg/h per degC/min": DPH_TO_RPS * 60.0,
     "ug per degC/min": UG_TO_MPS2 * 60.0, "ppm per degC/min": 1e-6 * 60.0,
     "deg/h/sqrt(h)": DPH_TO_RPS / 60.0, "ug/sqrt(s)": UG_TO_MPS2, "deg/s/g": DEG_TO_RAD / earth.GAMMA_E,
+    "ms": 1e-3, "mm": 1e-3, "g": earth.GAMMA_E, "1/degC": 1.0,
 }
 
 

@@ -113,34 +113,43 @@ def test_heldout_programme_differs_from_training_within_its_envelope():
         assert np.argmax(amb(t)) < np.argmin(amb(t))  # hot end first
 
 
-def test_recording_overrides_keep_the_training_session_turn_on_bias():
-    """'heldout' continues the training session: its turn-on bias is the training run's (a constant bias),
-    'repowered' draws its own; an ablation zeroes its term everywhere (no turn-on added back)."""
+def test_test_runs_are_other_power_ups_and_same_session_keeps_the_turn_on_bias():
+    """'heldout' and 'repowered' are power-ups of their own (seeds s+1, s+2: new turn-on biases, no
+    override); 'same-session' pins the training run's turn-on bias as a constant bias; an ablation zeroes
+    its term everywhere (no turn-on added back)."""
     from sarins_fmu import imu_correlated
 
     seed = 3
     preset = imu.preset("mems")
-    on_train = imu_correlated.turn_on_bias(preset, mems_calibration.run_seed("dynamic", seed))
-    held = mems_calibration.recording_model("heldout", seed)
-    assert np.allclose(held.gyro.bias, preset.gyro.bias + on_train[:3], rtol=0, atol=1e-15)
-    assert np.allclose(held.accel.bias, preset.accel.bias + on_train[3:], rtol=0, atol=1e-15)
-    assert not held.gyro.turn_on_bias.any() and not held.accel.turn_on_bias.any()
+    assert mems_calibration.recording_overrides("heldout", seed) == {}
     assert mems_calibration.recording_overrides("repowered", seed) == {}
-    assert mems_calibration.run_seed("repowered", seed) == mems_calibration.run_seed("heldout", seed) == seed + 1
+    seeds = [mems_calibration.run_seed(k, seed) for k in ("dynamic", "heldout", "repowered")]
+    assert seeds == [seed, seed + 1, seed + 2]
+    ons = [imu_correlated.turn_on_bias(preset, s) for s in seeds]
+    assert not np.allclose(ons[0], ons[1]) and not np.allclose(ons[1], ons[2])
     assert mems_calibration.run_seed("heldout", 2**31 - 1) == 0
-    off = mems_calibration.recording_model("heldout", seed, "turn-on")
+    same = mems_calibration.recording_model("same-session", seed)
+    assert np.allclose(same.gyro.bias, preset.gyro.bias + ons[0][:3], rtol=0, atol=1e-15)
+    assert np.allclose(same.accel.bias, preset.accel.bias + ons[0][3:], rtol=0, atol=1e-15)
+    assert not same.gyro.turn_on_bias.any() and not same.accel.turn_on_bias.any()
+    off = mems_calibration.recording_model("same-session", seed, "turn-on")
     assert np.array_equal(off.gyro.bias, preset.gyro.bias)
     every = mems_calibration.recording_model("dynamic", seed, "all")
-    assert not any(np.any(getattr(every.gyro, f)) for f in ("flicker", "hysteresis", "bias_dtdt", "turn_on_bias"))
-    assert not any(every.thermal.die_time_constant)
+    assert not any(np.any(getattr(every.gyro, f)) for f in ("flicker", "hysteresis", "bias_dtdt", "turn_on_bias",
+                                                             "rate_hysteresis", "filter_time_constant"))
+    assert not any(every.thermal.die_time_constant) and not every.accel_lever_arm.any()
+
+
+def test_profiles_record_at_the_papers_200_hz():
+    assert all(p.step == pytest.approx(1 / 200) for p in mems_calibration.PROFILES.values())
 
 
 def test_an_ablation_changes_only_its_term():
     """Same seed, one term off: the measured outputs differ by that term alone (white noise identical)."""
-    prof = mems_calibration.with_profile(QUICK, warmup=20.0, test=dict(ramp_c_per_min=30.0, hold_min=0.5,
-                                                                        step_hold_min=0.2))
+    prof = mems_calibration.with_profile(QUICK, step=0.05, warmup=20.0,
+                                         test=dict(ramp_c_per_min=30.0, hold_min=0.5, step_hold_min=0.2))
     rec = {a: mems_calibration.record_in_process("heldout", prof, seed=4,
-                                                 model=mems_calibration.recording_model("heldout", 3, a))
+                                                 model=mems_calibration.recording_model("same-session", 3, a))
            for a in (None, "hysteresis", "flicker")}
     # gyro hysteresis: +-c_h once the play is taken up (scale factor and misalignment of 1e-3 on top)
     d_h = (rec[None]["dtheta"] - rec["hysteresis"]["dtheta"]) / prof.step
@@ -332,8 +341,9 @@ def test_recurrent_without_torch_names_the_extra(monkeypatch):
 # --------------------------------------------------------------- co-simulation
 @pytest.mark.integration
 def test_cosimulated_recording_equals_in_process(fmu_dir, tmp_path):
-    prof = mems_calibration.with_profile(QUICK, warmup=20.0, test=dict(ramp_c_per_min=30.0, hold_min=0.5,
-                                                                        step_hold_min=0.2))
+    # a 50 ms step keeps the test short; the output dynamics' state still carries from step to step
+    prof = mems_calibration.with_profile(QUICK, step=0.05, warmup=20.0,
+                                         test=dict(ramp_c_per_min=30.0, hold_min=0.5, step_hold_min=0.2))
     overrides = mems_calibration.recording_overrides("heldout", 5, "hysteresis")
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # e.g. no unconnected-input warning
@@ -347,7 +357,7 @@ def test_cosimulated_recording_equals_in_process(fmu_dir, tmp_path):
 
 def _campaign(out: Path, *extra: str, timeout: int = 900) -> dict:
     cmd = [sys.executable, "-m", "sarins", "campaign", "mems-calibration", "--profile", "quick", "--out", str(out),
-           "--workers", "2", "--no-progress", *extra]
+           "--workers", "2", "--no-progress", "--engine", "inprocess", *extra]  # 200 Hz: in process (same numbers)
     done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=timeout,
                           env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})
     assert done.returncode == 0, done.stderr[-3000:]
@@ -689,3 +699,10 @@ def test_recording_records_name_the_ablation_and_the_run():
     assert base == record(fmu_dir="elsewhere")
     assert len({str(r) for r in (base, record(ablation="flicker"), record(ablation="all"), record(kind="repowered"),
                                  record(seed=4), record(profile_name="paper"))}) == 6
+
+
+def test_record_task_refuses_an_unknown_engine():
+    from sarins.mems_calibration.recording import record_task
+
+    with pytest.raises(ValueError, match="engine"):
+        record_task("tumble", "quick", "unused", engine="warp")

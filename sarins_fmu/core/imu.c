@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "correlated.h"
+#include "dynamics.h"
 #include "imu.h"
 #include "thermal.h"
 
@@ -240,7 +241,7 @@ void sarins_imu_axial_thermal_terms(int64_t n_steps, double temp0, const double 
 
 typedef struct {
     double *consts, *clock, *sensor_par, *state, *coef, *triad, *mats, *axes, *base, *rng, *corr_par, *corr_state,
-        *phi, *q, *x_flicker;
+        *phi, *q, *x_flicker, *dyn_par, *dyn_state;
     int64_t n_axes, n_flicker;
 } ImuView;
 
@@ -250,7 +251,7 @@ static int has_shape(const int64_t *table, int64_t i, int64_t rows, int64_t cols
     return table[3 * i + 1] == rows && table[3 * i + 2] == cols && (rows == 0 || table[3 * i] != 0);
 }
 
-/* The IMU arrays of table rows 0..14 with their shapes checked; 0 when they fit. */
+/* The IMU arrays of table rows 0..16 with their shapes checked; 0 when they fit. */
 static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
     if (table == NULL || rows < SARINS_IMU_N_ARRAYS) return SARINS_IMU_BAD_TABLE;
     v->n_axes = table[3 * SARINS_IMU_AXES + 1];
@@ -263,7 +264,9 @@ static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
           && has_shape(table, SARINS_IMU_RNG, SARINS_IMU_N_STREAMS, SARINS_RNG_WORDS)
           && has_shape(table, SARINS_IMU_CORR_PAR, 8, 6) && has_shape(table, SARINS_IMU_CORR_STATE, 3, 6)
           && v->n_flicker >= 0 && has_shape(table, SARINS_IMU_PHI, v->n_flicker, 1)
-          && has_shape(table, SARINS_IMU_Q, v->n_flicker, 6) && has_shape(table, SARINS_IMU_X_FLICKER, v->n_flicker, 6)))
+          && has_shape(table, SARINS_IMU_Q, v->n_flicker, 6) && has_shape(table, SARINS_IMU_X_FLICKER, v->n_flicker, 6)
+          && has_shape(table, SARINS_IMU_DYN_PAR, SARINS_DYN_PAR_ROWS, 6)
+          && has_shape(table, SARINS_IMU_DYN_STATE, SARINS_DYN_STATE_ROWS, 6)))
         return SARINS_IMU_BAD_TABLE;
     v->consts = table_array(table, SARINS_IMU_CONSTS);
     v->clock = table_array(table, SARINS_IMU_CLOCK);
@@ -280,6 +283,8 @@ static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
     v->phi = table_array(table, SARINS_IMU_PHI);
     v->q = table_array(table, SARINS_IMU_Q);
     v->x_flicker = table_array(table, SARINS_IMU_X_FLICKER);
+    v->dyn_par = table_array(table, SARINS_IMU_DYN_PAR);
+    v->dyn_state = table_array(table, SARINS_IMU_DYN_STATE);
     /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub, (spare), (spare), the five parameters of
      * sarins_imu_axial_thermal_terms (block and relaxation times >= 0, width > 0) */
     if (!(v->consts[1] > 0.0 && v->consts[5] >= 1.0 && v->consts[9] >= 0.0 && v->consts[11] > 0.0
@@ -359,6 +364,17 @@ int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, cons
     return SARINS_IMU_OK;
 }
 
+int sarins_imu_dynamics(const int64_t *table, int64_t rows, int64_t n_steps, const double *temps, double *dtheta,
+                        double *dv) {
+    ImuView v;
+    int status = imu_view(table, rows, &v);
+    if (status != SARINS_IMU_OK) return status;
+    if (n_steps < 0) return SARINS_IMU_BAD_TABLE;
+    if (sarins_dynamics_active(v.dyn_par))
+        sarins_dynamics_apply(n_steps, v.consts[1], temps, v.dyn_par, v.dyn_state, SARINS_IMU_T_REF, dtheta, dv);
+    return SARINS_IMU_OK;
+}
+
 int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, double *dtheta, double *dv) {
     ImuView v;
     int status = imu_view(table, rows, &v);
@@ -399,6 +415,8 @@ int sarins_imu_steps(const int64_t *table, int64_t rows, int64_t n_steps, const 
     sarins_imu_increments(0, n_steps, v.n_axes, v.axes, angle0, rate0, accel, w_t, f_t, v.consts[1],
                           (int64_t)v.consts[5], g_sf, v.mats, g_bias, v.triad + 3, v.triad + 6, v.triad + 9,
                           v.mats + 9, a_sf, v.mats + 18, a_bias, v.triad + 12, dtheta, dv);
+    status = sarins_imu_dynamics(table, rows, n_steps, temps, dtheta, dv);
+    if (status != SARINS_IMU_OK) return status;
     return sarins_imu_white_noise(table, rows, n_steps, dtheta, dv);
 }
 

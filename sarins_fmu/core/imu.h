@@ -25,7 +25,7 @@
  *
  * The IMU's state (sarins_fmu/imu_step.py docstring) reaches C as an array
  * table: int64 rows (address, rows, columns), one per float64 array, rows 0
- * to 14 in the order SARINS_IMU_CONSTS .. SARINS_IMU_X_FLICKER.  Every random
+ * to 16 in the order SARINS_IMU_CONSTS .. SARINS_IMU_DYN_STATE.  Every random
  * number is drawn here, inside the step, from the streams of rng.h whose
  * states the table holds; sarins_imu_seed starts them from the IMU seed.
  */
@@ -39,7 +39,8 @@
 enum {
     SARINS_IMU_CONSTS, SARINS_IMU_CLOCK, SARINS_IMU_SENSOR_PAR, SARINS_IMU_STATE, SARINS_IMU_COEF,
     SARINS_IMU_TRIAD, SARINS_IMU_MATS, SARINS_IMU_AXES, SARINS_IMU_BASE, SARINS_IMU_RNG, SARINS_IMU_CORR_PAR,
-    SARINS_IMU_CORR_STATE, SARINS_IMU_PHI, SARINS_IMU_Q, SARINS_IMU_X_FLICKER, SARINS_IMU_N_ARRAYS
+    SARINS_IMU_CORR_STATE, SARINS_IMU_PHI, SARINS_IMU_Q, SARINS_IMU_X_FLICKER, SARINS_IMU_DYN_PAR, SARINS_IMU_DYN_STATE,
+    SARINS_IMU_N_ARRAYS
 };
 
 /* The IMU's random streams (rng.h), one per purpose, all from the IMU seed;
@@ -140,13 +141,20 @@ void sarins_imu_axial_thermal_terms(int64_t n_steps, double temp0, const double 
 int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, const double *amb_end, double *temps,
                        double *die, double *g_bias, double *g_sf, double *a_bias, double *a_sf);
 
+/* The output dynamics of dynamics.h (size effect, rate hysteresis, output
+ * filter) on K intervals' dtheta, dv (K, 3), in place, with temps (K, 6) the
+ * reported temperatures at the interval ends; does nothing when the table's
+ * dynamics parameters are all 0.  No random draws. */
+int sarins_imu_dynamics(const int64_t *table, int64_t rows, int64_t n_steps, const double *temps, double *dtheta,
+                        double *dv);
+
 /* Add the angle / velocity random walk (exact variance rw^2 h, from the
  * WHITE stream) to K intervals' dtheta, dv (K, 3) and move the clock on by K
  * intervals. */
 int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, double *dtheta, double *dv);
 
 /* K intervals on the calling thread: sarins_imu_advance, the minor loop over
- * all K, sarins_imu_white_noise.  angle0, rate0, accel (K, A); w_t, f_t
+ * all K, sarins_imu_dynamics, sarins_imu_white_noise.  angle0, rate0, accel (K, A); w_t, f_t
  * (K, 3); amb_end[K] (degC, checked by the caller); dtheta, dv (K, 3) and
  * temps (K, 6) out; work (K, 18) scratch. */
 int sarins_imu_steps(const int64_t *table, int64_t rows, int64_t n_steps, const double *angle0,
@@ -179,7 +187,7 @@ void sarins_imu_aged_poly(uint64_t seed, int64_t n, const double *t, const doubl
                           double tau, double *out);
 
 /* The IMUThermal FMU's step (fmus/c/imu_thermal/model.c): table
- * rows 0-14 the IMU state, 15 the io row, 16 the held motion set, 17 the
+ * rows 0-16 the IMU state, 17 the io row, 18 the held motion set, 19 the
  * held vehicle set; buf[n] the FMU's Real values; t, h the communication
  * point and step (s).  Returns 0 when it did the step, 1 when it changed
  * nothing (the caller then finds and reports the reason). */

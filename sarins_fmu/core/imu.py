@@ -29,6 +29,7 @@ _increments = function("sarins_imu_increments", None, _I64, _I64, _I64, _P, _P, 
                        *([_P] * 13))
 _advance = function("sarins_imu_advance", _INT, _P, _I64, _I64, *([_P] * 7))
 _white_noise = function("sarins_imu_white_noise", _INT, _P, _I64, _I64, _P, _P)
+_dynamics = function("sarins_imu_dynamics", _INT, _P, _I64, _I64, _P, _P, _P)
 _steps = function("sarins_imu_steps", _INT, _P, _I64, _I64, *([_P] * 10))
 _one_interval = function("sarins_imu_one_interval", _INT, _P, _I64, _P, _P, _P, _F64, _P, _P, _P)
 _seed = function("sarins_imu_seed", _INT, _P, _I64, _U64)
@@ -177,6 +178,17 @@ def steps(table, angle0, rate0, accel, w_t, f_t, amb_end):
                   w_t.ctypes.data, f_t.ctypes.data, amb_end.ctypes.data, dtheta.ctypes.data, dv.ctypes.data,
                   temps.ctypes.data, work.ctypes.data))
     return dtheta, dv, temps
+
+
+def dynamics(table, temps, dtheta, dv) -> None:
+    """Apply the output dynamics (``dynamics.h``: size effect, rate hysteresis, output filter) to K intervals'
+    increments (K, 3), in place, in time order; temps (K, 6) reported temperatures at the interval ends (degC)."""
+    table = _arrays.table(table)
+    n = np.shape(dtheta)[0]
+    temps = _arrays.read(temps, (n, 6), "temps")
+    _arrays.written(dtheta, (n, 3), "dtheta")
+    _arrays.written(dv, (n, 3), "dv")
+    _check(_dynamics(table.ctypes.data, table.shape[0], n, temps.ctypes.data, dtheta.ctypes.data, dv.ctypes.data))
 
 
 def white_noise(table, dtheta, dv) -> None:

@@ -5,6 +5,7 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "dynamics.h"
 #include "imu.h"
 #include "imu_build.h"
 #include "imu_params.h"
@@ -74,6 +75,12 @@ int64_t sarins_imu_check_params(const double *par, const char **reason) {
         {SARINS_IMU_P_ACCEL_RATE_RANDOM_WALK_X, 3, 1, NON_NEGATIVE, "must be non-negative"},
         {SARINS_IMU_P_GYRO_TURN_ON_BIAS_X, 3, 1, NON_NEGATIVE, "must be non-negative"},
         {SARINS_IMU_P_ACCEL_TURN_ON_BIAS_X, 3, 1, NON_NEGATIVE, "must be non-negative"},
+        {SARINS_IMU_P_GYRO_FILTER_TIME_CONSTANT_X, 3, 1, NON_NEGATIVE, "must be non-negative"},
+        {SARINS_IMU_P_ACCEL_FILTER_TIME_CONSTANT_X, 3, 1, NON_NEGATIVE, "must be non-negative"},
+        {SARINS_IMU_P_GYRO_RATE_HYSTERESIS_WIDTH_X, 3, 1, POSITIVE, "must be positive"},
+        {SARINS_IMU_P_ACCEL_RATE_HYSTERESIS_WIDTH_X, 3, 1, POSITIVE, "must be positive"},
+        {SARINS_IMU_P_GYRO_RATE_HYSTERESIS_TIME_X, 3, 1, NON_NEGATIVE, "must be non-negative"},
+        {SARINS_IMU_P_ACCEL_RATE_HYSTERESIS_TIME_X, 3, 1, NON_NEGATIVE, "must be non-negative"},
         {SARINS_IMU_P_LOWRATE_WIDTH_X, 3, 2, POSITIVE, "must be positive"},
         {SARINS_IMU_P_AGING_CORR_TIME, 1, 1, POSITIVE, "must be positive"},
         {SARINS_IMU_P_FLICKER_TAU_MIN, 1, 1, POSITIVE, "must be positive"},
@@ -104,7 +111,8 @@ static double *row_array(const int64_t *table, int64_t i, int64_t rows, int64_t 
 }
 
 typedef struct {
-    double *consts, *clock, *sensor_par, *state, *coef, *triad, *mats, *corr_par, *corr_state, *phi, *q, *x_flicker;
+    double *consts, *clock, *sensor_par, *state, *coef, *triad, *mats, *corr_par, *corr_state, *phi, *q, *x_flicker,
+        *dyn_par, *dyn_state;
 } Arrays;
 
 static int arrays_of(const int64_t *table, int64_t rows, int64_t n_flicker, Arrays *a) {
@@ -121,8 +129,10 @@ static int arrays_of(const int64_t *table, int64_t rows, int64_t n_flicker, Arra
     a->phi = row_array(table, SARINS_IMU_PHI, n_flicker, 1);
     a->q = row_array(table, SARINS_IMU_Q, n_flicker, 6);
     a->x_flicker = row_array(table, SARINS_IMU_X_FLICKER, n_flicker, 6);
+    a->dyn_par = row_array(table, SARINS_IMU_DYN_PAR, SARINS_DYN_PAR_ROWS, 6);
+    a->dyn_state = row_array(table, SARINS_IMU_DYN_STATE, SARINS_DYN_STATE_ROWS, 6);
     double *all[] = {a->consts, a->clock, a->sensor_par, a->state, a->coef, a->triad, a->mats, a->corr_par,
-                     a->corr_state, a->phi, a->q, a->x_flicker};
+                     a->corr_state, a->phi, a->q, a->x_flicker, a->dyn_par, a->dyn_state};
     for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
         if (all[i] == NULL) return 0;
     }
@@ -229,6 +239,18 @@ int sarins_imu_build(const int64_t *table, int64_t rows, const double *par, doub
             a.q[6 * k + j] = unit_std * par[TP(SARINS_IMU_P_GYRO_FLICKER_X, j / 3, j % 3)];
         }
     }
+    /* dyn_par (dynamics.h): filter time constant, rate hysteresis amplitude, width, relaxation time,
+       temperature coefficient; rows 5-7 component a of each accelerometer's lever arm (gyro columns 0) */
+    static const int DYN[5] = {SARINS_IMU_P_GYRO_FILTER_TIME_CONSTANT_X, SARINS_IMU_P_GYRO_RATE_HYSTERESIS_X,
+                               SARINS_IMU_P_GYRO_RATE_HYSTERESIS_WIDTH_X, SARINS_IMU_P_GYRO_RATE_HYSTERESIS_TIME_X,
+                               SARINS_IMU_P_GYRO_RATE_HYSTERESIS_TC_X};
+    memset(a.dyn_par, 0, SARINS_DYN_PAR_ROWS * 6 * sizeof *a.dyn_par);
+    for (int j = 0; j < 6; j++) {
+        for (int r = 0; r < 5; r++) a.dyn_par[6 * r + j] = par[TP(DYN[r], j / 3, j % 3)];
+    }
+    for (int i = 0; i < 3; i++) {
+        for (int c = 0; c < 3; c++) a.dyn_par[6 * (5 + c) + 3 + i] = par[SARINS_IMU_P_ACCEL_LEVER_ARM_XX + 3 * i + c];
+    }
     return SARINS_IMU_OK;
 }
 
@@ -249,5 +271,7 @@ int sarins_imu_start(const int64_t *table, int64_t rows, double ambient0, int ho
     }
     /* the z gyro's block node and play operator at its temperature: no gradient, the loop at 0 */
     a.state[12] = a.state[13] = a.state[2];
+    /* the output dynamics at rest: each state starts on its first input */
+    memset(a.dyn_state, 0, SARINS_DYN_STATE_ROWS * 6 * sizeof *a.dyn_state);
     return sarins_imu_seed(table, rows, seed); /* the GM and flicker states, the turn-on bias */
 }

@@ -28,7 +28,7 @@ void sarins_imu_flicker_taus(double tau_min, double tau_max, int64_t n, double *
 int64_t sarins_imu_check_params(const double *par, const char **reason);
 
 /* Fill the constant arrays of the IMU table (imu.h rows CONSTS, SENSOR_PAR, COEF, TRIAD, MATS, CORR_PAR
- * rows 0-5 and 7, PHI, Q; the PHI/Q/X_FLICKER rows must have sarins_imu_flicker_count rows) from par,
+ * rows 0-5 and 7, PHI, Q, DYN_PAR; the PHI/Q/X_FLICKER rows must have sarins_imu_flicker_count rows) from par,
  * checked first: t0 the start time (s), h the output interval (s, > 0), n_sub minor steps per interval;
  * the azimuth-drift coefficients aged by age (s; 0: not aged) with the AGEING stream of seed when an
  * ageing std is not zero.  The table's AXES and BASE rows are the caller's.  Returns SARINS_IMU_OK or
@@ -39,7 +39,7 @@ int sarins_imu_build(const int64_t *table, int64_t rows, const double *par, doub
 /* Start a run of a built table: clock (0, ambient0), reported temperatures ambient0 (+ the self-heating
  * when hot), the die at them, the play operators relaxed, the z gyro's block node and play operator
  * (state row 2, sarins_imu_axial_thermal_terms) at its temperature, the rate random walks and the flicker
- * states at 0, then sarins_imu_seed(seed).  ambient0 degC, finite and above -273.15 (else SARINS_IMU_BAD_TABLE,
+ * states at 0, the output dynamics (DYN_STATE, dynamics.h) at rest, then sarins_imu_seed(seed).  ambient0 degC, finite and above -273.15 (else SARINS_IMU_BAD_TABLE,
  * nothing written). */
 int sarins_imu_start(const int64_t *table, int64_t rows, double ambient0, int hot, uint64_t seed);
 

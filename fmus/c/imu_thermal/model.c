@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "dynamics.h"
 #include "earth.h"
 #include "imu.h"
 #include "imu_build.h"
@@ -225,10 +226,12 @@ static void layout(imu_work *w, int64_t n_axes, int64_t n_flicker)
 {
     static const int64_t shapes[SARINS_IMU_N_ARRAYS][2] = {
         {SARINS_IMU_N_CONSTS, 1}, {2, 1}, {4, 6}, {3, 6}, {10, 3}, {7, 3}, {9, 3}, {0, 3}, {2, 3}, {SARINS_IMU_N_STREAMS,
-        SARINS_RNG_WORDS}, {8, 6}, {3, 6}, {0, 1}, {0, 6}, {0, 6}};
+        SARINS_RNG_WORDS}, {8, 6}, {3, 6}, {0, 1}, {0, 6}, {0, 6}, {SARINS_DYN_PAR_ROWS, 6},
+        {SARINS_DYN_STATE_ROWS, 6}};
     size_t used = 0;
     for (int i = 0; i < SARINS_IMU_N_ARRAYS; i++) {
-        int64_t rows = i == SARINS_IMU_AXES ? n_axes : i >= SARINS_IMU_PHI ? n_flicker : shapes[i][0];
+        int flicker = i >= SARINS_IMU_PHI && i <= SARINS_IMU_X_FLICKER; /* the rows of the flicker terms */
+        int64_t rows = i == SARINS_IMU_AXES ? n_axes : flicker ? n_flicker : shapes[i][0];
         place(w, i, rows, shapes[i][1], &used);
     }
     w->io = place(w, SARINS_IMU_N_ARRAYS, SARINS_IMU_IO_SIZE, 1, &used);
