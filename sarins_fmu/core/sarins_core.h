@@ -16,7 +16,7 @@
 #include <stdint.h>
 
 /* ABI version of the library; the binding refuses a library of another one. */
-#define SARINS_CORE_ABI 5
+#define SARINS_CORE_ABI 6
 
 int sarins_core_abi(void);
 
