@@ -154,6 +154,7 @@ def test_residual_truth_is_the_true_drift_minus_the_table_mean():
 
 
 # ---------------------------------------------------------------- sweep
+@pytest.mark.slow
 def test_quick_sweep_through_the_cli_is_stored_resumable_and_keyed_by_noise_and_latitude(tmp_path, capsys):
     from sarins.cli import main
 

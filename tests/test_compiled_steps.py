@@ -344,6 +344,7 @@ def test_vehicle_system_compiled_equals_python_bit_for_bit(fmu_dir, monkeypatch)
     _assert_same_runs(runs)
 
 
+@pytest.mark.slow
 def test_online_vehicle_system_compiled_equals_python_and_stays_compiled(fmu_dir, monkeypatch):
     """vehicle_rins_online (the updater sends its model a, b, c every step, tagged one step ahead, and
     updates it once): every INS and updater output as without the compiled steps, both schemes; the

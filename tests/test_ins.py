@@ -38,6 +38,7 @@ def test_latitude_error_from_axial_drift_follows_table_1(drift_dph):
     assert np.sign(result.at_hours("lat_error", 12.0)) == np.sign(drift_dph)
 
 
+@pytest.mark.slow
 def test_rotation_modulates_horizontal_drift():
     """0.01 deg/h on the x gyro: continuous rotation bounds its effect."""
     from dataclasses import replace

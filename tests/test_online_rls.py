@@ -48,6 +48,7 @@ def test_exact_estimates_ff_rls_tracks_the_ageing_best():
     assert r["truth_dph"].shape == (301, 3) and r["ff_history_dph"].shape == (20, 3)
 
 
+@pytest.mark.slow
 def test_quick_campaign_writes_a_report_and_ff_rls_beats_no_update(tmp_path):
     from sarins.cli import main
 
