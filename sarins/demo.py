@@ -170,8 +170,8 @@ def run_demo(*, lat_deg: float = SITE_LAT_DEG, align_hours: float = 4.0, identif
     system = standard_static_identified(fmu_dir, hours=hours, identifier=ident, **params)
     record = ["ins.lat_error", "ins.position_error", "ins.nav_time", "imu.temp_gyro_z", "identifier.axial_drift"]
     steps = int(round(hours * HOUR))
-    phases.start("compiling", "loading the FMUs and compiling their kernels (the first run in a new cache "
-                 "takes about a minute)")
+    phases.start("loading", "loading the FMUs (the native ones are plain C; the Python-hosted RBFIdentifier "
+                 "starts its interpreter layer)")
     bar = phases.progress(steps)
 
     def on_step(t, master):

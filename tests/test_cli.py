@@ -55,7 +55,7 @@ def test_demo_cosimulates_the_identified_system(tmp_path, capsys):
     out, err = captured.out, captured.err
     assert "gauss-seidel" in out and "position error, compensated" in out
     # issue 21: each phase announced on stderr, in order, with its duration
-    phases = ["building the FMUs", "compiling", "co-simulating", "in-process reference"]
+    phases = ["building the FMUs", "loading", "co-simulating", "in-process reference"]
     starts = [err.index(f"sarins demo: {p}") for p in phases]
     assert starts == sorted(starts), err
     assert all(f"sarins demo: {p}: done in" in err for p in phases), err
@@ -86,9 +86,9 @@ def test_demo_progress_estimate_is_right_from_its_first_update():
     now = [0.0]
     stream = io.StringIO()
     phases = Phases(stream, clock=lambda: now[0])
-    phases.start("compiling")
+    phases.start("loading")
     bar = phases.progress(316800)
-    now[0] = 63.0  # loading and compiling: no step yet
+    now[0] = 63.0  # loading: no step yet
     bar.update(1)
     rate = 15000.0
     for done in range(1000, 316800, 1000):
