@@ -86,7 +86,7 @@ typedef struct {
     /* thermal chain */
     double amb_end[K], temps[K * 6], die[K * 6];
     /* interval terms and correlated terms (libm-free temperatures) */
-    double temps_iso[K * 6], die_iso[K * 6], gm_noise[K * 6], corr_noise[K * CORR_STRIDE];
+    double temps_iso[K * 6], die_iso[K * 6];
     double g_bias[K * 3], g_sf[K * 3], a_bias[K * 3], a_sf[K * 3];
     /* increments */
     double dtheta[K * 3], dv[K * 3];
@@ -216,10 +216,7 @@ static void error_terms(Work *w, Lcg *g)
         for (int j = 0; j < 6; j++) {
             w->temps_iso[6 * k + j] = temp0[j] + (3.0 + 0.2 * (double)j) * t - 0.7 * t * t + 1e-3 * normal(g);
             w->die_iso[6 * k + j] = w->temps_iso[6 * k + j] - 0.1 + 0.05 * t;
-            w->gm_noise[6 * k + j] = normal(g);
         }
-        for (int j = 0; j < CORR_STRIDE; j++)
-            w->corr_noise[CORR_STRIDE * k + j] = normal(g);
     }
     /* coef (10, 3): gyro bias (rad/s), tc1, tc2, sf, sf tc; then the same for the accelerometers (m/s^2) */
     double coef[30];
@@ -233,8 +230,13 @@ static void error_terms(Work *w, Lcg *g)
     double gm[6] = {1e-7, -2e-7, 3e-7, 1e-4, -2e-4, 3e-4};
     double gm_phi[6] = {0.999, 0.998, 0.9995, 0.99, 0.995, 0.997};
     double gm_std[6] = {1e-7, 2e-7, 1.5e-7, 5e-5, 6e-5, 7e-5};
+    /* the Gauss-Markov and correlated-term normals come from the core's seeded streams (polar method: log) */
+    SarinsRng gm_rng, flicker_rng, rrw_rng;
+    sarins_rng_stream(&gm_rng, 20261202u, 1u);
+    sarins_rng_stream(&flicker_rng, 20261202u, 2u);
+    sarins_rng_stream(&rrw_rng, 20261202u, 3u);
     sarins_imu_interval_terms(K, temp0, w->temps_iso, H, coef, drift_poly, drift_dtdt, gm, gm_phi, gm_std,
-                              w->gm_noise, w->g_bias, w->g_sf, w->a_bias, w->a_sf);
+                              &gm_rng, w->g_bias, w->g_sf, w->a_bias, w->a_sf);
     emit("interval_terms", w->g_bias, K * 3);
     emit("interval_terms", w->g_sf, K * 3);
     emit("interval_terms", w->a_bias, K * 3);
@@ -260,7 +262,7 @@ static void error_terms(Work *w, Lcg *g)
         x_flicker[i] = q[i] * normal(g);
     }
     sarins_correlated_terms(K, die0, w->die_iso, H, corr_par, corr_state, N_FLICKER, phi, q, x_flicker,
-                            w->corr_noise, w->g_bias, w->g_sf, w->a_bias, w->a_sf);
+                            &flicker_rng, &rrw_rng, w->g_bias, w->g_sf, w->a_bias, w->a_sf);
     emit("correlated", w->g_bias, K * 3);
     emit("correlated", w->g_sf, K * 3);
     emit("correlated", w->a_bias, K * 3);
