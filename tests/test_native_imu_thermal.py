@@ -29,7 +29,7 @@ from fmu_driver import Slave, check_parameter_error
 from fmus.native_fmu import CFLAGS, MINGW, NATIVE, fmi_headers_dir
 from sarins_fmu import imu, imu_params
 from sarins_fmu.site import SITE_LAT
-from test_native_fmus import COUNTER_SRC, HOST_SRC, _cc, bits, ops, run_host, table
+from test_native_fmus import COUNTER_SRC, HOST_SRC, STATE_SCRIPT, _cc, bits, ops, run_host, table
 
 HERE = Path(__file__).resolve().parent
 OUTPUTS = [f"dtheta_{a}" for a in "xyz"] + [f"dv_{a}" for a in "xyz"] + [
@@ -240,27 +240,7 @@ def test_get_step_set_step_again_is_bit_identical_in_the_c_host(unzipped, host, 
     assert len({tuple(again[k][:3]) for k in again}) > 300  # the noise moved on between get and set
 
 
-STATE_SCRIPT = """
-import sys
-sys.path[0:0] = [{tests!r}, {root!r}]
-from fmu_driver import Slave
-s = Slave({fmu!r}, "p")
-s.set(**{values!r})
-s.fmu.enterInitializationMode(); s.fmu.exitInitializationMode()
-mode, path, k0, n = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
-if mode == "load":
-    state = s.fmu.deSerializeFMUstate(open(path, "rb").read())
-    s.fmu.setFMUstate(state)
-    s.fmu.freeFMUstate(state)
-for k in range(k0, k0 + n):
-    s.fmu.doStep(float(k), 1.0)
-    print("ROW", k + 1, *[v.hex() for v in s.get(*{outputs!r})])
-if mode == "save":
-    state = s.fmu.getFMUstate()
-    open(path, "wb").write(s.fmu.serializeFMUstate(state))
-    s.fmu.freeFMUstate(state)
-s.free()
-"""
+# STATE_SCRIPT: the save/load child of test_native_fmus (imported above)
 
 
 def test_state_serialized_in_one_process_continues_identically_in_another(imu_fmu, tmp_path):
