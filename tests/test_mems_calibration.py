@@ -376,25 +376,25 @@ def quick_campaign(tmp_path_factory):
     return out, _campaign(out, "--models", QUICK_MODELS if recurrent.torch_available() else "traditional,rbf,grnn")
 
 
-def _assert_report_claims(summary: dict, recurrent_models) -> None:
-    """What docs/results/mems-calibration/report.md claims for the paper profile, on the quick profile."""
-    from sarins.mems_calibration.analysis import ordered_metrics
+def _assert_report_claims(summary: dict, one_layer) -> None:
+    """What the quick profile shows (docs/mems-calibration.md, *Quick profile after issue 20 item 5*): the
+    one-layer recurrent networks ``one_layer`` beat both shallow models, their memoryless controls beat them."""
     from sarins.mems_calibration.report import MEMORY_EFFECT
 
     red, ins = summary["reductions"], summary["reductions_in_sample"]
-    order = summary["order"]
-    # recurrent > shallow > traditional on the held-out run: std, mean |r| and the systematic residual
-    assert set(ordered_metrics(order)) >= {"std", "mae", "sys"}, order
-    assert all(order[m]["worst_recurrent"][0] in recurrent_models for m in ("std", "mae", "sys"))
     # every network beats the traditional model on every metric, the signed mean included
     for name in red:
         if name != "traditional":
             assert all(red[name][m] > red["traditional"][m] for m in red[name]), name
+    # the one-layer recurrent networks beat both shallow models on the held-out run: std, mean |r| and the
+    # systematic residual (not on the signed mean; the three-layer networks lose to RBFNN: not claimed)
+    for cell in one_layer:
+        for m in ("std", "mae", "sys"):
+            assert red[cell][m] > max(red["rbf"][m], red["grnn"][m]), (cell, m)
     # memory is not what makes the recurrent models better: their memoryless controls score at least as
     # well (on the 200 Hz records of the datasheet-sized mems preset they score 3-4 points better)
-    for cell in ("lstm", "gru"):
-        if cell in red:
-            assert red[f"{cell}-memoryless"]["sys"] > red[cell]["sys"] - MEMORY_EFFECT, cell
+    for cell in one_layer:
+        assert red[f"{cell}-memoryless"]["sys"] > red[cell]["sys"] - MEMORY_EFFECT, cell
     assert red["lstm-memoryless"]["sys"] > max(red["rbf"]["sys"], red["grnn"]["sys"])
     # The old report's carry-over claim (RBFNN within CARRY_OVER of its in-sample score, GRNN not) was made
     # with the held-out run on the same power-up; the held-out run is now another power-up (its own turn-on
@@ -414,6 +414,9 @@ def test_quick_campaign_orders_models_as_the_report_claims(quick_campaign):
     if not recurrent.torch_available():
         pytest.skip("PyTorch is not installed: the recurrent half of the claims cannot be checked")
     _assert_report_claims(summary, ("lstm",))
+    from sarins.mems_calibration.analysis import ordered_metrics
+
+    assert set(ordered_metrics(summary["order"])) >= {"std", "mae", "sys"}  # with LSTM as the only recurrent
     assert summary["models"]["lstm"]["n_parameters"] == 16926
     for name in ("report.md", "fig_programmes.png", "fig4_gyro_x_residual.png", "fig5_accel_x_residual.png"):
         assert (out / name).stat().st_size > 0
@@ -455,10 +458,10 @@ def test_quick_campaign_with_every_model_and_the_ablation(tmp_path):
     from sarins.mems_calibration.report import MEMORY_EFFECT
 
     summary = _campaign(tmp_path / "c", "--ablation", "all")
-    _assert_report_claims(summary, ("lstm", "gru", "lstm3", "gru3"))
+    _assert_report_claims(summary, ("lstm", "gru"))
     red, off = summary["reductions"], summary["ablation"]["all"]["reductions"]
-    gap = red["lstm"]["sys"] - max(red["rbf"]["sys"], red["grnn"]["sys"])
-    assert off["lstm"]["sys"] - max(off["rbf"]["sys"], off["grnn"]["sys"]) > gap - MEMORY_EFFECT > 5.0
+    gap = red["lstm"]["sys"] - max(red["rbf"]["sys"], red["grnn"]["sys"])  # 5.3 points (seed 3)
+    assert off["lstm"]["sys"] - max(off["rbf"]["sys"], off["grnn"]["sys"]) > gap - MEMORY_EFFECT  # 16.6 points
     assert abs(off["lstm"]["sys"] - off["lstm-memoryless"]["sys"]) < MEMORY_EFFECT
     assert off["lstm"]["sys"] > red["lstm"]["sys"]  # the time-correlated terms cost the networks accuracy
     rms = np.asarray(summary["ablation"]["all"]["term_rms"])
@@ -478,7 +481,7 @@ def test_campaign_without_torch_says_how_to_install_and_runs_the_others(quick_ca
     monkeypatch.setitem(sys.modules, "torch", None)
     prof = dict(profile="quick", workers=1, scheduler=None, out=str(tmp_path), no_progress=True, seed=3,
                 report_dir=None, models="traditional,grnn,gru", rnn_steps=None, grnn_patterns=300, rbf_samples=None,
-                refit=False, ablation="none", ablation_models="rbf,grnn,lstm")
+                refit=False, ablation="none", ablation_models="rbf,grnn,lstm", engine="inprocess")
     assert mc_campaign.run(argparse.Namespace(**prof)) == 0
     err = capsys.readouterr().err
     assert "pip install 'sarins-fmu[deep]'" in err and "recomputing" not in err
