@@ -15,6 +15,8 @@ import os
 import shutil
 import subprocess
 import warnings
+import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -275,3 +277,86 @@ def test_fmusim_runs_the_fmi3_imu_with_n_sub(fmus3, tmp_path):
         assert sub.shape == (K,)
         np.testing.assert_allclose(sub, mine, rtol=4.5e-16, atol=0)  # fmusim prints %.16g
     imu.s.freeInstance()
+
+
+# ----------------------------------------------------------------- slow: win64 under wine
+
+
+def _host_table(stdout: str, tag: str = "OUT") -> np.ndarray:
+    """The host's printed rows (steps done 0, 1, ...) as float64 values."""
+    rows = {}
+    for line in stdout.splitlines():
+        parts = line.split()
+        if parts and parts[0] == tag:
+            rows[int(parts[1])] = [int(x, 16) for x in parts[2:]]
+    return np.array([rows[k] for k in sorted(rows)], dtype=np.uint64).view(np.float64)
+
+
+@pytest.mark.slow
+def test_fmi3_win64_dlls_under_wine_match_linux(tmp_path):
+    """The FMI 3.0 IMUThermal (n_sub = 200, two presets) and StrapdownINS (sub_inputs = 1, fed the linux IMU's
+    arrays) from their win64 DLLs under wine through the FMI 3.0 C host (tests/native_host/native_fmu3_host.c)
+    against x86_64-linux; mingw's libm may round differently from glibc's (the FMI 2.0 wine tests): the
+    largest relative difference is printed and must stay below 1e-9 (IMU) and 1e-8 (INS)."""
+    from fmus.native_fmu import MINGW, fmi_headers_dir
+
+    missing = [t for t in (MINGW, "wine") if shutil.which(t) is None]
+    if missing:
+        pytest.skip(f"{', '.join(missing)} not installed (Debian: apt-get install gcc-mingw-w64-x86-64 wine64)")
+    cc = shutil.which("gcc") or shutil.which("cc")
+    src = str(Path(__file__).resolve().parent / "native_host" / "native_fmu3_host.c")
+    flags = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", f"-I{fmi_headers_dir(3)}"]
+    subprocess.run([cc, *flags, src, "-ldl", "-o", str(tmp_path / "host")], check=True)
+    subprocess.run([MINGW, *flags, src, "-static", "-o", str(tmp_path / "host.exe")], check=True)
+    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all")
+    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
+    fmus = {}
+    for name, slave in (("IMUThermal", "imu_thermal_slave.py"), ("StrapdownINS", "strapdown_ins_slave.py")):
+        fmu = build_native_fmu(name, slave, tmp_path, fmi=3, win64=True)
+        folder = tmp_path / name
+        with zipfile.ZipFile(fmu) as z:
+            z.extractall(folder)
+        fmus[name] = (read_model_description(str(fmu)), folder)
+
+    def run(name, steps, *args):
+        md, folder = fmus[name]
+        out = {}
+        for system, host, binary, prefix in (
+                ("linux", tmp_path / "host", folder / "binaries" / "x86_64-linux" / f"{name}.so", []),
+                ("win64", tmp_path / "host.exe", folder / "binaries" / "x86_64-windows" / f"{name}.dll", ["wine"])):
+            proc = subprocess.run([*prefix, str(host), str(binary), md.guid, str(steps), "1.0", *args],
+                                  capture_output=True, text=True, timeout=600, env=env)
+            assert proc.returncode == 0 and "STATUS" not in proc.stdout, proc.stdout[-2000:] + proc.stderr[-2000:]
+            assert proc.stdout.rstrip().endswith("DONE 1")
+            out[system] = proc.stdout
+        win, lin = _host_table(out["win64"]), _host_table(out["linux"])
+        again = _host_table(out["win64"], "AGAIN")
+        assert np.array_equal(again, win[-len(again):])  # its own state round trip is exact
+        worst = float(np.max(np.abs(win - lin) / np.maximum(np.abs(lin), 1e-300)))
+        print(f"{name} {args[:2]}: win64 == linux {np.array_equal(win, lin)}, {int(np.sum(win != lin))} of "
+              f"{win.size} values differ, largest relative difference {worst:.3g}")
+        return lin, worst
+
+    md, _ = fmus["IMUThermal"]
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    imu_out = ["increment_end_time", *SUB]
+    steps = 40
+    for preset in ("nav-rlg", "mems"):
+        lin, worst = run("IMUThermal", steps, f"u{vr['n_sub']}={K}", f"s{vr['preset']}={preset}",
+                         f"r{vr['angle_1']}=0.3", f"r{vr['rate_1']}=0.0", "roundtrip=20",
+                         "out=" + ",".join(str(vr[n]) for n in imu_out), f"nout={1 + 7 * K}")
+        assert worst < 1e-9
+        if preset == "nav-rlg":
+            imu_rows = lin
+    md, _ = fmus["StrapdownINS"]
+    vr_ins = {v.name: v.valueReference for v in md.modelVariables}
+    # Gauss-Seidel: the INS's step k gets the IMU's outputs after its step k + 1 (tag, then the seven arrays)
+    rows = tmp_path / "rows.bin"
+    np.ascontiguousarray(imu_rows[1:]).tofile(rows)
+    ins_out = ["lat", "lon", "v_e", "v_n", "yaw", "pitch", "roll", "nav_time", "temp_azimuth_gyro"]
+    lin, worst = run("StrapdownINS", steps, f"u{vr_ins['n_sub']}={K}", f"i{vr_ins['sub_inputs']}=1",
+                     f"r{vr_ins['align_time']}=20.0", f"r{vr_ins['coarse_time']}=10.0", "roundtrip=25",
+                     "in=" + ",".join(str(vr_ins[n]) for n in imu_out), f"nin={1 + 7 * K}", f"rows={rows}",
+                     "out=" + ",".join(str(vr_ins[n]) for n in ins_out), f"nout={len(ins_out)}")
+    assert worst < 1e-8
+    assert lin[-1, ins_out.index("nav_time")] == 20.0  # aligned, then navigated 20 s of 200 sub-intervals each
