@@ -227,6 +227,19 @@ def test_bad_sub_settings_are_refused_with_the_reason(fmu_dir, fmus3):
     ins.s.freeInstance()
 
 
+def test_the_in_process_ins_refuses_sub_inputs():
+    from fmus.slave_support import ParameterError
+    from fmus.strapdown_ins_slave import StrapdownINS
+
+    ins = StrapdownINS(instance_name="ins", resources=".")
+    ins.sub_inputs = 1
+    with pytest.raises(ParameterError, match="sub_inputs = 1: this in-process INS has no array inputs"):
+        ins.exit_initialization_mode()
+    ins.sub_inputs = 0
+    ins.exit_initialization_mode()
+    assert ins.phase == 0
+
+
 def test_fmpy_validates_and_simulates_the_fmi3_imu_and_ins(fmus3):
     for name in ("IMUThermal", "StrapdownINS"):
         assert validate_fmu(str(fmus3 / f"{name}.fmu")) == []
