@@ -111,6 +111,14 @@ def test_the_arrays_are_the_fmi2_imu_stepped_at_the_internal_rate(fmu_dir, fmus3
             assert scalars[:6] == [sequential_sum(a) for a in arrays[:6]]  # the sums, in order
             assert scalars[6:] == [arrays[6, -1], step + 1.0]
         assert np.ptp(arrays[5]) > 0 and np.all(arrays[5] > 0.04)  # noise on, gravity along z
+        state = three.s.getFMUState()  # the arrays and the sub-interval IMU travel in the FMU state
+        three.s.doStep(3.0, 1.0)
+        after = three.get(SUB, 7 * K)
+        three.s.setFMUState(state)
+        assert three.get(SUB, 7 * K) == list(arrays.ravel())
+        three.s.doStep(3.0, 1.0)
+        assert three.get(SUB, 7 * K) == after and after != list(arrays.ravel())
+        three.s.freeFMUState(state)
     finally:
         two.free()
         three.s.freeInstance()
