@@ -11,6 +11,7 @@ motion set tagged with the start time, the first step at the start time.
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
+from fmus.native_fmu import ArrayVariable
 from fmus.slave_support import INPUT, NO_TAG, OUTPUT, PARAMETER, declare
 from sarins_fmu import imu, imu_params
 from sarins_fmu.thermal import SENSORS
@@ -50,6 +51,16 @@ class IMUThermal(Fmi2Slave):
         "at the vehicle (omega_ie + omega_en) and the specific force resolved in it, both held over the step. "
         "IMU parameters: 'preset' chooses the model; any coefficient parameter that is set overrides it.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
+    # FMI 3.0 only (fmus/native_fmu.py): every sub-interval of the last step, n_sub elements each
+    fmi3_arrays = tuple(
+        ArrayVariable(f"{q}_{a}_sub", "n_sub", "output", f"{what} {a} of each of the n_sub sub-intervals of the "
+                      f"last step, in time order, each in body axes at its own start [{unit}]")
+        for q, what, unit in (("dtheta", "angle increment about body", "rad"),
+                              ("dv", "velocity increment along body", "m/s"))
+        for a in "xyz") + (
+        ArrayVariable("temp_gyro_z_sub", "n_sub", "output",
+                      "temperature of the gyro_z sensor at the end of each sub-interval of the last step [degC]"),)
+
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         declare(self, "string", "preset", PARAMETER, "IMU model: ideal, nav-rlg or mems", "nav-rlg")
@@ -100,6 +111,13 @@ class IMUThermal(Fmi2Slave):
                     f"temperature of the {sensor} sensor at increment_end_time [degC]", 20.0)
         declare(self, "real", "increment_end_time", OUTPUT,
                 "time tag: end of the interval of the increments [s]", 0.0)
+        # last, so that the value references of the variables above stay those of the earlier builds
+        declare(self, "integer", "n_sub", PARAMETER,
+                "sub-intervals per communication step [1]: the IMU runs as if stepped at h / n_sub (each "
+                "sub-interval its own thermal and error terms, random walk and internal_rate h / n_sub minor "
+                "steps, a whole number); the scalar increments are the sums over the sub-intervals (no coning or "
+                "sculling across them), the temperatures the last one's. 1: one interval per step. FMI 3.0: a "
+                "structural parameter, the length of the *_sub arrays", 1)
 
     def _declare_coefficient(self, name, start, unit):
         """A model coefficient: setting it overrides the preset (model.c reads the glue's set flag)."""

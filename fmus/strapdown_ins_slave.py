@@ -14,6 +14,7 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
+from fmus.native_fmu import ArrayVariable
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_latitude, check_range,
                                 declare, discard_on_error, guarded, real_slots)
 from sarins_fmu import ins
@@ -50,6 +51,15 @@ class StrapdownINS(Fmi2Slave):
         "The step must stay constant. All outputs are state outputs (no direct feedthrough). Held between "
         "steps: attitude, velocity, position, filter state, estimates, the compensation in force.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
+    # FMI 3.0 only (fmus/native_fmu.py): the IMU's sub-interval arrays, read when sub_inputs = 1
+    fmi3_arrays = tuple(
+        ArrayVariable(f"{q}_{a}_sub", "n_sub", "input", f"{what} {a} of each of the n_sub sub-intervals of the "
+                      f"interval ending at increment_end_time, in time order [{unit}]")
+        for q, what, unit in (("dtheta", "angle increment about body", "rad"),
+                              ("dv", "velocity increment along body", "m/s"))
+        for a in "xyz") + (
+        ArrayVariable("temp_gyro_z_sub", "n_sub", "input",
+                      "azimuth gyro temperature at the end of each sub-interval [degC]"),)
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -102,6 +112,14 @@ class StrapdownINS(Fmi2Slave):
                 "quadratic temperature coefficient a of the azimuth drift correction [rad/s/degC2]", 0.0)
         declare(self, "real", "solution_time", OUTPUT,
                 "time tag: simulation time the navigation outputs refer to [s]", 0.0)
+        # last, so that the value references of the variables above stay those of the earlier builds
+        declare(self, "integer", "n_sub", PARAMETER,
+                "sub-intervals per communication step [1]: the length of the *_sub array inputs (FMI 3.0: a "
+                "structural parameter); with sub_inputs = 1 each step integrates them one by one", 1)
+        declare(self, "integer", "sub_inputs", PARAMETER,
+                "0: integrate the scalar increments, one interval per step; 1 (FMI 3.0 only): integrate the "
+                "n_sub sub-intervals of the *_sub array inputs in order, each with its gyro_z temperature, as "
+                "if stepped at h / n_sub (the scalar increments and temp_gyro_z are then unused) [1]", 0)
         self._core = core_ins.FmuState()
         self._start_time = 0.0
         self._in_slots = real_slots(self, core_ins.FMU_INPUTS)
@@ -143,6 +161,9 @@ class StrapdownINS(Fmi2Slave):
         check_finite(self, names, non_negative=["align_time", "coarse_time"],
                      positive=[f"kf_{n}" for n in FILTER_UNITS])
         check_latitude(self, "lat0")
+        if self.sub_inputs != 0:
+            raise ParameterError(f"parameter sub_inputs = {self.sub_inputs}: this in-process INS has no array "
+                                 "inputs; only 0 (the scalar increments); 1 needs the native FMI 3.0 FMU")
         self._setup()
         try:
             self._core.start(self._fmi_buffer[self._in_slots])

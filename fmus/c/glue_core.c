@@ -68,6 +68,11 @@ static void vlog(sarins_glue *g, int status, const char *fmt, va_list ap)
     g->emit(g, status, category, text);
 }
 
+int sarins_arrays_visible(const sarins_ctx *c)
+{
+    return c != NULL && c->glue != NULL && c->glue->arrays_visible;
+}
+
 void sarins_log(const sarins_ctx *c, int status, const char *fmt, ...)
 {
     if (c == NULL || c->glue == NULL || c->quiet)

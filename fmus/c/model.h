@@ -144,4 +144,8 @@ void sarins_log(const sarins_ctx *c, int status, const char *fmt, ...)
 #endif
     ;
 
+/* 1 when the host can reach the array variables (FMI 3.0), 0 when it cannot (FMI 2.0: c->a still exists, but
+ * an array input is never set there, so a model that needs one refuses its parameters). */
+int sarins_arrays_visible(const sarins_ctx *c);
+
 #endif

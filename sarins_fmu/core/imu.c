@@ -522,7 +522,31 @@ static void keep(double *held, const double *current, int count, double tag) {
     held[0] = 1.0;
 }
 
-int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h) {
+/* Sub-interval k's start-of-interval motion (k_sub > 1): the set of the step start carried forward with its
+ * acceleration, theta = theta0 + (rate0 + accel tau / 2) tau, rate = rate0 + accel tau (sarins_imu_truth's
+ * law, tau = k h_sub); the base row held; the ambient linear. */
+static void sub_motion(int64_t k_sub, int m, double h_sub, double motion[3][SARINS_IMU_MAX_AXES], const double *base,
+                       double amb0, double amb_rate, double *scratch) {
+    double *angle0 = scratch, *rate0 = angle0 + k_sub * m, *accel = rate0 + k_sub * m;
+    double *w_t = accel + k_sub * m, *f_t = w_t + 3 * k_sub, *amb_end = f_t + 3 * k_sub;
+    for (int64_t k = 0; k < k_sub; k++) {
+        double tau = (double)k * h_sub;
+        for (int j = 0; j < m; j++) {
+            double a0 = motion[0][j], r0 = motion[1][j], acc = motion[2][j];
+            angle0[k * m + j] = a0 + (r0 + 0.5 * acc * tau) * tau;
+            rate0[k * m + j] = r0 + acc * tau;
+            accel[k * m + j] = acc;
+        }
+        memcpy(w_t + 3 * k, base, 3 * sizeof *w_t);
+        memcpy(f_t + 3 * k, base + 3, 3 * sizeof *f_t);
+        amb_end[k] = amb0 + amb_rate * ((double)(k + 1) * h_sub);
+    }
+}
+
+/* The FMU step of sarins_imu_fmu_step (k_sub = 1, the arguments after it unused) or of
+ * sarins_imu_fmu_step_sub (k_sub > 1). */
+static int fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h, int64_t k_sub,
+                    double *sub_dtheta, double *sub_dv, double *sub_temps, double *scratch) {
     ImuView v;
     if (buf == NULL || rows < SARINS_IMU_N_ARRAYS + 3 || imu_view(table, rows, &v) != SARINS_IMU_OK) return 1;
     if (!has_shape(table, SARINS_IMU_N_ARRAYS, IO_SIZE, 1)) return 1;
@@ -532,6 +556,7 @@ int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, do
     const double *consts = v.consts, *clock = v.clock;
     if (!(fabs(h - io[IO_STEP]) <= 1e-9 * io[IO_STEP])) return 1;
     if (!same_time(consts[0] + clock[0] * consts[1] + io[IO_START], t, h)) return 1;
+    if (k_sub < 1 || (k_sub > 1 && !(fabs(consts[1] * (double)k_sub - h) <= 1e-9 * h))) return 1;
     if (!(io[IO_GIMBALS] >= 1.0 && io[IO_GIMBALS] <= 3.0)) return 1;
     int na = (int)io[IO_GIMBALS];
     int count = 3 * na + 2;
@@ -581,9 +606,28 @@ int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, do
         memcpy(v.base + 3, v_chosen + 12, 3 * sizeof *v.base);
     }
     double dtheta[3], dv[3], temps[6];
-    if (sarins_imu_one_interval(table, rows, motion[0], motion[1], motion[2], amb_end, dtheta, dv, temps)
-        != SARINS_IMU_OK)
-        return 1; /* not reached: the table and its stream states were checked above */
+    if (k_sub == 1) {
+        if (sarins_imu_one_interval(table, rows, motion[0], motion[1], motion[2], amb_end, dtheta, dv, temps)
+            != SARINS_IMU_OK)
+            return 1; /* not reached: the table and its stream states were checked above */
+    } else {
+        sub_motion(k_sub, m, consts[1], motion, v.base, chosen[3 * na], chosen[3 * na + 1], scratch);
+        double *angle0 = scratch, *amb = scratch + 3 * k_sub * m + 6 * k_sub;
+        if (sarins_imu_steps(table, rows, k_sub, angle0, angle0 + k_sub * m, angle0 + 2 * k_sub * m,
+                             angle0 + 3 * k_sub * m, angle0 + 3 * k_sub * m + 3 * k_sub, amb, sub_dtheta, sub_dv,
+                             sub_temps, amb + k_sub) != SARINS_IMU_OK)
+            return 1; /* not reached, as above */
+        /* the step's increments: the sums of the sub-intervals', in order; the temperatures at its end */
+        for (int i = 0; i < 3; i++) {
+            dtheta[i] = 0.0;
+            dv[i] = 0.0;
+            for (int64_t k = 0; k < k_sub; k++) {
+                dtheta[i] += sub_dtheta[3 * k + i];
+                dv[i] += sub_dv[3 * k + i];
+            }
+        }
+        memcpy(temps, sub_temps + 6 * (k_sub - 1), sizeof temps);
+    }
     for (int i = 0; i < 3; i++) {
         buf[(int64_t)io[IO_OUT + i]] = dtheta[i];
         buf[(int64_t)io[IO_OUT + 3 + i]] = dv[i];
@@ -591,4 +635,14 @@ int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, do
     for (int i = 0; i < 6; i++) buf[(int64_t)io[IO_OUT + 6 + i]] = temps[i];
     buf[(int64_t)io[IO_END_TIME]] = t + h;
     return 0;
+}
+
+int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h) {
+    return fmu_step(table, rows, buf, n, t, h, 1, NULL, NULL, NULL, NULL);
+}
+
+int sarins_imu_fmu_step_sub(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h,
+                            int64_t k_sub, double *dtheta, double *dv, double *temps, double *scratch) {
+    if (k_sub < 2 || dtheta == NULL || dv == NULL || temps == NULL || scratch == NULL) return 1;
+    return fmu_step(table, rows, buf, n, t, h, k_sub, dtheta, dv, temps, scratch);
 }

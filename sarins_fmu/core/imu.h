@@ -193,6 +193,20 @@ void sarins_imu_aged_poly(uint64_t seed, int64_t n, const double *t, const doubl
  * nothing (the caller then finds and reports the reason). */
 int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h);
 
+/* The same step split into k_sub > 1 output intervals of h / k_sub each (the table built with that interval
+ * and internal_rate h / k_sub minor steps per interval), as if the FMU stepped at h / k_sub: every
+ * sub-interval's thermal and error terms, minor loop, output dynamics and random walk (sarins_imu_steps),
+ * its start-of-interval motion the step's motion set carried forward with its constant accelerations
+ * (theta0 + (rate0 + accel tau / 2) tau, rate0 + accel tau), the base rates and forces held, the ambient
+ * linear.  dtheta, dv (k_sub, 3) and temps (k_sub, 6) out: each sub-interval's increments (body axes at its
+ * start) and temperatures at its end; buf's increments are their sums (in order, no coning or sculling
+ * across sub-intervals) and its temperatures the last sub-interval's.  scratch: SARINS_IMU_SUB_SCRATCH
+ * doubles.  Returns 0 when it did the step, 1 when it changed nothing (also for a table built with
+ * another interval than h / k_sub). */
+int sarins_imu_fmu_step_sub(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h,
+                            int64_t k_sub, double *dtheta, double *dv, double *temps, double *scratch);
+#define SARINS_IMU_SUB_SCRATCH(k_sub, n_axes) ((k_sub) * (3 * (n_axes) + 7 + 18))
+
 /* The io row of sarins_imu_fmu_step: the expected step (s), the start time (s), the gimbal count A (1-3),
  * the buf slots of motion_time, ambient_temp, ambient_temp_rate, angle_1..3, rate_1..3, accel_1..3, the 12
  * outputs (dtheta x y z, dv x y z, the six temperatures), increment_end_time; moving base (1/0), the slots of

@@ -9,6 +9,13 @@
  *
  * Every array of the IMU lives in one allocation (c->work, sized by the gimbals and the flicker terms the
  * parameters give) and is the work state: FMU state copies it as is.
+ *
+ * Sub-intervals (n_sub, default 1).  With n_sub = K > 1 the IMU is built for the interval h / K and each step
+ * runs K of them (sarins_imu_fmu_step_sub: as if the FMU stepped at h / K, the motion set carried forward
+ * with its accelerations); the *_sub arrays (FMI 3.0 outputs, c->a in both versions) hold every
+ * sub-interval's increments and gyro_z temperature, the scalar increments their sums.  With K = 1 the step
+ * is the one interval of before and the arrays hold its one value.  The sub-interval rows and the scratch
+ * of sarins_imu_fmu_step_sub are a second allocation (c->work's sub), not state: rewritten every step.
  * Units: rad, rad/s, rad/s^2, m, m/s, m/s^2, s, degC (the declaration's non-SI display units are the host's).
  */
 #include <math.h>
@@ -47,6 +54,8 @@ typedef struct {
     double *held, *v_held, *io;    /* the held motion set, the held vehicle set, the io row */
     size_t n_doubles;
     double *block;
+    int64_t n_sub;                  /* sub-intervals per step (the parameter n_sub) */
+    double *sub_dtheta, *sub_dv, *sub_temps, *scratch; /* (n_sub, 3), (n_sub, 3), (n_sub, 6), scratch; n_sub > 1 */
 } imu_work;
 
 static const int MOTION_SLOTS[3][MAX_GIMBALS] = {
@@ -62,6 +71,9 @@ static const int OUT_SLOTS[12] = {
     SARINS_R_dtheta_x, SARINS_R_dtheta_y, SARINS_R_dtheta_z, SARINS_R_dv_x, SARINS_R_dv_y, SARINS_R_dv_z,
     SARINS_R_temp_gyro_x, SARINS_R_temp_gyro_y, SARINS_R_temp_gyro_z, SARINS_R_temp_accel_x,
     SARINS_R_temp_accel_y, SARINS_R_temp_accel_z};
+/* the arrays of the sub-intervals' increments, in the order of OUT_SLOTS' first six */
+static const int SUB_ARRAYS[6] = {SARINS_A_dtheta_x_sub, SARINS_A_dtheta_y_sub, SARINS_A_dtheta_z_sub,
+                                  SARINS_A_dv_x_sub, SARINS_A_dv_y_sub, SARINS_A_dv_z_sub};
 /* the vehicle's attitude gimbals: mat_nv = Rz(yaw) Rx(pitch) Ry(roll) (sarins_fmu.imu.VEHICLE_ATTITUDE_AXES) */
 static const double VEHICLE_AXES[3][3] = {{0.0, 0.0, 1.0}, {1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}};
 
@@ -164,6 +176,11 @@ static int check_parameters(sarins_ctx *c, double axes[MAX_GIMBALS][3], int *n_g
                    -LAT_LIMIT * 180.0 / PI, LAT_LIMIT * 180.0 / PI);
         return SARINS_ERROR;
     }
+    if (c->i[SARINS_I_n_sub] < 1 || c->i[SARINS_I_n_sub] > SARINS_TABLE.max_dim) {
+        sarins_log(c, SARINS_ERROR, "parameter n_sub = %d must be an integer in [1, %d]", c->i[SARINS_I_n_sub],
+                   SARINS_TABLE.max_dim);
+        return SARINS_ERROR;
+    }
     if (c->i[SARINS_I_seed] < 0) {
         sarins_log(c, SARINS_ERROR, "parameter seed = %d must be an integer in [0, %d]", c->i[SARINS_I_seed],
                    INT32_LIMIT);
@@ -204,6 +221,7 @@ static void imu_release(sarins_ctx *c)
 {
     imu_work *w = c->work;
     if (w != NULL) {
+        free(w->sub_dtheta);
         free(w->block);
         free(w);
     }
@@ -340,6 +358,20 @@ static int imu_initialize(sarins_ctx *c)
         return SARINS_ERROR;
     }
     layout(w, n_axes, n_flicker);
+    w->n_sub = c->i[SARINS_I_n_sub];
+    if (w->n_sub > 1) { /* the sub-interval rows and the scratch of sarins_imu_fmu_step_sub, one allocation */
+        size_t n_sub_doubles = (size_t)(12 * w->n_sub + SARINS_IMU_SUB_SCRATCH(w->n_sub, n_axes));
+        w->sub_dtheta = calloc(n_sub_doubles, sizeof(double));
+        if (w->sub_dtheta == NULL) {
+            sarins_log(c, SARINS_ERROR, "out of memory for n_sub = %d sub-intervals", (int)w->n_sub);
+            free(w->block);
+            free(w);
+            return SARINS_ERROR;
+        }
+        w->sub_dv = w->sub_dtheta + 3 * w->n_sub;
+        w->sub_temps = w->sub_dv + 3 * w->n_sub;
+        w->scratch = w->sub_temps + 6 * w->n_sub;
+    }
     double *ax = row(w, SARINS_IMU_AXES);
     for (int64_t j = 0; j < n_axes; j++)
         memcpy(ax + 3 * j, moving ? (j < 3 ? VEHICLE_AXES[j] : axes[j - 3]) : axes[j], 3 * sizeof *ax);
@@ -358,6 +390,8 @@ static int imu_initialize(sarins_ctx *c)
     for (int j = 0; j < 6; j++)
         c->r[OUT_SLOTS[6 + j]] = ambient + (w->hot ? par[heat[j]] : 0.0);
     c->r[SARINS_R_increment_end_time] = c->start_time;
+    for (int64_t k = 0; k < w->n_sub; k++) /* the increment arrays stay 0 (the glue zeroed them) */
+        c->a[SARINS_A_temp_gyro_z_sub][k] = c->r[SARINS_R_temp_gyro_z];
     return SARINS_OK;
 }
 
@@ -436,10 +470,15 @@ static int explain(const sarins_ctx *c, const imu_work *w, double t, double h)
 static int start(sarins_ctx *c, imu_work *w, double t, double h)
 {
     double internal_rate = c->r[SARINS_R_internal_rate];
-    double n_sub = h * internal_rate;
+    double interval = w->n_sub > 1 ? h / (double)w->n_sub : h; /* the IMU's output interval */
+    double n_sub = interval * internal_rate; /* minor steps per output interval */
     if (fabs(n_sub - nearbyint(n_sub)) > 1e-6 || nearbyint(n_sub) < 1.0) {
-        sarins_log(c, SARINS_ERROR, "ValueError: output interval %.17g s is not a whole number of minor steps at "
-                   "%.17g Hz", h, internal_rate);
+        if (w->n_sub > 1)
+            sarins_log(c, SARINS_ERROR, "ValueError: output interval %.17g s / n_sub %d = %.17g s is not a whole "
+                       "number of minor steps at %.17g Hz", h, (int)w->n_sub, interval, internal_rate);
+        else
+            sarins_log(c, SARINS_ERROR, "ValueError: output interval %.17g s is not a whole number of minor steps "
+                       "at %.17g Hz", h, internal_rate);
         return SARINS_ERROR;
     }
     double motion[3 * MAX_GIMBALS + 2];
@@ -457,7 +496,7 @@ static int start(sarins_ctx *c, imu_work *w, double t, double h)
     if (!(ambient0 >= ABSOLUTE_ZERO))
         return step_error(c, "ambient temperature must be finite and above absolute zero (degC)");
     uint64_t seed = (uint64_t)c->i[SARINS_I_seed];
-    if (sarins_imu_build(w->table, TABLE_ROWS, w->par, 0.0, h, (int64_t)nearbyint(n_sub),
+    if (sarins_imu_build(w->table, TABLE_ROWS, w->par, 0.0, interval, (int64_t)nearbyint(n_sub),
                          c->r[SARINS_R_aging_days] * SARINS_IMU_DAY, seed) != SARINS_IMU_OK
         || sarins_imu_start(w->table, TABLE_ROWS, ambient0, w->hot, seed) != SARINS_IMU_OK)
         return step_error(c, "the IMU could not be built from its parameters");
@@ -477,8 +516,24 @@ static int imu_do_step(sarins_ctx *c, double t, double h)
         if (status != SARINS_OK)
             return status;
     }
-    if (sarins_imu_fmu_step(w->table, TABLE_ROWS, c->r, (int64_t)SARINS_TABLE.n_real, t, h) != 0)
+    if (w->n_sub == 1) {
+        if (sarins_imu_fmu_step(w->table, TABLE_ROWS, c->r, (int64_t)SARINS_TABLE.n_real, t, h) != 0)
+            return explain(c, w, t, h);
+        for (int i = 0; i < 6; i++)
+            c->a[SUB_ARRAYS[i]][0] = c->r[OUT_SLOTS[i]];
+        c->a[SARINS_A_temp_gyro_z_sub][0] = c->r[SARINS_R_temp_gyro_z];
+        return SARINS_OK;
+    }
+    if (sarins_imu_fmu_step_sub(w->table, TABLE_ROWS, c->r, (int64_t)SARINS_TABLE.n_real, t, h, w->n_sub,
+                                w->sub_dtheta, w->sub_dv, w->sub_temps, w->scratch) != 0)
         return explain(c, w, t, h);
+    for (int64_t k = 0; k < w->n_sub; k++) {
+        for (int i = 0; i < 3; i++) {
+            c->a[SUB_ARRAYS[i]][k] = w->sub_dtheta[3 * k + i];
+            c->a[SUB_ARRAYS[3 + i]][k] = w->sub_dv[3 * k + i];
+        }
+        c->a[SARINS_A_temp_gyro_z_sub][k] = w->sub_temps[6 * k + 2];
+    }
     return SARINS_OK;
 }
 

@@ -6,6 +6,12 @@
  * drift compensation queue, alignment and navigation), whose state struct
  * is this model's whole state (plain bytes, no pointer).  Units and frames
  * as in the core's headers: rad, m, m/s, s, degC, ENU.
+ *
+ * Sub-interval inputs (FMI 3.0, sub_inputs = 1): a step of size h integrates
+ * the n_sub sub-intervals of the *_sub arrays one by one, each a core step
+ * of h / n_sub with its own increments, gyro_z temperature and time tag
+ * (increment_end_time - (n_sub - 1 - k) h / n_sub): the same calls, in the
+ * same order, as an INS stepped at h / n_sub with the scalar inputs.
  */
 #include <math.h>
 #include <stdio.h>
@@ -39,6 +45,11 @@ static const unsigned OUTPUT_SLOTS[SARINS_INS_N_OUT] = {
     SARINS_R_east_error, SARINS_R_position_error, SARINS_R_nav_time, SARINS_R_gyro_drift_est_x,
     SARINS_R_gyro_drift_est_y, SARINS_R_accel_bias_est_x, SARINS_R_accel_bias_est_y, SARINS_R_temp_align_start,
     SARINS_R_temp_align_end, SARINS_R_temp_change_align, SARINS_R_temp_azimuth_gyro, SARINS_R_solution_time};
+
+/* the sub-interval arrays, in the order of the core's first six inputs, then temp_gyro_z */
+static const int SUB_ARRAYS[7] = {SARINS_A_dtheta_x_sub, SARINS_A_dtheta_y_sub, SARINS_A_dtheta_z_sub,
+                                  SARINS_A_dv_x_sub, SARINS_A_dv_y_sub, SARINS_A_dv_z_sub,
+                                  SARINS_A_temp_gyro_z_sub};
 
 static void read_inputs(const sarins_ctx *c, double *in)
 {
@@ -107,7 +118,25 @@ static int check_parameters(const sarins_ctx *c)
     for (int i = SARINS_INS_ALIGN_TIME; i <= SARINS_INS_COARSE_TIME; i++)
         if (!(config[i] >= 0.0))
             return refuse(c, SITE[i], config[i], "must not be negative");
-    return check_range_deg(c, "lat0", config[SARINS_INS_LAT], -SARINS_INS_LAT_LIMIT, SARINS_INS_LAT_LIMIT);
+    if (check_range_deg(c, "lat0", config[SARINS_INS_LAT], -SARINS_INS_LAT_LIMIT, SARINS_INS_LAT_LIMIT) != SARINS_OK)
+        return SARINS_ERROR;
+    if (c->i[SARINS_I_n_sub] < 1 || c->i[SARINS_I_n_sub] > SARINS_TABLE.max_dim) {
+        sarins_log(c, SARINS_ERROR, "parameter n_sub = %d must be an integer in [1, %d]", c->i[SARINS_I_n_sub],
+                   SARINS_TABLE.max_dim);
+        return SARINS_ERROR;
+    }
+    int sub = c->i[SARINS_I_sub_inputs];
+    if (sub != 0 && sub != 1) {
+        sarins_log(c, SARINS_ERROR, "parameter sub_inputs = %d must be 0 (scalar increments) or 1 (the *_sub "
+                   "arrays)", sub);
+        return SARINS_ERROR;
+    }
+    if (sub == 1 && !sarins_arrays_visible(c)) {
+        sarins_log(c, SARINS_ERROR, "parameter sub_inputs = 1 needs the *_sub array inputs, which only the FMI 3.0 "
+                   "variant of this FMU has; use 0 here");
+        return SARINS_ERROR;
+    }
+    return SARINS_OK;
 }
 
 static int initialize(sarins_ctx *c)
@@ -132,12 +161,51 @@ static int initialize(sarins_ctx *c)
     return SARINS_OK;
 }
 
+/* sub_inputs = 1: the n_sub sub-intervals of the arrays, one core step of h / n_sub each (see the top). */
+static int do_sub_steps(sarins_ctx *c, sarins_ins_fmu *f, double *in, double t, double h)
+{
+    int n = c->i[SARINS_I_n_sub];
+    double h_sub = h / (double)n, tag = in[SARINS_INS_IN_INCREMENT_END_TIME];
+    char msg[512];
+    for (int j = 0; j < 7; j++)
+        for (int k = 0; k < n; k++)
+            if (!isfinite(c->a[SUB_ARRAYS[j]][k])) {
+                sarins_log(c, SARINS_ERROR, "the *_sub array inputs contain NaN or infinity (element %d)", k + 1);
+                return SARINS_ERROR;
+            }
+    /* the start time as the tag before anything was integrated: Jacobi's first step, nothing to do yet */
+    if (!(f->running && f->ins.steps > 0) && fabs(tag - f->start_time) <= SARINS_INS_TAG_TOL * h_sub) {
+        if (sarins_ins_fmu_do_step(f, in, t, h_sub, msg, sizeof msg) != SARINS_INS_OK) {
+            sarins_log(c, SARINS_ERROR, "%s", msg);
+            return SARINS_ERROR;
+        }
+        return SARINS_OK;
+    }
+    for (int k = 0; k < n; k++) {
+        for (int j = 0; j < 6; j++)
+            in[j] = c->a[SUB_ARRAYS[j]][k];
+        in[SARINS_INS_IN_TEMP_GYRO_Z] = c->a[SARINS_A_temp_gyro_z_sub][k];
+        in[SARINS_INS_IN_INCREMENT_END_TIME] = k == n - 1 ? tag : tag - (double)(n - 1 - k) * h_sub;
+        if (sarins_ins_fmu_do_step(f, in, t + (double)k * h_sub, h_sub, msg, sizeof msg) != SARINS_INS_OK) {
+            sarins_log(c, SARINS_ERROR, "sub-interval %d of %d: %s", k + 1, n, msg);
+            return SARINS_ERROR;
+        }
+    }
+    return SARINS_OK;
+}
+
 static int do_step(sarins_ctx *c, double t, double h)
 {
     sarins_ins_fmu *f = (sarins_ins_fmu *)c->state;
     char msg[512];
     double in[SARINS_INS_N_IN];
     read_inputs(c, in);
+    if (c->i[SARINS_I_sub_inputs] == 1) {
+        int status = do_sub_steps(c, f, in, t, h);
+        if (status == SARINS_OK)
+            write_outputs(c, f);
+        return status;
+    }
     if (sarins_ins_fmu_do_step(f, in, t, h, msg, sizeof msg) != SARINS_INS_OK) {
         sarins_log(c, SARINS_ERROR, "%s", msg);
         return SARINS_ERROR;
