@@ -464,6 +464,8 @@ typedef struct {
     double *consts, *clock, *sensor_par, *state, *coef, *triad, *mats, *axes, *base, *rng, *corr_par, *corr_state,
         *phi, *q, *x_flicker, *dyn_par, *dyn_state;
     int64_t n_axes, n_flicker;
+    SarinsRng streams[SARINS_IMU_N_STREAMS]; /* the RNG rows unpacked (imu_view), kept equal to them */
+    int have_streams;
 } ImuView;
 
 static double *table_array(const int64_t *table, int64_t i) { return (double *)(intptr_t)table[3 * i]; }
@@ -474,6 +476,7 @@ static int has_shape(const int64_t *table, int64_t i, int64_t rows, int64_t cols
 
 /* The IMU arrays of table rows 0..16 with their shapes checked; 0 when they fit. */
 static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
+    v->have_streams = 0;
     if (table == NULL || rows < SARINS_IMU_N_ARRAYS) return SARINS_IMU_BAD_TABLE;
     v->n_axes = table[3 * SARINS_IMU_AXES + 1];
     v->n_flicker = table[3 * SARINS_IMU_PHI + 1];
@@ -519,9 +522,9 @@ static int imu_view(const int64_t *table, int64_t rows, ImuView *v) {
     int status = imu_shapes(table, rows, v);
     if (status != SARINS_IMU_OK) return status;
     for (int s = 0; s < SARINS_IMU_N_STREAMS; s++) {
-        SarinsRng r;
-        if (!sarins_rng_unpack(v->rng + SARINS_RNG_WORDS * s, &r)) return SARINS_IMU_BAD_TABLE;
+        if (!sarins_rng_unpack(v->rng + SARINS_RNG_WORDS * s, &v->streams[s])) return SARINS_IMU_BAD_TABLE;
     }
+    v->have_streams = 1;
     return SARINS_IMU_OK;
 }
 
@@ -535,11 +538,58 @@ static int any_nonzero(const double *x, int64_t n) {
 
 /* The stream of the table's RNG row `stream` into r; 0 when the row is not a stream state. */
 static int load_stream(const ImuView *v, int stream, SarinsRng *r) {
+    if (v->have_streams) {
+        *r = v->streams[stream];
+        return 1;
+    }
     return sarins_rng_unpack(v->rng + SARINS_RNG_WORDS * stream, r);
 }
 
-static void store_stream(const ImuView *v, int stream, const SarinsRng *r) {
+static void store_stream(ImuView *v, int stream, const SarinsRng *r) {
     sarins_rng_pack(r, (uint64_t)stream, v->rng + SARINS_RNG_WORDS * stream);
+    if (v->have_streams) v->streams[stream] = *r;
+}
+
+/* The table functions below check the table once (imu_view) and then work on the view: a table that passed
+ * stays valid through a step (the streams are stored packed as sarins_rng_pack writes them). */
+
+static int advance_view(ImuView *v, int64_t n_steps, const double *amb_end, double *temps, double *die,
+                        double *g_bias, double *g_sf, double *a_bias, double *a_sf) {
+    SarinsRng gm_rng, flicker_rng, rrw_rng;
+    if (!(load_stream(v, SARINS_IMU_STREAM_GM, &gm_rng) && load_stream(v, SARINS_IMU_STREAM_FLICKER, &flicker_rng)
+          && load_stream(v, SARINS_IMU_STREAM_RRW, &rrw_rng)))
+        return SARINS_IMU_BAD_TABLE;
+    int gm_on = any_nonzero(v->sensor_par + 18, 6);
+    int flicker_on = any_nonzero(v->q, 6 * v->n_flicker), rrw_on = any_nonzero(v->corr_par + 30, 6);
+    double h = v->consts[1];
+    double *temperature = v->state; /* reported temperatures, row 0 */
+    double start[6];
+    memcpy(start, temperature, sizeof start);
+    sarins_thermal_steps(v->consts[0], h, v->clock[0], v->clock[1], n_steps, amb_end, 6, v->sensor_par,
+                         v->sensor_par + 6, temperature, temps);
+    v->clock[1] = amb_end[n_steps - 1];
+    const double *die0 = start, *die_t = temps;
+    double die_start[6];
+    if (v->consts[3] != 0.0) { /* the errors follow the die, which lags the reported temperature */
+        double *die_now = v->corr_state; /* row 0 */
+        memcpy(die_start, die_now, sizeof die_start);
+        sarins_die_temperatures(n_steps, 6, start, temps, h, v->corr_par, die_now, die);
+        die0 = die_start;
+        die_t = die;
+    }
+    sarins_imu_interval_terms(n_steps, die0, die_t, h, v->coef, v->triad, v->consts[2], v->state + 6,
+                              v->sensor_par + 12, v->sensor_par + 18, gm_on ? &gm_rng : NULL, g_bias, g_sf, a_bias,
+                              a_sf);
+    store_stream(v, SARINS_IMU_STREAM_GM, &gm_rng);
+    sarins_imu_axial_thermal_terms(n_steps, die0[2], die_t + 2, 6, h, v->consts + 8, v->state + 12, g_bias + 2, 3);
+    if (v->consts[4] != 0.0) {
+        sarins_correlated_terms(n_steps, die0, die_t, h, v->corr_par, v->corr_state, v->n_flicker, v->phi, v->q,
+                                v->x_flicker, flicker_on ? &flicker_rng : NULL, rrw_on ? &rrw_rng : NULL, g_bias,
+                                g_sf, a_bias, a_sf);
+        store_stream(v, SARINS_IMU_STREAM_FLICKER, &flicker_rng);
+        store_stream(v, SARINS_IMU_STREAM_RRW, &rrw_rng);
+    }
+    return SARINS_IMU_OK;
 }
 
 int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, const double *amb_end, double *temps,
@@ -548,41 +598,12 @@ int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, cons
     int status = imu_view(table, rows, &v);
     if (status != SARINS_IMU_OK) return status;
     if (n_steps < 1) return SARINS_IMU_BAD_TABLE;
-    SarinsRng gm_rng, flicker_rng, rrw_rng;
-    if (!(load_stream(&v, SARINS_IMU_STREAM_GM, &gm_rng) && load_stream(&v, SARINS_IMU_STREAM_FLICKER, &flicker_rng)
-          && load_stream(&v, SARINS_IMU_STREAM_RRW, &rrw_rng)))
-        return SARINS_IMU_BAD_TABLE;
-    int gm_on = any_nonzero(v.sensor_par + 18, 6);
-    int flicker_on = any_nonzero(v.q, 6 * v.n_flicker), rrw_on = any_nonzero(v.corr_par + 30, 6);
-    double h = v.consts[1];
-    double *temperature = v.state; /* reported temperatures, row 0 */
-    double start[6];
-    memcpy(start, temperature, sizeof start);
-    sarins_thermal_steps(v.consts[0], h, v.clock[0], v.clock[1], n_steps, amb_end, 6, v.sensor_par,
-                         v.sensor_par + 6, temperature, temps);
-    v.clock[1] = amb_end[n_steps - 1];
-    const double *die0 = start, *die_t = temps;
-    double die_start[6];
-    if (v.consts[3] != 0.0) { /* the errors follow the die, which lags the reported temperature */
-        double *die_now = v.corr_state; /* row 0 */
-        memcpy(die_start, die_now, sizeof die_start);
-        sarins_die_temperatures(n_steps, 6, start, temps, h, v.corr_par, die_now, die);
-        die0 = die_start;
-        die_t = die;
-    }
-    sarins_imu_interval_terms(n_steps, die0, die_t, h, v.coef, v.triad, v.consts[2], v.state + 6,
-                              v.sensor_par + 12, v.sensor_par + 18, gm_on ? &gm_rng : NULL, g_bias, g_sf, a_bias,
-                              a_sf);
-    store_stream(&v, SARINS_IMU_STREAM_GM, &gm_rng);
-    sarins_imu_axial_thermal_terms(n_steps, die0[2], die_t + 2, 6, h, v.consts + 8, v.state + 12, g_bias + 2, 3);
-    if (v.consts[4] != 0.0) {
-        sarins_correlated_terms(n_steps, die0, die_t, h, v.corr_par, v.corr_state, v.n_flicker, v.phi, v.q,
-                                v.x_flicker, flicker_on ? &flicker_rng : NULL, rrw_on ? &rrw_rng : NULL, g_bias,
-                                g_sf, a_bias, a_sf);
-        store_stream(&v, SARINS_IMU_STREAM_FLICKER, &flicker_rng);
-        store_stream(&v, SARINS_IMU_STREAM_RRW, &rrw_rng);
-    }
-    return SARINS_IMU_OK;
+    return advance_view(&v, n_steps, amb_end, temps, die, g_bias, g_sf, a_bias, a_sf);
+}
+
+static void dynamics_view(ImuView *v, int64_t n_steps, const double *temps, double *dtheta, double *dv) {
+    if (sarins_dynamics_active(v->dyn_par))
+        sarins_dynamics_apply(n_steps, v->consts[1], temps, v->dyn_par, v->dyn_state, SARINS_IMU_T_REF, dtheta, dv);
 }
 
 int sarins_imu_dynamics(const int64_t *table, int64_t rows, int64_t n_steps, const double *temps, double *dtheta,
@@ -591,19 +612,15 @@ int sarins_imu_dynamics(const int64_t *table, int64_t rows, int64_t n_steps, con
     int status = imu_view(table, rows, &v);
     if (status != SARINS_IMU_OK) return status;
     if (n_steps < 0) return SARINS_IMU_BAD_TABLE;
-    if (sarins_dynamics_active(v.dyn_par))
-        sarins_dynamics_apply(n_steps, v.consts[1], temps, v.dyn_par, v.dyn_state, SARINS_IMU_T_REF, dtheta, dv);
+    dynamics_view(&v, n_steps, temps, dtheta, dv);
     return SARINS_IMU_OK;
 }
 
-int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, double *dtheta, double *dv) {
-    ImuView v;
-    int status = imu_view(table, rows, &v);
-    if (status != SARINS_IMU_OK) return status;
+static int white_noise_view(ImuView *v, int64_t n_steps, double *dtheta, double *dv) {
     SarinsRng rng;
-    if (n_steps < 0 || !load_stream(&v, SARINS_IMU_STREAM_WHITE, &rng)) return SARINS_IMU_BAD_TABLE;
-    double sqrt_h = sqrt(v.consts[1]);
-    const double *rw_g = v.triad + 15, *rw_a = v.triad + 18; /* triad rows 5 and 6 */
+    if (!load_stream(v, SARINS_IMU_STREAM_WHITE, &rng)) return SARINS_IMU_BAD_TABLE;
+    double sqrt_h = sqrt(v->consts[1]);
+    const double *rw_g = v->triad + 15, *rw_a = v->triad + 18; /* triad rows 5 and 6 */
     if (any_nonzero(rw_g, 6)) { /* rows 5 and 6 are adjacent */
         for (int64_t k = 0; k < n_steps; k++) {
             double w[6];
@@ -614,10 +631,33 @@ int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, 
                 dv[3 * k + i] += w[3 + i] * sqrt_h * rw_a[i];
             }
         }
-        store_stream(&v, SARINS_IMU_STREAM_WHITE, &rng);
+        store_stream(v, SARINS_IMU_STREAM_WHITE, &rng);
     }
-    v.clock[0] += (double)n_steps;
+    v->clock[0] += (double)n_steps;
     return SARINS_IMU_OK;
+}
+
+int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, double *dtheta, double *dv) {
+    ImuView v;
+    int status = imu_view(table, rows, &v);
+    if (status != SARINS_IMU_OK) return status;
+    if (n_steps < 0) return SARINS_IMU_BAD_TABLE;
+    return white_noise_view(&v, n_steps, dtheta, dv);
+}
+
+static int steps_view(ImuView *v, int64_t n_steps, const double *angle0, const double *rate0,
+                      const double *accel, const double *w_t, const double *f_t, const double *amb_end,
+                      double *dtheta, double *dv, double *temps, double *work) {
+    double *g_bias = work, *g_sf = work + 3 * n_steps, *a_bias = work + 6 * n_steps, *a_sf = work + 9 * n_steps;
+    int status = advance_view(v, n_steps, amb_end, temps, work + 12 * n_steps, g_bias, g_sf, a_bias, a_sf);
+    if (status != SARINS_IMU_OK) return status;
+    /* triad rows: drift poly, gyro quadratic, low-rate gain, low-rate width, accel quadratic, random walks;
+       mats rows: gyro misalignment, g-sensitivity, accel misalignment */
+    sarins_imu_increments(0, n_steps, v->n_axes, v->axes, angle0, rate0, accel, w_t, f_t, v->consts[1],
+                          (int64_t)v->consts[5], g_sf, v->mats, g_bias, v->triad + 3, v->triad + 6, v->triad + 9,
+                          v->mats + 9, a_sf, v->mats + 18, a_bias, v->triad + 12, dtheta, dv);
+    dynamics_view(v, n_steps, temps, dtheta, dv);
+    return white_noise_view(v, n_steps, dtheta, dv);
 }
 
 int sarins_imu_steps(const int64_t *table, int64_t rows, int64_t n_steps, const double *angle0,
@@ -627,27 +667,22 @@ int sarins_imu_steps(const int64_t *table, int64_t rows, int64_t n_steps, const 
     int status = imu_view(table, rows, &v);
     if (status != SARINS_IMU_OK) return status;
     if (n_steps < 1) return SARINS_IMU_BAD_TABLE;
-    double *g_bias = work, *g_sf = work + 3 * n_steps, *a_bias = work + 6 * n_steps, *a_sf = work + 9 * n_steps;
-    status = sarins_imu_advance(table, rows, n_steps, amb_end, temps, work + 12 * n_steps, g_bias, g_sf, a_bias,
-                                a_sf);
-    if (status != SARINS_IMU_OK) return status;
-    /* triad rows: drift poly, gyro quadratic, low-rate gain, low-rate width, accel quadratic, random walks;
-       mats rows: gyro misalignment, g-sensitivity, accel misalignment */
-    sarins_imu_increments(0, n_steps, v.n_axes, v.axes, angle0, rate0, accel, w_t, f_t, v.consts[1],
-                          (int64_t)v.consts[5], g_sf, v.mats, g_bias, v.triad + 3, v.triad + 6, v.triad + 9,
-                          v.mats + 9, a_sf, v.mats + 18, a_bias, v.triad + 12, dtheta, dv);
-    status = sarins_imu_dynamics(table, rows, n_steps, temps, dtheta, dv);
-    if (status != SARINS_IMU_OK) return status;
-    return sarins_imu_white_noise(table, rows, n_steps, dtheta, dv);
+    return steps_view(&v, n_steps, angle0, rate0, accel, w_t, f_t, amb_end, dtheta, dv, temps, work);
+}
+
+/* One interval with the base motion of the view's base row (sarins_imu_one_interval). */
+static int one_interval_view(ImuView *v, const double *angle0, const double *rate0, const double *accel,
+                             double amb_end, double *dtheta, double *dv, double *temps) {
+    double work[18];
+    return steps_view(v, 1, angle0, rate0, accel, v->base, v->base + 3, &amb_end, dtheta, dv, temps, work);
 }
 
 int sarins_imu_one_interval(const int64_t *table, int64_t rows, const double *angle0, const double *rate0,
                             const double *accel, double amb_end, double *dtheta, double *dv, double *temps) {
-    double work[18];
-    const double *base = table != NULL && rows > SARINS_IMU_BASE ? table_array(table, SARINS_IMU_BASE) : NULL;
-    if (base == NULL) return SARINS_IMU_BAD_TABLE;
-    return sarins_imu_steps(table, rows, 1, angle0, rate0, accel, base, base + 3, &amb_end, dtheta, dv, temps,
-                            work);
+    ImuView v;
+    int status = imu_view(table, rows, &v);
+    if (status != SARINS_IMU_OK) return status;
+    return one_interval_view(&v, angle0, rate0, accel, amb_end, dtheta, dv, temps);
 }
 
 /* ------------------------------------------------------ seeding and ageing */
@@ -802,7 +837,7 @@ int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, do
         memcpy(v.base + 3, v_chosen + 12, 3 * sizeof *v.base);
     }
     double dtheta[3], dv[3], temps[6];
-    if (sarins_imu_one_interval(table, rows, motion[0], motion[1], motion[2], amb_end, dtheta, dv, temps)
+    if (one_interval_view(&v, motion[0], motion[1], motion[2], amb_end, dtheta, dv, temps)
         != SARINS_IMU_OK)
         return 1; /* not reached: the table and its stream states were checked above */
     for (int i = 0; i < 3; i++) {
