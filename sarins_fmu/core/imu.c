@@ -199,33 +199,54 @@ static LANE_INLINE void rot_t_lane(double ax, double ay, double az, double c, do
     *z = c * v2 - s * cz + d * az;
 }
 
-/* sarins_imu_truth lane by lane: gimbal states ang, rat, acc [A] lanes; w_t, f_t [3] lanes; out [6] lanes.
- * Per gimbal, w, f and s turn by R^T as rot_t turns them. */
+/* Gimbal j of truth_lanes: w, f, s (v[0..8] lanes) turned by R^T as rot_t turns them, then s += thetadot a.
+ * first: s is still the zero vector (+0.0 each), taken as literals rather than stored (a store of zeros
+ * becomes a memset, a slow rep stos here). */
+static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, const double *restrict ang,
+                                     const double *restrict rat, const double *restrict acc, double tau,
+                                     Lanes *restrict v) {
+    Lanes th, thd, c, sn;
+    for (int l = 0; l < LANES; l++) {
+        th[l] = ang[l] + (rat[l] + 0.5 * acc[l] * tau) * tau;
+        thd[l] = rat[l] + acc[l] * tau;
+    }
+    for (int l = 0; l < LANES; l++) {
+        c[l] = cos(th[l]);
+        sn[l] = sin(th[l]);
+    }
+    double ax = axis[0], ay = axis[1], az = axis[2];
+    for (int l = 0; l < LANES; l++) {
+        double s0 = first ? 0.0 : v[6][l], s1 = first ? 0.0 : v[7][l], s2 = first ? 0.0 : v[8][l];
+        rot_t_lane(ax, ay, az, c[l], sn[l], &v[0][l], &v[1][l], &v[2][l]);
+        rot_t_lane(ax, ay, az, c[l], sn[l], &v[3][l], &v[4][l], &v[5][l]);
+        rot_t_lane(ax, ay, az, c[l], sn[l], &s0, &s1, &s2);
+        v[6][l] = s0 + thd[l] * ax;
+        v[7][l] = s1 + thd[l] * ay;
+        v[8][l] = s2 + thd[l] * az;
+    }
+}
+
+/* sarins_imu_truth lane by lane: gimbal states ang, rat, acc [A] lanes; w_t, f_t [3] lanes; out [6] lanes. */
 static LANE_INLINE void truth_lanes(int64_t n_axes, const double *restrict axes, const Lanes *restrict ang,
-                               const Lanes *restrict rat, const Lanes *restrict acc, double tau,
-                               const Lanes *restrict w_t, const Lanes *restrict f_t, Lanes *restrict out) {
-    Lanes v[9]; /* w, f, s */
-    memcpy(v, w_t, 3 * sizeof *v);
-    memcpy(v + 3, f_t, 3 * sizeof *v);
-    memset(v + 6, 0, 3 * sizeof *v);
+                                    const Lanes *restrict rat, const Lanes *restrict acc, double tau,
+                                    const Lanes *restrict w_t, const Lanes *restrict f_t, Lanes *restrict out) {
+    Lanes v[9]; /* w, f, s (omega_tb in the current gimbal frame) */
+    for (int a = 0; a < 3; a++) {
+        for (int l = 0; l < LANES; l++) {
+            v[a][l] = w_t[a][l];
+            v[3 + a][l] = f_t[a][l];
+        }
+    }
+    if (n_axes < 1) { /* no gimbal (the binding refuses it): s stays zero */
+        for (int a = 6; a < 9; a++) {
+            for (int l = 0; l < LANES; l++) v[a][l] = 0.0;
+        }
+    }
     for (int64_t j = 0; j < n_axes; j++) {
-        Lanes th, thd, c, sn;
-        for (int l = 0; l < LANES; l++) {
-            th[l] = ang[j][l] + (rat[j][l] + 0.5 * acc[j][l] * tau) * tau;
-            thd[l] = rat[j][l] + acc[j][l] * tau;
-        }
-        for (int l = 0; l < LANES; l++) {
-            c[l] = cos(th[l]);
-            sn[l] = sin(th[l]);
-        }
-        double ax = axes[3 * j], ay = axes[3 * j + 1], az = axes[3 * j + 2];
-        for (int l = 0; l < LANES; l++) {
-            rot_t_lane(ax, ay, az, c[l], sn[l], &v[0][l], &v[1][l], &v[2][l]);
-            rot_t_lane(ax, ay, az, c[l], sn[l], &v[3][l], &v[4][l], &v[5][l]);
-            rot_t_lane(ax, ay, az, c[l], sn[l], &v[6][l], &v[7][l], &v[8][l]);
-            v[6][l] += thd[l] * ax;
-            v[7][l] += thd[l] * ay;
-            v[8][l] += thd[l] * az;
+        if (j == 0) {
+            gimbal_lanes(1, axes, ang[0], rat[0], acc[0], tau, v);
+        } else {
+            gimbal_lanes(0, axes + 3 * j, ang[j], rat[j], acc[j], tau, v);
         }
     }
     for (int a = 0; a < 3; a++) {
@@ -289,13 +310,17 @@ LANE_CLONES static void interval_lanes(int64_t k0, int64_t n_axes, const double 
             for (int l = 0; l < LANES; l++)
                 g[a][l] = g_sens[3 * a] * u[0][l] + g_sens[3 * a + 1] * u[1][l] + g_sens[3 * a + 2] * u[2][l];
         }
-        if (lowrate) {
+        if (lowrate) { /* the exp calls of the three axes together: one wait for their results */
             for (int a = 0; a < 3; a++) {
                 for (int l = 0; l < LANES; l++) {
                     double r = e[a][l] / (dt * g_width[a]);
                     x[a][l] = -(r * r);
                 }
+            }
+            for (int a = 0; a < 3; a++) {
                 for (int l = 0; l < LANES; l++) x[a][l] = exp(x[a][l]);
+            }
+            for (int a = 0; a < 3; a++) {
                 for (int l = 0; l < LANES; l++) g[a][l] += g_lowrate[a] * e[a][l] * x[a][l];
             }
         }
