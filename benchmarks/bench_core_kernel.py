@@ -2,16 +2,21 @@
 
 Cost in ns per 200 Hz sample of ``sarins_imu_increments`` through its
 binding (:func:`sarins_fmu.core.imu.increments`: one gimbal about z, mems-like
-error terms, low-rate nonlinearity on) on one thread and on all threads, beside
-the same arithmetic written as one flat scalar C loop (one gimbal, no
-function-pointer or array-shape generality), compiled here at run time with
-the core's flags and timed in C.  A last pair of lines times the whole
-``IMU.step`` of the ``mems`` preset on the same motion (thermal model,
-every error term, all its random numbers drawn in the C core) against the
-same yardstick.  The ratios hold on a noisy machine because
-both run in the same minute on the same cores.
+error terms, low-rate nonlinearity on) beside the same arithmetic written as
+one flat scalar C loop (one gimbal, no function-pointer or array-shape
+generality), compiled here at run time with the core's flags and timed in C.
+The core is timed one interval at a time (its scalar path, the reference of
+the lanes), in SIMD lanes on one thread, and in lanes on all threads.  Then
+the whole ``IMU.step`` of the ``mems`` and ``nav-rlg`` presets on the same
+motion (thermal model, every error term, all their random numbers drawn in
+the C core), and a whole in-process static run (``run_static``: turntable,
+IMU, INS; the path of ``sarins navigate``), each on one thread and on all.
 
-    python benchmarks/bench_core_kernel.py [--intervals 4000] [--repeat 5]
+The machine may be loaded: every figure is measured in each of ``--rounds``
+rounds (the yardstick too, in each round), the best of each counts, and
+each is printed as its ratio to the yardstick.
+
+    python benchmarks/bench_core_kernel.py [--intervals 4000] [--repeat 3] [--rounds 3]
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ import numpy as np
 
 from sarins_fmu import imu as imu_mod
 from sarins_fmu.core import imu as core_imu
+from sarins_fmu.experiments import run_static
 
 FLAGS = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-fno-fast-math", "-ffp-contract=off"]  # as setup.py
 N_SUB = 200  # minor steps per 1 s interval
@@ -163,61 +169,103 @@ def core_args(n_int: int):
             np.full((n_int, 3), A_SF), mis, np.full((n_int, 3), A_BIAS), np.full(3, QUAD_A))
 
 
-def core_ns(n_int: int, repeat: int, threads: int) -> float:
-    """ns per sample of the core's minor loop through its binding (best of ``repeat``)."""
+def core_ns(n_int: int, repeat: int, threads: int, lanes: bool = True) -> float:
+    """ns per sample of the core's minor loop through its binding (best of ``repeat``); ``lanes=False``: the
+    scalar path, one interval at a time."""
     args = core_args(n_int)
     core_imu.increments(*core_args(64), threads=threads)  # thread pool start-up outside the timing
     best = math.inf
     for _ in range(repeat):
         t0 = time.perf_counter()
-        core_imu.increments(*args, threads=threads)
+        core_imu.increments(*args, threads=threads, lanes=lanes)
         best = min(best, time.perf_counter() - t0)
     return best * 1e9 / (n_int * N_SUB)
 
 
-def imu_step_ns(n_int: int, repeat: int, threads: int) -> float:
-    """ns per sample of the whole ``IMU.step`` of the mems preset (one gimbal turning at RATE, static base),
+class _Threads:
+    """SARINS_THREADS set to ``threads`` inside the block."""
+
+    def __init__(self, threads: int):
+        self.threads, self.saved = threads, None
+
+    def __enter__(self):
+        self.saved = os.environ.get("SARINS_THREADS")
+        os.environ["SARINS_THREADS"] = str(self.threads)
+
+    def __exit__(self, *exc):
+        if self.saved is None:
+            del os.environ["SARINS_THREADS"]
+        else:
+            os.environ["SARINS_THREADS"] = self.saved
+
+
+def imu_step_ns(n_int: int, repeat: int, threads: int, preset: str = "mems") -> float:
+    """ns per sample of the whole ``IMU.step`` of ``preset`` (one gimbal turning at RATE, static base),
     a new IMU per timed call (best of ``repeat``); ``threads`` through SARINS_THREADS."""
     k = np.arange(n_int)
     angle0, rate0, accel = (RATE * k)[:, None], np.full((n_int, 1), RATE), np.zeros((n_int, 1))
-    saved = os.environ.get("SARINS_THREADS")
-    os.environ["SARINS_THREADS"] = str(threads)
-    try:
-        best = math.inf
+    best = math.inf
+    with _Threads(threads):
         for _ in range(repeat):
-            sensor = imu_mod.IMU(imu_mod.preset("mems"), imu_mod.StaticBase(0.6), [[0.0, 0.0, 1.0]],
+            sensor = imu_mod.IMU(imu_mod.preset(preset), imu_mod.StaticBase(0.6), [[0.0, 0.0, 1.0]],
                                  internal_rate=N_SUB, seed=1)
             t0 = time.perf_counter()
             sensor.step(angle0, rate0, accel)
             best = min(best, time.perf_counter() - t0)
-    finally:
-        if saved is None:
-            del os.environ["SARINS_THREADS"]
-        else:
-            os.environ["SARINS_THREADS"] = saved
     return best * 1e9 / (n_int * N_SUB)
+
+
+def static_run_ns(n_int: int, repeat: int, threads: int) -> float:
+    """ns per sample of a whole in-process static run (``run_static``, nav-rlg, continuous rotation, a quarter
+    of it aligning): turntable, IMU and INS, as ``sarins navigate`` runs them (best of ``repeat``)."""
+    hours = n_int / 3600.0
+    best = math.inf
+    with _Threads(threads):
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            run_static(align_hours=0.25 * hours, nav_hours=0.75 * hours, rotation="continuous", imu="nav-rlg",
+                       seed=1)
+            best = min(best, time.perf_counter() - t0)
+    return best * 1e9 / (n_int * N_SUB)
+
+
+def measure(n_int: int, repeat: int, rounds: int) -> tuple[float, dict]:
+    """Best yardstick (ns/sample) and best of each figure over ``rounds`` rounds, every round measuring all
+    of them in turn (so that a change of the machine's load hits them alike)."""
+    threads = core_imu.thread_count()
+    figures = {
+        "core minor loop, scalar, 1 thread": lambda: core_ns(n_int, repeat, 1, lanes=False),
+        "core minor loop, SIMD, 1 thread": lambda: core_ns(n_int, repeat, 1),
+        f"core minor loop, SIMD, {threads} threads": lambda: core_ns(n_int, repeat, threads),
+        "IMU.step mems, 1 thread": lambda: imu_step_ns(n_int, repeat, 1),
+        f"IMU.step mems, {threads} threads": lambda: imu_step_ns(n_int, repeat, threads),
+        "IMU.step nav-rlg, 1 thread": lambda: imu_step_ns(n_int, repeat, 1, "nav-rlg"),
+        f"IMU.step nav-rlg, {threads} threads": lambda: imu_step_ns(n_int, repeat, threads, "nav-rlg"),
+        "static run nav-rlg, 1 thread": lambda: static_run_ns(n_int, 1, 1),
+        f"static run nav-rlg, {threads} threads": lambda: static_run_ns(n_int, 1, threads),
+    }
+    yard, best = math.inf, dict.fromkeys(figures, math.inf)
+    for _ in range(rounds):
+        yard = min(yard, yardstick_ns(n_int, repeat))
+        for label, run in figures.items():
+            best[label] = min(best[label], run())
+    return yard, best
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--intervals", type=int, default=4000, help="1 s intervals per timed call")
-    parser.add_argument("--repeat", type=int, default=5, help="timed calls (the best counts)")
+    parser.add_argument("--repeat", type=int, default=3, help="timed calls per round (the best counts)")
+    parser.add_argument("--rounds", type=int, default=3, help="rounds, each timing every figure and the yardstick")
     args = parser.parse_args()
-    if args.intervals < 64 or args.repeat < 1:
-        parser.error("--intervals must be >= 64 and --repeat >= 1")
-    threads = core_imu.thread_count()
-    yard = yardstick_ns(args.intervals, args.repeat)
-    one = core_ns(args.intervals, args.repeat, 1)
-    every = core_ns(args.intervals, args.repeat, threads)
-    step_one = imu_step_ns(args.intervals, args.repeat, 1)
-    step_every = imu_step_ns(args.intervals, args.repeat, threads)
-    yard_again = yardstick_ns(args.intervals, args.repeat)  # the machine's load may have changed meanwhile
-    yard = min(yard, yard_again)
-    print(f"{args.intervals} intervals x {N_SUB} minor steps, best of {args.repeat}; cpu_count {os.cpu_count()}")
-    print(f"  {'yardstick (flat scalar C loop)':<34} {yard:8.1f} ns/sample")
-    for label, value in (("core minor loop, 1 thread", one), (f"core minor loop, {threads} threads", every),
-                         ("IMU.step mems, 1 thread", step_one), (f"IMU.step mems, {threads} threads", step_every)):
-        print(f"  {label:<34} {value:8.1f} ns/sample   ratio {value / yard:5.2f}")
+    if args.intervals < 64 or args.repeat < 1 or args.rounds < 1:
+        parser.error("--intervals must be >= 64, --repeat and --rounds >= 1")
+    yard, best = measure(args.intervals, args.repeat, args.rounds)
+    print(f"{args.intervals} intervals x {N_SUB} minor steps, best of {args.repeat} x {args.rounds} rounds; "
+          f"cpu_count {os.cpu_count()}")
+    print(f"  {'yardstick (flat scalar C loop)':<38} {yard:8.1f} ns/sample")
+    for label, value in best.items():
+        print(f"  {label:<38} {value:8.1f} ns/sample   ratio {value / yard:5.2f}")
 
 
 if __name__ == "__main__":

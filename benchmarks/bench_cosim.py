@@ -8,8 +8,6 @@ Reports, in one process, same seed:
 * wall time of the co-simulation (Turntable -> IMUThermal -> StrapdownINS,
   Gauss-Seidel, 1 s step, nav-rlg, recording three outputs) as
   ``N.Nx the in-process run``; the results must be bit-identical (asserted);
-* the same co-simulation with the slaves' compiled steps called through
-  their Python ``do_step`` instead of from C (``SARINS_FMU_NO_FAST_STEP=1``);
 * where a co-simulation step goes: the FMU calls (a bare loop doing the master's
   get/set/doStep/record calls through the same ctypes pointers; the three FMUs
   are native) and the master's own work (master minus the bare loop).
@@ -57,21 +55,13 @@ def in_process(hours: float, align: float, threads: int | None = None):
             os.environ["SARINS_THREADS"] = before
 
 
-def cosimulate(system, hours: float, fast: bool):
-    """(result, seconds) of the master's run; ``fast=False`` keeps the native layer off the compiled steps."""
-    saved = os.environ.pop("SARINS_FMU_NO_FAST_STEP", None)
-    if not fast:
-        os.environ["SARINS_FMU_NO_FAST_STEP"] = "1"
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            t0 = time.perf_counter()
-            res = simulate_system(system, hours * 3600.0, 1.0, progress=False, record=RECORD)
-            return res, time.perf_counter() - t0
-    finally:
-        os.environ.pop("SARINS_FMU_NO_FAST_STEP", None)
-        if saved is not None:
-            os.environ["SARINS_FMU_NO_FAST_STEP"] = saved
+def cosimulate(system, hours: float):
+    """(result, seconds) of the master's run."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        t0 = time.perf_counter()
+        res = simulate_system(system, hours * 3600.0, 1.0, progress=False, record=RECORD)
+        return res, time.perf_counter() - t0
 
 
 def bare_loop(fmu_dir: Path, n: int, align_s: float) -> float:
@@ -135,18 +125,16 @@ def main():
         system = standard_static(fmu_dir, hours=hours, turntable=dict(align_time=align * 3600),
                                  ins=dict(align_time=align * 3600))
         run_static(align_hours=align, nav_hours=0.1)  # compile / load caches first
-        cosimulate(system, 0.2, True)  # the FMUs' caches too
+        cosimulate(system, 0.2)  # the FMUs' caches too
         ref, t_inproc = in_process(hours, align)
         _, t_serial = in_process(hours, align, threads=1)
-        res, t_cosim = cosimulate(system, hours, True)
-        res_py, t_cosim_py = cosimulate(system, hours, False)
+        res, t_cosim = cosimulate(system, hours)
         n_raw = min(steps, 30000)
         t_raw = bare_loop(fmu_dir, n_raw, align * 3600)
     nav = int(round(align * 3600)) + 1
-    for name, out in (("compiled steps from C", res), ("compiled steps through do_step", res_py)):
-        for field, series in (("lat_error", ref.lat_error), ("position_error", ref.position_error)):
-            got = out[f"ins.{field}"][nav:]
-            assert len(got) == len(series) and np.array_equal(got, series), f"{name}: ins.{field} differs"
+    for field, series in (("lat_error", ref.lat_error), ("position_error", ref.position_error)):
+        got = res[f"ins.{field}"][nav:]
+        assert len(got) == len(series) and np.array_equal(got, series), f"co-simulation: ins.{field} differs"
     load = os.getloadavg()
     us = 1e6 / steps
     per_step, raw = t_cosim * us, t_raw * 1e6
@@ -155,8 +143,6 @@ def main():
           f"single thread {t_serial:.2f} s = {t_serial * us:.1f} us/step")
     print(f"co-simulation  : {t_cosim:7.2f} s = {per_step:5.1f} us/step, {t_cosim / t_inproc:.1f}x the in-process "
           f"run ({t_cosim / t_serial:.1f}x the single-thread one); results bit-identical")
-    print(f"  same, compiled steps through the Python do_step (SARINS_FMU_NO_FAST_STEP=1): {t_cosim_py:.2f} s = "
-          f"{t_cosim_py * us:.1f} us/step, {t_cosim_py / t_inproc:.1f}x")
     print(f"per step       : FMU calls (a bare loop of the master's get/set/doStep/record calls; the three FMUs "
           f"are native) {raw:.1f} us; master's own work {per_step - raw:.1f} us")
 

@@ -35,13 +35,13 @@ def _errors(k, rng=None, scale=0.0):
                 a_bias=r(k, 3), a_quad=r(3))
 
 
-def _increments(axes, angle0, rate0, accel, w_t, f_t, h=H, n_sub=N_SUB, threads=None, **errors):
+def _increments(axes, angle0, rate0, accel, w_t, f_t, h=H, n_sub=N_SUB, threads=None, lanes=True, **errors):
     k = np.shape(angle0)[0]
     args = {**_errors(k), **errors}
     return core_imu.increments(axes, angle0, rate0, accel, w_t, f_t, h, n_sub, args["g_sf"], args["g_mis"],
                                args["g_bias"], args["g_quad"], args["g_lowrate"], args["g_lowrate_width"],
                                args["g_sens"], args["a_sf"], args["a_mis"], args["a_bias"], args["a_quad"],
-                               threads=threads)
+                               threads=threads, lanes=lanes)
 
 
 def rotvec_to_mat(v):
@@ -152,6 +152,33 @@ def test_batch_results_do_not_depend_on_the_thread_count(threads):
     assert all(np.isfinite(x).all() for x in reference)
     out = _increments(axes, *gimbal, *base, n_sub=20, threads=threads, **errors)
     assert np.array_equal(out[0], reference[0]) and np.array_equal(out[1], reference[1])
+
+
+@pytest.mark.parametrize("n_axes", [1, 2, 3, 6, 9])
+@pytest.mark.parametrize("lowrate", [False, True])
+def test_simd_lanes_give_the_scalar_loops_bits(n_axes, lowrate):
+    """The minor loop evaluated SARINS_IMU_LANES intervals side by side equals, bit for bit (signed zeros
+    too), the one-interval-at-a-time loop it was written from, on random inputs: any operation reordered
+    in a lane would show here.  K = 23 leaves a remainder; 9 gimbals exceed the lanes' limit (all scalar)."""
+    rng = np.random.default_rng(100 + n_axes + 10 * lowrate)
+    k = 23
+    axes = rng.standard_normal((n_axes, 3))
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    gimbal = [rng.uniform(-4, 4, (k, n_axes)), rng.uniform(-3, 3, (k, n_axes)), rng.uniform(-0.5, 0.5, (k, n_axes))]
+    gimbal[1][:4] = 0.0  # a block of still gimbals (exact zeros along the loop)
+    gimbal[2][:6] = 0.0
+    base = [rng.standard_normal((k, 3)) * 1e-4, rng.standard_normal((k, 3)) * 5.0]
+    base[0][:2] = 0.0
+    # error terms as large as the increments, so that a rounding changed in any one of them reaches the output
+    errors = _errors(k, rng, scale=0.3)
+    errors["g_lowrate"] = np.array([0.7, -0.5, 0.9]) if lowrate else np.zeros(3)
+    errors["g_lowrate_width"] = np.array([1e-4, 1.5, 3.0])  # rad/s: exp from 0 (underflow) to ~1
+    for n_sub, h in ((200, 1.0), (7, 0.3), (2, 1.5)):  # the last: rad-sized minor steps, every term large
+        scalar = _increments(axes, *gimbal, *base, h=h, n_sub=n_sub, threads=1, lanes=False, **errors)
+        lanes = _increments(axes, *gimbal, *base, h=h, n_sub=n_sub, threads=1, **errors)
+        assert all(np.isfinite(x).all() for x in scalar)
+        for got, want in zip(lanes, scalar):
+            assert np.array_equal(got.view(np.uint64), want.view(np.uint64))
 
 
 def test_imu_runs_are_the_same_whatever_sarins_threads(monkeypatch):

@@ -206,10 +206,8 @@ static void set_start_values(sarins_glue *g)
 /* Every Real output finite, else SARINS_ERROR naming it. */
 int sg_check_outputs(sarins_glue *g, const char *fn)
 {
-    for (size_t k = 0; k < g->table->n_vars; k++) {
-        const sarins_var *v = &g->table->vars[k];
-        if (v->type != SARINS_REAL || v->causality != SARINS_OUTPUT)
-            continue;
+    for (size_t k = 0; k < g->n_outputs; k++) {
+        const sarins_var *v = g->outputs[k];
         if (v->dim < 0 && !isfinite(g->ctx.r[v->slot]))
             return sg_fail(g, "%s: output %s = %g is not finite", fn, v->name, g->ctx.r[v->slot]);
         for (size_t e = 0; v->dim >= 0 && e < sg_length(g, v); e++)
@@ -334,6 +332,7 @@ void sg_free(sarins_glue *g)
     free(g->values);
     free(g->built);
     free((void *)g->by_vr);
+    free((void *)g->outputs);
     free(g->cat_on);
     free(g->name);
     free(g);
@@ -359,12 +358,13 @@ int sg_init(sarins_glue *g, const char *instance_name, const char *token, int lo
             max_vr = t->vars[k].vr;
     g->n_vr = t->n_vars ? (size_t)max_vr + 1 : 0;
     g->by_vr = calloc(g->n_vr ? g->n_vr : 1, sizeof(const sarins_var *));
+    g->outputs = calloc(t->n_vars ? t->n_vars : 1, sizeof(const sarins_var *));
     g->values_size = values_size(t);
     g->values = calloc(g->values_size ? g->values_size : 1, 1);
     g->built = calloc(g->values_size ? g->values_size : 1, 1);
     g->ctx.state = calloc(g->model->state_size ? g->model->state_size : 1, 1);
     g->ctx.a = calloc(t->n_array ? t->n_array : 1, sizeof(double *));
-    if (!g->name || !g->cat_on || !g->by_vr || !g->values || !g->built || !g->ctx.state || !g->ctx.a) {
+    if (!g->name || !g->cat_on || !g->by_vr || !g->outputs || !g->values || !g->built || !g->ctx.state || !g->ctx.a) {
         if (g->emit)
             g->emit(g, SARINS_ERROR, "logStatusError", "out of memory");
         return 0;
@@ -380,8 +380,11 @@ int sg_init(sarins_glue *g, const char *instance_name, const char *token, int lo
                "FMU?)", fn, token ? token : "(null)", t->guid);
         return 0;
     }
-    for (size_t k = 0; k < t->n_vars; k++)
+    for (size_t k = 0; k < t->n_vars; k++) {
         g->by_vr[t->vars[k].vr] = &t->vars[k];
+        if (t->vars[k].type == SARINS_REAL && t->vars[k].causality == SARINS_OUTPUT)
+            g->outputs[g->n_outputs++] = &t->vars[k];
+    }
     point_ctx(g);
     set_start_values(g);
     g->state = S_INSTANTIATED;

@@ -41,6 +41,8 @@ struct sarins_glue {
     int *cat_on;
     const sarins_var **by_vr; /* value reference -> variable (NULL: none) */
     size_t n_vr;
+    const sarins_var **outputs; /* the Real outputs in table order (sg_check_outputs after every step) */
+    size_t n_outputs;
     unsigned char *values; /* the value arrays, one block: r, i, b, s */
     unsigned char *built;  /* the value block as initialize() last saw it (its parameters built c->work) */
     size_t values_size;

@@ -21,9 +21,7 @@ What it does
   and describes its variables to the C core (value reference, type,
   causality, variability, name) and, when the slave offers one, the float64
   buffer that holds its Real variables (``_fmi_buffer`` and ``_fmi_slots``,
-  see ``fmus.slave_support``), which the core reads and writes directly;
-  and, when the slave offers one, its compiled step (``_fmi_fast_step``,
-  see :meth:`Instance.fast_step`).
+  see ``fmus.slave_support``), which the core reads and writes directly.
 """
 
 from __future__ import annotations
@@ -189,25 +187,6 @@ class Instance:
         self.buffer, self.slots = self._buffer(slave, {row[0]: row[1] for row in table})
         self.log_queue = slave._get_log_queue()
         self.slave = slave
-
-    def fast_step(self):
-        """The slave's compiled step for the core, or None.
-
-        A slave with a Real buffer may set ``_fmi_fast_step = (address, table,
-        rows)``: the address of a C function ``int f(int64_t *table, int64_t
-        rows, double *buffer, int64_t n, double t, double h)`` that does a
-        whole ``fmi2DoStep(t, h)`` on the buffer (n doubles) and returns 0, or
-        returns non-zero without having changed anything (the core then calls
-        ``do_step``).  The slave keeps the function and the table alive.  The
-        core asks after each ``do_step`` until it gets one.
-        ``SARINS_FMU_NO_FAST_STEP=1`` disables it (every step through Python).
-        """
-        if self.buffer is None or os.environ.get("SARINS_FMU_NO_FAST_STEP", "") in ("1", "true", "yes"):
-            return None
-        fast = getattr(self.slave, "_fmi_fast_step", None)
-        if not (isinstance(fast, tuple) and len(fast) == 3 and all(isinstance(x, int) and x > 0 for x in fast)):
-            return None
-        return fast
 
     @staticmethod
     def _buffer(slave, kinds):

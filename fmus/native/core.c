@@ -16,9 +16,7 @@
  *   switches every category on; fmi2SetDebugLogging changes them);
  * - Py_Finalize is never called (the interpreter outlives every instance).
  * Reals that the slave keeps in a float64 buffer are read and written here
- * without entering Python.  A slave may also offer a compiled step (see
- * fast_step below): fmi2DoStep then calls it without entering Python and
- * falls back to the slave's do_step when it declines.
+ * without entering Python.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -74,10 +72,6 @@ typedef struct {
     int have_time;
     double t_next;
     double t_start; /* fmi2SetupExperiment's start time (0 until it is called): the first step starts there */
-    /* compiled step offered by the slave (bridge Instance.fast_step()): 0 = step done, else not touched */
-    int (*fast)(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h);
-    int64_t *fast_table;
-    int64_t fast_rows;
 } Inst;
 
 static pthread_mutex_t setup_lock = PTHREAD_MUTEX_INITIALIZER;
@@ -238,9 +232,6 @@ static void clear_slave(Inst *in) {
         in->have_view = 0;
     }
     in->buf = NULL;
-    in->fast = NULL;
-    in->fast_table = NULL;
-    in->fast_rows = 0;
     Py_CLEAR(in->m_do_step); Py_CLEAR(in->m_get_real); Py_CLEAR(in->m_set_real);
     Py_CLEAR(in->m_get_integer); Py_CLEAR(in->m_set_integer); Py_CLEAR(in->m_get_boolean);
     Py_CLEAR(in->m_set_boolean); Py_CLEAR(in->m_get_string); Py_CLEAR(in->m_set_string);
@@ -960,24 +951,6 @@ static fmi2Status core_set_string(fmi2Component c, const fmi2ValueReference vr[]
 
 /* ---------------------------------------------------------------- step */
 
-/* Ask the bridge for the slave's compiled step (GIL held): (function, table, rows) or None. */
-static void refresh_fast(Inst *in) {
-    if (in->buf == NULL || in->bridge_inst == NULL) return;
-    PyObject *r = PyObject_CallMethod(in->bridge_inst, "fast_step", NULL);
-    if (r && PyTuple_Check(r) && PyTuple_GET_SIZE(r) == 3) {
-        void *fn = PyLong_AsVoidPtr(PyTuple_GET_ITEM(r, 0));
-        void *table = PyLong_AsVoidPtr(PyTuple_GET_ITEM(r, 1));
-        long long rows = PyLong_AsLongLong(PyTuple_GET_ITEM(r, 2));
-        if (!PyErr_Occurred() && fn && table && rows > 0) {
-            in->fast = (int (*)(int64_t *, int64_t, double *, int64_t, double, double))fn;
-            in->fast_table = (int64_t *)table;
-            in->fast_rows = (int64_t)rows;
-        }
-    }
-    Py_XDECREF(r);
-    PyErr_Clear(); /* no compiled step: every step goes through do_step */
-}
-
 static fmi2Status core_do_step(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior) {
     Inst *in = (Inst *)c;
     (void)noSetPrior;
@@ -992,31 +965,25 @@ static fmi2Status core_do_step(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Bool
         return fail(in, "fmi2DoStep: the first communication point %.17g is not the start time %.17g "
                     "(fmi2SetupExperiment)", t, in->t_start);
     fmi2Status st;
-    /* the slave's compiled step: no Python, no GIL; non-zero = declined, nothing changed */
-    if (in->fast != NULL && in->fast(in->fast_table, in->fast_rows, in->buf, in->view.len / 8, t, h) == 0) {
-        st = fmi2OK;
-    } else {
-        PyGILState_STATE g = PyGILState_Ensure();
-        PyObject *args[2] = {PyFloat_FromDouble(t), PyFloat_FromDouble(h)};
-        PyObject *r = (args[0] && args[1]) ? PyObject_Vectorcall(in->m_do_step, args, 2, NULL) : NULL;
-        Py_XDECREF(args[0]);
-        Py_XDECREF(args[1]);
-        if (!r) st = py_fail(in, "fmi2DoStep");
+    PyGILState_STATE g = PyGILState_Ensure();
+    PyObject *args[2] = {PyFloat_FromDouble(t), PyFloat_FromDouble(h)};
+    PyObject *r = (args[0] && args[1]) ? PyObject_Vectorcall(in->m_do_step, args, 2, NULL) : NULL;
+    Py_XDECREF(args[0]);
+    Py_XDECREF(args[1]);
+    if (!r) st = py_fail(in, "fmi2DoStep");
+    else {
+        int ok = PyObject_IsTrue(r);
+        Py_DECREF(r);
+        if (ok < 0) st = py_fail(in, "fmi2DoStep");
         else {
-            int ok = PyObject_IsTrue(r);
-            Py_DECREF(r);
-            if (ok < 0) st = py_fail(in, "fmi2DoStep");
-            else {
-                st = (in->log_queue && PyList_GET_SIZE(in->log_queue)) ? after_call(in, 1) : fmi2OK;
-                if (!ok && st < fmi2Discard) {
-                    st = fmi2Discard;
-                    logf_(in, fmi2Discard, "fmi2DoStep: the slave refused the step at t = %.17g", t);
-                }
+            st = (in->log_queue && PyList_GET_SIZE(in->log_queue)) ? after_call(in, 1) : fmi2OK;
+            if (!ok && st < fmi2Discard) {
+                st = fmi2Discard;
+                logf_(in, fmi2Discard, "fmi2DoStep: the slave refused the step at t = %.17g", t);
             }
         }
-        if (st <= fmi2Warning && in->fast == NULL) refresh_fast(in);
-        PyGILState_Release(g);
     }
+    PyGILState_Release(g);
     if (st == fmi2Discard) {
         in->state = S_STEP_FAILED;
         return st;

@@ -69,6 +69,22 @@ static void qrot(const double q[4], const double v[3], double r[3]) {
     r[2] = v[2] + 2.0 * (q[0] * cz + q[1] * cy - q[2] * cx);
 }
 
+/* An interval's outputs from its composed quaternion q (changed) and velocity increment v: dtheta_k[3] the
+ * rotation vector of q, its sign fixed so that the angle is in [0, pi] (2 atan2(|u|, w) u / |u|); dv_k[3] = v. */
+static void finish(double q[4], const double v[3], double *dtheta_k, double *dv_k) {
+    if (q[0] < 0.0) {
+        for (int a = 0; a < 4; a++) q[a] = -q[a];
+    }
+    double vn = sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    double scale = vn > 1e-300 ? 2.0 * atan2(vn, q[0]) / vn : 2.0;
+    dtheta_k[0] = q[1] * scale;
+    dtheta_k[1] = q[2] * scale;
+    dtheta_k[2] = q[3] * scale;
+    dv_k[0] = v[0];
+    dv_k[1] = v[1];
+    dv_k[2] = v[2];
+}
+
 /* Minor loop of output interval k; writes dtheta[k], dv[k]. */
 static void interval(int64_t k, int64_t n_axes, const double *axes, const double *angle0, const double *rate0,
                      const double *accel, const double *w_t, const double *f_t, double h, int64_t n_sub,
@@ -142,18 +158,242 @@ static void interval(int64_t k, int64_t n_axes, const double *axes, const double
         memcpy(pv, dvm, sizeof pv);
         memcpy(t0, t1, sizeof t0);
     }
-    /* rotation vector of q, sign fixed so that the angle is in [0, pi]: 2 atan2(|u|, w) u / |u| */
-    if (q[0] < 0.0) {
-        for (int a = 0; a < 4; a++) q[a] = -q[a];
+    finish(q, v, dtheta + 3 * k, dv + 3 * k);
+}
+
+
+/* ------------------------------------------------- minor loop in lanes */
+
+/* SARINS_IMU_LANES intervals side by side (struct of arrays, one element per
+ * interval): every lane does the operations of interval() in the same order,
+ * so its results are those of interval() bit for bit; the loops over lanes
+ * carry no dependence, so the compiler evaluates them in SIMD registers.
+ * The libm calls (sin, cos, exp, atan2) stay one per lane. */
+#define LANES SARINS_IMU_LANES
+typedef double Lanes[LANES];
+
+/* With GCC or clang on x86-64 glibc, interval_lanes is also compiled for AVX2 (four lanes in one register) and
+ * the loader picks the variant the CPU runs; elsewhere the one portable build (SSE2 on x86-64).  Both do
+ * the same IEEE operations (no contraction: -ffp-contract=off), so the results are the same. */
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && defined(__GLIBC__) && defined(__has_attribute)
+#if __has_attribute(target_clones)
+#define LANE_CLONES __attribute__((target_clones("avx2", "default")))
+#define LANE_INLINE __attribute__((always_inline)) inline /* into each variant (GCC inlines no plain callee) */
+#endif
+#endif
+#ifndef LANE_CLONES
+#define LANE_CLONES
+#define LANE_INLINE inline
+#endif
+
+/* (x, y, z) <- R(a, theta)^T (x, y, z): rot_t on one lane's vector */
+static LANE_INLINE void rot_t_lane(double ax, double ay, double az, double c, double s, double *x, double *y,
+                                   double *z) {
+    double v0 = *x, v1 = *y, v2 = *z;
+    double cx = ay * v2 - az * v1;
+    double cy = az * v0 - ax * v2;
+    double cz = ax * v1 - ay * v0;
+    double d = (1.0 - c) * (ax * v0 + ay * v1 + az * v2);
+    *x = c * v0 - s * cx + d * ax;
+    *y = c * v1 - s * cy + d * ay;
+    *z = c * v2 - s * cz + d * az;
+}
+
+/* Gimbal j of truth_lanes: w, f, s (v[0..8] lanes) turned by R^T as rot_t turns them, then s += thetadot a.
+ * first: s is still the zero vector (+0.0 each), taken as literals rather than stored (a store of zeros
+ * becomes a memset, a slow rep stos here). */
+static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, const double *restrict ang,
+                                     const double *restrict rat, const double *restrict acc, double tau,
+                                     Lanes *restrict v) {
+    Lanes th, thd, c, sn;
+    for (int l = 0; l < LANES; l++) {
+        th[l] = ang[l] + (rat[l] + 0.5 * acc[l] * tau) * tau;
+        thd[l] = rat[l] + acc[l] * tau;
     }
-    double vn = sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    double scale = vn > 1e-300 ? 2.0 * atan2(vn, q[0]) / vn : 2.0;
-    dtheta[3 * k] = q[1] * scale;
-    dtheta[3 * k + 1] = q[2] * scale;
-    dtheta[3 * k + 2] = q[3] * scale;
-    dv[3 * k] = v[0];
-    dv[3 * k + 1] = v[1];
-    dv[3 * k + 2] = v[2];
+    for (int l = 0; l < LANES; l++) {
+        c[l] = cos(th[l]);
+        sn[l] = sin(th[l]);
+    }
+    double ax = axis[0], ay = axis[1], az = axis[2];
+    for (int l = 0; l < LANES; l++) {
+        double s0 = first ? 0.0 : v[6][l], s1 = first ? 0.0 : v[7][l], s2 = first ? 0.0 : v[8][l];
+        rot_t_lane(ax, ay, az, c[l], sn[l], &v[0][l], &v[1][l], &v[2][l]);
+        rot_t_lane(ax, ay, az, c[l], sn[l], &v[3][l], &v[4][l], &v[5][l]);
+        rot_t_lane(ax, ay, az, c[l], sn[l], &s0, &s1, &s2);
+        v[6][l] = s0 + thd[l] * ax;
+        v[7][l] = s1 + thd[l] * ay;
+        v[8][l] = s2 + thd[l] * az;
+    }
+}
+
+/* sarins_imu_truth lane by lane: gimbal states ang, rat, acc [A] lanes; w_t, f_t [3] lanes; out [6] lanes. */
+static LANE_INLINE void truth_lanes(int64_t n_axes, const double *restrict axes, const Lanes *restrict ang,
+                                    const Lanes *restrict rat, const Lanes *restrict acc, double tau,
+                                    const Lanes *restrict w_t, const Lanes *restrict f_t, Lanes *restrict out) {
+    Lanes v[9]; /* w, f, s (omega_tb in the current gimbal frame) */
+    for (int a = 0; a < 3; a++) {
+        for (int l = 0; l < LANES; l++) {
+            v[a][l] = w_t[a][l];
+            v[3 + a][l] = f_t[a][l];
+        }
+    }
+    if (n_axes < 1) { /* no gimbal (the binding refuses it): s stays zero */
+        for (int a = 6; a < 9; a++) {
+            for (int l = 0; l < LANES; l++) v[a][l] = 0.0;
+        }
+    }
+    for (int64_t j = 0; j < n_axes; j++) {
+        if (j == 0) {
+            gimbal_lanes(1, axes, ang[0], rat[0], acc[0], tau, v);
+        } else {
+            gimbal_lanes(0, axes + 3 * j, ang[j], rat[j], acc[j], tau, v);
+        }
+    }
+    for (int a = 0; a < 3; a++) {
+        for (int l = 0; l < LANES; l++) {
+            out[a][l] = v[a][l] + v[6 + a][l];
+            out[3 + a][l] = v[3 + a][l];
+        }
+    }
+}
+
+/* rows k0..k0+LANES-1 of the (K, cols) array x into lanes, column-major */
+static void load_lanes(const double *x, int64_t k0, int64_t cols, Lanes *out) {
+    for (int64_t c = 0; c < cols; c++) {
+        for (int l = 0; l < LANES; l++) out[c][l] = x[(k0 + l) * cols + c];
+    }
+}
+
+/* The minor loops of intervals k0..k0+LANES-1 (n_axes <= SARINS_IMU_MAX_AXES); arguments as interval(). */
+LANE_CLONES static void interval_lanes(int64_t k0, int64_t n_axes, const double *axes, const double *angle0,
+                           const double *rate0, const double *accel, const double *w_t, const double *f_t, double h,
+                           int64_t n_sub, const double *g_sf, const double *g_mis, const double *g_bias,
+                           const double *g_quad, const double *g_lowrate, const double *g_width,
+                           const double *g_sens, const double *a_sf, const double *a_mis, const double *a_bias,
+                           const double *a_quad, double *dtheta, double *dv) {
+    Lanes ang[SARINS_IMU_MAX_AXES], rat[SARINS_IMU_MAX_AXES], acc[SARINS_IMU_MAX_AXES];
+    Lanes wk[3], fk[3], gsf[3], gb[3], asf[3], ab[3];
+    load_lanes(angle0, k0, n_axes, ang);
+    load_lanes(rate0, k0, n_axes, rat);
+    load_lanes(accel, k0, n_axes, acc);
+    load_lanes(w_t, k0, 3, wk);
+    load_lanes(f_t, k0, 3, fk);
+    load_lanes(g_sf, k0, 3, gsf);
+    load_lanes(g_bias, k0, 3, gb);
+    load_lanes(a_sf, k0, 3, asf);
+    load_lanes(a_bias, k0, 3, ab);
+    int lowrate = g_lowrate[0] != 0.0 || g_lowrate[1] != 0.0 || g_lowrate[2] != 0.0;
+    double dt = h / (double)n_sub;
+    Lanes t0[6], t1[6];
+    Lanes q[4], v[3], pa[3], pv[3]; /* as in interval() */
+    for (int l = 0; l < LANES; l++) {
+        q[0][l] = 1.0;
+        q[1][l] = q[2][l] = q[3][l] = 0.0;
+        v[0][l] = v[1][l] = v[2][l] = 0.0;
+        pa[0][l] = pa[1][l] = pa[2][l] = 0.0;
+        pv[0][l] = pv[1][l] = pv[2][l] = 0.0;
+    }
+    for (int64_t i = 0; i <= n_sub; i++) { /* one call site of truth_lanes, inlined into each variant */
+        truth_lanes(n_axes, axes, ang, rat, acc, (double)i * dt, wk, fk, t1);
+        if (i == 0) {
+            memcpy(t0, t1, sizeof t0);
+            continue;
+        }
+        Lanes u[3], e[3], g[3], x[3];
+        for (int a = 0; a < 3; a++) {
+            for (int l = 0; l < LANES; l++) {
+                u[a][l] = 0.5 * (t0[3 + a][l] + t1[3 + a][l]) * dt;
+                e[a][l] = 0.5 * (t0[a][l] + t1[a][l]) * dt;
+            }
+        }
+        for (int a = 0; a < 3; a++) {
+            for (int l = 0; l < LANES; l++)
+                g[a][l] = g_sens[3 * a] * u[0][l] + g_sens[3 * a + 1] * u[1][l] + g_sens[3 * a + 2] * u[2][l];
+        }
+        if (lowrate) { /* the exp calls of the three axes together: one wait for their results */
+            for (int a = 0; a < 3; a++) {
+                for (int l = 0; l < LANES; l++) {
+                    double r = e[a][l] / (dt * g_width[a]);
+                    x[a][l] = -(r * r);
+                }
+            }
+            for (int a = 0; a < 3; a++) {
+                for (int l = 0; l < LANES; l++) x[a][l] = exp(x[a][l]);
+            }
+            for (int a = 0; a < 3; a++) {
+                for (int l = 0; l < LANES; l++) g[a][l] += g_lowrate[a] * e[a][l] * x[a][l];
+            }
+        }
+        for (int l = 0; l < LANES; l++) {
+            double d0 = e[0][l], d1 = e[1][l], d2 = e[2][l];
+            /* apply_errors on e, then + g */
+            double da0 = d0 * (1.0 + gsf[0][l]) + g_mis[1] * d1 + g_mis[2] * d2 + gb[0][l] * dt
+                         + g_quad[0] * d0 * fabs(d0) / dt;
+            double da1 = d1 * (1.0 + gsf[1][l]) + g_mis[3] * d0 + g_mis[5] * d2 + gb[1][l] * dt
+                         + g_quad[1] * d1 * fabs(d1) / dt;
+            double da2 = d2 * (1.0 + gsf[2][l]) + g_mis[6] * d0 + g_mis[7] * d1 + gb[2][l] * dt
+                         + g_quad[2] * d2 * fabs(d2) / dt;
+            da0 += g[0][l];
+            da1 += g[1][l];
+            da2 += g[2][l];
+            double u0 = u[0][l], u1 = u[1][l], u2 = u[2][l];
+            double dv0 = u0 * (1.0 + asf[0][l]) + a_mis[1] * u1 + a_mis[2] * u2 + ab[0][l] * dt
+                         + a_quad[0] * u0 * fabs(u0) / dt;
+            double dv1 = u1 * (1.0 + asf[1][l]) + a_mis[3] * u0 + a_mis[5] * u2 + ab[1][l] * dt
+                         + a_quad[1] * u1 * fabs(u1) / dt;
+            double dv2 = u2 * (1.0 + asf[2][l]) + a_mis[6] * u0 + a_mis[7] * u1 + ab[2][l] * dt
+                         + a_quad[2] * u2 * fabs(u2) / dt;
+            double pa0 = pa[0][l], pa1 = pa[1][l], pa2 = pa[2][l], pv0 = pv[0][l], pv1 = pv[1][l], pv2 = pv[2][l];
+            /* sculling, as interval() */
+            double s0 = dv0 + 0.5 * (da1 * dv2 - da2 * dv1)
+                        + ((pa1 * dv2 - pa2 * dv1) + (pv1 * da2 - pv2 * da1)) / 12.0;
+            double s1 = dv1 + 0.5 * (da2 * dv0 - da0 * dv2)
+                        + ((pa2 * dv0 - pa0 * dv2) + (pv2 * da0 - pv0 * da2)) / 12.0;
+            double s2 = dv2 + 0.5 * (da0 * dv1 - da1 * dv0)
+                        + ((pa0 * dv1 - pa1 * dv0) + (pv0 * da1 - pv1 * da0)) / 12.0;
+            double q0 = q[0][l], q1 = q[1][l], q2 = q[2][l], q3 = q[3][l];
+            /* qrot(q, s) added to v */
+            double cx = q2 * s2 - q3 * s1, cy = q3 * s0 - q1 * s2, cz = q1 * s1 - q2 * s0;
+            v[0][l] += s0 + 2.0 * (q0 * cx + q2 * cz - q3 * cy);
+            v[1][l] += s1 + 2.0 * (q0 * cy + q3 * cx - q1 * cz);
+            v[2][l] += s2 + 2.0 * (q0 * cz + q1 * cy - q2 * cx);
+            /* coning, quaternion update */
+            double p0 = da0 + (pa1 * da2 - pa2 * da1) / 12.0;
+            double p1 = da1 + (pa2 * da0 - pa0 * da2) / 12.0;
+            double p2 = da2 + (pa0 * da1 - pa1 * da0) / 12.0;
+            double th2 = p0 * p0 + p1 * p1 + p2 * p2;
+            double c = 1.0 - th2 / 8.0 + th2 * th2 / 384.0;
+            double s = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0;
+            q[0][l] = q0 * c - s * (q1 * p0 + q2 * p1 + q3 * p2);
+            q[1][l] = q0 * s * p0 + q1 * c + s * (q2 * p2 - q3 * p1);
+            q[2][l] = q0 * s * p1 + q2 * c + s * (q3 * p0 - q1 * p2);
+            q[3][l] = q0 * s * p2 + q3 * c + s * (q1 * p1 - q2 * p0);
+            pa[0][l] = da0;
+            pa[1][l] = da1;
+            pa[2][l] = da2;
+            pv[0][l] = dv0;
+            pv[1][l] = dv1;
+            pv[2][l] = dv2;
+        }
+        memcpy(t0, t1, sizeof t0);
+    }
+    for (int l = 0; l < LANES; l++) {
+        double ql[4] = {q[0][l], q[1][l], q[2][l], q[3][l]}, vl[3] = {v[0][l], v[1][l], v[2][l]};
+        finish(ql, vl, dtheta + 3 * (k0 + l), dv + 3 * (k0 + l));
+    }
+}
+
+void sarins_imu_increments_scalar(int64_t k0, int64_t k1, int64_t n_axes, const double *axes, const double *angle0,
+                                  const double *rate0, const double *accel, const double *w_t, const double *f_t,
+                                  double h, int64_t n_sub, const double *g_sf, const double *g_mis,
+                                  const double *g_bias, const double *g_quad, const double *g_lowrate,
+                                  const double *g_lowrate_width, const double *g_sens, const double *a_sf,
+                                  const double *a_mis, const double *a_bias, const double *a_quad, double *dtheta,
+                                  double *dv) {
+    for (int64_t k = k0; k < k1; k++) {
+        interval(k, n_axes, axes, angle0, rate0, accel, w_t, f_t, h, n_sub, g_sf, g_mis, g_bias, g_quad,
+                 g_lowrate, g_lowrate_width, g_sens, a_sf, a_mis, a_bias, a_quad, dtheta, dv);
+    }
 }
 
 void sarins_imu_increments(int64_t k0, int64_t k1, int64_t n_axes, const double *axes, const double *angle0,
@@ -163,7 +403,13 @@ void sarins_imu_increments(int64_t k0, int64_t k1, int64_t n_axes, const double 
                            const double *g_lowrate_width, const double *g_sens, const double *a_sf,
                            const double *a_mis, const double *a_bias, const double *a_quad, double *dtheta,
                            double *dv) {
-    for (int64_t k = k0; k < k1; k++) {
+    if (n_axes <= SARINS_IMU_MAX_AXES) {
+        for (; k0 + LANES <= k1; k0 += LANES) {
+            interval_lanes(k0, n_axes, axes, angle0, rate0, accel, w_t, f_t, h, n_sub, g_sf, g_mis, g_bias, g_quad,
+                           g_lowrate, g_lowrate_width, g_sens, a_sf, a_mis, a_bias, a_quad, dtheta, dv);
+        }
+    }
+    for (int64_t k = k0; k < k1; k++) { /* the remainder (or every interval of more than MAX_AXES gimbals) */
         interval(k, n_axes, axes, angle0, rate0, accel, w_t, f_t, h, n_sub, g_sf, g_mis, g_bias, g_quad,
                  g_lowrate, g_lowrate_width, g_sens, a_sf, a_mis, a_bias, a_quad, dtheta, dv);
     }
@@ -243,6 +489,8 @@ typedef struct {
     double *consts, *clock, *sensor_par, *state, *coef, *triad, *mats, *axes, *base, *rng, *corr_par, *corr_state,
         *phi, *q, *x_flicker, *dyn_par, *dyn_state;
     int64_t n_axes, n_flicker;
+    SarinsRng streams[SARINS_IMU_N_STREAMS]; /* the RNG rows unpacked (imu_view), kept equal to them */
+    int have_streams;
 } ImuView;
 
 static double *table_array(const int64_t *table, int64_t i) { return (double *)(intptr_t)table[3 * i]; }
@@ -253,6 +501,7 @@ static int has_shape(const int64_t *table, int64_t i, int64_t rows, int64_t cols
 
 /* The IMU arrays of table rows 0..16 with their shapes checked; 0 when they fit. */
 static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
+    v->have_streams = 0;
     if (table == NULL || rows < SARINS_IMU_N_ARRAYS) return SARINS_IMU_BAD_TABLE;
     v->n_axes = table[3 * SARINS_IMU_AXES + 1];
     v->n_flicker = table[3 * SARINS_IMU_PHI + 1];
@@ -298,9 +547,9 @@ static int imu_view(const int64_t *table, int64_t rows, ImuView *v) {
     int status = imu_shapes(table, rows, v);
     if (status != SARINS_IMU_OK) return status;
     for (int s = 0; s < SARINS_IMU_N_STREAMS; s++) {
-        SarinsRng r;
-        if (!sarins_rng_unpack(v->rng + SARINS_RNG_WORDS * s, &r)) return SARINS_IMU_BAD_TABLE;
+        if (!sarins_rng_unpack(v->rng + SARINS_RNG_WORDS * s, &v->streams[s])) return SARINS_IMU_BAD_TABLE;
     }
+    v->have_streams = 1;
     return SARINS_IMU_OK;
 }
 
@@ -314,11 +563,58 @@ static int any_nonzero(const double *x, int64_t n) {
 
 /* The stream of the table's RNG row `stream` into r; 0 when the row is not a stream state. */
 static int load_stream(const ImuView *v, int stream, SarinsRng *r) {
+    if (v->have_streams) {
+        *r = v->streams[stream];
+        return 1;
+    }
     return sarins_rng_unpack(v->rng + SARINS_RNG_WORDS * stream, r);
 }
 
-static void store_stream(const ImuView *v, int stream, const SarinsRng *r) {
+static void store_stream(ImuView *v, int stream, const SarinsRng *r) {
     sarins_rng_pack(r, (uint64_t)stream, v->rng + SARINS_RNG_WORDS * stream);
+    if (v->have_streams) v->streams[stream] = *r;
+}
+
+/* The table functions below check the table once (imu_view) and then work on the view: a table that passed
+ * stays valid through a step (the streams are stored packed as sarins_rng_pack writes them). */
+
+static int advance_view(ImuView *v, int64_t n_steps, const double *amb_end, double *temps, double *die,
+                        double *g_bias, double *g_sf, double *a_bias, double *a_sf) {
+    SarinsRng gm_rng, flicker_rng, rrw_rng;
+    if (!(load_stream(v, SARINS_IMU_STREAM_GM, &gm_rng) && load_stream(v, SARINS_IMU_STREAM_FLICKER, &flicker_rng)
+          && load_stream(v, SARINS_IMU_STREAM_RRW, &rrw_rng)))
+        return SARINS_IMU_BAD_TABLE;
+    int gm_on = any_nonzero(v->sensor_par + 18, 6);
+    int flicker_on = any_nonzero(v->q, 6 * v->n_flicker), rrw_on = any_nonzero(v->corr_par + 30, 6);
+    double h = v->consts[1];
+    double *temperature = v->state; /* reported temperatures, row 0 */
+    double start[6];
+    memcpy(start, temperature, sizeof start);
+    sarins_thermal_steps(v->consts[0], h, v->clock[0], v->clock[1], n_steps, amb_end, 6, v->sensor_par,
+                         v->sensor_par + 6, temperature, temps);
+    v->clock[1] = amb_end[n_steps - 1];
+    const double *die0 = start, *die_t = temps;
+    double die_start[6];
+    if (v->consts[3] != 0.0) { /* the errors follow the die, which lags the reported temperature */
+        double *die_now = v->corr_state; /* row 0 */
+        memcpy(die_start, die_now, sizeof die_start);
+        sarins_die_temperatures(n_steps, 6, start, temps, h, v->corr_par, die_now, die);
+        die0 = die_start;
+        die_t = die;
+    }
+    sarins_imu_interval_terms(n_steps, die0, die_t, h, v->coef, v->triad, v->consts[2], v->state + 6,
+                              v->sensor_par + 12, v->sensor_par + 18, gm_on ? &gm_rng : NULL, g_bias, g_sf, a_bias,
+                              a_sf);
+    store_stream(v, SARINS_IMU_STREAM_GM, &gm_rng);
+    sarins_imu_axial_thermal_terms(n_steps, die0[2], die_t + 2, 6, h, v->consts + 8, v->state + 12, g_bias + 2, 3);
+    if (v->consts[4] != 0.0) {
+        sarins_correlated_terms(n_steps, die0, die_t, h, v->corr_par, v->corr_state, v->n_flicker, v->phi, v->q,
+                                v->x_flicker, flicker_on ? &flicker_rng : NULL, rrw_on ? &rrw_rng : NULL, g_bias,
+                                g_sf, a_bias, a_sf);
+        store_stream(v, SARINS_IMU_STREAM_FLICKER, &flicker_rng);
+        store_stream(v, SARINS_IMU_STREAM_RRW, &rrw_rng);
+    }
+    return SARINS_IMU_OK;
 }
 
 int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, const double *amb_end, double *temps,
@@ -327,41 +623,12 @@ int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, cons
     int status = imu_view(table, rows, &v);
     if (status != SARINS_IMU_OK) return status;
     if (n_steps < 1) return SARINS_IMU_BAD_TABLE;
-    SarinsRng gm_rng, flicker_rng, rrw_rng;
-    if (!(load_stream(&v, SARINS_IMU_STREAM_GM, &gm_rng) && load_stream(&v, SARINS_IMU_STREAM_FLICKER, &flicker_rng)
-          && load_stream(&v, SARINS_IMU_STREAM_RRW, &rrw_rng)))
-        return SARINS_IMU_BAD_TABLE;
-    int gm_on = any_nonzero(v.sensor_par + 18, 6);
-    int flicker_on = any_nonzero(v.q, 6 * v.n_flicker), rrw_on = any_nonzero(v.corr_par + 30, 6);
-    double h = v.consts[1];
-    double *temperature = v.state; /* reported temperatures, row 0 */
-    double start[6];
-    memcpy(start, temperature, sizeof start);
-    sarins_thermal_steps(v.consts[0], h, v.clock[0], v.clock[1], n_steps, amb_end, 6, v.sensor_par,
-                         v.sensor_par + 6, temperature, temps);
-    v.clock[1] = amb_end[n_steps - 1];
-    const double *die0 = start, *die_t = temps;
-    double die_start[6];
-    if (v.consts[3] != 0.0) { /* the errors follow the die, which lags the reported temperature */
-        double *die_now = v.corr_state; /* row 0 */
-        memcpy(die_start, die_now, sizeof die_start);
-        sarins_die_temperatures(n_steps, 6, start, temps, h, v.corr_par, die_now, die);
-        die0 = die_start;
-        die_t = die;
-    }
-    sarins_imu_interval_terms(n_steps, die0, die_t, h, v.coef, v.triad, v.consts[2], v.state + 6,
-                              v.sensor_par + 12, v.sensor_par + 18, gm_on ? &gm_rng : NULL, g_bias, g_sf, a_bias,
-                              a_sf);
-    store_stream(&v, SARINS_IMU_STREAM_GM, &gm_rng);
-    sarins_imu_axial_thermal_terms(n_steps, die0[2], die_t + 2, 6, h, v.consts + 8, v.state + 12, g_bias + 2, 3);
-    if (v.consts[4] != 0.0) {
-        sarins_correlated_terms(n_steps, die0, die_t, h, v.corr_par, v.corr_state, v.n_flicker, v.phi, v.q,
-                                v.x_flicker, flicker_on ? &flicker_rng : NULL, rrw_on ? &rrw_rng : NULL, g_bias,
-                                g_sf, a_bias, a_sf);
-        store_stream(&v, SARINS_IMU_STREAM_FLICKER, &flicker_rng);
-        store_stream(&v, SARINS_IMU_STREAM_RRW, &rrw_rng);
-    }
-    return SARINS_IMU_OK;
+    return advance_view(&v, n_steps, amb_end, temps, die, g_bias, g_sf, a_bias, a_sf);
+}
+
+static void dynamics_view(ImuView *v, int64_t n_steps, const double *temps, double *dtheta, double *dv) {
+    if (sarins_dynamics_active(v->dyn_par))
+        sarins_dynamics_apply(n_steps, v->consts[1], temps, v->dyn_par, v->dyn_state, SARINS_IMU_T_REF, dtheta, dv);
 }
 
 int sarins_imu_dynamics(const int64_t *table, int64_t rows, int64_t n_steps, const double *temps, double *dtheta,
@@ -370,19 +637,15 @@ int sarins_imu_dynamics(const int64_t *table, int64_t rows, int64_t n_steps, con
     int status = imu_view(table, rows, &v);
     if (status != SARINS_IMU_OK) return status;
     if (n_steps < 0) return SARINS_IMU_BAD_TABLE;
-    if (sarins_dynamics_active(v.dyn_par))
-        sarins_dynamics_apply(n_steps, v.consts[1], temps, v.dyn_par, v.dyn_state, SARINS_IMU_T_REF, dtheta, dv);
+    dynamics_view(&v, n_steps, temps, dtheta, dv);
     return SARINS_IMU_OK;
 }
 
-int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, double *dtheta, double *dv) {
-    ImuView v;
-    int status = imu_view(table, rows, &v);
-    if (status != SARINS_IMU_OK) return status;
+static int white_noise_view(ImuView *v, int64_t n_steps, double *dtheta, double *dv) {
     SarinsRng rng;
-    if (n_steps < 0 || !load_stream(&v, SARINS_IMU_STREAM_WHITE, &rng)) return SARINS_IMU_BAD_TABLE;
-    double sqrt_h = sqrt(v.consts[1]);
-    const double *rw_g = v.triad + 15, *rw_a = v.triad + 18; /* triad rows 5 and 6 */
+    if (!load_stream(v, SARINS_IMU_STREAM_WHITE, &rng)) return SARINS_IMU_BAD_TABLE;
+    double sqrt_h = sqrt(v->consts[1]);
+    const double *rw_g = v->triad + 15, *rw_a = v->triad + 18; /* triad rows 5 and 6 */
     if (any_nonzero(rw_g, 6)) { /* rows 5 and 6 are adjacent */
         for (int64_t k = 0; k < n_steps; k++) {
             double w[6];
@@ -393,10 +656,33 @@ int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, 
                 dv[3 * k + i] += w[3 + i] * sqrt_h * rw_a[i];
             }
         }
-        store_stream(&v, SARINS_IMU_STREAM_WHITE, &rng);
+        store_stream(v, SARINS_IMU_STREAM_WHITE, &rng);
     }
-    v.clock[0] += (double)n_steps;
+    v->clock[0] += (double)n_steps;
     return SARINS_IMU_OK;
+}
+
+int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, double *dtheta, double *dv) {
+    ImuView v;
+    int status = imu_view(table, rows, &v);
+    if (status != SARINS_IMU_OK) return status;
+    if (n_steps < 0) return SARINS_IMU_BAD_TABLE;
+    return white_noise_view(&v, n_steps, dtheta, dv);
+}
+
+static int steps_view(ImuView *v, int64_t n_steps, const double *angle0, const double *rate0,
+                      const double *accel, const double *w_t, const double *f_t, const double *amb_end,
+                      double *dtheta, double *dv, double *temps, double *work) {
+    double *g_bias = work, *g_sf = work + 3 * n_steps, *a_bias = work + 6 * n_steps, *a_sf = work + 9 * n_steps;
+    int status = advance_view(v, n_steps, amb_end, temps, work + 12 * n_steps, g_bias, g_sf, a_bias, a_sf);
+    if (status != SARINS_IMU_OK) return status;
+    /* triad rows: drift poly, gyro quadratic, low-rate gain, low-rate width, accel quadratic, random walks;
+       mats rows: gyro misalignment, g-sensitivity, accel misalignment */
+    sarins_imu_increments(0, n_steps, v->n_axes, v->axes, angle0, rate0, accel, w_t, f_t, v->consts[1],
+                          (int64_t)v->consts[5], g_sf, v->mats, g_bias, v->triad + 3, v->triad + 6, v->triad + 9,
+                          v->mats + 9, a_sf, v->mats + 18, a_bias, v->triad + 12, dtheta, dv);
+    dynamics_view(v, n_steps, temps, dtheta, dv);
+    return white_noise_view(v, n_steps, dtheta, dv);
 }
 
 int sarins_imu_steps(const int64_t *table, int64_t rows, int64_t n_steps, const double *angle0,
@@ -406,27 +692,22 @@ int sarins_imu_steps(const int64_t *table, int64_t rows, int64_t n_steps, const 
     int status = imu_view(table, rows, &v);
     if (status != SARINS_IMU_OK) return status;
     if (n_steps < 1) return SARINS_IMU_BAD_TABLE;
-    double *g_bias = work, *g_sf = work + 3 * n_steps, *a_bias = work + 6 * n_steps, *a_sf = work + 9 * n_steps;
-    status = sarins_imu_advance(table, rows, n_steps, amb_end, temps, work + 12 * n_steps, g_bias, g_sf, a_bias,
-                                a_sf);
-    if (status != SARINS_IMU_OK) return status;
-    /* triad rows: drift poly, gyro quadratic, low-rate gain, low-rate width, accel quadratic, random walks;
-       mats rows: gyro misalignment, g-sensitivity, accel misalignment */
-    sarins_imu_increments(0, n_steps, v.n_axes, v.axes, angle0, rate0, accel, w_t, f_t, v.consts[1],
-                          (int64_t)v.consts[5], g_sf, v.mats, g_bias, v.triad + 3, v.triad + 6, v.triad + 9,
-                          v.mats + 9, a_sf, v.mats + 18, a_bias, v.triad + 12, dtheta, dv);
-    status = sarins_imu_dynamics(table, rows, n_steps, temps, dtheta, dv);
-    if (status != SARINS_IMU_OK) return status;
-    return sarins_imu_white_noise(table, rows, n_steps, dtheta, dv);
+    return steps_view(&v, n_steps, angle0, rate0, accel, w_t, f_t, amb_end, dtheta, dv, temps, work);
+}
+
+/* One interval with the base motion of the view's base row (sarins_imu_one_interval). */
+static int one_interval_view(ImuView *v, const double *angle0, const double *rate0, const double *accel,
+                             double amb_end, double *dtheta, double *dv, double *temps) {
+    double work[18];
+    return steps_view(v, 1, angle0, rate0, accel, v->base, v->base + 3, &amb_end, dtheta, dv, temps, work);
 }
 
 int sarins_imu_one_interval(const int64_t *table, int64_t rows, const double *angle0, const double *rate0,
                             const double *accel, double amb_end, double *dtheta, double *dv, double *temps) {
-    double work[18];
-    const double *base = table != NULL && rows > SARINS_IMU_BASE ? table_array(table, SARINS_IMU_BASE) : NULL;
-    if (base == NULL) return SARINS_IMU_BAD_TABLE;
-    return sarins_imu_steps(table, rows, 1, angle0, rate0, accel, base, base + 3, &amb_end, dtheta, dv, temps,
-                            work);
+    ImuView v;
+    int status = imu_view(table, rows, &v);
+    if (status != SARINS_IMU_OK) return status;
+    return one_interval_view(&v, angle0, rate0, accel, amb_end, dtheta, dv, temps);
 }
 
 /* ------------------------------------------------------ seeding and ageing */
@@ -607,8 +888,7 @@ static int fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double
     }
     double dtheta[3], dv[3], temps[6];
     if (k_sub == 1) {
-        if (sarins_imu_one_interval(table, rows, motion[0], motion[1], motion[2], amb_end, dtheta, dv, temps)
-            != SARINS_IMU_OK)
+        if (one_interval_view(&v, motion[0], motion[1], motion[2], amb_end, dtheta, dv, temps) != SARINS_IMU_OK)
             return 1; /* not reached: the table and its stream states were checked above */
     } else {
         sub_motion(k_sub, m, consts[1], motion, v.base, chosen[3 * na], chosen[3 * na + 1], scratch);

@@ -66,6 +66,7 @@ enum {
 #define SARINS_IMU_BAD_TABLE 1  /* a missing row, an array of the wrong shape or a stream state that is not one */
 
 #define SARINS_IMU_MAX_AXES 8   /* gimbals the one-interval step accepts */
+#define SARINS_IMU_LANES 4      /* intervals the minor loop evaluates side by side */
 #define SARINS_IMU_N_CONSTS 13  /* length of the consts row (sarins_fmu/imu_step.py) */
 
 /* Reference temperature of the linear/quadratic coefficients, degC. */
@@ -89,7 +90,12 @@ void sarins_imu_truth(int64_t n_axes, const double *axes, const double *angle0, 
  * a_mis (3, 3) misalignment (rad, diagonal unused); g_bias, a_bias (K, 3)
  * biases (rad/s, m/s^2); g_quad, a_quad [3] coefficients of x|x| (s/rad,
  * s^2/m); g_lowrate, g_lowrate_width [3] low-rate nonlinearity gain and
- * width (rad/s); g_sens (3, 3) g-sensitivity (rad/s per m/s^2). */
+ * width (rad/s); g_sens (3, 3) g-sensitivity (rad/s per m/s^2).
+ *
+ * Runs of SARINS_IMU_LANES intervals are evaluated side by side in SIMD
+ * lanes (each lane does the scalar loop's operations in the same order);
+ * the remainder, and every interval of more than SARINS_IMU_MAX_AXES
+ * gimbals, one at a time.  The results do not depend on the split. */
 void sarins_imu_increments(int64_t k0, int64_t k1, int64_t n_axes, const double *axes, const double *angle0,
                            const double *rate0, const double *accel, const double *w_t, const double *f_t,
                            double h, int64_t n_sub, const double *g_sf, const double *g_mis,
@@ -97,6 +103,16 @@ void sarins_imu_increments(int64_t k0, int64_t k1, int64_t n_axes, const double 
                            const double *g_lowrate_width, const double *g_sens, const double *a_sf,
                            const double *a_mis, const double *a_bias, const double *a_quad, double *dtheta,
                            double *dv);
+
+/* sarins_imu_increments one interval at a time, without lanes (the
+ * reference the lanes are tested against; the same results). */
+void sarins_imu_increments_scalar(int64_t k0, int64_t k1, int64_t n_axes, const double *axes, const double *angle0,
+                                  const double *rate0, const double *accel, const double *w_t, const double *f_t,
+                                  double h, int64_t n_sub, const double *g_sf, const double *g_mis,
+                                  const double *g_bias, const double *g_quad, const double *g_lowrate,
+                                  const double *g_lowrate_width, const double *g_sens, const double *a_sf,
+                                  const double *a_mis, const double *a_bias, const double *a_quad, double *dtheta,
+                                  double *dv);
 
 /* Biases (rad/s, m/s^2) and scale-factor errors held over each of K
  * intervals of length h (s), written to the (K, 3) outputs.  temp0[6] and

@@ -27,6 +27,8 @@ _I64, _F64, _P, _INT, _U64 = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p, c
 _truth = function("sarins_imu_truth", None, _I64, _P, _P, _P, _P, _F64, _P, _P, _P)
 _increments = function("sarins_imu_increments", None, _I64, _I64, _I64, _P, _P, _P, _P, _P, _P, _F64, _I64,
                        *([_P] * 13))
+_increments_scalar = function("sarins_imu_increments_scalar", None, _I64, _I64, _I64, _P, _P, _P, _P, _P, _P, _F64,
+                              _I64, *([_P] * 13))
 _advance = function("sarins_imu_advance", _INT, _P, _I64, _I64, *([_P] * 7))
 _white_noise = function("sarins_imu_white_noise", _INT, _P, _I64, _I64, _P, _P)
 _dynamics = function("sarins_imu_dynamics", _INT, _P, _I64, _I64, _P, _P, _P)
@@ -95,7 +97,7 @@ def truth(axes, angle0, rate0, accel, k: int, tau: float, w_t, f_t) -> tuple:
 
 def increments(axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
                g_sf, g_mis, g_bias, g_quad, g_lowrate, g_lowrate_width, g_sens,
-               a_sf, a_mis, a_bias, a_quad, *, threads: int | None = None):
+               a_sf, a_mis, a_bias, a_quad, *, threads: int | None = None, lanes: bool = True):
     """Compensated increments of K intervals: dtheta, dv (K, 3), rad and m/s, body axes at each interval start.
 
     axes (A, 3) gimbal axes; angle0, rate0, accel (K, A) gimbal state at each
@@ -105,7 +107,8 @@ def increments(axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
     errors and biases (rad/s, m/s^2); g_mis, a_mis (3, 3) misalignment (rad);
     g_quad, a_quad (3,) x|x| coefficients; g_lowrate, g_lowrate_width (3,)
     low-rate nonlinearity; g_sens (3, 3) g-sensitivity (rad/s per m/s^2).
-    ``threads``: default :func:`thread_count`.
+    ``threads``: default :func:`thread_count`.  ``lanes=False`` evaluates one interval at a time
+    (``sarins_imu_increments_scalar``: the reference of the SIMD lanes, the same results, slower).
     """
     axes = _arrays.read(axes, np.shape(axes), "axes")
     n_axes = axes.shape[0]
@@ -126,8 +129,10 @@ def increments(axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
     g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad = (a.ctypes.data for a in fixed)
     dtheta, dv = np.empty((n_int, 3)), np.empty((n_int, 3))
 
+    kernel = _increments if lanes else _increments_scalar
+
     def run(k0: int, k1: int) -> None:
-        _increments(k0, k1, n_axes, axes.ctypes.data, angle0, rate0, accel, w_t, f_t, float(h), n_sub,
+        kernel(k0, k1, n_axes, axes.ctypes.data, angle0, rate0, accel, w_t, f_t, float(h), n_sub,
                     g_sf, g_mis, g_bias, g_quad, g_lowrate, g_width, g_sens, a_sf, a_mis, a_bias, a_quad,
                     dtheta.ctypes.data, dv.ctypes.data)
 
