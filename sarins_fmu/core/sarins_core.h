@@ -16,7 +16,7 @@
 #include <stdint.h>
 
 /* ABI version of the library; the binding refuses a library of another one. */
-#define SARINS_CORE_ABI 6
+#define SARINS_CORE_ABI 7
 
 int sarins_core_abi(void);
 
