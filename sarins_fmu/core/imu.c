@@ -893,9 +893,9 @@ static int fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double
     } else {
         sub_motion(k_sub, m, consts[1], motion, v.base, chosen[3 * na], chosen[3 * na + 1], scratch);
         double *angle0 = scratch, *amb = scratch + 3 * k_sub * m + 6 * k_sub;
-        if (sarins_imu_steps(table, rows, k_sub, angle0, angle0 + k_sub * m, angle0 + 2 * k_sub * m,
-                             angle0 + 3 * k_sub * m, angle0 + 3 * k_sub * m + 3 * k_sub, amb, sub_dtheta, sub_dv,
-                             sub_temps, amb + k_sub) != SARINS_IMU_OK)
+        if (steps_view(&v, k_sub, angle0, angle0 + k_sub * m, angle0 + 2 * k_sub * m, angle0 + 3 * k_sub * m,
+                       angle0 + 3 * k_sub * m + 3 * k_sub, amb, sub_dtheta, sub_dv, sub_temps, amb + k_sub)
+            != SARINS_IMU_OK)
             return 1; /* not reached, as above */
         /* the step's increments: the sums of the sub-intervals', in order; the temperatures at its end */
         for (int i = 0; i < 3; i++) {
