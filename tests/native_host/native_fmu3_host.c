@@ -24,18 +24,7 @@
 #include <string.h>
 
 #include "fmi3Functions.h"
-
-#if defined(_WIN32)
-#include <windows.h>
-typedef HMODULE lib_t;
-static lib_t lib_open(const char *path) { return LoadLibraryA(path); }
-static void *lib_sym(lib_t lib, const char *name) { return (void *)(uintptr_t)GetProcAddress(lib, name); }
-#else
-#include <dlfcn.h>
-typedef void *lib_t;
-static lib_t lib_open(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
-static void *lib_sym(lib_t lib, const char *name) { return dlsym(lib, name); }
-#endif
+#include "host_common.h"
 
 #define MAX_VR 64
 
@@ -78,17 +67,6 @@ static int report(const char *fn, fmi3Status st)
     return st == fmi3OK;
 }
 
-static void parse_vrs(const char *text, vr_list *list)
-{
-    for (char *p = (char *)text; *p && list->n_vr < MAX_VR;) {
-        list->vr[list->n_vr++] = (fmi3ValueReference)strtoul(p, &p, 10);
-        if (*p == ',')
-            p++;
-        else if (*p)
-            break;
-    }
-}
-
 static vr_list outs, ins;
 static double *out_values;  /* outs.n_values */
 static double *in_rows;     /* (n_in_rows, ins.n_values), from rows=FILE */
@@ -100,13 +78,7 @@ static int print_outputs(const api_t *f, fmi3Instance c, const char *tag, long k
         return 1;
     if (!report("fmi3GetFloat64", f->get_float64(c, outs.vr, outs.n_vr, out_values, outs.n_values)))
         return 0;
-    printf("%s %ld", tag, k);
-    for (size_t i = 0; i < outs.n_values; i++) {
-        uint64_t bits;
-        memcpy(&bits, &out_values[i], 8);
-        printf(" %016llx", (unsigned long long)bits);
-    }
-    printf("\n");
+    host_print_bits(tag, k, out_values, outs.n_values);
     return 1;
 }
 
@@ -126,20 +98,6 @@ static int steps(const api_t *f, fmi3Instance c, long k0, long n, double h, cons
     return 1;
 }
 
-static int read_rows(const char *path)
-{
-    FILE *in = fopen(path, "rb");
-    long bytes = -1;
-    if (in && fseek(in, 0, SEEK_END) == 0)
-        bytes = ftell(in);
-    in_rows = (bytes > 0 && fseek(in, 0, SEEK_SET) == 0) ? malloc((size_t)bytes) : NULL;
-    int ok = in_rows != NULL && fread(in_rows, 1, (size_t)bytes, in) == (size_t)bytes;
-    if (in)
-        fclose(in);
-    n_in_rows = ok ? bytes / (long)sizeof(double) : 0;
-    return ok;
-}
-
 int main(int argc, char **argv)
 {
     if (argc < 5) {
@@ -155,7 +113,7 @@ int main(int argc, char **argv)
         return 2;
     }
     api_t f;
-    struct { void **slot; const char *name; } syms[] = {
+    const host_symbol syms[] = {
         {(void **)&f.instantiate, "fmi3InstantiateCoSimulation"},
         {(void **)&f.enter_config, "fmi3EnterConfigurationMode"},
         {(void **)&f.exit_config, "fmi3ExitConfigurationMode"},
@@ -167,21 +125,15 @@ int main(int argc, char **argv)
         {(void **)&f.get_state, "fmi3GetFMUState"}, {(void **)&f.set_state, "fmi3SetFMUState"},
         {(void **)&f.free_state, "fmi3FreeFMUState"},
     };
-    for (size_t i = 0; i < sizeof syms / sizeof syms[0]; i++) {
-        void *p = lib_sym(lib, syms[i].name);
-        if (p == NULL) {
-            fprintf(stderr, "missing symbol %s\n", syms[i].name);
-            return 2;
-        }
-        memcpy(syms[i].slot, &p, sizeof p);
-    }
+    if (!host_resolve(lib, syms, sizeof syms / sizeof syms[0]))
+        return 2;
     long roundtrip = -1;
     const char *rows = NULL;
     for (int k = 5; k < argc; k++) {
         if (strncmp(argv[k], "out=", 4) == 0)
-            parse_vrs(argv[k] + 4, &outs);
+            host_parse_vrs(argv[k] + 4, outs.vr, &outs.n_vr, MAX_VR);
         else if (strncmp(argv[k], "in=", 3) == 0)
-            parse_vrs(argv[k] + 3, &ins);
+            host_parse_vrs(argv[k] + 3, ins.vr, &ins.n_vr, MAX_VR);
         else if (strncmp(argv[k], "nout=", 5) == 0)
             outs.n_values = (size_t)atol(argv[k] + 5);
         else if (strncmp(argv[k], "nin=", 4) == 0)
@@ -196,7 +148,7 @@ int main(int argc, char **argv)
         return 2;
     }
     out_values = calloc(outs.n_values + 1, sizeof *out_values);
-    if (out_values == NULL || (rows != NULL && !read_rows(rows))) {
+    if (out_values == NULL || (rows != NULL && !host_read_doubles(rows, &in_rows, &n_in_rows))) {
         fprintf(stderr, "cannot allocate or read %s\n", rows ? rows : "the outputs");
         return 2;
     }

@@ -29,18 +29,7 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
-
-#if defined(_WIN32)
-#include <windows.h>
-typedef HMODULE lib_t;
-static lib_t lib_open(const char *path) { return LoadLibraryA(path); }
-static void *lib_sym(lib_t lib, const char *name) { return (void *)(uintptr_t)GetProcAddress(lib, name); }
-#else
-#include <dlfcn.h>
-typedef void *lib_t;
-static lib_t lib_open(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
-static void *lib_sym(lib_t lib, const char *name) { return dlsym(lib, name); }
-#endif
+#include "host_common.h"
 
 typedef struct {
     fmi2InstantiateTYPE *instantiate;
@@ -94,13 +83,7 @@ static int print_outputs(const api_t *f, fmi2Component c, const char *tag, long 
         return 1;
     if (!report("fmi2GetReal", f->get_real(c, outs, n_outs, v)))
         return 0;
-    printf("%s %ld", tag, k);
-    for (size_t i = 0; i < n_outs; i++) {
-        uint64_t bits;
-        memcpy(&bits, &v[i], 8);
-        printf(" %016llx", (unsigned long long)bits);
-    }
-    printf("\n");
+    host_print_bits(tag, k, v, n_outs);
     return 1;
 }
 
@@ -141,7 +124,7 @@ int main(int argc, char **argv)
         return 2;
     }
     api_t f;
-    struct { void **slot; const char *name; } syms[] = {
+    const host_symbol syms[] = {
         {(void **)&f.instantiate, "fmi2Instantiate"}, {(void **)&f.setup, "fmi2SetupExperiment"},
         {(void **)&f.enter, "fmi2EnterInitializationMode"}, {(void **)&f.exit_init, "fmi2ExitInitializationMode"},
         {(void **)&f.step, "fmi2DoStep"}, {(void **)&f.terminate, "fmi2Terminate"},
@@ -152,42 +135,21 @@ int main(int argc, char **argv)
         {(void **)&f.free_state, "fmi2FreeFMUstate"}, {(void **)&f.state_size, "fmi2SerializedFMUstateSize"},
         {(void **)&f.serialize, "fmi2SerializeFMUstate"}, {(void **)&f.deserialize, "fmi2DeSerializeFMUstate"},
     };
-    for (size_t i = 0; i < sizeof syms / sizeof syms[0]; i++) {
-        void *p = lib_sym(lib, syms[i].name);
-        if (p == NULL) {
-            fprintf(stderr, "missing symbol %s\n", syms[i].name);
-            return 2;
-        }
-        memcpy(syms[i].slot, &p, sizeof p);
-    }
+    if (!host_resolve(lib, syms, sizeof syms / sizeof syms[0]))
+        return 2;
     long roundtrip = -1;
     const char *save = NULL, *load = NULL;
     int allocs = 0;
     for (int k = 5; k < argc; k++) {
         if (strncmp(argv[k], "out=", 4) == 0) {
-            for (char *p = argv[k] + 4; *p && n_outs < 256;) {
-                outs[n_outs++] = (fmi2ValueReference)strtoul(p, &p, 10);
-                if (*p == ',')
-                    p++;
-            }
+            host_parse_vrs(argv[k] + 4, outs, &n_outs, 256);
         } else if (strncmp(argv[k], "in=", 3) == 0) {
-            for (char *p = argv[k] + 3; *p && n_ins < 256;) {
-                ins[n_ins++] = (fmi2ValueReference)strtoul(p, &p, 10);
-                if (*p == ',')
-                    p++;
-            }
+            host_parse_vrs(argv[k] + 3, ins, &n_ins, 256);
         } else if (strncmp(argv[k], "rows=", 5) == 0) {
-            FILE *in = fopen(argv[k] + 5, "rb");
-            long bytes = -1;
-            if (in && fseek(in, 0, SEEK_END) == 0)
-                bytes = ftell(in);
-            in_rows = (bytes > 0 && in && fseek(in, 0, SEEK_SET) == 0) ? malloc((size_t)bytes) : NULL;
-            if (in_rows == NULL || fread(in_rows, 1, (size_t)bytes, in) != (size_t)bytes) {
+            if (!host_read_doubles(argv[k] + 5, &in_rows, &n_in_rows)) {
                 fprintf(stderr, "cannot read %s\n", argv[k] + 5);
                 return 2;
             }
-            fclose(in);
-            n_in_rows = bytes / (long)sizeof(double);
         } else if (strncmp(argv[k], "roundtrip=", 10) == 0) {
             roundtrip = atol(argv[k] + 10);
         } else if (strncmp(argv[k], "save=", 5) == 0) {
