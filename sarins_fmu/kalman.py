@@ -173,7 +173,79 @@ def _running_sum(total: float, values: np.ndarray) -> float:
     return float(np.cumsum(np.concatenate(([total], values)))[-1])
 
 
-class StopKalmanFilter:
+def check_stop_arguments(lat: float, dt: float, history_limit: int) -> None:
+    """ValueError unless the stop's latitude (rad), filter step (s) and history limit are usable."""
+    if not (math.isfinite(lat) and abs(lat) <= 89.9 * DEG_TO_RAD):
+        raise ValueError(f"latitude must be finite and within +-89.9 deg, got {lat!r} rad")
+    if not (math.isfinite(dt) and dt > 0):
+        raise ValueError(f"filter step must be positive, got {dt!r}")
+    if int(history_limit) < 0:
+        raise ValueError(f"history_limit must be >= 0, got {history_limit!r}")
+
+
+class StopRecord:
+    """What a stop filter keeps of a stop besides its state: the timer, the running means of the INS's
+    compensation and the azimuth gyro's temperature, and the first ``history_limit`` estimate rows.
+
+    A filter sets ``x`` (state), ``p`` (covariance), ``dt`` (s), ``history_limit`` and the class
+    attribute ``eps_index`` (where the azimuth drift sits in ``x``), calls :meth:`_clear_record` on
+    reset and :meth:`_record` after each block of steps."""
+
+    eps_index: int
+
+    def _clear_record(self) -> None:
+        self.elapsed = 0.0
+        self._correction_sum = 0.0
+        self._temperature_sum = 0.0
+        self._n = 0
+        self.history: list[np.ndarray] = []
+        self._history_rows = 0
+
+    def _record(self, out: np.ndarray, corr: np.ndarray, temp: np.ndarray) -> None:
+        n = out.shape[0]
+        room = self.history_limit - self._history_rows
+        if room > 0:  # bounded: a parked vehicle's stop may last months
+            self.history.append(out[:room].copy())
+            self._history_rows += min(room, n)
+        # running sums added row by row (np.cumsum is sequential): a stop fed in blocks or one row at a
+        # time (the FMU) gives the same sums bit for bit
+        self._correction_sum = _running_sum(self._correction_sum, corr)
+        self._temperature_sum = _running_sum(self._temperature_sum, temp)
+        self._n += n
+        self.elapsed = self._n * self.dt
+
+    @property
+    def residual_drift(self) -> float:
+        """Estimated azimuth drift left after the INS's compensation, rad/s."""
+        return float(self.x[self.eps_index])
+
+    @property
+    def drift_std(self) -> float:
+        """Filter standard deviation of the azimuth drift, rad/s."""
+        return float(math.sqrt(self.p[self.eps_index, self.eps_index]))
+
+    @property
+    def drift_estimate(self) -> float:
+        """The stop's drift measurement ε_U: mean compensation + residual, rad/s."""
+        mean_corr = self._correction_sum / self._n if self._n else 0.0
+        return mean_corr + self.residual_drift
+
+    @property
+    def mean_temperature(self) -> float:
+        """Mean azimuth gyro temperature over the stop (T_gz), °C; NaN if not given."""
+        return self._temperature_sum / self._n if self._n else float("nan")
+
+    def convergence(self) -> np.ndarray:
+        """(K, 3): time since reset (s), ε_z residual estimate and std (rad/s),
+        the first ``history_limit`` steps of the stop."""
+        if not self.history:
+            return np.empty((0, 3))
+        h = np.concatenate(self.history)
+        t = np.arange(1, h.shape[0] + 1) * self.dt
+        return np.column_stack([t, h])
+
+
+class StopKalmanFilter(StopRecord):
     """The stop filter of seed 002 (eqs 4-6) on the outputs of a free INS.
 
     Parameters
@@ -197,14 +269,11 @@ class StopKalmanFilter:
         first ``history_limit`` steps of the stop.
     """
 
+    eps_index = EPS_Z
+
     def __init__(self, lat: float, settings: StopFilterSettings = StopFilterSettings(), dt: float = 1.0,
                  history_limit: int = 0):
-        if not (math.isfinite(lat) and abs(lat) <= 89.9 * DEG_TO_RAD):
-            raise ValueError(f"latitude must be finite and within +-89.9 deg, got {lat!r} rad")
-        if not (math.isfinite(dt) and dt > 0):
-            raise ValueError(f"filter step must be positive, got {dt!r}")
-        if int(history_limit) < 0:
-            raise ValueError(f"history_limit must be >= 0, got {history_limit!r}")
+        check_stop_arguments(lat, dt, history_limit)
         self.lat, self.settings, self.dt = float(lat), settings, float(dt)
         self.history_limit = int(history_limit)
         self._q = settings.process_noise()
@@ -214,17 +283,11 @@ class StopKalmanFilter:
     def reset(self, lat: float | None = None) -> None:
         """Restart the estimation (new stop): state 0, covariance P0, timer 0."""
         if lat is not None:
-            if not (math.isfinite(lat) and abs(lat) <= 89.9 * DEG_TO_RAD):
-                raise ValueError(f"latitude must be finite and within +-89.9 deg, got {lat!r} rad")
+            check_stop_arguments(lat, self.dt, self.history_limit)
             self.lat = float(lat)
         self.x = np.zeros(N_STATES)
         self.p = self.settings.initial_covariance()
-        self.elapsed = 0.0
-        self._correction_sum = 0.0
-        self._temperature_sum = 0.0
-        self._n = 0
-        self.history: list[np.ndarray] = []
-        self._history_rows = 0
+        self._clear_record()
 
     def step(self, velocity_en, attitude, axial_correction=0.0, temperature=np.nan) -> np.ndarray:
         """Process K INS output rows taken at the stop.
@@ -251,44 +314,5 @@ class StopKalmanFilter:
         if not (np.isfinite(vel).all() and np.isfinite(att).all() and np.isfinite(corr).all()):
             raise ValueError("INS outputs contain NaN or infinity")
         out = stop_filter_steps(self.x, self.p, vel, att, self.lat, self.dt, self._q, self._r)
-        room = self.history_limit - self._history_rows
-        if room > 0:  # bounded: a parked vehicle's stop may last months
-            self.history.append(out[:room].copy())
-            self._history_rows += min(room, n)
-        # running sums added row by row (np.cumsum is sequential): a stop fed in blocks or one row at a
-        # time (the FMU) gives the same sums bit for bit
-        self._correction_sum = _running_sum(self._correction_sum, corr)
-        self._temperature_sum = _running_sum(self._temperature_sum, temp)
-        self._n += n
-        self.elapsed = self._n * self.dt
+        self._record(out, corr, temp)
         return out
-
-    @property
-    def residual_drift(self) -> float:
-        """Estimated azimuth drift left after the INS's compensation, rad/s."""
-        return float(self.x[EPS_Z])
-
-    @property
-    def drift_std(self) -> float:
-        """Filter standard deviation of the azimuth drift, rad/s."""
-        return float(math.sqrt(self.p[EPS_Z, EPS_Z]))
-
-    @property
-    def drift_estimate(self) -> float:
-        """The stop's drift measurement ε_U: mean compensation + residual, rad/s."""
-        mean_corr = self._correction_sum / self._n if self._n else 0.0
-        return mean_corr + self.residual_drift
-
-    @property
-    def mean_temperature(self) -> float:
-        """Mean azimuth gyro temperature over the stop (T_gz), °C; NaN if not given."""
-        return self._temperature_sum / self._n if self._n else float("nan")
-
-    def convergence(self) -> np.ndarray:
-        """(K, 3): time since reset (s), ε_z residual estimate and std (rad/s),
-        the first ``history_limit`` steps of the stop."""
-        if not self.history:
-            return np.empty((0, 3))
-        h = np.concatenate(self.history)
-        t = np.arange(1, h.shape[0] + 1) * self.dt
-        return np.column_stack([t, h])

@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import earth
-from .kalman import StopFilterSettings
+from .kalman import StopFilterSettings, StopRecord, check_stop_arguments
 from .stop_accuracy import G, R_EARTH, StopAccuracy, discretise, heading_walk_drift_std
 from .turntable import DUAL_AXIS_AXES, GimbalSchedule
 from .units import DEG_TO_RAD
@@ -364,7 +364,7 @@ def filter_dynamics(lat: float, mat_nb: np.ndarray) -> np.ndarray:
     return F
 
 
-class IndexedStopFilter:
+class IndexedStopFilter(StopRecord):
     """Stop filter of seed 002 for a RINS indexed through several positions during the stop.
 
     As :class:`sarins_fmu.kalman.StopKalmanFilter` (open loop on the INS's east/north velocity, the
@@ -381,14 +381,11 @@ class IndexedStopFilter:
     history_limit : rows of :meth:`convergence` kept (0: none).
     """
 
+    eps_index = FILTER_EPS_Z
+
     def __init__(self, lat: float, settings: StopFilterSettings = StopFilterSettings(), dt: float = 1.0,
                  history_limit: int = 0):
-        if not (math.isfinite(lat) and abs(lat) <= 89.9 * DEG_TO_RAD):
-            raise ValueError(f"latitude must be finite and within +-89.9 deg, got {lat!r} rad")
-        if not (math.isfinite(dt) and dt > 0):
-            raise ValueError(f"filter step must be positive, got {dt!r}")
-        if int(history_limit) < 0:
-            raise ValueError(f"history_limit must be >= 0, got {history_limit!r}")
+        check_stop_arguments(lat, dt, history_limit)
         self.lat, self.settings, self.dt, self.history_limit = float(lat), settings, float(dt), int(history_limit)
         s = settings
         self._q = np.array([s.arw, s.arw, s.arw, s.vrw, s.vrw, s.drift_rw, s.drift_rw, s.drift_rw,
@@ -409,9 +406,7 @@ class IndexedStopFilter:
         """Restart the estimation (new stop): state 0, covariance P0, timer 0."""
         self.x = np.zeros(N_FILTER_STATES)
         self.p = self.initial_covariance()
-        self.elapsed = 0.0
-        self._correction, self._temperature = [], []
-        self.history: list = []
+        self._clear_record()
 
     def _transition(self, samples: np.ndarray) -> np.ndarray:
         """Phi of one step from its M rotation samples (the parts' exponentials, cached per rotation)."""
@@ -465,39 +460,5 @@ class IndexedStopFilter:
             p = a @ p @ a.T + r * gain @ gain.T  # Joseph form
             out[k] = x[FILTER_EPS_Z], math.sqrt(p[FILTER_EPS_Z, FILTER_EPS_Z])
         self.x, self.p = x, p
-        room = self.history_limit - sum(len(h) for h in self.history)
-        if room > 0:
-            self.history.append(out[:room].copy())
-        self._correction.append(corr.copy())
-        self._temperature.append(temp.copy())
-        self.elapsed += n * self.dt
+        self._record(out, corr, temp)
         return out
-
-    @property
-    def residual_drift(self) -> float:
-        """Estimated azimuth drift left after the INS's compensation, rad/s."""
-        return float(self.x[FILTER_EPS_Z])
-
-    @property
-    def drift_std(self) -> float:
-        """Filter standard deviation of the azimuth drift, rad/s."""
-        return float(math.sqrt(self.p[FILTER_EPS_Z, FILTER_EPS_Z]))
-
-    @property
-    def drift_estimate(self) -> float:
-        """The stop's drift measurement: mean compensation + residual, rad/s."""
-        corr = np.concatenate(self._correction) if self._correction else np.zeros(0)
-        return (float(np.mean(corr)) if corr.size else 0.0) + self.residual_drift
-
-    @property
-    def mean_temperature(self) -> float:
-        """Mean azimuth gyro temperature over the stop, °C; NaN if not given."""
-        temp = np.concatenate(self._temperature) if self._temperature else np.zeros(0)
-        return float(np.mean(temp)) if temp.size else float("nan")
-
-    def convergence(self) -> np.ndarray:
-        """(K, 3): time since reset (s), eps_z residual estimate and std (rad/s), first ``history_limit`` rows."""
-        if not self.history:
-            return np.empty((0, 3))
-        h = np.concatenate(self.history)
-        return np.column_stack([np.arange(1, h.shape[0] + 1) * self.dt, h])
