@@ -158,8 +158,10 @@ def test_batch_results_do_not_depend_on_the_thread_count(threads):
 @pytest.mark.parametrize("lowrate", [False, True])
 def test_simd_lanes_give_the_scalar_loops_bits(n_axes, lowrate):
     """The minor loop evaluated SARINS_IMU_LANES intervals side by side equals, bit for bit (signed zeros
-    too), the one-interval-at-a-time loop it was written from, on random inputs: any operation reordered
-    in a lane would show here.  K = 23 leaves a remainder; 9 gimbals exceed the lanes' limit (all scalar)."""
+    too), the one-interval-at-a-time loop (its minor steps' independent terms side by side in lanes, in
+    blocks of 64 steps), on random inputs: any operation reordered in a lane would show here.  K = 23 leaves
+    a remainder; 9 gimbals exceed the lanes' limit (all one at a time); n_sub = 1, 3, 7, 257 leave a part of
+    a lane group (257: after four whole blocks), 200 is the FMU's."""
     rng = np.random.default_rng(100 + n_axes + 10 * lowrate)
     k = 23
     axes = rng.standard_normal((n_axes, 3))
@@ -173,7 +175,7 @@ def test_simd_lanes_give_the_scalar_loops_bits(n_axes, lowrate):
     errors = _errors(k, rng, scale=0.3)
     errors["g_lowrate"] = np.array([0.7, -0.5, 0.9]) if lowrate else np.zeros(3)
     errors["g_lowrate_width"] = np.array([1e-4, 1.5, 3.0])  # rad/s: exp from 0 (underflow) to ~1
-    for n_sub, h in ((200, 1.0), (7, 0.3), (2, 1.5)):  # the last: rad-sized minor steps, every term large
+    for n_sub, h in ((200, 1.0), (7, 0.3), (257, 0.9), (3, 0.2), (1, 0.5), (2, 1.5)):  # the last: rad-sized steps
         scalar = _increments(axes, *gimbal, *base, h=h, n_sub=n_sub, threads=1, lanes=False, **errors)
         lanes = _increments(axes, *gimbal, *base, h=h, n_sub=n_sub, threads=1, **errors)
         assert all(np.isfinite(x).all() for x in scalar)

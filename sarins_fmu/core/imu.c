@@ -50,25 +50,6 @@ void sarins_imu_truth(int64_t n_axes, const double *axes, const double *angle0, 
     out[5] = f[2];
 }
 
-/* Deterministic triad errors on one minor-step increment d over dt:
- * m = (I + diag(sf) + M) d + b dt + q d|d| / dt; sf, bias: this interval's rows. */
-static void apply_errors(const double d[3], double dt, const double *sf, const double *mis, const double *bias,
-                         const double *quad, double m[3]) {
-    m[0] = d[0] * (1.0 + sf[0]) + mis[1] * d[1] + mis[2] * d[2] + bias[0] * dt + quad[0] * d[0] * fabs(d[0]) / dt;
-    m[1] = d[1] * (1.0 + sf[1]) + mis[3] * d[0] + mis[5] * d[2] + bias[1] * dt + quad[1] * d[1] * fabs(d[1]) / dt;
-    m[2] = d[2] * (1.0 + sf[2]) + mis[6] * d[0] + mis[7] * d[1] + bias[2] * dt + quad[2] * d[2] * fabs(d[2]) / dt;
-}
-
-/* r = v rotated by the unit quaternion q = [w x y z]: v + 2w (u x v) + 2 u x (u x v) */
-static void qrot(const double q[4], const double v[3], double r[3]) {
-    double cx = q[2] * v[2] - q[3] * v[1];
-    double cy = q[3] * v[0] - q[1] * v[2];
-    double cz = q[1] * v[1] - q[2] * v[0];
-    r[0] = v[0] + 2.0 * (q[0] * cx + q[2] * cz - q[3] * cy);
-    r[1] = v[1] + 2.0 * (q[0] * cy + q[3] * cx - q[1] * cz);
-    r[2] = v[2] + 2.0 * (q[0] * cz + q[1] * cy - q[2] * cx);
-}
-
 /* An interval's outputs from its composed quaternion q (changed) and velocity increment v: dtheta_k[3] the
  * rotation vector of q, its sign fixed so that the angle is in [0, pi] (2 atan2(|u|, w) u / |u|); dv_k[3] = v. */
 static void finish(double q[4], const double v[3], double *dtheta_k, double *dv_k) {
@@ -85,95 +66,18 @@ static void finish(double q[4], const double v[3], double *dtheta_k, double *dv_
     dv_k[2] = v[2];
 }
 
-/* Minor loop of output interval k; writes dtheta[k], dv[k]. */
-static void interval(int64_t k, int64_t n_axes, const double *axes, const double *angle0, const double *rate0,
-                     const double *accel, const double *w_t, const double *f_t, double h, int64_t n_sub,
-                     const double *g_sf, const double *g_mis, const double *g_bias, const double *g_quad,
-                     const double *g_lowrate, const double *g_width, const double *g_sens, const double *a_sf,
-                     const double *a_mis, const double *a_bias, const double *a_quad, double *dtheta,
-                     double *dv) {
-    const double *ang = angle0 + k * n_axes, *rat = rate0 + k * n_axes, *acc = accel + k * n_axes;
-    const double *wk = w_t + 3 * k, *fk = f_t + 3 * k;
-    const double *gsf = g_sf + 3 * k, *gb = g_bias + 3 * k, *asf = a_sf + 3 * k, *ab = a_bias + 3 * k;
-    int lowrate = g_lowrate[0] != 0.0 || g_lowrate[1] != 0.0 || g_lowrate[2] != 0.0;
-    double dt = h / (double)n_sub;
-    double t0[6], t1[6];
-    sarins_imu_truth(n_axes, axes, ang, rat, acc, 0.0, wk, fk, t0);
-    double q[4] = {1.0, 0.0, 0.0, 0.0}; /* q_{b(k-1) b(m)} */
-    double v[3] = {0.0, 0.0, 0.0};      /* velocity increment in b(k-1) */
-    double pa[3] = {0.0, 0.0, 0.0};     /* previous minor angle increment */
-    double pv[3] = {0.0, 0.0, 0.0};     /* previous minor velocity increment */
-    for (int64_t i = 1; i <= n_sub; i++) {
-        sarins_imu_truth(n_axes, axes, ang, rat, acc, (double)i * dt, wk, fk, t1);
-        /* trapezoid increments over the minor step */
-        double u[3], e[3];
-        for (int a = 0; a < 3; a++) {
-            u[a] = 0.5 * (t0[3 + a] + t1[3 + a]) * dt;
-            e[a] = 0.5 * (t0[a] + t1[a]) * dt;
-        }
-        /* g-sensitivity G u and the low-rate nonlinearity k e exp(-(e / (w dt))^2) */
-        double g[3];
-        for (int a = 0; a < 3; a++) g[a] = g_sens[3 * a] * u[0] + g_sens[3 * a + 1] * u[1] + g_sens[3 * a + 2] * u[2];
-        if (lowrate) {
-            for (int a = 0; a < 3; a++) {
-                double r = e[a] / (dt * g_width[a]);
-                g[a] += g_lowrate[a] * e[a] * exp(-(r * r));
-            }
-        }
-        double da[3], dvm[3];
-        apply_errors(e, dt, gsf, g_mis, gb, g_quad, da);
-        da[0] += g[0];
-        da[1] += g[1];
-        da[2] += g[2];
-        apply_errors(u, dt, asf, a_mis, ab, a_quad, dvm);
-        /* minor-step velocity in b(m-1): dnu + dalpha x dnu / 2 + (dalpha_prev x dnu + dnu_prev x dalpha) / 12 */
-        double sv[3];
-        sv[0] = dvm[0] + 0.5 * (da[1] * dvm[2] - da[2] * dvm[1])
-                + ((pa[1] * dvm[2] - pa[2] * dvm[1]) + (pv[1] * da[2] - pv[2] * da[1])) / 12.0;
-        sv[1] = dvm[1] + 0.5 * (da[2] * dvm[0] - da[0] * dvm[2])
-                + ((pa[2] * dvm[0] - pa[0] * dvm[2]) + (pv[2] * da[0] - pv[0] * da[2])) / 12.0;
-        sv[2] = dvm[2] + 0.5 * (da[0] * dvm[1] - da[1] * dvm[0])
-                + ((pa[0] * dvm[1] - pa[1] * dvm[0]) + (pv[0] * da[1] - pv[1] * da[0])) / 12.0;
-        double r[3];
-        qrot(q, sv, r);
-        v[0] += r[0];
-        v[1] += r[1];
-        v[2] += r[2];
-        /* coning-corrected minor rotation vector dphi = dalpha + dalpha_prev x dalpha / 12 */
-        double p[3];
-        p[0] = da[0] + (pa[1] * da[2] - pa[2] * da[1]) / 12.0;
-        p[1] = da[1] + (pa[2] * da[0] - pa[0] * da[2]) / 12.0;
-        p[2] = da[2] + (pa[0] * da[1] - pa[1] * da[0]) / 12.0;
-        /* q <- q * [cos(|p|/2), sin(|p|/2) p/|p|], both by their series to th^4 */
-        double th2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
-        double c = 1.0 - th2 / 8.0 + th2 * th2 / 384.0;
-        double s = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0;
-        double qn[4];
-        qn[0] = q[0] * c - s * (q[1] * p[0] + q[2] * p[1] + q[3] * p[2]);
-        qn[1] = q[0] * s * p[0] + q[1] * c + s * (q[2] * p[2] - q[3] * p[1]);
-        qn[2] = q[0] * s * p[1] + q[2] * c + s * (q[3] * p[0] - q[1] * p[2]);
-        qn[3] = q[0] * s * p[2] + q[3] * c + s * (q[1] * p[1] - q[2] * p[0]);
-        memcpy(q, qn, sizeof q);
-        memcpy(pa, da, sizeof pa);
-        memcpy(pv, dvm, sizeof pv);
-        memcpy(t0, t1, sizeof t0);
-    }
-    finish(q, v, dtheta + 3 * k, dv + 3 * k);
-}
-
-
-/* ------------------------------------------------- minor loop in lanes */
-
-/* SARINS_IMU_LANES intervals side by side (struct of arrays, one element per
- * interval): every lane does the operations of interval() in the same order,
- * so its results are those of interval() bit for bit; the loops over lanes
- * carry no dependence, so the compiler evaluates them in SIMD registers.
- * The libm calls (sin, cos, exp, atan2) stay one per lane. */
+/* The minor loop evaluates SARINS_IMU_LANES values side by side (struct of arrays, one element per lane):
+ * LANES intervals of a batch (interval_lanes), or LANES consecutive minor steps of one interval (interval:
+ * the terms that do not depend on the loop's serial state, i.e. all but the quaternion and the velocity
+ * sum).  Every lane does the operations of the one-value formulas in the same order, so the results do not
+ * depend on the layout, bit for bit, and equal those of the scalar formulas (sarins_imu_truth); the loops
+ * over lanes carry no dependence, so the compiler evaluates them in SIMD registers.  The libm calls (sin,
+ * cos, exp, atan2) stay one per value. */
 #define LANES SARINS_IMU_LANES
 typedef double Lanes[LANES];
 
-/* With GCC or clang on x86-64 glibc, interval_lanes is also compiled for AVX2 (four lanes in one register) and
- * the loader picks the variant the CPU runs; elsewhere the one portable build (SSE2 on x86-64).  Both do
+/* With GCC or clang on x86-64 glibc, the lane functions are also compiled for AVX2 (four lanes in one register)
+ * and the loader picks the variant the CPU runs; elsewhere the one portable build (SSE2 on x86-64).  Both do
  * the same IEEE operations (no contraction: -ffp-contract=off), so the results are the same. */
 #if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && defined(__GLIBC__) && defined(__has_attribute)
 #if __has_attribute(target_clones)
@@ -185,6 +89,12 @@ typedef double Lanes[LANES];
 #define LANE_CLONES
 #define LANE_INLINE inline
 #endif
+
+/* The error terms of the minor loop that are the same for every interval of a batch. */
+typedef struct {
+    const double *g_mis, *g_quad, *g_lowrate, *g_width, *g_sens, *a_mis, *a_quad; /* as sarins_imu_increments */
+    int lowrate; /* g_lowrate is not zero */
+} Fixed;
 
 /* (x, y, z) <- R(a, theta)^T (x, y, z): rot_t on one lane's vector */
 static LANE_INLINE void rot_t_lane(double ax, double ay, double az, double c, double s, double *x, double *y,
@@ -199,20 +109,26 @@ static LANE_INLINE void rot_t_lane(double ax, double ay, double az, double c, do
     *z = c * v2 - s * cz + d * az;
 }
 
-/* Gimbal j of truth_lanes: w, f, s (v[0..8] lanes) turned by R^T as rot_t turns them, then s += thetadot a.
- * first: s is still the zero vector (+0.0 each), taken as literals rather than stored (a store of zeros
- * becomes a memset, a slow rep stos here). */
+/* Gimbal j of the truth: w, f, s (v[0..8] lanes) turned by R^T as rot_t turns them, then s += thetadot a; the
+ * gimbal state ang, rat, acc and the time tau (s) since the interval start per lane.  Lanes from n_valid on
+ * hold no value: no libm call for them (their cos, sin taken as 1, 0).  first: s is still the zero vector
+ * (+0.0 each), taken as literals rather than stored (a store of zeros becomes a memset, a slow rep stos here). */
 static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, const double *restrict ang,
-                                     const double *restrict rat, const double *restrict acc, double tau,
-                                     Lanes *restrict v) {
+                                     const double *restrict rat, const double *restrict acc,
+                                     const double *restrict tau, int n_valid, Lanes *restrict v) {
     Lanes th, thd, c, sn;
     for (int l = 0; l < LANES; l++) {
-        th[l] = ang[l] + (rat[l] + 0.5 * acc[l] * tau) * tau;
-        thd[l] = rat[l] + acc[l] * tau;
+        th[l] = ang[l] + (rat[l] + 0.5 * acc[l] * tau[l]) * tau[l];
+        thd[l] = rat[l] + acc[l] * tau[l];
     }
     for (int l = 0; l < LANES; l++) {
-        c[l] = cos(th[l]);
-        sn[l] = sin(th[l]);
+        if (l < n_valid) {
+            c[l] = cos(th[l]);
+            sn[l] = sin(th[l]);
+        } else {
+            c[l] = 1.0;
+            sn[l] = 0.0;
+        }
     }
     double ax = axis[0], ay = axis[1], az = axis[2];
     for (int l = 0; l < LANES; l++) {
@@ -226,11 +142,9 @@ static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, con
     }
 }
 
-/* sarins_imu_truth lane by lane: gimbal states ang, rat, acc [A] lanes; w_t, f_t [3] lanes; out [6] lanes. */
-static LANE_INLINE void truth_lanes(int64_t n_axes, const double *restrict axes, const Lanes *restrict ang,
-                                    const Lanes *restrict rat, const Lanes *restrict acc, double tau,
-                                    const Lanes *restrict w_t, const Lanes *restrict f_t, Lanes *restrict out) {
-    Lanes v[9]; /* w, f, s (omega_tb in the current gimbal frame) */
+/* The truth's start: w_t, f_t [3] lanes into v (w, f, s); s zero only without a gimbal (else gimbal 0 sets it). */
+static LANE_INLINE void truth_start(int64_t n_axes, const Lanes *restrict w_t, const Lanes *restrict f_t,
+                                    Lanes *restrict v) {
     for (int a = 0; a < 3; a++) {
         for (int l = 0; l < LANES; l++) {
             v[a][l] = w_t[a][l];
@@ -242,13 +156,10 @@ static LANE_INLINE void truth_lanes(int64_t n_axes, const double *restrict axes,
             for (int l = 0; l < LANES; l++) v[a][l] = 0.0;
         }
     }
-    for (int64_t j = 0; j < n_axes; j++) {
-        if (j == 0) {
-            gimbal_lanes(1, axes, ang[0], rat[0], acc[0], tau, v);
-        } else {
-            gimbal_lanes(0, axes + 3 * j, ang[j], rat[j], acc[j], tau, v);
-        }
-    }
+}
+
+/* The truth's end: out [6] lanes = (w + s, f), sarins_imu_truth's out. */
+static LANE_INLINE void truth_end(const Lanes *restrict v, Lanes *restrict out) {
     for (int a = 0; a < 3; a++) {
         for (int l = 0; l < LANES; l++) {
             out[a][l] = v[a][l] + v[6 + a][l];
@@ -256,6 +167,252 @@ static LANE_INLINE void truth_lanes(int64_t n_axes, const double *restrict axes,
         }
     }
 }
+
+/* sarins_imu_truth of LANES intervals at one time tau: gimbal states ang, rat, acc [A] lanes; w_t, f_t [3]
+ * lanes; out [6] lanes. */
+static LANE_INLINE void truth_lanes(int64_t n_axes, const double *restrict axes, const Lanes *restrict ang,
+                                    const Lanes *restrict rat, const Lanes *restrict acc, double tau,
+                                    const Lanes *restrict w_t, const Lanes *restrict f_t, Lanes *restrict out) {
+    Lanes v[9], taus; /* w, f, s (omega_tb in the current gimbal frame) */
+    for (int l = 0; l < LANES; l++) taus[l] = tau;
+    truth_start(n_axes, w_t, f_t, v);
+    for (int64_t j = 0; j < n_axes; j++) {
+        if (j == 0) {
+            gimbal_lanes(1, axes, ang[0], rat[0], acc[0], taus, LANES, v);
+        } else {
+            gimbal_lanes(0, axes + 3 * j, ang[j], rat[j], acc[j], taus, LANES, v);
+        }
+    }
+    truth_end(v, out);
+}
+
+/* sarins_imu_truth of one interval at LANES times tau (lanes from n_valid on hold no time): gimbal state
+ * ang, rat, acc [A]; w_t, f_t [3] lanes (the same in each); out [6] lanes. */
+static LANE_INLINE void truth_steps(int64_t n_axes, const double *restrict axes, const double *restrict ang,
+                                    const double *restrict rat, const double *restrict acc,
+                                    const double *restrict tau, int n_valid, const Lanes *restrict w_t,
+                                    const Lanes *restrict f_t, Lanes *restrict out) {
+    Lanes v[9];
+    truth_start(n_axes, w_t, f_t, v);
+    for (int64_t j = 0; j < n_axes; j++) {
+        Lanes a, r, c;
+        for (int l = 0; l < LANES; l++) {
+            a[l] = ang[j];
+            r[l] = rat[j];
+            c[l] = acc[j];
+        }
+        if (j == 0) {
+            gimbal_lanes(1, axes, a, r, c, tau, n_valid, v);
+        } else {
+            gimbal_lanes(0, axes + 3 * j, a, r, c, tau, n_valid, v);
+        }
+    }
+    truth_end(v, out);
+}
+
+/* The compensated increments of a minor step of length dt per lane from the truth t0, t1 [6] lanes at its
+ * ends: trapezoid increments u (force), e (rate); da = (I + diag(gsf) + M_g) e + gb dt + q_g e|e| / dt + G u
+ * + k e exp(-(e / (w dt))^2) (low rate; no exp for the lanes from n_valid on), dvm = (I + diag(asf) + M_a) u
+ * + ab dt + q_a u|u| / dt; gsf, gb, asf, ab [3] lanes: the interval's scale factors and biases. */
+static LANE_INLINE void minor_terms(const Lanes *restrict t0, const Lanes *restrict t1, double dt, int n_valid,
+                                    const Fixed *restrict fx, const Lanes *restrict gsf, const Lanes *restrict gb,
+                                    const Lanes *restrict asf, const Lanes *restrict ab, Lanes *restrict da,
+                                    Lanes *restrict dvm) {
+    const double *g_sens = fx->g_sens, *g_mis = fx->g_mis, *g_quad = fx->g_quad, *a_mis = fx->a_mis;
+    const double *a_quad = fx->a_quad;
+    Lanes u[3], e[3], g[3], x[3];
+    for (int a = 0; a < 3; a++) {
+        for (int l = 0; l < LANES; l++) {
+            u[a][l] = 0.5 * (t0[3 + a][l] + t1[3 + a][l]) * dt;
+            e[a][l] = 0.5 * (t0[a][l] + t1[a][l]) * dt;
+        }
+    }
+    for (int a = 0; a < 3; a++) { /* g-sensitivity G u */
+        for (int l = 0; l < LANES; l++)
+            g[a][l] = g_sens[3 * a] * u[0][l] + g_sens[3 * a + 1] * u[1][l] + g_sens[3 * a + 2] * u[2][l];
+    }
+    if (fx->lowrate) { /* the exp calls of the three axes together: one wait for their results */
+        for (int a = 0; a < 3; a++) {
+            for (int l = 0; l < LANES; l++) {
+                double r = e[a][l] / (dt * fx->g_width[a]);
+                x[a][l] = -(r * r);
+            }
+        }
+        for (int a = 0; a < 3; a++) {
+            for (int l = 0; l < LANES; l++) x[a][l] = l < n_valid ? exp(x[a][l]) : 0.0;
+        }
+        for (int a = 0; a < 3; a++) {
+            for (int l = 0; l < LANES; l++) g[a][l] += fx->g_lowrate[a] * e[a][l] * x[a][l];
+        }
+    }
+    for (int l = 0; l < LANES; l++) {
+        double d0 = e[0][l], d1 = e[1][l], d2 = e[2][l];
+        double da0 = d0 * (1.0 + gsf[0][l]) + g_mis[1] * d1 + g_mis[2] * d2 + gb[0][l] * dt
+                     + g_quad[0] * d0 * fabs(d0) / dt;
+        double da1 = d1 * (1.0 + gsf[1][l]) + g_mis[3] * d0 + g_mis[5] * d2 + gb[1][l] * dt
+                     + g_quad[1] * d1 * fabs(d1) / dt;
+        double da2 = d2 * (1.0 + gsf[2][l]) + g_mis[6] * d0 + g_mis[7] * d1 + gb[2][l] * dt
+                     + g_quad[2] * d2 * fabs(d2) / dt;
+        da[0][l] = da0 + g[0][l];
+        da[1][l] = da1 + g[1][l];
+        da[2][l] = da2 + g[2][l];
+        double u0 = u[0][l], u1 = u[1][l], u2 = u[2][l];
+        dvm[0][l] = u0 * (1.0 + asf[0][l]) + a_mis[1] * u1 + a_mis[2] * u2 + ab[0][l] * dt
+                    + a_quad[0] * u0 * fabs(u0) / dt;
+        dvm[1][l] = u1 * (1.0 + asf[1][l]) + a_mis[3] * u0 + a_mis[5] * u2 + ab[1][l] * dt
+                    + a_quad[1] * u1 * fabs(u1) / dt;
+        dvm[2][l] = u2 * (1.0 + asf[2][l]) + a_mis[6] * u0 + a_mis[7] * u1 + ab[2][l] * dt
+                    + a_quad[2] * u2 * fabs(u2) / dt;
+    }
+}
+
+/* A minor step's terms from its increments da, dvm and the previous step's pa, pv: sv[3] its velocity in
+ * b(m-1), dnu + dalpha x dnu / 2 + (dalpha_prev x dnu + dnu_prev x dalpha) / 12 (sculling); p[3] its
+ * coning-corrected rotation vector, dalpha + dalpha_prev x dalpha / 12; *c, *s: cos(|p|/2) and
+ * sin(|p|/2) / |p| by their series to |p|^4. */
+static LANE_INLINE void scull_cone(double da0, double da1, double da2, double dv0, double dv1, double dv2,
+                                   double pa0, double pa1, double pa2, double pv0, double pv1, double pv2,
+                                   double *restrict sv, double *restrict p, double *restrict c, double *restrict s) {
+    sv[0] = dv0 + 0.5 * (da1 * dv2 - da2 * dv1) + ((pa1 * dv2 - pa2 * dv1) + (pv1 * da2 - pv2 * da1)) / 12.0;
+    sv[1] = dv1 + 0.5 * (da2 * dv0 - da0 * dv2) + ((pa2 * dv0 - pa0 * dv2) + (pv2 * da0 - pv0 * da2)) / 12.0;
+    sv[2] = dv2 + 0.5 * (da0 * dv1 - da1 * dv0) + ((pa0 * dv1 - pa1 * dv0) + (pv0 * da1 - pv1 * da0)) / 12.0;
+    p[0] = da0 + (pa1 * da2 - pa2 * da1) / 12.0;
+    p[1] = da1 + (pa2 * da0 - pa0 * da2) / 12.0;
+    p[2] = da2 + (pa0 * da1 - pa1 * da0) / 12.0;
+    double th2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+    *c = 1.0 - th2 / 8.0 + th2 * th2 / 384.0;
+    *s = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0;
+}
+
+/* The serial part of a minor step: v += q sv q* (the step's velocity into b(k-1)); q <- q * [c, s p]. */
+static LANE_INLINE void q_step(double *restrict q, double *restrict v, const double *restrict sv,
+                               const double *restrict p, double c, double s) {
+    double q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3];
+    double cx = q2 * sv[2] - q3 * sv[1], cy = q3 * sv[0] - q1 * sv[2], cz = q1 * sv[1] - q2 * sv[0];
+    v[0] += sv[0] + 2.0 * (q0 * cx + q2 * cz - q3 * cy);
+    v[1] += sv[1] + 2.0 * (q0 * cy + q3 * cx - q1 * cz);
+    v[2] += sv[2] + 2.0 * (q0 * cz + q1 * cy - q2 * cx);
+    q[0] = q0 * c - s * (q1 * p[0] + q2 * p[1] + q3 * p[2]);
+    q[1] = q0 * s * p[0] + q1 * c + s * (q2 * p[2] - q3 * p[1]);
+    q[2] = q0 * s * p[1] + q2 * c + s * (q3 * p[0] - q1 * p[2]);
+    q[3] = q0 * s * p[2] + q3 * c + s * (q1 * p[1] - q2 * p[0]);
+}
+
+/* ---------------------------------------------- one interval, minor steps in lanes */
+
+/* Minor steps per block of interval(): the lane phase fills a block's terms, the serial phase reads them. */
+#define BLOCK 64
+_Static_assert(BLOCK % LANES == 0, "a block holds whole lane groups");
+
+/* One interval's inputs to the minor loop (pointers to its rows; arguments of interval()). */
+typedef struct {
+    int64_t n_axes;
+    const double *axes, *ang, *rat, *acc, *wk, *fk, *gsf, *gb, *asf, *ab;
+    double dt;
+    Fixed fx;
+} Minor;
+
+/* What the lane phase carries from one block to the next: the truth t at the last minor time done, that
+ * step's increments da, dvm (zero before the first step). */
+typedef struct {
+    double t[6], da[3], dvm[3];
+} Carry;
+
+/* The serial phase's inputs of BLOCK minor steps (scull_cone's outputs), one column per step. */
+typedef struct {
+    double sv[3][BLOCK], p[3][BLOCK], c[BLOCK], s[BLOCK];
+} Block;
+
+/* x [rows] lanes = y shifted one lane up, the carry in lane 0; the carry <- y's lane n_valid - 1. */
+static LANE_INLINE void shift_in(const Lanes *restrict y, int rows, int n_valid, double *restrict carry,
+                                 Lanes *restrict x) {
+    for (int a = 0; a < rows; a++) {
+        x[a][0] = carry[a];
+        for (int l = 1; l < LANES; l++) x[a][l] = y[a][l - 1];
+        carry[a] = y[a][n_valid - 1];
+    }
+}
+
+/* x [3] lanes = the three values of row, each in every lane */
+static LANE_INLINE void broadcast3(const double *restrict row, Lanes *restrict x) {
+    for (int a = 0; a < 3; a++) {
+        for (int l = 0; l < LANES; l++) x[a][l] = row[a];
+    }
+}
+
+/* The lane phase of minor steps i0 + 1 .. i0 + nb (1 <= nb <= BLOCK) of one interval, LANES steps side by
+ * side: their truth at the step ends, increments and sculling and coning terms, into out. */
+LANE_CLONES static void minor_block(const Minor *restrict in, int64_t i0, int nb, Carry *restrict carry,
+                                    Block *restrict out) {
+    Lanes wk[3], fk[3], gsf[3], gb[3], asf[3], ab[3];
+    broadcast3(in->wk, wk);
+    broadcast3(in->fk, fk);
+    broadcast3(in->gsf, gsf);
+    broadcast3(in->gb, gb);
+    broadcast3(in->asf, asf);
+    broadcast3(in->ab, ab);
+    double dt = in->dt;
+    for (int j0 = 0; j0 < nb; j0 += LANES) {
+        int n_valid = nb - j0 < LANES ? nb - j0 : LANES;
+        Lanes tau, t0[6], t1[6], da[3], dvm[3], pa[3], pv[3];
+        for (int l = 0; l < LANES; l++) tau[l] = (double)(i0 + j0 + l + 1) * dt;
+        truth_steps(in->n_axes, in->axes, in->ang, in->rat, in->acc, tau, n_valid, wk, fk, t1);
+        shift_in(t1, 6, n_valid, carry->t, t0);
+        minor_terms(t0, t1, dt, n_valid, &in->fx, gsf, gb, asf, ab, da, dvm);
+        shift_in(da, 3, n_valid, carry->da, pa);
+        shift_in(dvm, 3, n_valid, carry->dvm, pv);
+        /* the group's columns of out (indices from pointers: with -fwrapv, j0 + l may not be consecutive) */
+        double *sv0 = out->sv[0] + j0, *sv1 = out->sv[1] + j0, *sv2 = out->sv[2] + j0;
+        double *p0 = out->p[0] + j0, *p1 = out->p[1] + j0, *p2 = out->p[2] + j0;
+        double *c = out->c + j0, *s = out->s + j0;
+        for (int l = 0; l < LANES; l++) {
+            double sv[3], p[3];
+            scull_cone(da[0][l], da[1][l], da[2][l], dvm[0][l], dvm[1][l], dvm[2][l], pa[0][l], pa[1][l],
+                       pa[2][l], pv[0][l], pv[1][l], pv[2][l], sv, p, &c[l], &s[l]);
+            sv0[l] = sv[0]; /* written out, as in interval_lanes */
+            sv1[l] = sv[1];
+            sv2[l] = sv[2];
+            p0[l] = p[0];
+            p1[l] = p[1];
+            p2[l] = p[2];
+        }
+    }
+}
+
+/* The serial phase of nb minor steps: q, v through the block's terms. */
+static void serial_block(const Block *restrict b, int nb, double *restrict q, double *restrict v) {
+    for (int j = 0; j < nb; j++) {
+        double sv[3] = {b->sv[0][j], b->sv[1][j], b->sv[2][j]}, p[3] = {b->p[0][j], b->p[1][j], b->p[2][j]};
+        q_step(q, v, sv, p, b->c[j], b->s[j]);
+    }
+}
+
+/* Minor loop of output interval k; writes dtheta[k], dv[k].  Blocks of BLOCK minor steps: the lane phase
+ * (minor_block), then the serial one (serial_block); the quaternion q_{b(k-1) b(m)} and the velocity
+ * increment in b(k-1) are the only state the steps pass on. */
+static void interval(int64_t k, int64_t n_axes, const double *axes, const double *angle0, const double *rate0,
+                     const double *accel, const double *w_t, const double *f_t, double h, int64_t n_sub,
+                     const double *g_sf, const double *g_mis, const double *g_bias, const double *g_quad,
+                     const double *g_lowrate, const double *g_width, const double *g_sens, const double *a_sf,
+                     const double *a_mis, const double *a_bias, const double *a_quad, double *dtheta,
+                     double *dv) {
+    Minor in = {n_axes, axes, angle0 + k * n_axes, rate0 + k * n_axes, accel + k * n_axes, w_t + 3 * k,
+                f_t + 3 * k, g_sf + 3 * k, g_bias + 3 * k, a_sf + 3 * k, a_bias + 3 * k, h / (double)n_sub,
+                {g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad,
+                 g_lowrate[0] != 0.0 || g_lowrate[1] != 0.0 || g_lowrate[2] != 0.0}};
+    Carry carry = {{0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
+    sarins_imu_truth(n_axes, axes, in.ang, in.rat, in.acc, 0.0, in.wk, in.fk, carry.t);
+    double q[4] = {1.0, 0.0, 0.0, 0.0}, v[3] = {0.0, 0.0, 0.0};
+    Block block;
+    for (int64_t i0 = 0; i0 < n_sub; i0 += BLOCK) {
+        int nb = n_sub - i0 < BLOCK ? (int)(n_sub - i0) : BLOCK;
+        minor_block(&in, i0, nb, &carry, &block);
+        serial_block(&block, nb, q, v);
+    }
+    finish(q, v, dtheta + 3 * k, dv + 3 * k);
+}
+
+/* ------------------------------------------------- intervals in lanes */
 
 /* rows k0..k0+LANES-1 of the (K, cols) array x into lanes, column-major */
 static void load_lanes(const double *x, int64_t k0, int64_t cols, Lanes *out) {
@@ -282,10 +439,11 @@ LANE_CLONES static void interval_lanes(int64_t k0, int64_t n_axes, const double 
     load_lanes(g_bias, k0, 3, gb);
     load_lanes(a_sf, k0, 3, asf);
     load_lanes(a_bias, k0, 3, ab);
-    int lowrate = g_lowrate[0] != 0.0 || g_lowrate[1] != 0.0 || g_lowrate[2] != 0.0;
+    Fixed fx = {g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad,
+                g_lowrate[0] != 0.0 || g_lowrate[1] != 0.0 || g_lowrate[2] != 0.0};
     double dt = h / (double)n_sub;
     Lanes t0[6], t1[6];
-    Lanes q[4], v[3], pa[3], pv[3]; /* as in interval() */
+    Lanes q[4], v[3], pa[3], pv[3]; /* as in interval(): pa, pv the previous step's increments */
     for (int l = 0; l < LANES; l++) {
         q[0][l] = 1.0;
         q[1][l] = q[2][l] = q[3][l] = 0.0;
@@ -299,81 +457,27 @@ LANE_CLONES static void interval_lanes(int64_t k0, int64_t n_axes, const double 
             memcpy(t0, t1, sizeof t0);
             continue;
         }
-        Lanes u[3], e[3], g[3], x[3];
-        for (int a = 0; a < 3; a++) {
-            for (int l = 0; l < LANES; l++) {
-                u[a][l] = 0.5 * (t0[3 + a][l] + t1[3 + a][l]) * dt;
-                e[a][l] = 0.5 * (t0[a][l] + t1[a][l]) * dt;
-            }
-        }
-        for (int a = 0; a < 3; a++) {
-            for (int l = 0; l < LANES; l++)
-                g[a][l] = g_sens[3 * a] * u[0][l] + g_sens[3 * a + 1] * u[1][l] + g_sens[3 * a + 2] * u[2][l];
-        }
-        if (lowrate) { /* the exp calls of the three axes together: one wait for their results */
-            for (int a = 0; a < 3; a++) {
-                for (int l = 0; l < LANES; l++) {
-                    double r = e[a][l] / (dt * g_width[a]);
-                    x[a][l] = -(r * r);
-                }
-            }
-            for (int a = 0; a < 3; a++) {
-                for (int l = 0; l < LANES; l++) x[a][l] = exp(x[a][l]);
-            }
-            for (int a = 0; a < 3; a++) {
-                for (int l = 0; l < LANES; l++) g[a][l] += g_lowrate[a] * e[a][l] * x[a][l];
-            }
-        }
+        Lanes da[3], dvm[3];
+        minor_terms(t0, t1, dt, LANES, &fx, gsf, gb, asf, ab, da, dvm);
         for (int l = 0; l < LANES; l++) {
-            double d0 = e[0][l], d1 = e[1][l], d2 = e[2][l];
-            /* apply_errors on e, then + g */
-            double da0 = d0 * (1.0 + gsf[0][l]) + g_mis[1] * d1 + g_mis[2] * d2 + gb[0][l] * dt
-                         + g_quad[0] * d0 * fabs(d0) / dt;
-            double da1 = d1 * (1.0 + gsf[1][l]) + g_mis[3] * d0 + g_mis[5] * d2 + gb[1][l] * dt
-                         + g_quad[1] * d1 * fabs(d1) / dt;
-            double da2 = d2 * (1.0 + gsf[2][l]) + g_mis[6] * d0 + g_mis[7] * d1 + gb[2][l] * dt
-                         + g_quad[2] * d2 * fabs(d2) / dt;
-            da0 += g[0][l];
-            da1 += g[1][l];
-            da2 += g[2][l];
-            double u0 = u[0][l], u1 = u[1][l], u2 = u[2][l];
-            double dv0 = u0 * (1.0 + asf[0][l]) + a_mis[1] * u1 + a_mis[2] * u2 + ab[0][l] * dt
-                         + a_quad[0] * u0 * fabs(u0) / dt;
-            double dv1 = u1 * (1.0 + asf[1][l]) + a_mis[3] * u0 + a_mis[5] * u2 + ab[1][l] * dt
-                         + a_quad[1] * u1 * fabs(u1) / dt;
-            double dv2 = u2 * (1.0 + asf[2][l]) + a_mis[6] * u0 + a_mis[7] * u1 + ab[2][l] * dt
-                         + a_quad[2] * u2 * fabs(u2) / dt;
-            double pa0 = pa[0][l], pa1 = pa[1][l], pa2 = pa[2][l], pv0 = pv[0][l], pv1 = pv[1][l], pv2 = pv[2][l];
-            /* sculling, as interval() */
-            double s0 = dv0 + 0.5 * (da1 * dv2 - da2 * dv1)
-                        + ((pa1 * dv2 - pa2 * dv1) + (pv1 * da2 - pv2 * da1)) / 12.0;
-            double s1 = dv1 + 0.5 * (da2 * dv0 - da0 * dv2)
-                        + ((pa2 * dv0 - pa0 * dv2) + (pv2 * da0 - pv0 * da2)) / 12.0;
-            double s2 = dv2 + 0.5 * (da0 * dv1 - da1 * dv0)
-                        + ((pa0 * dv1 - pa1 * dv0) + (pv0 * da1 - pv1 * da0)) / 12.0;
-            double q0 = q[0][l], q1 = q[1][l], q2 = q[2][l], q3 = q[3][l];
-            /* qrot(q, s) added to v */
-            double cx = q2 * s2 - q3 * s1, cy = q3 * s0 - q1 * s2, cz = q1 * s1 - q2 * s0;
-            v[0][l] += s0 + 2.0 * (q0 * cx + q2 * cz - q3 * cy);
-            v[1][l] += s1 + 2.0 * (q0 * cy + q3 * cx - q1 * cz);
-            v[2][l] += s2 + 2.0 * (q0 * cz + q1 * cy - q2 * cx);
-            /* coning, quaternion update */
-            double p0 = da0 + (pa1 * da2 - pa2 * da1) / 12.0;
-            double p1 = da1 + (pa2 * da0 - pa0 * da2) / 12.0;
-            double p2 = da2 + (pa0 * da1 - pa1 * da0) / 12.0;
-            double th2 = p0 * p0 + p1 * p1 + p2 * p2;
-            double c = 1.0 - th2 / 8.0 + th2 * th2 / 384.0;
-            double s = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0;
-            q[0][l] = q0 * c - s * (q1 * p0 + q2 * p1 + q3 * p2);
-            q[1][l] = q0 * s * p0 + q1 * c + s * (q2 * p2 - q3 * p1);
-            q[2][l] = q0 * s * p1 + q2 * c + s * (q3 * p0 - q1 * p2);
-            q[3][l] = q0 * s * p2 + q3 * c + s * (q1 * p1 - q2 * p0);
-            pa[0][l] = da0;
-            pa[1][l] = da1;
-            pa[2][l] = da2;
-            pv[0][l] = dv0;
-            pv[1][l] = dv1;
-            pv[2][l] = dv2;
+            double sv[3], p[3], c, s;
+            scull_cone(da[0][l], da[1][l], da[2][l], dvm[0][l], dvm[1][l], dvm[2][l], pa[0][l], pa[1][l],
+                       pa[2][l], pv[0][l], pv[1][l], pv[2][l], sv, p, &c, &s);
+            double ql[4] = {q[0][l], q[1][l], q[2][l], q[3][l]}, vl[3] = {v[0][l], v[1][l], v[2][l]};
+            q_step(ql, vl, sv, p, c, s);
+            q[0][l] = ql[0]; /* written out: a loop over the components here keeps GCC from vectorising */
+            q[1][l] = ql[1];
+            q[2][l] = ql[2];
+            q[3][l] = ql[3];
+            v[0][l] = vl[0];
+            v[1][l] = vl[1];
+            v[2][l] = vl[2];
+            pa[0][l] = da[0][l];
+            pa[1][l] = da[1][l];
+            pa[2][l] = da[2][l];
+            pv[0][l] = dvm[0][l];
+            pv[1][l] = dvm[1][l];
+            pv[2][l] = dvm[2][l];
         }
         memcpy(t0, t1, sizeof t0);
     }

@@ -93,9 +93,11 @@ void sarins_imu_truth(int64_t n_axes, const double *axes, const double *angle0, 
  * width (rad/s); g_sens (3, 3) g-sensitivity (rad/s per m/s^2).
  *
  * Runs of SARINS_IMU_LANES intervals are evaluated side by side in SIMD
- * lanes (each lane does the scalar loop's operations in the same order);
+ * lanes (each lane does the scalar formulas' operations in the same order);
  * the remainder, and every interval of more than SARINS_IMU_MAX_AXES
- * gimbals, one at a time.  The results do not depend on the split. */
+ * gimbals, one at a time (then the terms of SARINS_IMU_LANES consecutive
+ * minor steps that do not depend on the attitude and velocity sums side by
+ * side).  The results do not depend on the split. */
 void sarins_imu_increments(int64_t k0, int64_t k1, int64_t n_axes, const double *axes, const double *angle0,
                            const double *rate0, const double *accel, const double *w_t, const double *f_t,
                            double h, int64_t n_sub, const double *g_sf, const double *g_mis,
@@ -104,8 +106,8 @@ void sarins_imu_increments(int64_t k0, int64_t k1, int64_t n_axes, const double 
                            const double *a_mis, const double *a_bias, const double *a_quad, double *dtheta,
                            double *dv);
 
-/* sarins_imu_increments one interval at a time, without lanes (the
- * reference the lanes are tested against; the same results). */
+/* sarins_imu_increments one interval at a time, without interval lanes
+ * (the reference those lanes are tested against; the same results). */
 void sarins_imu_increments_scalar(int64_t k0, int64_t k1, int64_t n_axes, const double *axes, const double *angle0,
                                   const double *rate0, const double *accel, const double *w_t, const double *f_t,
                                   double h, int64_t n_sub, const double *g_sf, const double *g_mis,

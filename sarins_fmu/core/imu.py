@@ -108,7 +108,7 @@ def increments(axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
     g_quad, a_quad (3,) x|x| coefficients; g_lowrate, g_lowrate_width (3,)
     low-rate nonlinearity; g_sens (3, 3) g-sensitivity (rad/s per m/s^2).
     ``threads``: default :func:`thread_count`.  ``lanes=False`` evaluates one interval at a time
-    (``sarins_imu_increments_scalar``: the reference of the SIMD lanes, the same results, slower).
+    (``sarins_imu_increments_scalar``: the reference of the interval lanes, the same results, slower).
     """
     axes = _arrays.read(axes, np.shape(axes), "axes")
     n_axes = axes.shape[0]
