@@ -331,6 +331,25 @@ def test_recurrent_numpy_cells_equal_torch(tmp_path, cell):
     assert back.cell == comp.weights.cell and all(np.array_equal(a, comp.weights.arrays()[k]) for k, a in back.arrays().items())
 
 
+@needs_torch
+@pytest.mark.parametrize("cell", ["lstm", "gru3"])
+def test_recurrent_run_in_chunks_is_one_call_bit_for_bit(monkeypatch, cell):
+    """run() feeds torch chunks of RUN_CHUNK samples with the state carried (bounded workspace): the same
+    bits as one call over the whole series, with and without memory, a chunk boundary mid-series."""
+    import torch
+
+    X, Y = _toy_series(700)
+    comp = compensators.make(cell, hidden=16, steps=5, seq_len=50, streams=8).fit(X[:500], Y[:500])
+    z = comp._z(X)
+    monkeypatch.setattr(recurrent, "RUN_CHUNK", 64)  # 700 = 10 chunks of 64 and one of 60
+    for memory in (True, False):
+        x = torch.tensor(z[None] if memory else z[:, None], dtype=torch.float32)
+        with torch.no_grad():
+            whole, _ = recurrent._from_weights(torch, comp.weights)(x)
+        whole = (whole[0] if memory else whole[:, 0]).double().numpy()
+        assert np.array_equal(recurrent.run(comp.weights, z, memory=memory), whole)
+
+
 def test_recurrent_without_torch_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "torch", None)  # import torch -> ImportError
     with pytest.raises(ImportError, match=r"sarins-fmu\[deep\]"):

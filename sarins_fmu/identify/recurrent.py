@@ -270,18 +270,33 @@ def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, layers: 
     return _to_weights(cell, net), losses
 
 
+RUN_CHUNK = 1 << 16  # samples per forward call of :func:`run` (bounds torch's workspace: ~0.1 GB a layer)
+
+
 def run(weights: RecurrentWeights, z: np.ndarray, memory: bool = True) -> np.ndarray:
     """Outputs (T, m) of the whole series z (T, d) from a zero state (torch if installed, else numpy);
-    ``memory=False``: every sample from a zero state (the control of :func:`train`)."""
+    ``memory=False``: every sample from a zero state (the control of :func:`train`).
+
+    Torch runs the series in chunks of :data:`RUN_CHUNK` samples, the state carried from one to the next:
+    one call over millions of samples needs several GB of workspace, and oneDNN refuses ("could not create
+    a primitive") when it cannot have it."""
     if not torch_available():
         return weights.run(z) if memory else weights.step(z, weights.zero_state(len(z)))[0]
     import torch
 
     net = _from_weights(torch, weights)
-    x = torch.tensor(z[None] if memory else z[:, None], dtype=torch.float32)
+    out = np.empty((len(z), weights.n_out))
+    state = None
     with torch.no_grad():
-        y, _ = net(x)
-    return (y[0] if memory else y[:, 0]).double().numpy()
+        for start in range(0, len(z), RUN_CHUNK):
+            part = torch.tensor(z[start:start + RUN_CHUNK], dtype=torch.float32)
+            if memory:
+                y, state = net(part[None], state)
+                out[start:start + len(part)] = y[0].double().numpy()
+            else:
+                y, _ = net(part[:, None])
+                out[start:start + len(part)] = y[:, 0].double().numpy()
+    return out
 
 
 def save_state_dict(weights: RecurrentWeights, path) -> None:
