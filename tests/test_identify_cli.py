@@ -1,6 +1,7 @@
 """Tests of the `sarins identify` subcommands (sarins.cli.identify)."""
 
 import argparse
+import math
 
 import numpy as np
 import pytest
@@ -183,16 +184,30 @@ def test_predict_refuses_inputs_outside_the_training_range(tmp_path, capsys, val
     assert main(["identify", "predict", "--model", str(model), "--data", str(data)]) == 0
 
 
-def test_shipped_model_without_a_stored_range_is_bounded_from_its_scaling(tmp_path, capsys):
-    """The shipped models predate the stored range: they load, and their range is bounded by
-    Samuelson's inequality (mean +- std sqrt(n - 1)), which contains every training input."""
+def test_model_without_a_stored_range_is_bounded_from_its_scaling(tmp_path, capsys):
+    """A model file written before the range was stored (the shipped hot model with its range taken out)
+    loads, and its range is bounded by Samuelson's inequality (mean +- std sqrt(n - 1)), which contains
+    every training input: here the exact range the shipped file stores."""
+    import json
+
     from sarins_fmu.identify.axial import default_model_path
 
-    net = RBFNetwork.load(default_model_path("hot"))
+    shipped = RBFNetwork.load(default_model_path("hot"))
+    assert shipped.input_range_exact_
+    doc = json.loads(default_model_path("hot").read_text())
+    for key in ("input_min", "input_max"):
+        del doc["arrays"][key]
+    old = tmp_path / "old_hot.json"
+    old.write_text(json.dumps(doc))
+    net = RBFNetwork.load(old)
     assert not net.input_range_exact_
     lo, hi = net.input_range_[:, 0]
-    assert lo < -0.0254 and hi > 0.0254 and hi - lo < 0.2
+    exact_lo, exact_hi = shipped.input_range_[:, 0]
+    mean, scale = doc["arrays"]["scaling_mean"]["data"][0], doc["arrays"]["scaling_scale"]["data"][0]
+    half = scale * math.sqrt(doc["meta"]["metadata"]["n_samples"] - 1)
+    assert (lo, hi) == pytest.approx((mean - half, mean + half), rel=1e-12)
+    assert lo <= exact_lo < exact_hi <= hi
     data = tmp_path / "far.csv"
     data.write_text("lat_error_deg\n0.01\n1e308\n")
-    assert main(["identify", "predict", "--model", str(default_model_path("hot")), "--data", str(data)]) == 2
+    assert main(["identify", "predict", "--model", str(old), "--data", str(data)]) == 2
     assert "line 3: lat_error_deg = 1e+308 is outside the range" in capsys.readouterr().err
