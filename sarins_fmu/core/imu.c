@@ -96,6 +96,13 @@ typedef struct {
     int lowrate; /* g_lowrate is not zero */
 } Fixed;
 
+static Fixed fixed_terms(const double *g_mis, const double *g_quad, const double *g_lowrate, const double *g_width,
+                         const double *g_sens, const double *a_mis, const double *a_quad) {
+    Fixed fx = {g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad,
+                g_lowrate[0] != 0.0 || g_lowrate[1] != 0.0 || g_lowrate[2] != 0.0};
+    return fx;
+}
+
 /* (x, y, z) <- R(a, theta)^T (x, y, z): rot_t on one lane's vector */
 static LANE_INLINE void rot_t_lane(double ax, double ay, double az, double c, double s, double *x, double *y,
                                    double *z) {
@@ -398,8 +405,7 @@ static void interval(int64_t k, int64_t n_axes, const double *axes, const double
                      double *dv) {
     Minor in = {n_axes, axes, angle0 + k * n_axes, rate0 + k * n_axes, accel + k * n_axes, w_t + 3 * k,
                 f_t + 3 * k, g_sf + 3 * k, g_bias + 3 * k, a_sf + 3 * k, a_bias + 3 * k, h / (double)n_sub,
-                {g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad,
-                 g_lowrate[0] != 0.0 || g_lowrate[1] != 0.0 || g_lowrate[2] != 0.0}};
+                fixed_terms(g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad)};
     Carry carry = {{0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
     sarins_imu_truth(n_axes, axes, in.ang, in.rat, in.acc, 0.0, in.wk, in.fk, carry.t);
     double q[4] = {1.0, 0.0, 0.0, 0.0}, v[3] = {0.0, 0.0, 0.0};
@@ -439,8 +445,7 @@ LANE_CLONES static void interval_lanes(int64_t k0, int64_t n_axes, const double 
     load_lanes(g_bias, k0, 3, gb);
     load_lanes(a_sf, k0, 3, asf);
     load_lanes(a_bias, k0, 3, ab);
-    Fixed fx = {g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad,
-                g_lowrate[0] != 0.0 || g_lowrate[1] != 0.0 || g_lowrate[2] != 0.0};
+    Fixed fx = fixed_terms(g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad);
     double dt = h / (double)n_sub;
     Lanes t0[6], t1[6];
     Lanes q[4], v[3], pa[3], pv[3]; /* as in interval(): pa, pv the previous step's increments */
