@@ -268,7 +268,7 @@ NAV_RLG = ImuModel(
     ),
     accel=TriadErrors(
         bias=np.array([30.0, -30.0, 50.0]) * UG_TO_MPS2,
-        scale_factor=np.full(3, 20 * PPM),
+        scale_factor=np.full(3, 100 * PPM),  # HG9900 brochure, 1 sigma
         misalignment=_mis(1.0),
         random_walk=np.full(3, 5.0 * UG_TO_MPS2),
         bias_instability=np.full(3, 2.0 * UG_TO_MPS2),

@@ -62,7 +62,9 @@ class ThermalParams:
     """
 
     self_heating: tuple = (16.0, 16.5, 17.0, 15.0, 15.2, 15.4)
-    time_constant: tuple = (5400.0, 5600.0, 5800.0, 5000.0, 5100.0, 5200.0)
+    # 4.3-5.0 h: inside the 2.9-7.5 h that seed 000's Tables 4-5 give for the warm-up of an RLG INS
+    # (docs/imu-presets.md, nav-rlg `time_constant_*`); the per-sensor spread is ours
+    time_constant: tuple = (16800.0, 17400.0, 18000.0, 15500.0, 15800.0, 16100.0)
     die_time_constant: tuple = (0.0,) * 6
 
     @property

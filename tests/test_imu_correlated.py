@@ -10,7 +10,7 @@ from numpy.testing import assert_allclose
 from sarins_fmu import imu as imu_mod, imu_params, turntable as tt
 from sarins_fmu.imu import IMU, StaticBase, TriadErrors
 from sarins_fmu.imu_correlated import flicker_taus, flicker_term_std
-from sarins_fmu.thermal import Ambient, ThermalParams, die_temperatures
+from sarins_fmu.thermal import SENSORS, Ambient, ThermalParams, die_temperatures
 from sarins_fmu.units import DPH_TO_RPS, UG_TO_MPS2
 
 IDEAL = imu_mod.preset("ideal")
@@ -45,16 +45,26 @@ def _without_noise(model):
     return replace(model, gyro=replace(model.gyro, **quiet), accel=replace(model.accel, **quiet))
 
 
+# the thermal time constants (s) of every preset and nav-rlg's accelerometer scale factor (1) before issue 20
+# gave them sourced values
+OLD_TIME_CONSTANTS = {f"time_constant_{sensor}": tau
+                      for sensor, tau in zip(SENSORS, (5400.0, 5600.0, 5800.0, 5000.0, 5100.0, 5200.0))}
+BEFORE_SOURCED_VALUES = {"ideal": OLD_TIME_CONSTANTS,
+                         "nav-rlg": {**OLD_TIME_CONSTANTS, **{f"accel_scale_factor_{a}": 20e-6 for a in "xyz"}}}
+
+
 @pytest.mark.parametrize("seed", [3, 4])
 def test_nav_rlg_and_ideal_increments_unchanged_by_the_new_terms(seed):
     """Golden values from the code before the time-correlated terms existed, of the deterministic part of
     the models (their random terms at zero: those draw from the C core's streams since, seed 3's numbers
     from numpy's are gone): any seed gives them bit for bit.  nav-rlg without the azimuth gyro's gradient
-    and hysteresis terms of issue 20, which change its z gyro on purpose."""
+    and hysteresis terms of issue 20, which change its z gyro on purpose, and with the thermal time constants
+    and accelerometer scale factor it had before they were given sourced values."""
     golden = {"nav-rlg": (3.5234855276243486, 3917.1269380894337), "ideal": (3.5234758144304026, 3916.877283337595)}
     for name, (sum_dth, sum_dv) in golden.items():
         sched = tt.single_axis("forward-reverse", 1000)
-        model = imu_params.apply_overrides(imu_mod.preset(name), {"axial_drift_grad": 0.0, "axial_hysteresis": 0.0})
+        model = imu_params.apply_overrides(imu_mod.preset(name), {"axial_drift_grad": 0.0, "axial_hysteresis": 0.0,
+                                                                  **BEFORE_SOURCED_VALUES[name]})
         s = IMU(_without_noise(model), StaticBase(0.5), sched.axes, seed=seed, thermal_start="cold",
                 ambient=Ambient(mean=20, amplitude=3, period=3000))
         dth, dv, _ = s.step(*sched.state(np.arange(400.0)))

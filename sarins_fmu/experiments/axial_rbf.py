@@ -74,7 +74,6 @@ K1_DPH_PER_C = 2.0e-4  # linear drift-temperature coefficient of the unit, deg/h
 K2_DPH_PER_C2 = 2.0e-6  # quadratic coefficient, deg/h/degC^2
 DTDT_DPH_PER_CPH = 1.0e-4  # drift per temperature rate, deg/h per degC/h
 GYRO_NOISE_SCALE = 1.0  # the unit's gyro noise / bias instability relative to nav-rlg: its own (docs/imu-presets.md)
-TAU_Z = 5.0 * HOUR  # warm-up time constant of the azimuth gyro, s
 HOT_HEATING_C = 16.0  # self-heating of the azimuth gyro on hot starts (in equilibrium), degC
 TRUTH_GRID = 60.0  # s, grid of the simulated-truth integral
 STARTS = ("hot", "cold")
@@ -112,11 +111,10 @@ def thermal_overrides(heating_c: float) -> dict:
     """Flat IMU parameters of the unit's thermal model (degC, s)."""
     base = imu_mod.preset("nav-rlg").thermal
     ratio = np.asarray(base.self_heating) / base.self_heating[2]
-    tau = np.asarray(base.time_constant) / base.time_constant[2] * TAU_Z
     out = {}
     for j, sensor in enumerate(SENSORS):
         out[f"self_heating_{sensor}"] = float(heating_c * ratio[j])
-        out[f"time_constant_{sensor}"] = float(tau[j])
+        out[f"time_constant_{sensor}"] = float(base.time_constant[j])
     return out
 
 
