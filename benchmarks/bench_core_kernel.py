@@ -36,7 +36,7 @@ from sarins_fmu import imu as imu_mod
 from sarins_fmu.core import imu as core_imu
 from sarins_fmu.experiments import run_static
 
-FLAGS = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-fno-fast-math", "-ffp-contract=off"]  # as setup.py
+FLAGS = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-fno-fast-math", "-ffp-contract=off"]  # as setup.py
 N_SUB = 200  # minor steps per 1 s interval
 RATE = math.radians(6.0)  # rad/s, table rate
 W_T = (1.2e-5, 6.4e-5, 3.4e-5)  # rad/s, Earth rate in the base frame

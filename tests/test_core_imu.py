@@ -276,7 +276,7 @@ def test_core_under_address_and_undefined_behaviour_sanitizers(tmp_path):
     """Rebuild the core with ASan + UBSan and run IMU batches and the one-interval step through the binding."""
     core = ROOT / "sarins_fmu" / "core"
     lib = tmp_path / "_sarins_core_asan.so"
-    flags = ["-std=c11", "-O1", "-g", "-fPIC", "-shared", "-Wall", "-Wextra", "-Werror", "-ffp-contract=off",
+    flags = ["-std=c11", "-O1", "-g", "-fPIC", "-shared", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-ffp-contract=off",
              "-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
     subprocess.run(["gcc", *flags, "-I", str(core), *sorted(map(str, core.glob("*.c"))), "-o", str(lib), "-lm"],
                    check=True, capture_output=True, text=True)

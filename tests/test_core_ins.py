@@ -359,7 +359,7 @@ def _build_sanitized_core(out_dir):
 
     lib = Path(out_dir) / "libsarins_core_asan.so"
     sources = sorted(str(p) for p in _lib.HERE.glob("*.c"))
-    subprocess.run(["gcc", "-std=c11", "-O1", "-g", "-fPIC", "-shared", "-Wall", "-Wextra", "-Werror", "-ffp-contract=off",
+    subprocess.run(["gcc", "-std=c11", "-O1", "-g", "-fPIC", "-shared", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-ffp-contract=off",
                     "-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer",
                     f"-I{_lib.HERE}", *sources, "-o", str(lib), "-lm"], check=True, capture_output=True, text=True)
     return lib

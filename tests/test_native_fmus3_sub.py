@@ -326,7 +326,7 @@ def test_fmi3_win64_dlls_under_wine_match_linux(tmp_path):
         pytest.skip(f"{', '.join(missing)} not installed (Debian: apt-get install gcc-mingw-w64-x86-64 wine64)")
     cc = shutil.which("gcc") or shutil.which("cc")
     src = str(Path(__file__).resolve().parent / "native_host" / "native_fmu3_host.c")
-    flags = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", f"-I{fmi_headers_dir(3)}"]
+    flags = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}"]
     subprocess.run([cc, *flags, src, "-ldl", "-o", str(tmp_path / "host")], check=True)
     subprocess.run([MINGW, *flags, src, "-static", "-o", str(tmp_path / "host.exe")], check=True)
     env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all")

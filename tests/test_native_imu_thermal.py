@@ -81,7 +81,7 @@ def unzipped(imu_fmu, tmp_path_factory):
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
     out = tmp_path_factory.mktemp("native_imu_host") / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", f"-I{fmi_headers_dir()}",
+    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
                     str(HOST_SRC), "-ldl", "-o", str(out)], check=True)
     return out
 

@@ -238,7 +238,7 @@ def host(tmp_path_factory):
     from test_native_fmus import HOST_SRC, _cc
 
     out = tmp_path_factory.mktemp("ins_host") / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", f"-I{fmi_headers_dir()}",
+    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
                     str(HOST_SRC), "-ldl", "-o", str(out)], check=True)
     return out
 

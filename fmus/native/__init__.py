@@ -50,7 +50,7 @@ HOST_REQUIREMENTS = (
 _ALIASED = ("sarins_fmu", "fmus", "pythonfmu")
 SOURCES = ("shim.c", "core.c", "sarins_fmi.h", "sarins_uri.h")
 # warnings are errors: the layer must compile clean with every compiler that builds the FMUs
-WARNINGS = ("-std=c11", "-Wall", "-Wextra", "-Werror")
+WARNINGS = ("-std=c11", "-Wall", "-Wextra", "-Wpedantic", "-Werror")
 _FROM = re.compile(r"^(\s*)from\s+(" + "|".join(_ALIASED) + r")(\.|\s)", re.M)
 _IMPORT = re.compile(r"^(\s*)import\s+(" + "|".join(_ALIASED) + r")((?:\.\w+)*)(\s+as\s+\w+)?\s*$", re.M)
 

@@ -19,6 +19,7 @@
 #include <limits.h>
 #include <pthread.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -213,7 +214,8 @@ static void report(const fmi2CallbackFunctions *functions, fmi2String name, cons
 
 static int load_core(const char *resources, char *err, size_t errlen) {
     Dl_info self;
-    if (!dladdr((void *)&load_core, &self) || !self.dli_fname) {
+    /* function and object pointers convert through uintptr_t (POSIX; ISO C has no direct conversion) */
+    if (!dladdr((void *)(uintptr_t)&load_core, &self) || !self.dli_fname) {
         snprintf(err, errlen, "cannot locate this FMU's binary");
         return 0;
     }
@@ -230,7 +232,7 @@ static int load_core(const char *resources, char *err, size_t errlen) {
         return 0;
     }
     char lib[PATH_MAX] = "", program[PATH_MAX] = "";
-    int (*initialized)(void) = (int (*)(void))dlsym(RTLD_DEFAULT, "Py_IsInitialized");
+    int (*initialized)(void) = (int (*)(void))(uintptr_t)dlsym(RTLD_DEFAULT, "Py_IsInitialized");
     if (!initialized) {
         char why[4096] = "";
         if (!find_python(&ri, lib, program, why, sizeof why)) {
@@ -248,7 +250,7 @@ static int load_core(const char *resources, char *err, size_t errlen) {
         program_of_lib(ri.libpython, ri.version, program); /* libpython present but idle: start it */
         if (is_file(ri.executable)) snprintf(program, sizeof program, "%s", ri.executable);
     }
-    const char *(*get_version)(void) = (const char *(*)(void))dlsym(RTLD_DEFAULT, "Py_GetVersion");
+    const char *(*get_version)(void) = (const char *(*)(void))(uintptr_t)dlsym(RTLD_DEFAULT, "Py_GetVersion");
     const char *running = get_version ? get_version() : NULL;
     if (!version_matches(running, ri.version)) {
         snprintf(err, errlen, "this FMU was built for CPython %s but the process runs CPython %s", ri.version,
@@ -260,7 +262,7 @@ static int load_core(const char *resources, char *err, size_t errlen) {
         snprintf(err, errlen, "cannot load %s: %s", core, dlerror());
         return 0;
     }
-    sarins_core_entry entry = (sarins_core_entry)dlsym(h, SARINS_CORE_ENTRY);
+    sarins_core_entry entry = (sarins_core_entry)(uintptr_t)dlsym(h, SARINS_CORE_ENTRY);
     const sarins_core_api *a = entry ? entry() : NULL;
     if (!a || a->abi != SARINS_CORE_ABI) {
         snprintf(err, errlen, "%s is not a matching sarins FMI core", core);

@@ -51,14 +51,14 @@ void sarins_filter_propagate(int n, double *x, double *p, const double *phi, con
         p[n * i + i] += q_diag[i] * dt;
 }
 
-/* sum_k (I - K H)_ik b[k * stride] over k in {i, 3, 4} ascending, with ikh[i] = ((I - K H)_i3, (I - K H)_i4) */
-static double ikh_row_dot(int i, const double (*ikh)[2], const double *b, int stride)
+/* sum_k (I - K H)_ik b[k * stride] over k in {i, 3, 4} ascending, with ikh_i = ((I - K H)_i3, (I - K H)_i4) */
+static double ikh_row_dot(int i, const double *ikh_i, const double *b, int stride)
 {
     double s = 0.0;
     if (i < 3)
         s += 1.0 * b[i * stride];
-    s += ikh[i][0] * b[3 * stride];
-    s += ikh[i][1] * b[4 * stride];
+    s += ikh_i[0] * b[3 * stride];
+    s += ikh_i[1] * b[4 * stride];
     if (i > 4)
         s += 1.0 * b[i * stride];
     return s;
@@ -94,11 +94,11 @@ void sarins_filter_velocity_update(int n, double *x, double *p, double r_var, do
     /* tmp = (I - K H) P */
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++)
-            tmp[n * i + j] = ikh_row_dot(i, ikh, p + j, n);
+            tmp[n * i + j] = ikh_row_dot(i, ikh[i], p + j, n);
     /* P = tmp (I - K H)' + r K K' */
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++)
-            p[n * i + j] = ikh_row_dot(j, ikh, tmp + n * i, 1);
+            p[n * i + j] = ikh_row_dot(j, ikh[j], tmp + n * i, 1);
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++)
             p[n * i + j] += r_var * (gain[i][0] * gain[j][0] + gain[i][1] * gain[j][1]);

@@ -75,6 +75,8 @@ static void finish(double q[4], const double v[3], double *dtheta_k, double *dv_
  * cos, exp, atan2) stay one per value. */
 #define LANES SARINS_IMU_LANES
 typedef double Lanes[LANES];
+/* Lane arrays are passed as Lanes * even where a function only reads them (its comment names its outputs):
+ * ISO C before C23 does not convert double (*)[N] to const double (*)[N] implicitly (-Wpedantic; MSVC C4090). */
 
 /* With GCC or clang on x86-64 glibc, the lane functions are also compiled for AVX2 (four lanes in one register)
  * and the loader picks the variant the CPU runs; elsewhere the one portable build (SSE2 on x86-64).  Both do
@@ -150,8 +152,7 @@ static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, con
 }
 
 /* The truth's start: w_t, f_t [3] lanes into v (w, f, s); s zero only without a gimbal (else gimbal 0 sets it). */
-static LANE_INLINE void truth_start(int64_t n_axes, const Lanes *restrict w_t, const Lanes *restrict f_t,
-                                    Lanes *restrict v) {
+static LANE_INLINE void truth_start(int64_t n_axes, Lanes *restrict w_t, Lanes *restrict f_t, Lanes *restrict v) {
     for (int a = 0; a < 3; a++) {
         for (int l = 0; l < LANES; l++) {
             v[a][l] = w_t[a][l];
@@ -166,7 +167,7 @@ static LANE_INLINE void truth_start(int64_t n_axes, const Lanes *restrict w_t, c
 }
 
 /* The truth's end: out [6] lanes = (w + s, f), sarins_imu_truth's out. */
-static LANE_INLINE void truth_end(const Lanes *restrict v, Lanes *restrict out) {
+static LANE_INLINE void truth_end(Lanes *restrict v, Lanes *restrict out) {
     for (int a = 0; a < 3; a++) {
         for (int l = 0; l < LANES; l++) {
             out[a][l] = v[a][l] + v[6 + a][l];
@@ -177,9 +178,9 @@ static LANE_INLINE void truth_end(const Lanes *restrict v, Lanes *restrict out) 
 
 /* sarins_imu_truth of LANES intervals at one time tau: gimbal states ang, rat, acc [A] lanes; w_t, f_t [3]
  * lanes; out [6] lanes. */
-static LANE_INLINE void truth_lanes(int64_t n_axes, const double *restrict axes, const Lanes *restrict ang,
-                                    const Lanes *restrict rat, const Lanes *restrict acc, double tau,
-                                    const Lanes *restrict w_t, const Lanes *restrict f_t, Lanes *restrict out) {
+static LANE_INLINE void truth_lanes(int64_t n_axes, const double *restrict axes, Lanes *restrict ang,
+                                    Lanes *restrict rat, Lanes *restrict acc, double tau, Lanes *restrict w_t,
+                                    Lanes *restrict f_t, Lanes *restrict out) {
     Lanes v[9], taus; /* w, f, s (omega_tb in the current gimbal frame) */
     for (int l = 0; l < LANES; l++) taus[l] = tau;
     truth_start(n_axes, w_t, f_t, v);
@@ -197,8 +198,8 @@ static LANE_INLINE void truth_lanes(int64_t n_axes, const double *restrict axes,
  * ang, rat, acc [A]; w_t, f_t [3] lanes (the same in each); out [6] lanes. */
 static LANE_INLINE void truth_steps(int64_t n_axes, const double *restrict axes, const double *restrict ang,
                                     const double *restrict rat, const double *restrict acc,
-                                    const double *restrict tau, int n_valid, const Lanes *restrict w_t,
-                                    const Lanes *restrict f_t, Lanes *restrict out) {
+                                    const double *restrict tau, int n_valid, Lanes *restrict w_t,
+                                    Lanes *restrict f_t, Lanes *restrict out) {
     Lanes v[9];
     truth_start(n_axes, w_t, f_t, v);
     for (int64_t j = 0; j < n_axes; j++) {
@@ -221,10 +222,9 @@ static LANE_INLINE void truth_steps(int64_t n_axes, const double *restrict axes,
  * ends: trapezoid increments u (force), e (rate); da = (I + diag(gsf) + M_g) e + gb dt + q_g e|e| / dt + G u
  * + k e exp(-(e / (w dt))^2) (low rate; no exp for the lanes from n_valid on), dvm = (I + diag(asf) + M_a) u
  * + ab dt + q_a u|u| / dt; gsf, gb, asf, ab [3] lanes: the interval's scale factors and biases. */
-static LANE_INLINE void minor_terms(const Lanes *restrict t0, const Lanes *restrict t1, double dt, int n_valid,
-                                    const Fixed *restrict fx, const Lanes *restrict gsf, const Lanes *restrict gb,
-                                    const Lanes *restrict asf, const Lanes *restrict ab, Lanes *restrict da,
-                                    Lanes *restrict dvm) {
+static LANE_INLINE void minor_terms(Lanes *restrict t0, Lanes *restrict t1, double dt, int n_valid,
+                                    const Fixed *restrict fx, Lanes *restrict gsf, Lanes *restrict gb,
+                                    Lanes *restrict asf, Lanes *restrict ab, Lanes *restrict da, Lanes *restrict dvm) {
     const double *g_sens = fx->g_sens, *g_mis = fx->g_mis, *g_quad = fx->g_quad, *a_mis = fx->a_mis;
     const double *a_quad = fx->a_quad;
     Lanes u[3], e[3], g[3], x[3];
@@ -331,7 +331,7 @@ typedef struct {
 } Block;
 
 /* x [rows] lanes = y shifted one lane up, the carry in lane 0; the carry <- y's lane n_valid - 1. */
-static LANE_INLINE void shift_in(const Lanes *restrict y, int rows, int n_valid, double *restrict carry,
+static LANE_INLINE void shift_in(Lanes *restrict y, int rows, int n_valid, double *restrict carry,
                                  Lanes *restrict x) {
     for (int a = 0; a < rows; a++) {
         x[a][0] = carry[a];

@@ -11,7 +11,7 @@ from pathlib import Path
 HERE = Path(__file__).parent
 SLAVES = ("Ramp", "Gain", "Faulty", "Feed")
 FMI3_MODELS = {"Burst3": "burst3.c", "Sum3": "sum3.c"}  # FMU name -> model source in fmi3/
-C_FLAGS = ("-std=c11", "-shared", "-fPIC", "-O2", "-Wall", "-Wextra", "-Werror")
+C_FLAGS = ("-std=c11", "-shared", "-fPIC", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror")
 
 
 def build_fixture_fmus(destination: Path) -> dict[str, Path]:
