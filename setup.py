@@ -6,6 +6,7 @@ The library is plain C11 + libm, loaded with ctypes
 (:mod:`sarins_fmu.core._lib`), so it exports no Python module init function.
 """
 
+import runpy
 import sys
 from pathlib import Path
 
@@ -34,7 +35,11 @@ class BuildCore(build_ext):
                      "Windows: the MSVC build tools) and run pip install again.")
 
     def get_export_symbols(self, ext):
-        return []  # a plain C library: no PyInit_ function to export
+        # a plain C library: no PyInit_ function. GNU ld exports every public function by itself; MSVC's
+        # linker only the names it is given
+        if self.compiler.compiler_type == "msvc":
+            return runpy.run_path(str(CORE / "exports.py"))["public_functions"](CORE)
+        return []
 
 
 setup(

@@ -39,6 +39,8 @@ from pathlib import Path
 
 import pytest
 
+from sarins_fmu.core.exports import public_functions
+
 ROOT = Path(__file__).resolve().parent.parent
 CORE = ROOT / "sarins_fmu" / "core"
 DRIVER = ROOT / "tests" / "core_driver" / "core_driver.c"
@@ -170,3 +172,23 @@ def test_core_builds_as_win64_dll(tmp_path):
     linux = {line.split()[-1] for line in nm.splitlines() if line.split()[1] == "T"}
     assert "sarins_core_abi" in linux
     assert exports == linux
+
+
+@pytest.mark.slow
+def test_core_dll_from_the_msvc_export_list_exports_every_public_function(tmp_path):
+    # what MSVC's linker does with setup.py's list: export those names and nothing else; mingw's ld does the
+    # same with auto-export off and a module-definition file
+    _need(MINGW, MINGW_OBJDUMP)
+    names = public_functions(CORE)
+    definition = tmp_path / "sarins_core.def"
+    definition.write_text("EXPORTS\n" + "".join(f"    {name}\n" for name in names))
+    dll = tmp_path / "sarins_core.dll"
+    _run([MINGW, *FLAGS, "-shared", f"-I{CORE}", *SOURCES, "-Wl,--exclude-all-symbols", str(definition),
+          "-o", str(dll)])
+    _, exports = _dll_imports_exports(dll)
+    assert exports == set(names)
+    # every function the Python binding declares is among them
+    bound = set()
+    for module in (ROOT / "sarins_fmu").rglob("*.py"):
+        bound.update(re.findall(r"\bfunction\(\s*\"(sarins_\w+)\"", module.read_text(encoding="utf-8")))
+    assert bound and bound <= exports, sorted(bound - exports)
