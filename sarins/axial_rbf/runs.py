@@ -281,6 +281,23 @@ def _multitemp(e, models, table, nav, slope, rerun_all) -> dict:
     return out
 
 
+def multitemp_test_task(exp: dict, models: dict, table: dict, nav_hours: float = s0.NAV_HOURS) -> dict:
+    """A held-out cold start with the multi-temperature compensation only
+    (the sensitivity study of the terms beyond temperature, in process):
+    :func:`_multitemp` with its compensated re-runs, nothing uncompensated.
+
+    models : {'hot_mt': path, ...} (keys of :data:`MULTITEMP_MODELS`);
+    table : the unit's own multi-temperature table (dict).  Returns the
+    experiment's fields and the ``mt_*`` keys of :func:`test_task`."""
+    t0 = _time.perf_counter()
+    e = _exp(exp)
+    if e.start != "cold":
+        raise ValueError("the multi-temperature identification is for cold starts")
+    out = {**e.to_dict(), **_multitemp(e, models, table, float(nav_hours), None, True)}
+    out["wall_seconds"] = _time.perf_counter() - t0
+    return out
+
+
 def _live(e, model_file, feats, engine, fmu_dir) -> dict:
     """The issue's single run: align -> 12 h -> identify -> compensate -> 72 h."""
     hours = s0.IDENTIFY_HOURS + s0.NAV_HOURS
@@ -320,14 +337,15 @@ def cosim_check_task(exp: dict, model_file: str, fmu_dir: str, align_hours: floa
 
 def calibration_task(seed: int, points_c, settle_hours: float = 20.0, average_hours: float = 4.0,
                      ramp_hours: float = 0.5, noise_scale: float = s0.GYRO_NOISE_SCALE,
-                     lat_deg: float = s0.SITE_LAT_DEG) -> dict:
+                     lat_deg: float = s0.SITE_LAT_DEG, thermal_scale: float = 1.0) -> dict:
     """The multi-temperature calibration of the campaign's unit
-    (:func:`calibrate_axial_drift` on :func:`s0.calibration_unit`).
+    (:func:`calibrate_axial_drift` on :func:`s0.calibration_unit`; ``thermal_scale``:
+    its terms beyond temperature scaled, :class:`s0.Experiment`).
 
     Returns the table (temp_c, drift_dph) and the unit's steady drift law at
     the measured temperatures (law_dph), deg/h."""
     t0 = _time.perf_counter()
-    unit = s0.calibration_unit(seed, noise_scale)
+    unit = s0.calibration_unit(seed, noise_scale, thermal_scale)
     tab = calibrate_axial_drift(s0.imu_model(unit), points_c=points_c, lat_deg=lat_deg, settle_hours=settle_hours,
                                 average_hours=average_hours, ramp_hours=ramp_hours, seed=unit.seed)
     temp = np.asarray(tab.temp_c)

@@ -88,7 +88,11 @@ class Experiment:
     amplitude_c the ambient mean and daily amplitude (degC); heating_c the
     self-heating of the azimuth gyro (degC); seed the noise seed; lat_deg
     the site latitude (deg); noise_scale the gyro white noise and bias
-    instability relative to the ``nav-rlg`` preset's.
+    instability relative to the ``nav-rlg`` preset's; thermal_scale the
+    factor k on the azimuth drift's terms beyond temperature (block-gradient
+    coefficient, temperature-rate coefficient, hysteresis half-height; the
+    block time constant and the loop width unchanged), 1 for the campaign's
+    unit (other values: the sensitivity study only, no source).
     """
 
     name: str
@@ -102,6 +106,7 @@ class Experiment:
     heating_c: float
     lat_deg: float = SITE_LAT_DEG
     noise_scale: float = GYRO_NOISE_SCALE
+    thermal_scale: float = 1.0
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -118,13 +123,17 @@ def thermal_overrides(heating_c: float) -> dict:
     return out
 
 
-def drift_overrides(eps0_dph: float) -> dict:
-    """Flat IMU parameters (SI) of the azimuth drift eps(T) for a turn-on constant."""
+def drift_overrides(eps0_dph: float, thermal_scale: float = 1.0) -> dict:
+    """Flat IMU parameters (SI) of the azimuth drift eps(T) for a turn-on constant, with the
+    terms beyond temperature (rate, block gradient, hysteresis) times ``thermal_scale``."""
+    base = imu_mod.preset("nav-rlg")
     a = K2_DPH_PER_C2
     b = K1_DPH_PER_C - 2 * T_CENTRE_C * K2_DPH_PER_C2
     c = eps0_dph - K1_DPH_PER_C * T_CENTRE_C + K2_DPH_PER_C2 * T_CENTRE_C**2
     return {"axial_drift_a": a * DPH_TO_RPS, "axial_drift_b": b * DPH_TO_RPS, "axial_drift_c": c * DPH_TO_RPS,
-            "axial_drift_dtdt": DTDT_DPH_PER_CPH * DPH_TO_RPS * HOUR,
+            "axial_drift_dtdt": DTDT_DPH_PER_CPH * thermal_scale * DPH_TO_RPS * HOUR,
+            "axial_drift_grad": base.axial_drift_grad * thermal_scale,
+            "axial_hysteresis": base.axial_hysteresis * thermal_scale,
             "gyro_bias_z": 0.0, "gyro_bias_tc1_z": 0.0, "gyro_bias_tc2_z": 0.0,
             "aging_sigma_a": 0.0, "aging_sigma_b": 0.0, "aging_sigma_c": 0.0}
 
@@ -136,7 +145,7 @@ def imu_overrides(exp: Experiment) -> dict:
     for i, ax in enumerate("xyz"):
         noise[f"gyro_random_walk_{ax}"] = float(base.random_walk[i] * exp.noise_scale)
         noise[f"gyro_bias_instability_{ax}"] = float(base.bias_instability[i] * exp.noise_scale)
-    return {**thermal_overrides(exp.heating_c), **drift_overrides(exp.eps0_dph), **noise}
+    return {**thermal_overrides(exp.heating_c), **drift_overrides(exp.eps0_dph, exp.thermal_scale), **noise}
 
 
 def imu_model(exp: Experiment) -> imu_mod.ImuModel:
@@ -160,28 +169,34 @@ def drift_series_dph(exp_or_eps0, temperature: np.ndarray, dt: float, temp0_c: f
 
     ``temp0_c``: z temperature one step before the series' first sample, where the unit
     was switched on (the block node and the loop start there, :func:`thermal_terms_dph`);
-    default the first sample."""
-    eps0 = exp_or_eps0.eps0_dph if isinstance(exp_or_eps0, Experiment) else float(exp_or_eps0)
+    default the first sample.  The terms beyond temperature carry the experiment's
+    ``thermal_scale`` (1 for a bare turn-on constant)."""
+    is_exp = isinstance(exp_or_eps0, Experiment)
+    eps0 = exp_or_eps0.eps0_dph if is_exp else float(exp_or_eps0)
+    scale = exp_or_eps0.thermal_scale if is_exp else 1.0
     rate_cph = np.gradient(temperature, dt) * HOUR
-    return (steady_drift_dph(eps0, temperature) + DTDT_DPH_PER_CPH * rate_cph
-            + thermal_terms_dph(temperature, dt, temp0_c))
+    return (steady_drift_dph(eps0, temperature) + DTDT_DPH_PER_CPH * scale * rate_cph
+            + thermal_terms_dph(temperature, dt, temp0_c, scale))
 
 
-def thermal_terms_dph(temperature: np.ndarray, dt: float, temp0_c: float | None = None) -> np.ndarray:
+def thermal_terms_dph(temperature: np.ndarray, dt: float, temp0_c: float | None = None,
+                      thermal_scale: float = 1.0) -> np.ndarray:
     """The block-gradient and heating/cooling hysteresis terms of the unit's azimuth drift (deg/h)
     along a z temperature series (degC) on a grid of ``dt`` s, from switch-on at ``temp0_c`` (one
     step before the first sample; default the first sample): the C core's
     ``sarins_imu_axial_thermal_terms`` with the nav-rlg preset's coefficients (the campaign's unit
-    keeps them), each value the term's mean over the step that ends at the sample."""
+    keeps them; the gradient coefficient and the hysteresis half-height times ``thermal_scale``),
+    each value the term's mean over the step that ends at the sample."""
     temperature = np.asarray(temperature, float)
     t0 = float(temperature[0] if temp0_c is None else temp0_c)
-    par = imu_mod.preset("nav-rlg").axial_thermal_par
+    par = imu_mod.preset("nav-rlg").axial_thermal_par.copy()
+    par[[0, 2]] *= float(thermal_scale)  # axial_drift_grad, axial_hysteresis (ImuModel.axial_thermal_par)
     return axial_terms(t0, temperature, float(dt), par) / DPH_TO_RPS
 
 
-def hysteresis_dph() -> float:
+def hysteresis_dph(thermal_scale: float = 1.0) -> float:
     """Half-height of the unit's heating/cooling loop, deg/h (heating branch +, cooling branch -)."""
-    return float(imu_mod.preset("nav-rlg").axial_hysteresis / DPH_TO_RPS)
+    return float(imu_mod.preset("nav-rlg").axial_hysteresis * thermal_scale / DPH_TO_RPS)
 
 
 def switch_on_temperature(exp: Experiment) -> float:
@@ -220,23 +235,24 @@ def window_mean_table_dph(exp: Experiment, table, start_h: float = 0.0, end_h: f
     return float(np.mean(table.drift_at(temp)[sel]))
 
 
-def calibration_unit(seed: int, noise_scale: float = GYRO_NOISE_SCALE) -> Experiment:
+def calibration_unit(seed: int, noise_scale: float = GYRO_NOISE_SCALE, thermal_scale: float = 1.0) -> Experiment:
     """The unit as it stands in the multi-temperature calibration: the
     campaign's drift law with turn-on constant 0, the hot-start self-heating,
     its own noise seed (:func:`sarins_fmu.identify.multitemp.calibrate_axial_drift`)."""
     return Experiment("calibration", "hot", "calibration", int(seed), 0.0, 0.0, 20.0, 0.0, HOT_HEATING_C,
-                      SITE_LAT_DEG, float(noise_scale))
+                      SITE_LAT_DEG, float(noise_scale), float(thermal_scale))
 
 
 def generate(start: str, n_train: int, n_test: int, seed: int, *, lat_deg: float = SITE_LAT_DEG,
-             noise_scale: float = GYRO_NOISE_SCALE) -> list[Experiment]:
+             noise_scale: float = GYRO_NOISE_SCALE, thermal_scale: float = 1.0) -> list[Experiment]:
     """Seeded training and held-out experiments of one start kind.
 
     The true drift (72 h mean from the start of navigation) is uniform in
     +-DRIFT_RANGE_DPH; ambient and heating per the hot/cold definitions.
-    ``lat_deg`` (site, deg) and ``noise_scale`` (gyro noise relative to
-    nav-rlg) do not enter the draws: the same seed gives the same drifts,
-    temperatures and noise seeds at every latitude and noise scale.
+    ``lat_deg`` (site, deg), ``noise_scale`` (gyro noise relative to
+    nav-rlg) and ``thermal_scale`` (:class:`Experiment`) do not enter the
+    draws: the same seed gives the same drifts, temperatures and noise seeds
+    at every latitude and scale (the turn-on constant follows the unit).
     """
     if start not in STARTS:
         raise ValueError(f"start must be 'hot' or 'cold', got {start!r}")
@@ -246,6 +262,8 @@ def generate(start: str, n_train: int, n_test: int, seed: int, *, lat_deg: float
         raise ValueError(f"site latitude must be within +-80 deg, got {lat_deg}")
     if not (np.isfinite(noise_scale) and noise_scale >= 0.0):
         raise ValueError(f"gyro noise scale must be a non-negative number, got {noise_scale}")
+    if not (np.isfinite(thermal_scale) and thermal_scale >= 0.0):
+        raise ValueError(f"thermal scale must be a non-negative number, got {thermal_scale}")
     rng = np.random.default_rng([int(seed), STARTS.index(start)])
     out = []
     for i in range(n_train + n_test):
@@ -256,7 +274,7 @@ def generate(start: str, n_train: int, n_test: int, seed: int, *, lat_deg: float
         else:
             amb, amp, heat = float(rng.uniform(0.0, 30.0)), 0.0, float(rng.uniform(18.0, 40.0))
         proto = Experiment(f"{start}-{role}-{i:03d}", start, role, int(rng.integers(0, 2**31 - 1)),
-                           drift, 0.0, amb, amp, heat, float(lat_deg), float(noise_scale))
+                           drift, 0.0, amb, amp, heat, float(lat_deg), float(noise_scale), float(thermal_scale))
         offset = window_mean_drift_dph(proto, 0.0, NAV_HOURS)  # drift of the unit with eps0 = 0
         out.append(Experiment(**{**proto.to_dict(), "eps0_dph": drift - offset}))
     return out
