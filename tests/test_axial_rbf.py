@@ -189,6 +189,17 @@ def test_quick_campaign_identifies_and_compensates(tmp_path):
     assert {"mt_hot", "mt_hot_mt", "mt_cold_mt", "cold6_1", "cold6_2"} <= set(cold)
     for t, mt in zip(summary["test"]["cold"], cold["mt_hot_mt"]):  # the same held-out runs, with the table
         assert mt["error_dph"] == pytest.approx(t["mt_total_hot_mt_dph"] - t["drift_dph"])
+    # sensitivity study (terms beyond temperature x k): k = 1 redone through the study's own tasks is the
+    # comparison row (drift error exactly; nmi from re-runs here, from the affine error map in the quick main
+    # row, which it approximates to 0.2 %; the paper profile re-runs both, bit for bit the same)
+    sens = summary["sensitivity"]
+    assert sens["scales"] == [1.0, 10.0]
+    assert [e["error_dph"] for e in sens["rows"][1.0]] == [e["error_dph"] for e in cold["mt_hot_mt"]]
+    assert [e["max_nmi"] for e in sens["rows"][1.0]] == pytest.approx([e["max_nmi"] for e in cold["mt_hot_mt"]],
+                                                                       rel=1e-2)
+    assert [e["error_dph"] for e in sens["rows"][10.0]] != [e["error_dph"] for e in sens["rows"][1.0]]
+    assert "## Sensitivity (not a claim): the drift terms beyond temperature x k" in text
+    assert "**The quick profile is too small to test:** 2 held-out cold starts per k" in text
 
 
 @pytest.mark.slow  # 17 s; the default run keeps test_campaign's kill-and-resume on small tasks
@@ -200,7 +211,8 @@ def test_killed_campaign_resumes_without_redoing_finished_experiments(tmp_path):
     from sarins.axial_rbf.runs import train_task
 
     out = tmp_path / "out"
-    kwargs = dict(profile="paper", engine="inprocess", seed=3, live=False, sizes=(3, 1, 2, 1), nav_hours=2.0)
+    kwargs = dict(profile="paper", engine="inprocess", seed=3, live=False, sizes=(3, 1, 2, 1), nav_hours=2.0,
+                  thermal_scales=())
     script = textwrap.dedent(f"""
         import sys
         sys.path[:0] = [{str(ROOT)!r}]
@@ -293,3 +305,45 @@ def test_comparison_table_rows_from_the_held_out_comparisons():
     assert rows[3][4].startswith("not tested: too few runs (2")
     text = "\n".join(comparison_lines(comparison_claims({"comparison": big}), profile="quick"))
     assert "**The quick profile is too small to test:** cold start, cold network" in text
+
+
+def test_sensitivity_rows_in_the_report():
+    """The labelled sensitivity section: one row per k with the in-band count and the paper band's
+    percentile (sarins.comparison); the smallest k whose median lies in the band is named, with no source."""
+    from sarins.axial_rbf.report import PAPER_MT_RESIDUAL_DPH
+    from sarins.axial_rbf.report_additions import sensitivity_section
+
+    def entries(errors):
+        return [{"error_dph": e, "max_nmi": 0.5, "drift_dph": 0.0} for e in errors]
+
+    sens = {"scales": [1.0, 3.0, 10.0], "wall_seconds": 12.0,
+            "calibration_rms_dph": {1.0: 1e-5, 3.0: 2e-5, 10.0: 3e-5},
+            "rows": {1.0: entries([1e-4] * 5), 3.0: entries([-6e-4] * 3 + [1e-4] * 2), 10.0: entries([2e-3] * 5)}}
+    text = "\n".join(sensitivity_section({"sensitivity": sens, "profile": "paper"}, PAPER_MT_RESIDUAL_DPH))
+    assert "| 1 (the campaign) | 0.0002 | 0.0001 | 0.0001 |" in text
+    assert "| 3 | 0.0006 | 0.0003 | 0.0003 | 0.00002 | 0.0006 (n = 5) |" in text
+    assert "| 3 of 5 | 40 .. 100 % | 0.50 |" in text
+    assert "smallest k run at which the paper's band holds the median drift error is k = 3" in text
+    assert "no source" in text
+    assert sensitivity_section({"sensitivity": None}, PAPER_MT_RESIDUAL_DPH) == []
+
+
+def test_thermal_scale_scales_the_terms_beyond_temperature_only():
+    """k multiplies the rate, gradient and hysteresis coefficients (the IMU's and the truth's); k = 1 is
+    the campaign's unit bit for bit; the draws do not depend on k."""
+    e1, e10 = s0.generate("cold", 2, 1, 5)[0], s0.generate("cold", 2, 1, 5, thermal_scale=10.0)[0]
+    assert (e1.drift_dph, e1.seed, e1.heating_c) == (e10.drift_dph, e10.seed, e10.heating_c)
+    assert e1.eps0_dph != e10.eps0_dph  # the turn-on constant follows the unit
+    o1, o10 = s0.imu_overrides(e1), s0.imu_overrides(e10)
+    for name in ("axial_drift_dtdt", "axial_drift_grad", "axial_hysteresis"):
+        assert o10[name] == pytest.approx(10.0 * o1[name], rel=1e-15)
+    from sarins_fmu import imu
+
+    assert s0.imu_model(e1).axial_thermal_par.tolist() == imu.preset("nav-rlg").axial_thermal_par.tolist()
+    assert o1["axial_drift_dtdt"] == s0.DTDT_DPH_PER_CPH * DPH_TO_RPS * HOUR
+    temp = np.linspace(10.0, 40.0, 200)
+    assert np.allclose(s0.thermal_terms_dph(temp, 60.0, thermal_scale=10.0), 10.0 * s0.thermal_terms_dph(temp, 60.0),
+                       rtol=1e-12, atol=0)
+    assert s0.hysteresis_dph(10.0) == pytest.approx(10.0 * s0.hysteresis_dph())
+    with pytest.raises(ValueError):
+        s0.generate("cold", 2, 1, 5, thermal_scale=-1.0)

@@ -9,7 +9,10 @@ temperature, temperature change), both again on the compensated rows, and
 cold models on the paper's 6 rows; phase 3 runs the held-out experiments
 (uncompensated, compensated re-runs, the paper's true drift, cold starts
 with the table, and the live align -> 12 h -> identify -> compensate ->
-72 h run).  ``--sweep`` adds the noise-scale x latitude sweep
+72 h run); phase 4, a labelled sensitivity study (not a claim), scales the
+unit's azimuth-drift terms beyond temperature by k (:data:`SENSITIVITY_SCALES`)
+and redoes the calibration, the compensated hot training runs, the hot_mt
+network and the compensated held-out cold starts for each k.  ``--sweep`` adds the noise-scale x latitude sweep
 (:mod:`sarins.axial_rbf.sweep`).  The report (Markdown + PNG) is written
 to ``<out>/report``.  Every experiment's result is stored as it finishes
 (``<out>/runs``); rerunning skips them.
@@ -35,6 +38,10 @@ MULTITEMP = {"points_c": [float(t) for t in range(0, 71, 10)], "settle_hours": 2
              "ramp_hours": 0.5}
 PAPER_COLD_ROWS = 6  # the paper's Table 4 trains the cold network on 6 rows
 SWEEPS = ("none", "quick", "full")
+# sensitivity study (not a claim): factor k on the block-gradient coefficient, the temperature-rate coefficient and
+# the hysteresis half-height of the unit's azimuth drift (no public source for any of the three sizes,
+# docs/imu-presets.md); k = 1 is the campaign's unit.  The quick profile's 2 cold held-out runs test nothing.
+SENSITIVITY_SCALES = {"quick": (1.0, 10.0), "paper": (1.0, 3.0, 10.0, 30.0)}
 
 
 def add_arguments(parser) -> None:
@@ -65,7 +72,7 @@ def _digest(path: Path) -> str:
 def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0, out, workers=None,
             scheduler=None, progress: bool = True, truth: str = "simulated", live: bool | None = None,
             sizes=None, nav_hours: float | None = None, sweep: str = "none", sweep_only: bool = False,
-            multitemp: dict | None = None) -> dict:
+            multitemp: dict | None = None, thermal_scales=None) -> dict:
     """Run the campaign; returns the summary dict the report is written from.
 
     sizes : (hot train, hot test, cold train, cold test), default the profile's;
@@ -73,7 +80,8 @@ def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0,
     only to test the campaign machinery quickly); sweep : grid of
     :mod:`sarins.axial_rbf.sweep` ('none', 'quick', 'full'), ``sweep_only``
     runs nothing else; multitemp : calibration settings (default
-    :data:`MULTITEMP`)."""
+    :data:`MULTITEMP`); thermal_scales : the sensitivity study's factors k
+    (default the profile's :data:`SENSITIVITY_SCALES`; empty: no study)."""
     from sarins.campaign import run_campaign
 
     from . import sweep as sweep_mod
@@ -97,12 +105,13 @@ def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0,
         return {"profile": profile, "seed": seed, "sweep": swept, "sweep_only": True,
                 "wall_seconds": time.perf_counter() - t_start, "workers": workers, "scheduler": scheduler}
     summary = _main(profile=profile, engine=engine, seed=seed, out=out, common=common, truth=truth, live=live,
-                    sizes=sizes, nav_hours=nav_hours, multitemp=dict(MULTITEMP, **(multitemp or {})))
+                    sizes=sizes, nav_hours=nav_hours, multitemp=dict(MULTITEMP, **(multitemp or {})),
+                    thermal_scales=SENSITIVITY_SCALES[profile] if thermal_scales is None else thermal_scales)
     summary.update(sweep=swept, sweep_only=False, wall_seconds=time.perf_counter() - t_start)
     return summary
 
 
-def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, multitemp) -> dict:
+def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, multitemp, thermal_scales) -> dict:
     """Calibration, training runs, models, held-out runs (see the module docstring)."""
     from sarins.campaign import Task, build_artifacts, code_hash, run_campaign
 
@@ -122,12 +131,10 @@ def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, 
                                       code_hash())[0].parent)
     exps = {"hot": s0.generate("hot", n_ht, n_hv, seed), "cold": s0.generate("cold", n_ct, n_cv, seed)}
     # phase 0: the multi-temperature calibration (one short task, run here: no pool to start)
-    cal_task = Task(f"s{seed}-multitemp-calibration", runs.calibration_task, {"seed": seed, **multitemp},
-                    finite=("temp_c", "drift_dph"))
+    cal_task = _calibration_task(seed, multitemp, 1.0)
     calibration = run_campaign([cal_task], run_dir, description="axial-rbf calibration", workers=1,
                                progress=common["progress"])[cal_task.id]
-    table = {"temp_c": [float(x) for x in calibration["temp_c"]],
-             "drift_dph": [float(x) for x in calibration["drift_dph"]]}
+    table = _table(calibration)
     # phase 1: training runs, raw (engine) and with the table (in process), and Fig. 1's closed-form check
     fig1_task = Task("fig1-closed-form-check", runs.fig1_check_task, {"cases": FIG1_CASES})
     tr = "" if truth == "simulated" else "-ptruth"
@@ -135,9 +142,7 @@ def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, 
                         {"exp": e.to_dict(), "engine": engine, "fmu_dir": fmu_dir, "paper_truth": truth == "paper"},
                         volatile=("fmu_dir",), finite=("drift_dph", "lat_error_deg"))
                    for k in exps for e in exps[k] if e.role == "train"]
-    mt_tasks = [Task(f"s{seed}-{e.name}-mt", runs.train_task, {"exp": e.to_dict(), "table": table},
-                     finite=("residual_drift_dph", "lat_error_deg"))
-                for k in exps for e in exps[k] if e.role == "train"]
+    mt_tasks = _mt_train_tasks([e for k in exps for e in exps[k] if e.role == "train"], seed, table, 1.0)
     train = run_campaign(train_tasks + mt_tasks + [fig1_task], run_dir, description="axial-rbf training runs",
                          **common)
     fig1_check = train[fig1_task.id]
@@ -176,11 +181,97 @@ def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, 
     if tested["cold"]:
         comparison["cold"].update(_cold_extras(tested["cold"], six))
     uncompensated = [r for k in exps for r in rows[k] + tested[k]]  # cosim rows have no heading error
+    sensitivity = _sensitivity(thermal_scales, seed=seed, out=out, common=common, multitemp=multitemp,
+                               sizes=(n_ht, n_hv, n_ct, n_cv), nav=nav)
     return {"profile": profile, "engine": engine, "seed": seed, "truth": truth, "live": live,
             "train": rows, "train_mt": mt_rows, "test": tested, "nets": nets, "six": six, "models": models,
             "cosim_check": check, "comparison": comparison, "multitemp": {"settings": multitemp, **calibration},
-            "fig1": {"check": fig1_check, "signs": fig1.sign_analysis(uncompensated)},
+            "fig1": {"check": fig1_check, "signs": fig1.sign_analysis(uncompensated)}, "sensitivity": sensitivity,
             "workers": common["workers"], "scheduler": common["scheduler"]}
+
+
+def _ktag(scale: float) -> str:
+    """Task-id suffix of a thermal scale k (none for the campaign's unit, k = 1)."""
+    return "" if scale == 1.0 else f"-k{scale:g}"
+
+
+def _calibration_task(seed: int, multitemp: dict, scale: float):
+    """The multi-temperature calibration of the unit with thermal scale k (:func:`runs.calibration_task`)."""
+    from sarins.campaign import Task
+
+    from . import runs
+
+    return Task(f"s{seed}-multitemp-calibration{_ktag(scale)}", runs.calibration_task,
+                {"seed": seed, **multitemp, "thermal_scale": float(scale)}, finite=("temp_c", "drift_dph"))
+
+
+def _table(calibration: dict) -> dict:
+    """The multi-temperature table (``MultiTemperatureTable.to_dict()``) of a calibration result."""
+    return {"temp_c": [float(x) for x in calibration["temp_c"]],
+            "drift_dph": [float(x) for x in calibration["drift_dph"]]}
+
+
+def _mt_train_tasks(experiments, seed: int, table: dict, scale: float) -> list:
+    """Training runs compensated by the unit's table, in process (:func:`runs.train_task`); the
+    experiments carry the thermal scale k, the ids its tag."""
+    from sarins.campaign import Task
+
+    from . import runs
+
+    return [Task(f"s{seed}-{e.name}-mt{_ktag(scale)}", runs.train_task, {"exp": e.to_dict(), "table": table},
+                 finite=("residual_drift_dph", "lat_error_deg")) for e in experiments]
+
+
+def _sensitivity(scales, *, seed, out, common, multitemp, sizes, nav) -> dict | None:
+    """Sensitivity study (not a claim): for each factor k on the unit's drift terms beyond
+    temperature, the unit's own multi-temperature calibration, its compensated hot training runs,
+    its hot_mt network and its compensated held-out cold starts (in process, the campaign's
+    experiments and seeds; k = 1 shares the campaign's calibration and training runs).
+
+    Returns {'scales', 'rows' (per k: entries of :func:`_entries`, drift error = table mean +
+    identified residual - true drift, max nmi/72h of the compensated re-run), 'calibration_rms_dph'
+    (per k), 'wall_seconds'}, or None without scales."""
+    import numpy as np
+
+    from sarins.campaign import Task, run_campaign
+
+    from sarins_fmu.experiments import axial_rbf as s0
+    from . import runs
+
+    if not scales:
+        return None
+    t0 = time.perf_counter()
+    scales = [float(k) for k in scales]
+    n_ht, n_hv, n_ct, n_cv = sizes
+    run_dir = out / "runs"
+    cal_tasks = {k: _calibration_task(seed, multitemp, k) for k in scales}
+    cal = run_campaign(list(cal_tasks.values()), run_dir, description="axial-rbf sensitivity calibrations", **common)
+    tables = {k: _table(cal[t.id]) for k, t in cal_tasks.items()}
+    train = {k: _mt_train_tasks([e for e in s0.generate("hot", n_ht, n_hv, seed, thermal_scale=k) if e.role == "train"],
+                                seed, tables[k], k) for k in scales}
+    done = run_campaign([t for k in scales for t in train[k]], run_dir, description="axial-rbf sensitivity training",
+                        **common)
+    models, digests = {}, {}
+    for k in scales:
+        folder = out / "models" / f"sensitivity-k{k:g}"
+        _train_models(folder, {"hot_mt": ([done[t.id] for t in train[k]], s0.HOT_INPUTS, "residual_drift_dph")})
+        models[k] = {"hot_mt": str(folder / "hot_mt.json")}
+        digests[k] = _digest(folder / "hot_mt.json")
+    test_tasks = {k: [Task(f"s{seed}-{e.name}-mt-only-{nav:g}h{_ktag(k)}-{digests[k]}", runs.multitemp_test_task,
+                           {"exp": e.to_dict(), "models": models[k], "table": tables[k], "nav_hours": nav},
+                           volatile=("models",), identity={"models": {"hot_mt": digests[k]}})
+                      for e in s0.generate("cold", n_ct, n_cv, seed, thermal_scale=k) if e.role == "test"]
+                  for k in scales}
+    tested = run_campaign([t for k in scales for t in test_tasks[k]], run_dir,
+                          description="axial-rbf sensitivity held-out runs", **common)
+    rows, cal_rms = {}, {}
+    for k in scales:
+        tests = [tested[t.id] for t in test_tasks[k]]
+        rows[k] = _entries(tests, [t["mt_total_hot_mt_dph"] for t in tests], [t["mt_max_hot_mt_nmi"] for t in tests])
+        c = cal[cal_tasks[k].id]
+        cal_rms[k] = float(np.sqrt(np.mean((np.asarray(c["drift_dph"]) - np.asarray(c["law_dph"])) ** 2)))
+    return {"scales": scales, "rows": rows, "calibration_rms_dph": cal_rms,
+            "wall_seconds": time.perf_counter() - t0}
 
 
 # Fig. 1 closed-form check: (azimuth drift deg/h, heading error arcsec) of ideal-IMU runs

@@ -16,7 +16,7 @@ from sarins.comparison import comparison_lines
 
 from sarins_fmu.experiments import axial_rbf as s0
 
-from .report_additions import cold6_section, fig1_section, multitemp_section, sweep_section
+from .report_additions import cold6_section, fig1_section, multitemp_section, sensitivity_section, sweep_section
 
 
 def _md(headers, rows) -> str:
@@ -294,7 +294,8 @@ def write_report(summary: dict, folder) -> Path:
               "cold6_*: cold network on 6 rows, see below). nmi/72h from the affine error map of each experiment "
               "(mt_*: of the compensated re-runs).", "",
               comparison_table(summary["comparison"]), "", verdict(summary["comparison"]), ""]
-    lines += multitemp_section(summary) + cold6_section(summary) + fig1_section(summary)
+    lines += multitemp_section(summary) + sensitivity_section(summary, PAPER_MT_RESIDUAL_DPH)
+    lines += cold6_section(summary) + fig1_section(summary)
     if summary.get("sweep"):
         sweep_lines, sweep_figs = sweep_section(summary["sweep"], folder)
         lines += sweep_lines
