@@ -322,7 +322,7 @@ def test_sensitivity_rows_in_the_report():
     text = "\n".join(sensitivity_section({"sensitivity": sens, "profile": "paper"}, PAPER_MT_RESIDUAL_DPH))
     assert "| 1 (the campaign) | 0.0002 | 0.0001 | 0.0001 |" in text
     assert "| 3 | 0.0006 | 0.0003 | 0.0003 | 0.00002 | 0.0006 (n = 5) |" in text
-    assert "| 3 of 5 | 40 .. 100 % | 0.50 |" in text
+    assert "| 3 of 5 | 40 .. 100 % | 0.50 .. 0.50 |" in text
     assert "smallest k run at which the paper's band holds the median drift error is k = 3" in text
     assert "no source" in text
     assert sensitivity_section({"sensitivity": None}, PAPER_MT_RESIDUAL_DPH) == []
