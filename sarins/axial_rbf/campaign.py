@@ -41,7 +41,7 @@ SWEEPS = ("none", "quick", "full")
 # sensitivity study (not a claim): factor k on the block-gradient coefficient, the temperature-rate coefficient and
 # the hysteresis half-height of the unit's azimuth drift (no public source for any of the three sizes,
 # docs/imu-presets.md); k = 1 is the campaign's unit.  The quick profile's 2 cold held-out runs test nothing.
-SENSITIVITY_SCALES = {"quick": (1.0, 10.0), "paper": (1.0, 3.0, 10.0, 30.0)}
+SENSITIVITY_SCALES = {"quick": (1.0, 10.0), "paper": (1.0, 3.0, 5.0, 10.0, 30.0)}
 
 
 def add_arguments(parser) -> None:
