@@ -231,7 +231,6 @@ def _sensitivity(scales, *, seed, out, common, multitemp, sizes, nav) -> dict | 
     Returns {'scales', 'rows' (per k: entries of :func:`_entries`, drift error = table mean +
     identified residual - true drift, max nmi/72h of the compensated re-run), 'calibration_rms_dph'
     (per k), 'wall_seconds'}, or None without scales."""
-    import numpy as np
 
     from sarins.campaign import Task, run_campaign
 
@@ -268,8 +267,7 @@ def _sensitivity(scales, *, seed, out, common, multitemp, sizes, nav) -> dict | 
     for k in scales:
         tests = [tested[t.id] for t in test_tasks[k]]
         rows[k] = _entries(tests, [t["mt_total_hot_mt_dph"] for t in tests], [t["mt_max_hot_mt_nmi"] for t in tests])
-        c = cal[cal_tasks[k].id]
-        cal_rms[k] = float(np.sqrt(np.mean((np.asarray(c["drift_dph"]) - np.asarray(c["law_dph"])) ** 2)))
+        cal_rms[k] = runs.calibration_error_rms_dph(cal[cal_tasks[k].id])
     return {"scales": scales, "rows": rows, "calibration_rms_dph": cal_rms,
             "wall_seconds": time.perf_counter() - t0}
 

@@ -19,6 +19,7 @@ from sarins_fmu.experiments import axial_rbf as s0
 from sarins_fmu.units import DPH_TO_RPS
 
 from .fig1 import ratio_lon_to_lat, sign_analysis
+from .runs import calibration_error_rms_dph
 from .sweep import CLAIM_DPH
 
 
@@ -65,8 +66,7 @@ def multitemp_section(summary: dict) -> list[str]:
                   "calibration error (deg/h)"],
                  [(i + 1, f"{t:.2f}", f"{d:+.5f}", f"{w:+.5f}", f"{d - w:+.5f}")
                   for i, (t, d, w) in enumerate(zip(mt["temp_c"], mt["drift_dph"], mt["law_dph"]))]), ""]
-    err = np.asarray(mt["drift_dph"]) - np.asarray(mt["law_dph"])
-    lines += [f"Calibration error RMS {np.sqrt(np.mean(err ** 2)):.5f} deg/h (white noise and bias instability "
+    lines += [f"Calibration error RMS {calibration_error_rms_dph(mt):.5f} deg/h (white noise and bias instability "
               "over the averaging window, plus the z gyro's misalignment to the horizontal Earth rate, a constant "
               "the identification absorbs).", ""]
     present = [(k, label) for k, label in MT_METHODS if k in cold]

@@ -353,6 +353,12 @@ def calibration_task(seed: int, points_c, settle_hours: float = 20.0, average_ho
             "wall_seconds": _time.perf_counter() - t0}
 
 
+def calibration_error_rms_dph(calibration: dict) -> float:
+    """RMS of a calibration result's table against the unit's steady law (:func:`calibration_task`), deg/h."""
+    err = np.asarray(calibration["drift_dph"]) - np.asarray(calibration["law_dph"])
+    return float(np.sqrt(np.mean(err ** 2)))
+
+
 def fig1_check_task(cases, hours: float = s0.IDENTIFY_HOURS, lat_deg: float = s0.SITE_LAT_DEG) -> dict:
     """Latitude and longitude errors at ``hours`` of navigation of an ideal
     IMU started with the true attitude, for (azimuth drift deg/h, heading

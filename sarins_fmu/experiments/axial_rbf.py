@@ -53,7 +53,7 @@ Table 2 data; see tests/test_ins.py).
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -123,17 +123,23 @@ def thermal_overrides(heating_c: float) -> dict:
     return out
 
 
+def block_terms(thermal_scale: float = 1.0) -> dict:
+    """The nav-rlg preset's block-gradient coefficient and hysteresis half-height (SI, flat IMU
+    parameters and ``ImuModel`` fields alike) times ``thermal_scale``."""
+    base = imu_mod.preset("nav-rlg")
+    return {"axial_drift_grad": base.axial_drift_grad * thermal_scale,
+            "axial_hysteresis": base.axial_hysteresis * thermal_scale}
+
+
 def drift_overrides(eps0_dph: float, thermal_scale: float = 1.0) -> dict:
     """Flat IMU parameters (SI) of the azimuth drift eps(T) for a turn-on constant, with the
     terms beyond temperature (rate, block gradient, hysteresis) times ``thermal_scale``."""
-    base = imu_mod.preset("nav-rlg")
     a = K2_DPH_PER_C2
     b = K1_DPH_PER_C - 2 * T_CENTRE_C * K2_DPH_PER_C2
     c = eps0_dph - K1_DPH_PER_C * T_CENTRE_C + K2_DPH_PER_C2 * T_CENTRE_C**2
     return {"axial_drift_a": a * DPH_TO_RPS, "axial_drift_b": b * DPH_TO_RPS, "axial_drift_c": c * DPH_TO_RPS,
             "axial_drift_dtdt": DTDT_DPH_PER_CPH * thermal_scale * DPH_TO_RPS * HOUR,
-            "axial_drift_grad": base.axial_drift_grad * thermal_scale,
-            "axial_hysteresis": base.axial_hysteresis * thermal_scale,
+            **block_terms(thermal_scale),
             "gyro_bias_z": 0.0, "gyro_bias_tc1_z": 0.0, "gyro_bias_tc2_z": 0.0,
             "aging_sigma_a": 0.0, "aging_sigma_b": 0.0, "aging_sigma_c": 0.0}
 
@@ -189,14 +195,13 @@ def thermal_terms_dph(temperature: np.ndarray, dt: float, temp0_c: float | None 
     each value the term's mean over the step that ends at the sample."""
     temperature = np.asarray(temperature, float)
     t0 = float(temperature[0] if temp0_c is None else temp0_c)
-    par = imu_mod.preset("nav-rlg").axial_thermal_par.copy()
-    par[[0, 2]] *= float(thermal_scale)  # axial_drift_grad, axial_hysteresis (ImuModel.axial_thermal_par)
+    par = replace(imu_mod.preset("nav-rlg"), **block_terms(float(thermal_scale))).axial_thermal_par
     return axial_terms(t0, temperature, float(dt), par) / DPH_TO_RPS
 
 
 def hysteresis_dph(thermal_scale: float = 1.0) -> float:
     """Half-height of the unit's heating/cooling loop, deg/h (heating branch +, cooling branch -)."""
-    return float(imu_mod.preset("nav-rlg").axial_hysteresis * thermal_scale / DPH_TO_RPS)
+    return float(block_terms(thermal_scale)["axial_hysteresis"] / DPH_TO_RPS)
 
 
 def switch_on_temperature(exp: Experiment) -> float:
