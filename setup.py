@@ -1,9 +1,11 @@
-"""Build step of the C physics core (``sarins_fmu/core/*.c``).
+"""Build step of the C physics core (``sarins_fmu/core/*.c``) and of the master's compiled loop
+(``orchestration/steploop.c``).
 
 pyproject.toml holds the project's metadata; this file only declares the
 core as one shared library, built by ``pip install`` (regular or editable).
-The library is plain C11 + libm, loaded with ctypes
-(:mod:`sarins_fmu.core._lib`), so it exports no Python module init function.
+Both are plain C11 libraries (the core with libm), loaded with ctypes
+(:mod:`sarins_fmu.core._lib`, :mod:`orchestration.steploop`), so they export no Python module init
+function.
 """
 
 import runpy
@@ -38,12 +40,16 @@ class BuildCore(build_ext):
         # a plain C library: no PyInit_ function. GNU ld exports every public function by itself; MSVC's
         # linker only the names it is given
         if self.compiler.compiler_type == "msvc":
+            if ext.name.startswith("orchestration."):
+                return ["sl_abi", "sl_run"]
             return runpy.run_path(str(CORE / "exports.py"))["public_functions"](CORE)
         return []
 
 
 setup(
     ext_modules=[Extension("sarins_fmu.core._sarins_core", sources=sorted(str(p) for p in CORE.glob("*.c")),
-                           include_dirs=[str(CORE)], depends=sorted(str(p) for p in CORE.glob("*.h")))],
+                           include_dirs=[str(CORE)], depends=sorted(str(p) for p in CORE.glob("*.h"))),
+                 # the co-simulation master's compiled inner loop (orchestration/steploop.py)
+                 Extension("orchestration._steploop", sources=["orchestration/steploop.c"])],
     cmdclass={"build_ext": BuildCore},
 )

@@ -69,6 +69,8 @@ from .rawcalls import (FMI_WARNING, DoStep3Flags, do_step, getter, handle, sette
                        value_args, value_buffer, vr_array)
 from .recorder import Recorder, ResultArray, select_variables
 from .schedule import StepSpec, make_schedule
+from . import steploop
+from .steploop import OpSpec
 from .ssp_reader import ANNOTATION_TYPE, read_system
 from .system import StartValue, System
 from .unit_links import connection_maps, start_in_variable_unit
@@ -79,6 +81,8 @@ SCHEMES = ("gauss-seidel", "jacobi")
 StepCallback = Callable[[float, "Master"], bool | None]
 _SETTABLE_CAUSALITIES = ("parameter", "structuralParameter", "input")
 MAX_RECORD_BYTES = 2**31  # recorder storage preallocated for one run (rows x values x 8 bytes)
+C_BLOCK_STEPS = 512  # steps per call into the compiled loop (a signal is acted on between calls)
+LOOPS = ("auto", "c", "python")
 TEST_SIGNAL_ENV = "ORCHESTRATION_TEST_SIGNAL_AFTER"  # tests only: "N:SIGTERM" raises it after step N
 
 
@@ -167,6 +171,11 @@ class Master:
     logging_on : bool
         ``loggingOn`` passed to the FMUs, so that their error messages reach
         the :class:`~orchestration.errors.FMUCallError` raised on failures.
+    loop : {'auto', 'c', 'python'}
+        The inner loop: ``'c'`` runs the steps through the compiled loop
+        (:mod:`orchestration.steploop`; the same calls, the same numbers, without
+        the per-call cost of Python), ``'python'`` in Python, ``'auto'`` in C
+        when it is built and the run has no real-time pacing and no callback.
 
     Raises
     ------
@@ -183,7 +192,10 @@ class Master:
     """
 
     def __init__(self, system: System | str | Path, *, scheme: str = "gauss-seidel",
-                 record: Sequence[str] | None = None, logging_on: bool = True):
+                 record: Sequence[str] | None = None, logging_on: bool = True, loop: str = "auto"):
+        if loop not in LOOPS:
+            raise ValueError(f"unknown loop {loop!r}; use one of {LOOPS}")
+        self.loop = loop
         self._owns_system = not isinstance(system, System)
         self.system = system if isinstance(system, System) else read_system(system)
         self.scheme = _check_scheme(scheme)
@@ -409,7 +421,12 @@ class Master:
             self._sample(recorder, start)
             if pacer is not None:
                 pacer.start()  # the clock starts once every FMU is loaded and initialised
-            steps = self._loop(segments, total, recorder, output_every, bar, pacer, callback)
+            compiled = self._compiled(recorder) if pacer is None and callback is None else None
+            meta["loop"] = "c" if compiled is not None else "python"
+            if compiled is not None:
+                steps = self._c_loop(compiled, segments, total, recorder, output_every, bar)
+            else:
+                steps = self._loop(segments, total, recorder, output_every, bar, pacer, callback)
         except interrupt.Interrupted as stop:
             stop.partial = None
             if recorder is not None and recorder.count:
@@ -574,6 +591,28 @@ class Master:
             self._ops += [(get, args, index, call, convert) for get, args, convert, index, call in gets]
             self._ops += [(set_, args, index, call, None) for set_, args, index, call in sets]
             self._ops += [(step, args, index, call, None) for step, args, index, call in stage_steps]
+        self._specs = self._op_specs(flags)
+
+    def _op_specs(self, flags) -> list[OpSpec]:
+        """The inner loop's operations in C terms (:mod:`orchestration.steploop`), in the order of
+        ``self._ops``; each names the operation it belongs to."""
+        specs = []
+        for owner, (function, args, index, call, convert) in enumerate(self._ops):
+            fmi3 = self.instances[index].fmi3
+            if call.startswith("cast"):
+                source, target = function.arrays
+                specs.append(OpSpec("cast", owner, source=source, target=target))
+            elif call.endswith("DoStep"):
+                specs.append(OpSpec("step", owner, function=function, instance=args[0], fmi3=fmi3,
+                                    flags=flags[index]))
+            else:
+                n_values = args[4].value if fmi3 else len(args[1])
+                specs.append(OpSpec("values", owner, function=function, instance=args[0], vrs=args[1],
+                                    values=args[3], n_values=n_values, fmi3=fmi3))
+            if convert is not None:
+                view, factors, offsets = convert
+                specs.append(OpSpec("map", owner, values=view, factors=factors, offsets=offsets))
+        return specs
 
     def _transfer(self, transfers, time: float) -> None:
         """Make every get of ``transfers = (gets, sets)`` (and convert, cast), then every set."""
@@ -647,6 +686,59 @@ class Master:
                     return done
         return done
 
+    def _compiled(self, recorder: Recorder):
+        """The plan as a :class:`~orchestration.steploop.CompiledLoop`, or None (no library, a plan it
+        cannot run, or ``loop='python'``)."""
+        lib = steploop.load() if self.loop != "python" else None
+        if lib is None:
+            if self.loop == "c":
+                raise OrchestrationError("loop='c': the compiled loop (orchestration/_steploop) is not built; "
+                                         "reinstall the package with 'pip install -e .'")
+            return None
+        try:
+            return steploop.CompiledLoop(lib, self._specs, recorder)
+        except ValueError:
+            if self.loop == "c":
+                raise
+            return None
+
+    def _c_loop(self, compiled, segments, total: int, recorder: Recorder, every: int, bar: Progress) -> int:
+        """:meth:`_loop` without pacing or callback, a block of steps per call into C."""
+        pending = interrupt.PENDING
+        done, next_record = 0, min(every, total)
+        for segment in segments:
+            j = 0
+            while j < segment.count:
+                block = min(C_BLOCK_STEPS, segment.count - j)
+                if bar.next_tick > done:
+                    block = min(block, bar.next_tick - done)
+                s = compiled.run(segment.begin, segment.step, segment.end, j, block, segment.count, done, total,
+                                 every, next_record)
+                j += s.done - done
+                done, next_record = s.done, s.next_record
+                if s.done > 0:
+                    self.time = s.t_end
+                if s.outcome == steploop.CALL_FAILED:
+                    _, _, index, call, _ = self._ops[compiled.owners[s.where]]
+                    self._fail(index, call, s.status, s.t_fail)
+                elif s.outcome == steploop.BAD_OP:
+                    raise OrchestrationError(f"the compiled loop refused operation {s.where} of its plan")
+                elif s.outcome == steploop.RECORD_FAILED:
+                    index, kind = recorder.block_owner(s.where)
+                    self._fail(index, f"{_api(self.instances[index].fmi3)}Get{kind}", s.status, s.t_fail)
+                elif s.outcome == steploop.FULL:
+                    raise OrchestrationError("the recorder's storage is full (a bug: rows were planned)")
+                elif s.outcome == steploop.TERMINATED:
+                    self._terminated(self._terminate_flags)
+                    if recorder.time[recorder.count - 1] != s.t_end:
+                        self._sample(recorder, s.t_end)
+                    return done
+                if pending[0]:
+                    interrupt.check()
+                if done == bar.next_tick:
+                    bar.tick(done)
+        return done
+
     def _terminated(self, flags) -> bool:
         """True (and ``self.terminated_by`` set) if an FMI 3.0 FMU's last fmi3DoStep asked to end."""
         for flag, index in flags:
@@ -689,12 +781,14 @@ def _api(fmi3: bool) -> str:
 
 
 def _caster(source: np.ndarray, target: np.ndarray):
-    """A call for the plan copying ``source`` into ``target`` with a C cast; returns status 0."""
+    """A call for the plan copying ``source`` into ``target`` with a C cast; returns status 0.
+    Its ``arrays`` are the two buffers (for the compiled loop)."""
 
     def cast() -> int:
         np.copyto(target, source, casting="unsafe")
         return 0
 
+    cast.arrays = (source, target)
     return cast
 
 
