@@ -48,6 +48,7 @@ from __future__ import annotations
 import math
 import os
 import signal
+import time
 from collections.abc import Callable, Sequence
 from ctypes import c_double
 from pathlib import Path
@@ -343,7 +344,7 @@ class Master:
     def simulate(self, stop_time: float | None = None, step_size: StepSpec | None = None, *,
                  start_time: float | None = None, output_every: int = 1,
                  progress: bool | None = None, realtime: float | None = None,
-                 callback: StepCallback | None = None) -> ResultArray:
+                 callback: StepCallback | None = None, profile: bool = False) -> ResultArray:
         """Run the system and return the recorded results.
 
         Parameters
@@ -366,6 +367,11 @@ class Master:
             ``callback(time, master)`` after every step; it may read and set
             values with :meth:`get` / :meth:`set` and stop the run by
             returning ``False``.
+        profile : bool
+            Measure where the loop's time goes (compiled loop only, no pacing,
+            no callback): ``result.meta['profile']`` gives the wall seconds of
+            each component's doStep, gets and sets, of the conversions, of
+            recording and of the master's own work (the rest).
 
         Returns
         -------
@@ -421,10 +427,19 @@ class Master:
             self._sample(recorder, start)
             if pacer is not None:
                 pacer.start()  # the clock starts once every FMU is loaded and initialised
-            compiled = self._compiled(recorder) if pacer is None and callback is None else None
+            if profile and (pacer is not None or callback is not None or self.loop == "python"):
+                raise OrchestrationError("profile=True needs the compiled loop: no real-time pacing, no "
+                                         "callback, loop 'auto' or 'c'")
+            compiled = self._compiled(recorder, profile) if pacer is None and callback is None else None
+            if profile and compiled is None:
+                raise OrchestrationError("profile=True needs the compiled loop (orchestration/_steploop), "
+                                         "which is not built: reinstall the package with 'pip install -e .'")
             meta["loop"] = "c" if compiled is not None else "python"
             if compiled is not None:
+                began = time.perf_counter()
                 steps = self._c_loop(compiled, segments, total, recorder, output_every, bar)
+                if profile:
+                    meta["profile"] = self._profile(compiled, steps, time.perf_counter() - began)
             else:
                 steps = self._loop(segments, total, recorder, output_every, bar, pacer, callback)
         except interrupt.Interrupted as stop:
@@ -686,7 +701,23 @@ class Master:
                     return done
         return done
 
-    def _compiled(self, recorder: Recorder):
+    def _profile(self, compiled, steps: int, wall: float) -> dict:
+        """Where the compiled loop's ``wall`` seconds went (see :meth:`simulate`, ``profile``)."""
+        components = {name: {"doStep": 0.0, "get": 0.0, "set": 0.0} for name in self.names}
+        conversions = 0.0
+        for spec, seconds in zip(compiled.specs, compiled.seconds):
+            _, _, index, call, _ = self._ops[spec.owner]
+            if spec.kind in ("map", "cast"):
+                conversions += float(seconds)
+            else:
+                part = "doStep" if call.endswith("DoStep") else "get" if "Get" in call else "set"
+                components[self.names[index]][part] += float(seconds)
+        record = float(compiled.seconds[-1])
+        spent = sum(sum(parts.values()) for parts in components.values()) + conversions + record
+        return {"steps": steps, "wall_s": wall, "components": components, "conversions_s": conversions,
+                "record_s": record, "master_s": wall - spent}
+
+    def _compiled(self, recorder: Recorder, profile: bool = False):
         """The plan as a :class:`~orchestration.steploop.CompiledLoop`, or None (no library, a plan it
         cannot run, or ``loop='python'``)."""
         lib = steploop.load() if self.loop != "python" else None
@@ -696,7 +727,7 @@ class Master:
                                          "reinstall the package with 'pip install -e .'")
             return None
         try:
-            return steploop.CompiledLoop(lib, self._specs, recorder)
+            return steploop.CompiledLoop(lib, self._specs, recorder, profile)
         except ValueError:
             if self.loop == "c":
                 raise

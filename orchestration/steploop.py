@@ -52,7 +52,7 @@ class _State(Structure):
                 ("seg_count", c_int64), ("done", c_int64), ("total", c_int64), ("every", c_int64),
                 ("next_record", c_int64), ("rows", c_int64), ("capacity", c_int64), ("times", c_void_p),
                 ("outcome", c_int32), ("status", c_int32), ("where", c_int64), ("t_fail", c_double),
-                ("t_end", c_double)]
+                ("t_end", c_double), ("seconds", c_void_p)]
 
 
 @dataclass
@@ -139,8 +139,11 @@ class CompiledLoop:
     Raises ``ValueError`` for a plan the C loop cannot run (the master then uses its Python loop).
     """
 
-    def __init__(self, lib, specs: list[OpSpec], recorder):
+    def __init__(self, lib, specs: list[OpSpec], recorder, profile: bool = False):
         self.lib = lib
+        # profile: wall seconds per operation, recording last (sums over the run)
+        self.seconds = np.zeros(len(specs) + 1) if profile else None
+        self.specs = list(specs)
         self.owners = [s.owner for s in specs]
         self.ops = (_Op * max(1, len(specs)))()
         self.n_ops = len(specs)
@@ -208,6 +211,7 @@ class CompiledLoop:
         s.done, s.total, s.every, s.next_record = done, total, every, next_record
         s.rows, s.capacity = recorder.count, len(recorder.time)
         s.times = recorder.time.ctypes.data
+        s.seconds = None if self.seconds is None else self.seconds.ctypes.data
         self.lib.sl_run(self.ops, self.n_ops, self.records, self.n_records, ctypes.byref(s))
         recorder.count = s.rows
         return s

@@ -57,3 +57,14 @@ def test_output_csv_has_a_units_sidecar(fmu_dir, tmp_path, capsys):
                  "--no-progress"]) == 0
     units = json.loads((tmp_path / "run.csv.units.json").read_text())
     assert units == {"time": "s", "ins.lat_error": "rad", "imu.temp_gyro_z": "degC"}
+
+
+def test_profile_prints_where_a_step_goes(ramp_gain, tmp_path, capsys):
+    path = write_ssp(ramp_gain, tmp_path / "rg.ssp")
+    assert main(["cosim", str(path), "--stop-time", "2", "--step", "0.25", "--profile", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "profile:" in out and "us/step" in out
+    assert "ramp.doStep" in out and "gain.doStep" in out and "master (the rest)" in out
+    assert main(["cosim", str(path), "--stop-time", "1", "--step", "0.25", "--profile", "--realtime",
+                 "0.01"]) == 2
+    assert "--profile measures the compiled loop" in capsys.readouterr().err

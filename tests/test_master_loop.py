@@ -8,6 +8,7 @@ from __future__ import annotations
 import os
 import signal
 import threading
+import time
 import warnings
 
 import numpy as np
@@ -64,6 +65,27 @@ def test_a_step_schedule_and_sparse_recording_give_the_same_rows(fmi3_fmus, ever
     assert_same(both_loops(burst_sum(fmi3_fmus), 1.0, schedule, output_every=every))
 
 
+def mixed(fixture_fmus, fmi3_fmus):
+    """FMI 2.0 Real/Integer/Boolean into FMI 3.0 Float32/Int32/Boolean and back: casts on both sides."""
+    return System("mixed",
+                  [Component("ramp", fixture_fmus["Ramp"], {"slope": 2.0, "offset": -0.5}),
+                   Component("b", fmi3_fmus["Burst3"], {"slope": 2.0, "n": 4}),
+                   Component("s", fmi3_fmus["Sum3"], {"n": 4}),
+                   Component("gain", fixture_fmus["Gain"], {"k": 3.0})],
+                  [Connection.between("ramp.y", "s.k"), Connection.between("ramp.count", "s.m"),
+                   Connection.between("ramp.positive", "s.flag"), Connection.between("b.samples", "s.u"),
+                   Connection.between("b.y", "gain.u"), Connection.between("s.m_out", "gain.n_in"),
+                   Connection.between("s.flag_out", "gain.flag_in")])
+
+
+@needs_library
+@pytest.mark.parametrize("scheme", ["gauss-seidel", "jacobi"])
+def test_casts_between_fmi2_and_fmi3_types_are_the_same(fixture_fmus, fmi3_fmus, scheme):
+    results = both_loops(mixed(fixture_fmus, fmi3_fmus), 1.0, 0.125, scheme)
+    assert_same(results)
+    assert results["c"]["s.flag_out"].any() and not results["c"]["s.flag_out"].all()
+
+
 @needs_library
 def test_terminate_request_ends_both_loops_after_the_same_step(fmi3_fmus):
     results = both_loops(burst_sum(fmi3_fmus, stop_after=3), 1.0, 0.1)
@@ -106,25 +128,28 @@ def test_the_standard_system_is_bit_identical_under_both_loops_and_both_schemes(
 
 @needs_library
 def test_a_signal_during_the_compiled_loop_stops_the_run_between_blocks(fmi3_fmus):
-    """SIGTERM arrives while the C loop runs: the master stops after the current block of steps and keeps
-    the rows recorded so far."""
+    """SIGTERM arrives while the C loop runs (sent once the loop has done its first blocks): the master
+    stops after the current block of steps and keeps the rows recorded so far."""
     system = burst_sum(fmi3_fmus)
+    steps, every = 2_000_000, 1000  # seconds of work: the signal comes long before the end
     fired = threading.Event()
 
-    def send():
-        os.kill(os.getpid(), signal.SIGTERM)
-        fired.set()
+    def send_when_running(master):
+        while not fired.is_set():
+            if master.time is not None and master.time > 1.0:  # past the first blocks of 0.512 s
+                os.kill(os.getpid(), signal.SIGTERM)
+                fired.set()
+            time.sleep(0.001)
 
-    steps, every = 2_000_000, 1000  # seconds of work: the signal comes long before the end
     with interrupt.handle_signals(), Master(system, loop="c") as master:
-        timer = threading.Timer(0.2, send)
-        timer.start()
+        watcher = threading.Thread(target=send_when_running, args=(master,), daemon=True)
+        watcher.start()
         try:
             with pytest.raises(interrupt.Interrupted) as caught:
                 master.simulate(steps * 1e-3, 1e-3, output_every=every)
         finally:
-            timer.cancel()
-    assert fired.is_set()
+            fired.set()
+            watcher.join()
     partial = caught.value.partial
     assert partial is not None and 1 <= len(partial) < steps // every + 1
     assert partial.meta["loop"] == "c"
@@ -143,3 +168,33 @@ def test_loop_c_without_the_library_is_a_clear_error(fmi3_fmus, monkeypatch):
 def test_unknown_loop_is_refused(fmi3_fmus):
     with pytest.raises(ValueError, match="unknown loop"):
         Master(burst_sum(fmi3_fmus), loop="fortran")
+
+
+@needs_library
+def test_the_profile_splits_the_loop_time_by_component_and_call(fmi3_fmus):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UnconnectedInputWarning)
+        with Master(burst_sum(fmi3_fmus)) as master:
+            result = master.simulate(1.0, 0.01, profile=True)
+            plain = master.simulate(1.0, 0.01)
+            with pytest.raises(Exception, match="compiled loop"):
+                master.simulate(0.1, 0.01, profile=True, callback=lambda t, m: None)
+    for name in result.dtype.names:  # profiling changes no number
+        assert np.array_equal(result[name], plain[name])
+    profile = result.meta["profile"]
+    assert profile["steps"] == 100 and set(profile["components"]) == {"b", "s"}
+    assert profile["components"]["b"]["doStep"] > 0.0 and profile["components"]["s"]["doStep"] > 0.0
+    assert profile["components"]["b"]["get"] > 0.0 and profile["components"]["s"]["set"] > 0.0
+    assert profile["components"]["b"]["set"] == 0.0  # nothing feeds b
+    parts = sum(sum(p.values()) for p in profile["components"].values()) + profile["conversions_s"] \
+        + profile["record_s"]
+    assert parts + profile["master_s"] == pytest.approx(profile["wall_s"])
+    assert 0.0 < parts <= profile["wall_s"]
+
+
+@needs_library
+def test_the_profile_counts_the_casts_as_conversions(fixture_fmus, fmi3_fmus):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UnconnectedInputWarning)
+        result = Master(mixed(fixture_fmus, fmi3_fmus)).simulate(1.0, 0.125, profile=True)
+    assert result.meta["profile"]["conversions_s"] > 0.0

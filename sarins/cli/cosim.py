@@ -60,6 +60,9 @@ def register(subparsers) -> argparse.ArgumentParser:
                         help="pace the run: wall-clock seconds per simulated second (the "
                              "clock starts after initialisation; the lag distribution is reported)")
     parser.add_argument("--no-progress", action="store_true", help="never show a progress bar")
+    parser.add_argument("--profile", action="store_true",
+                        help="print where a step's time goes: each FMU's doStep, gets and sets, the "
+                             "conversions, recording and the master's own work (not with --realtime)")
     parser.set_defaults(func=run)
     return parser
 
@@ -112,6 +115,10 @@ def run(args: argparse.Namespace) -> int:
     extracted folders removed before exiting; with ``--output`` the rows recorded so far
     are written, the file's last line saying where the run was interrupted.
     """
+    if args.profile and args.realtime is not None:
+        print("sarins cosim: error: --profile measures the compiled loop, which --realtime does not use; "
+              "give one of them", file=sys.stderr)
+        return 2
     if args.output:
         check_output_path(args.output, "--output")
         check_output_path(str(args.output) + ".units.json", "--output (its units sidecar)")
@@ -124,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
                                          start_time=args.start_time,
                                          output_every=args.output_every,
                                          progress=False if args.no_progress else None,
-                                         realtime=args.realtime)
+                                         realtime=args.realtime, profile=args.profile)
                 units = column_units(master, result.dtype.names)
             _check_late_signal(result)
     except interrupt.Interrupted as stop:
@@ -142,6 +149,8 @@ def run(args: argparse.Namespace) -> int:
     realtime = result.meta.get("realtime")
     if realtime is not None:
         print(realtime_summary(realtime))
+    if "profile" in result.meta:
+        print(profile_summary(result.meta["profile"]))
     if args.output:
         path, sidecar = write_output(result, args.output, units)
         print(f"results written to {path} (units in {sidecar.name})")
@@ -208,6 +217,22 @@ def column_units(master, columns) -> dict:
             found = known.get(variable[:variable.rfind("[")])
         units[column] = (getattr(found, "unit", None) or "1") if found is not None else "1"
     return units
+
+
+def profile_summary(profile: dict) -> str:
+    """Text table of :meth:`orchestration.Master.simulate`'s profile, in microseconds per step."""
+    steps = max(1, profile["steps"])
+    per_step = 1e6 / steps
+    rows = [(f"{name}.{part}", seconds) for name, parts in profile["components"].items()
+            for part, seconds in parts.items() if seconds > 0.0]
+    rows += [("conversions", profile["conversions_s"]), ("recording", profile["record_s"]),
+             ("master (the rest)", profile["master_s"])]
+    width = max(len(label) for label, _ in rows)
+    lines = [f"profile: {profile['wall_s']:.3f} s for {profile['steps']} steps = "
+             f"{profile['wall_s'] * per_step:.2f} us/step"]
+    lines += [f"  {label:<{width}}  {seconds * per_step:8.2f} us/step  {100 * seconds / profile['wall_s']:5.1f} %"
+              for label, seconds in rows if seconds > 0.0 or label.startswith("master")]
+    return "\n".join(lines)
 
 
 def realtime_summary(report: dict) -> str:
