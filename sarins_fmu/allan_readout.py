@@ -116,7 +116,7 @@ def edf_overlapping(n_phase: int, m: int, alpha: int) -> float:
     if alpha == -1:
         return 2 * (n - 2) / (2.3 * n - 4.9) if m == 1 else 5 * n * n / (4 * m * (n + 3 * m))
     if alpha == -2:
-        return (n - 2) / (m * (n - 1) ** 2) * ((n - 1) ** 2 - 3 * m * (n - 1) + 4 * m * m)
+        return (n - 2) / (m * (n - 3) ** 2) * ((n - 1) ** 2 - 3 * m * (n - 1) + 4 * m * m)
     raise ValueError(f"alpha must be one of 2, 1, 0, -1, -2, got {alpha}")
 
 
@@ -189,8 +189,9 @@ def read_terms(curve: OctaveCurve) -> Readouts:
     """Q, N, B, K and R of one curve (see the module docstring).
 
     The value subtracts in variance what the other resolved terms put at the averaging time read;
-    the interval runs from the lower confidence limit less what the others' upper limits put there
-    to the upper confidence limit with nothing subtracted, so it holds both the statistical
+    the interval runs from the lower confidence limit less what the others can put there at most
+    (their upper limits; under the floor B also the bounds of those not resolved) to the upper
+    confidence limit with nothing subtracted, so it holds both the statistical
     uncertainty and that of the neighbouring lines (the graphical IEEE reading, sigma alone, is
     inside it).
     """
@@ -207,8 +208,11 @@ def read_terms(curve: OctaveCurve) -> Readouts:
             var = curve.adev[k] ** 2 - _others(values, term, t)
             new[term] = _VALUE[term](var, t) if var >= DOMINANT * curve.adev[k] ** 2 else None
         values = new
+    # the most each resolved term can put anywhere: its upper limit
     highs = {t: None if values[t] is None else _VALUE[t](curve.high[picks[t]] ** 2, float(curve.taus[picks[t]]))
              for t in TERMS}
+    # under a floor, the terms not resolved can hide up to their bounds
+    floor_highs = {t: _upper(curve, t) if values[t] is None else highs[t] for t in TERMS}
     terms = {}
     for term in TERMS:
         k = picks[term]
@@ -217,7 +221,8 @@ def read_terms(curve: OctaveCurve) -> Readouts:
             continue
         t = float(curve.taus[k])
         value = _VALUE[term](curve.adev[k] ** 2 - _others(values, term, t), t)
-        low = _VALUE[term](max(curve.low[k] ** 2 - _others(highs, term, t), 0.0), t)
+        most = _others(floor_highs if term == "bias_instability" else highs, term, t)
+        low = _VALUE[term](max(curve.low[k] ** 2 - most, 0.0), t)
         high = _VALUE[term](curve.high[k] ** 2, t)
         terms[term] = Term(term, value, low, high, t)
     return Readouts(terms)
