@@ -6,8 +6,8 @@ Every reader of :mod:`sarins_fmu.imu_log` parses its file in blocks and feeds th
 * checks the values (NaN and infinities) and the clock: strictly increasing on a uniform grid.  The
   project's format is *strict*: the interval h is the first difference and every difference is
   within 1e-6 h of it, the time kept as written.  The other formats (vendor CSV, i2Nav, ROS) take a
-  *nominal* interval, the median of the first differences (snapped to 1 / an integer rate when it is
-  one within 1e-6), accept timestamps that jitter by up to :data:`MAX_JITTER` of it with a warning,
+  *nominal* interval, the mean of the first differences below 1.5 x their median (snapped to 1 / an integer rate when it is
+  one within SNAP = 1e-4), accept timestamps that jitter by up to :data:`MAX_JITTER` of it with a warning,
   and store the uniform grid h, 2h, ... (the first sample ends at h);
 * rotates the vectors to right-front-up (:mod:`sarins_fmu.imu_log_units`) and turns rates into
   increments (rate x h);
@@ -29,7 +29,7 @@ from .imu_log_units import rotate
 SPILL_BYTES = 64 * 2**20  # bytes of samples kept in memory; more go to a temporary file, mapped
 MAX_JITTER = 0.1  # of h: timestamps of the non-strict formats may deviate this much from the grid
 STRICT_TOLERANCE = 1e-6  # of h: every time step of the project's format
-NOMINAL_SAMPLES = 1001  # first timestamps whose median difference is a non-strict log's interval
+NOMINAL_SAMPLES = 1001  # first timestamps whose mean difference is a non-strict log's interval
 
 
 class SampleStore:
@@ -66,11 +66,15 @@ class SampleStore:
         return np.memmap(self._file, dtype=np.float64, mode="r", shape=(self.rows, self.width))
 
 
+SNAP = 1e-4  # relative: an interval this close to 1 / an integer rate is taken as that (a crystal's tolerance)
+
+
 def snap_interval(h: float) -> float:
-    """h, or 1/n when 1/h is within 1e-6 of an integer n (a clock printed in decimals reads back exactly)."""
+    """h, or 1/n when 1/h is within SNAP of an integer n (a clock printed in decimals, or jittering, reads
+    back as its nominal rate)."""
     rate = 1.0 / h
     n = round(rate)
-    return 1.0 / n if n >= 1 and abs(rate - n) <= 1e-6 * rate else h
+    return 1.0 / n if n >= 1 and abs(rate - n) <= SNAP * rate else h
 
 
 class LogBuilder:
@@ -157,7 +161,8 @@ class LogBuilder:
                 self.h = float(t[1] - t[0])
             else:
                 dt0 = np.diff(t[:NOMINAL_SAMPLES])
-                self.h = snap_interval(float(np.median(dt0))) if np.all(dt0 > 0) else float(t[1] - t[0])
+                ok = dt0 < 1.5 * np.median(dt0)  # a gap does not set the interval
+                self.h = snap_interval(float(dt0[ok].mean())) if np.all(dt0 > 0) else float(t[1] - t[0])
             self.t_first = float(t[0])
             if self.strict:
                 self._time_start(t[0])
