@@ -181,9 +181,9 @@ def check_lines(path, block: Block, eol: bytes | None, separators: int | None, m
     long = lengths > max_line
     if long.any():
         raise TextError(f"{path}: line {block.first_line + int(np.argmax(long))}: longer than {max_line} characters")
-    # blank or whitespace-only lines: no byte other than whitespace between start and end
-    solid = np.concatenate(([0], np.cumsum(~_WHITESPACE[buf])))
-    blank = solid[body_end] - solid[starts] == 0
+    # blank or whitespace-only lines: no byte other than whitespace from a line's start to the next's
+    # (each segment holds at least its line end, which is whitespace)
+    blank = ~np.logical_or.reduceat(~_WHITESPACE[buf], starts)
     if blank.any():
         raise TextError(f"{path}: line {block.first_line + int(np.argmax(blank))}: blank line (the log has none: "
                         "metadata, header, samples)")
@@ -192,8 +192,7 @@ def check_lines(path, block: Block, eol: bytes | None, separators: int | None, m
         raise TextError(f"{path}: line {block.first_line + int(np.argmax(comment))}: a '#' line among the samples "
                         "(metadata comes before the column header)")
     if separators is not None:
-        seps = np.concatenate(([0], np.cumsum(buf == separator)))
-        count = seps[body_end] - seps[starts]
+        count = np.add.reduceat(buf == separator, starts, dtype=np.int64)
         bad = count != separators
         if bad.any():
             i = int(np.argmax(bad))
