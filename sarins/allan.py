@@ -101,17 +101,22 @@ def analyse(channels, rate_hz: float, source: str, model: imu.ImuModel | None = 
             means=None) -> AllanResult:
     """Allan curves and read-outs of six rate series (gyro x, y, z rad/s, accel x, y, z m/s^2) at rate_hz.
 
-    channels : a (K, 6) array or six (K,) arrays (taken one at a time: a large log is never copied
-    whole); means : optional (M, 6) 1 s means of the record, for the check that it is static.
+    channels : a (K, 6) array, or six (K,) arrays or functions returning them (called one at a time:
+    a large log is never copied whole); means : optional (M, 6) 1 s means of the record, for the check
+    that it is static.
     """
-    cols = [channels[:, j] for j in range(6)] if isinstance(channels, np.ndarray) else list(channels)
-    n = cols[0].shape[0]
+    def column(j):
+        if isinstance(channels, np.ndarray):
+            return channels[:, j]
+        return channels[j]() if callable(channels[j]) else channels[j]
+
+    n = column(0).shape[0]
     record = n / rate_hz
     taus = allan.default_taus(n, rate_hz)
     dense, curves, reads, spec, gm, res = [], {}, {}, None if model is None else {}, {}, {}
     for j, ch in enumerate(CHANNELS):
         triad = ch.split("_")[0]
-        y = np.ascontiguousarray(cols[j], dtype=float)
+        y = np.ascontiguousarray(column(j), dtype=float)
         t, dev = allan.overlapping_adev(y, rate_hz, taus)
         dense.append(dev)
         curves[ch] = allan_readout.octave_curve(y, rate_hz)

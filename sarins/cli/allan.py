@@ -78,7 +78,8 @@ def run(args) -> int:
     if args.log:
         log = _read(args)
         h = log.step
-        channels = [log.dtheta[:, j] / h for j in range(3)] + [log.dv[:, j] / h for j in range(3)]
+        channels = [lambda j=j: log.dtheta[:, j] / h for j in range(3)] + [lambda j=j: log.dv[:, j] / h
+                                                                         for j in range(3)]
         result = app.analyse(channels, 1.0 / h, f"log {args.log}", means=log.means)
     else:
         result = app.simulate(args.imu, args.hours, args.rate_hz, args.seed)
