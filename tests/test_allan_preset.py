@@ -71,7 +71,7 @@ def test_a_long_simulated_record_matches_at_every_octave(fitted):
         sim = allan_preset.simulate_rates(fit.model, 10 * record, 100.0, seed=2)
         for j, ch in enumerate(CHANNELS[:3]):
             ratio = _ratios(allan_readout.octave_curve(sim[:, j], 100.0), curves[ch], record)
-            assert ratio.size == 14 and np.all(np.abs(ratio - 1.0) < MODEL_TOLERANCE), (unit, ch, ratio)
+            assert ratio.size == 13 and np.all(np.abs(ratio - 1.0) < MODEL_TOLERANCE), (unit, ch, ratio)
 
 
 def test_the_preset_file_round_trips_and_every_command_takes_it(fitted, tmp_path, capsys):
