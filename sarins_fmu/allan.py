@@ -13,11 +13,9 @@ Hou & Niu, IEEE Trans. Instrum. Meas. 57(1), 2008):
 * rate random walk K: slope +1/2, read at tau = 3 s (rad/s/sqrt(s) or
   m/s^2/sqrt(s)).
 
-:func:`readouts` fits the three coefficients by non-negative least squares
-on the relative error of the Allan variance over the averaging times that
-hold at least ``MIN_CLUSTERS`` independent clusters, each weighted by the
-square root of its cluster count (the precision of the estimate); a term the data do not
-show comes out as 0 (the fit's bound).  A first-order Gauss-Markov bias
+:mod:`sarins_fmu.allan_readout` reads each term where its slope holds, with
+its confidence interval (quantisation and rate ramp too); a term the record
+cannot show is "not resolved".  A first-order Gauss-Markov bias
 (``bias_instability`` of :class:`sarins_fmu.imu.TriadErrors`) has no flat
 floor: its Allan deviation peaks at 0.62 sigma near tau = 1.9 T and is not
 one of the lines above; :func:`spec` states what a preset's terms imply on
@@ -27,8 +25,6 @@ the curve so that read-outs can be compared with it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-
 import numpy as np
 from scipy.optimize import nnls
 
@@ -38,15 +34,6 @@ from .units import DEG_TO_RAD
 FLOOR = math.sqrt(2.0 * math.log(2.0) / math.pi)  # Allan floor / B for flicker noise, 0.664
 MIN_CLUSTERS = 9  # fewest independent clusters of length tau used in the fit
 TRIADS = ("gyro", "accel")
-
-
-@dataclass(frozen=True)
-class Readout:
-    """Read-outs of one sensor axis (SI, see the module docstring); 0 = not shown."""
-
-    random_walk: float
-    bias_instability: float
-    rate_random_walk: float
 
 
 def static_record(model: ImuModel, duration: float, rate_hz: float, *, seed: int = 0,
@@ -144,30 +131,6 @@ def allan_deviation(rates, rate_hz: float, taus=None) -> tuple[np.ndarray, np.nd
     return out_taus, np.column_stack(cols)
 
 
-def readouts(taus, adev, record_length: float) -> Readout:
-    """N, B and K of one Allan-deviation curve (see the module docstring).
-
-    Parameters
-    ----------
-    taus : (T,) s; adev : (T,) Allan deviation; record_length : s (limits the
-        fit to tau <= record_length / MIN_CLUSTERS).
-    """
-    taus, adev = np.asarray(taus, float), np.asarray(adev, float)
-    use = taus <= record_length / MIN_CLUSTERS
-    if use.sum() < 3:
-        raise ValueError("the record is too short for an Allan read-out (fewer than 3 usable averaging times)")
-    use &= adev > 0
-    if not use.any():  # a noise-free channel (the ideal IMU)
-        return Readout(0.0, 0.0, 0.0)
-    t, var = taus[use], adev[use] ** 2
-    # relative error weighted by the square root of the cluster count: the
-    # Allan variance at tau has a relative std of about sqrt(tau / record)
-    weight = np.sqrt(record_length / t) / var
-    basis = np.column_stack([1.0 / t, np.ones_like(t), t / 3.0]) * weight[:, None]
-    coef, _ = nnls(basis, var * weight)
-    return Readout(math.sqrt(coef[0]), math.sqrt(coef[1]) / FLOOR, math.sqrt(coef[2]))
-
-
 def gauss_markov_avar(taus, std, corr_time):
     """Allan variance of a first-order Gauss-Markov process (std, correlation time T):
     (std T / tau)^2 (2 tau / T - 3 + 4 exp(-tau / T) - exp(-2 tau / T))
@@ -182,8 +145,8 @@ def fit_gauss_markov(taus, adev, corr_time: float, record_length: float) -> tupl
     """(white-noise density, Gauss-Markov std) fitted to one curve, the correlation time given.
 
     The read-out of a preset whose bias instability is a Gauss-Markov process
-    (no flat floor): non-negative least squares on the Allan variance with the
-    weights of :func:`readouts`.
+    (no flat floor): non-negative least squares on the Allan variance, each
+    averaging time weighted by the square root of its cluster count over its variance.
     """
     taus, adev = np.asarray(taus, float), np.asarray(adev, float)
     use = (taus <= record_length / MIN_CLUSTERS) & (adev > 0)

@@ -380,11 +380,17 @@ PRESETS = {"ideal": ImuModel(), "nav-rlg": NAV_RLG, "mems": MEMS}
 
 
 def preset(name: str) -> ImuModel:
-    """Named IMU model: 'ideal', 'nav-rlg' or 'mems'."""
+    """Named IMU model: 'ideal', 'nav-rlg' or 'mems', or a preset file (``*.json``,
+    :mod:`sarins_fmu.imu_preset_file`, e.g. fitted to a log by ``sarins allan --write-preset``)."""
+    from .imu_preset_file import is_preset_file, read_preset
+
+    if is_preset_file(name):
+        return read_preset(name)
     try:
         return PRESETS[name]
     except KeyError:
-        raise ValueError(f"unknown IMU preset {name!r}; choose one of {', '.join(PRESETS)}") from None
+        raise ValueError(f"unknown IMU preset {name!r}; choose one of {', '.join(PRESETS)} or a preset file "
+                         "(.json)") from None
 
 
 def aged_drift_poly(model: ImuModel, days, seed: int = 0):

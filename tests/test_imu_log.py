@@ -2,6 +2,7 @@
 
 import json
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -103,7 +104,7 @@ def test_unit_mistakes_are_caught(tmp_path):
         read_log(write_log(tmp_path / "g.csv", time, gyro, accel / 9.80665, lat_deg=45.0))
     reported = float(re.search(r"mean specific force (\S+) m/s", str(err.value)).group(1))
     assert reported == pytest.approx(np.linalg.norm(accel / 9.80665, axis=1).mean(), abs=1e-3)  # the log's, in g
-    with pytest.raises(LogError, match="degrees logged as radians"):
+    with pytest.warns(imu_log.LogWarning, match="degrees logged as radians"):  # a MEMS bias looks the same
         read_log(write_log(tmp_path / "deg.csv", time, np.degrees(gyro), accel, lat_deg=45.0))
     spin = gyro.copy()
     spin[50, 2] = 40.0
@@ -231,14 +232,17 @@ def test_npz_grammar(tmp_path, edit, message):
 
 def test_degrees_are_caught_on_a_log_that_starts_moving(tmp_path):
     """The units check does not need a start at rest: a log that turns for its first two minutes
-    (0.2 rad/s about the vertical) and then rests is read in radians, and refused in degrees in its
-    first window, while it turns: the accelerometers see no tilt, so the gyros' horizontal rate must
-    be the Earth's (57 x it in degrees); in g units it is refused by the whole log's mean |f|."""
+    (0.2 rad/s about the vertical) and then rests is read in radians silently, and in degrees with a
+    warning naming its first window, while it turns: the accelerometers see no tilt, so the gyros'
+    horizontal rate is the Earth's plus bias (57 x the Earth's in degrees, which a MEMS bias can also
+    give: a warning, not a refusal); in g units it is refused by the whole log's mean |f|."""
     gyro, accel, _ = allan.static_record(imu.preset("nav-rlg"), 600.0, 1.0, seed=1)
     gyro[:120, 2] += 0.2  # body z is up: a turn about it leaves gravity where it was
     time = np.arange(1.0, 601.0)
-    read_log(write_log(tmp_path / "rad.csv", time, gyro, accel, lat_deg=45.0))
-    with pytest.raises(LogError, match="line 6..line 65: the gyros turn 0.00.* rad/s about a horizontal axis .*degrees"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert read_log(write_log(tmp_path / "rad.csv", time, gyro, accel, lat_deg=45.0)).warnings == []
+    with pytest.warns(imu_log.LogWarning, match="line 6..line 65: the gyros turn 0.00.* rad/s .*about a horizontal axis .*degrees"):
         read_log(write_log(tmp_path / "deg.csv", time, np.degrees(gyro), accel, lat_deg=45.0))
     with pytest.raises(LogError, match="over the log is not gravity"):
         read_log(write_log(tmp_path / "g.csv", time, gyro, accel / 9.80665, lat_deg=45.0))

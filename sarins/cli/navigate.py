@@ -13,6 +13,7 @@ from sarins_fmu.site import SITE_LAT_DEG
 from sarins_fmu.turntable import ROTATION_SCHEMES
 
 from . import UsageError, check_size, finite, given, refuse_unless, seed_value  # noqa: F401  (seed_value: reused by other commands)
+from .log_options import imu_choice
 
 
 def add_run_options(p, nav_hours: float) -> None:
@@ -23,7 +24,8 @@ def add_run_options(p, nav_hours: float) -> None:
     p.add_argument("--nav-hours", type=finite, default=nav_hours, help=f"navigation duration, h (default {nav_hours:g})")
     p.add_argument("--axial-drift-dph", type=finite, default=None,
                    help="replace the azimuth gyro drift by this constant, deg/h")
-    p.add_argument("--imu", choices=sorted(imu_mod.PRESETS), default="nav-rlg", help="IMU error preset")
+    p.add_argument("--imu", type=imu_choice, default="nav-rlg", metavar="PRESET",
+                   help=f"IMU error preset: {', '.join(sorted(imu_mod.PRESETS))} or a preset file (.json, sarins allan --write-preset)")
     p.add_argument("--rotation", choices=ROTATION_SCHEMES, default="forward-reverse", help="rotation scheme")
     p.add_argument("--start", choices=("hot", "cold"), default="hot", help="thermal start (default hot)")
     p.add_argument("--seed", type=seed_value, default=0, help="base random seed of the run (the IMU noise), 0 .. 2**31-1 (default 0)")

@@ -18,6 +18,7 @@ written from a simulated run replays to the same numbers, bit for bit.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
@@ -25,7 +26,10 @@ from .. import earth
 from ..imu_log import ImuLog, LogError
 from ..ins import InsConfig, StrapdownINS
 from ..identify.axial import APPLY_LATENCY
+from ..rotations import euler_to_mat, mat_to_euler
 from ..units import DPH_TO_RPS, HOUR
+from . import replay_align as align
+from .replay_align import AlignmentError
 from .static_run import CHUNK, StaticRunResult
 
 
@@ -40,11 +44,21 @@ def compensate(log: ImuLog, compensator) -> tuple[np.ndarray, np.ndarray]:
 
 
 def replay(log: ImuLog, *, align_hours: float = 4.0, coarse_seconds: float = 300.0,
-           compensator=None, identifier=None, compensate_drift: bool = True) -> StaticRunResult:
+           compensator=None, identifier=None, compensate_drift: bool = True, heading: float | None = None,
+           path=None) -> StaticRunResult:
     """Align on the first ``align_hours`` of the log and navigate over the rest.
 
+    The alignment (:mod:`sarins_fmu.experiments.replay_align`): gyrocompassing (coarse in the
+    inertial frame, then the zero-velocity Kalman filter) when the gyros can see the Earth rate and
+    no ``heading`` is given; else levelling with the accelerometers' mean and the ``heading`` given
+    (rad, clockwise from north), the gyro bias and the vertical accelerometer bias then estimated
+    and removed.  With neither the sight of the Earth rate nor a heading it refuses
+    (:class:`~sarins_fmu.experiments.replay_align.AlignmentError` naming ``--heading-deg``); it
+    refuses an attitude whose tilt disagrees with the accelerometers' levelling by more than an
+    accelerometer bias of any class allows.  ``path`` names the log in messages.
+
     identifier : optional :class:`sarins_fmu.identify.axial.DriftIdentifier`
-        (seed 000's RBF network).  After ``identify_hours`` of navigation (the
+        (seed 000's RBF network, gyrocompassing only).  After ``identify_hours`` of navigation (the
         model's protocol) it identifies the axial drift from the latitude
         error there (and, for a cold model, the z-gyro temperature then and
         its change over the alignment), as the RBFIdentifier FMU does; with
@@ -54,17 +68,68 @@ def replay(log: ImuLog, *, align_hours: float = 4.0, coarse_seconds: float = 300
         :func:`check_identifier_fit` refuses a log the model does not fit.
 
     Returns a :class:`StaticRunResult` (navigation phase; ``time`` since
-    the end of alignment); with an identifier its info holds
+    the end of alignment); its info holds the alignment (``alignment``, ``roll_deg``,
+    ``pitch_deg``, ``heading_deg``, the estimated biases, ``warnings``) and, with an identifier,
     ``identified_drift_dph``, the features and ``compensation_from_s``.
-    Raises ValueError when the log is shorter than the alignment or the
+    Raises ValueError naming the option when the log is shorter than the alignment or the
     alignment is not a whole number of samples.
     """
+    path = path or "the log"
+    if log.lat is None:
+        raise AlignmentError(f"{path}: the log does not state the latitude of its static start; give it with "
+                             "--lat-deg")
+    n_align = _alignment_samples(log, align_hours, coarse_seconds, path)
+    window = _window(log, n_align)
+    seen = align.sight(window, log.lat)
+    if heading is None and not seen.can_see:
+        raise AlignmentError(f"{path}: the gyros cannot see the Earth rate ({seen.reason()}), so they cannot find "
+                             "the heading; give it with --heading-deg (the replay then levels with the "
+                             "accelerometers)")
+    if heading is not None and identifier is not None:
+        raise AlignmentError(f"{path}: --identify needs the gyrocompass alignment (the drift model was trained on "
+                             "it); leave out --heading-deg")
+    notes = []
+    if heading is None:
+        result = _replay_gyrocompass(log, n_align, coarse_seconds, compensator, identifier, compensate_drift)
+        ins_out = result.pop("_last_align_row")
+        mat = euler_to_mat(*ins_out)
+        align.check_tilt(mat, window, path, np.asarray(result["info"]["accel_comp"]))
+        note = align.accel_bias_note(result["info"]["accel_comp"], path)
+        mode = "gyrocompass"
+    else:
+        mat, gyro_bias, accel_bias = align.level(window, log.lat, log.height, heading)
+        result = _replay_levelled(log, n_align, mat, gyro_bias, accel_bias, compensator)
+        note = align.accel_bias_note(accel_bias, path)
+        mode = "levelling + given heading"
+    if note:
+        notes.append(note)
+        warnings.warn(note, stacklevel=2)
+    yaw, pitch, roll = mat_to_euler(mat)
+    result["info"].update(alignment=mode, roll_deg=math.degrees(roll), pitch_deg=math.degrees(pitch),
+                          heading_deg=math.degrees(-yaw) % 360.0,
+                          gyro_horizontal_rate_dph=seen.horizontal_rate / DPH_TO_RPS,
+                          earth_horizontal_rate_dph=seen.earth_rate / DPH_TO_RPS, warnings=notes)
+    return StaticRunResult(**result)
+
+
+def _window(log: ImuLog, n_align: int) -> np.ndarray:
+    """The 1 s means (or the samples, for intervals of 1 s or more) of the alignment."""
     h = log.step
-    n_align = _alignment_samples(log, align_hours)
+    block = max(1, int(round(1.0 / h)))
+    means = log.means
+    if means is None or len(means) == 0:
+        n = n_align // block * block
+        rates = np.hstack([log.dtheta[:n], log.dv[:n]]) / h
+        return rates.reshape(-1, block, 6).mean(axis=1) if n else np.hstack([log.dtheta[:1], log.dv[:1]]) / h
+    return means[:max(1, n_align // block)]
+
+
+def _replay_gyrocompass(log, n_align, coarse_seconds, compensator, identifier, compensate_drift) -> dict:
+    h = log.step
     n_total = len(log.time)
     n_id = n_corr = None
     if identifier is not None:
-        n_id, n_corr = check_identifier_fit(log, identifier, align_hours)
+        n_id, n_corr = check_identifier_fit(log, identifier, n_align * h / HOUR)
     dtheta, dv = (log.dtheta, log.dv) if compensator is None else compensate(log, compensator)
     config = InsConfig(lat=log.lat, lon=log.lon, height=log.height, align_time=n_align * h,
                        coarse_time=coarse_seconds, step=h)
@@ -90,28 +155,62 @@ def replay(log: ImuLog, *, align_hours: float = 4.0, coarse_seconds: float = 300
                 "compensation_from_s": (n_corr - n_align) * h if compensate_drift else None}
     nav = out[n_align:]
     err = _errors(log, ins, nav, n_align)
+    result = _result(log, nav, err, n_align, compensator, ins.gyro_comp, ins.accel_comp)
+    result["info"].update(info)
+    result["_last_align_row"] = tuple(float(x) for x in out[n_align - 1, 6:9])  # yaw, pitch, roll
+    return result
+
+
+def _replay_levelled(log, n_align, mat_nb, gyro_bias, accel_bias, compensator) -> dict:
+    """Navigate from the end of the alignment on the levelled attitude, the estimated biases removed."""
+    h = log.step
+    n_total = len(log.time)
+    config = InsConfig(lat=log.lat, lon=log.lon, height=log.height, align_time=0.0, coarse_time=0.0, step=h)
+    ins = StrapdownINS(config, initial_attitude=mat_nb)
+    nav = np.empty((n_total - n_align, 9))
+    for k0 in range(n_align, n_total, CHUNK):
+        k1 = min(n_total, k0 + CHUNK)
+        if compensator is None:
+            dtheta, dv = np.asarray(log.dtheta[k0:k1]), np.asarray(log.dv[k0:k1])
+        else:
+            part = ImuLog(time=log.time[k0:k1], dtheta=log.dtheta[k0:k1], dv=log.dv[k0:k1],
+                          temps=None if log.temps is None else log.temps[k0:k1], ref=None, lat=log.lat,
+                          interval=h)
+            dtheta, dv = compensate(part, compensator)
+        nav[k0 - n_align:k1 - n_align] = ins.step(dtheta - gyro_bias * h, dv - accel_bias * h)
+    err = _errors(log, ins, nav, n_align)
+    return _result(log, nav, err, n_align, compensator, gyro_bias, accel_bias)
+
+
+def _result(log, nav, err, n_align, compensator, gyro_comp, accel_comp) -> dict:
+    h = log.step
+    n_total = len(log.time)
     n_nav = n_total - n_align
-    temps = log.temps if log.temps is not None else np.full((n_total, 6), np.nan)
-    return StaticRunResult(
+    temps_all = log.temps if log.temps is not None else np.full((n_total, 6), np.nan)
+    return dict(
         time=np.arange(1, n_nav + 1) * h, lat_error=err[:, 0], lon_error=err[:, 1], north_error=err[:, 2],
         east_error=err[:, 3], position_error=np.hypot(err[:, 2], err[:, 3]), velocity_n=nav[:, 3:6],
-        attitude=nav[:, 6:9], time_all=np.arange(1, n_total + 1) * h - n_align * h, temperature=temps,
+        attitude=nav[:, 6:9], time_all=np.arange(1, n_total + 1) * h - n_align * h, temperature=temps_all,
         info={"lat_deg": math.degrees(log.lat), "align_hours": n_align * h / HOUR, "nav_hours": n_nav * h / HOUR,
               "source": "log", "quantity": log.quantity, "compensated": compensator is not None,
-              "gyro_comp_dph": (ins.gyro_comp / DPH_TO_RPS).tolist(),
-              "accel_comp": ins.accel_comp.tolist(), **info})
+              "gyro_comp_dph": (np.asarray(gyro_comp) / DPH_TO_RPS).tolist(),
+              "accel_comp": np.asarray(accel_comp).tolist()})
 
 
-def _alignment_samples(log: ImuLog, align_hours: float) -> int:
+def _alignment_samples(log: ImuLog, align_hours: float, coarse_seconds: float = 300.0, path="the log") -> int:
     h = log.step
     if not (math.isfinite(align_hours) and align_hours > 0):
-        raise ValueError(f"alignment must last a positive time, got {align_hours} h")
+        raise ValueError(f"--align-hours must be a positive time, got {align_hours} h")
     n_align = round(align_hours * HOUR / h)
     if abs(n_align * h - align_hours * HOUR) > 1e-6 * h:
-        raise ValueError(f"alignment of {align_hours} h is not a whole number of {h:g} s samples")
+        raise ValueError(f"--align-hours {align_hours:g} h is not a whole number of the log's {h:g} s samples "
+                         f"({path})")
+    if n_align * h < coarse_seconds + 2 * h:
+        raise ValueError(f"--align-hours {align_hours:g} h ({n_align * h:g} s) must exceed the {coarse_seconds:g} s "
+                         f"coarse alignment plus two of the log's {h:g} s samples ({path})")
     if len(log.time) <= n_align:
-        raise ValueError(f"the log ({len(log.time) * h / HOUR:.4g} h) is not longer than the {align_hours:g} h "
-                         "alignment")
+        raise ValueError(f"the log ({len(log.time) * h / HOUR:.4g} h, {path}) is not longer than the "
+                         f"{align_hours:g} h alignment (--align-hours)")
     return n_align
 
 
