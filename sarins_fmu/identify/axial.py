@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..units import DPH_TO_RPS, RAD_TO_DEG
+from . import netfile
 from .modelfile import ModelFileError
 from .rbf import RBFNetwork
 from ..site import SITE_LAT_DEG
@@ -97,9 +98,32 @@ class DriftIdentifier:
         unknown = [n for n in names if n not in KNOWN_INPUTS]
         if unknown:
             raise ModelFileError(self.path, f"unsupported model input(s) {unknown}; known: {KNOWN_INPUTS}")
+        if np.ndim(self.network.bias_) != 0:
+            raise ModelFileError(self.path, "an identifier has one output (the drift in deg/h)")
         self.input_names = tuple(names)
         self.local_lat_deg = site_latitude_deg(self.network.metadata, self.path)
         self.protocol = model_protocol(self.network.metadata, self.path)
+        from sarins_fmu.core.nets import AxialModel
+
+        self._native = AxialModel(self.binary(), self.path)
+
+    def binary_arrays(self) -> dict:
+        """The arrays of the binary model file (:mod:`.netfile`, kind ``axial_rbf``) that the RBFIdentifier
+        FMU and :meth:`drift_dph` evaluate (layout in ``sarins_fmu/core/netmodel.h``)."""
+        net = self.network
+        return {"mean": net.scaling_.mean, "scale": net.scaling_.scale, "centers": net.centers_,
+                "weights": np.asarray(net.weights_, float).reshape(-1, 1), "bias": np.atleast_1d(net.bias_),
+                "spread": np.float64(net.settings.spread),
+                "inputs": np.array([KNOWN_INPUTS.index(n) for n in self.input_names], float),
+                "local_lat_deg": np.float64(self.local_lat_deg)}
+
+    def binary(self) -> bytes:
+        """The binary model file's bytes (:meth:`binary_arrays`)."""
+        return netfile.to_bytes("axial_rbf", self.binary_arrays())
+
+    def export_binary(self, path: str | Path) -> Path:
+        """Write the binary model file the RBFIdentifier FMU reads (``model_file``); returns its path."""
+        return netfile.write(path, "axial_rbf", self.binary_arrays())
 
     def inputs(self, lat_error: float, temp_c: float = np.nan, temp_change_c: float = np.nan) -> np.ndarray:
         """Model input row (1, d) from the latitude error (rad) and temperatures (degC)."""
@@ -111,9 +135,17 @@ class DriftIdentifier:
         return row
 
     def drift_dph(self, lat_error: float, temp_c: float = np.nan, temp_change_c: float = np.nan) -> float:
-        """Identified axial drift, deg/h."""
-        return float(self.network.predict(self.inputs(lat_error, temp_c, temp_change_c))[0])
+        """Identified axial drift, deg/h, computed by the C core (``sarins_axial_drift``, the RBFIdentifier
+        FMU's function)."""
+        self.inputs(lat_error, temp_c, temp_change_c)  # the error message names the inputs
+        return self._native.drift_dph(lat_error, temp_c, temp_change_c)
 
     def drift(self, lat_error: float, temp_c: float = np.nan, temp_change_c: float = np.nan) -> float:
         """Identified axial drift, rad/s."""
         return self.drift_dph(lat_error, temp_c, temp_change_c) * DPH_TO_RPS
+
+
+def export_identifier(model_file: str | Path, out: str | Path) -> Path:
+    """Convert an identifier model file (JSON/npz, :meth:`RBFNetwork.save`) into the binary file the
+    RBFIdentifier FMU reads; returns ``out``."""
+    return DriftIdentifier(model_file).export_binary(out)
