@@ -153,9 +153,11 @@ int sarins_netfile_read_path(const char *path, unsigned char **buf, size_t *n, c
     uint64_t total = get_u64(head + 16);
     if (total > SARINS_NETFILE_MAX_BYTES || total < SARINS_NETFILE_HEADER + 8u) {
         fclose(fp);
-        return fail(msg, msg_len, total > SARINS_NETFILE_MAX_BYTES ? SARINS_NETFILE_TOO_BIG : SARINS_NETFILE_FORMAT,
-                    "declared size %llu bytes is outside %u .. %llu", (unsigned long long)total,
-                    (unsigned)(SARINS_NETFILE_HEADER + 8u), (unsigned long long)SARINS_NETFILE_MAX_BYTES);
+        if (total > SARINS_NETFILE_MAX_BYTES)
+            return fail(msg, msg_len, SARINS_NETFILE_TOO_BIG, "declared size %llu bytes is over the budget of %llu",
+                        (unsigned long long)total, (unsigned long long)SARINS_NETFILE_MAX_BYTES);
+        return fail(msg, msg_len, SARINS_NETFILE_FORMAT, "declared size %llu bytes is smaller than a header",
+                    (unsigned long long)total);
     }
     /* one byte more than declared: a longer file is seen as such, never silently cut */
     unsigned char *data = malloc((size_t)total + 1u);

@@ -149,3 +149,23 @@ def export_identifier(model_file: str | Path, out: str | Path) -> Path:
     """Convert an identifier model file (JSON/npz, :meth:`RBFNetwork.save`) into the binary file the
     RBFIdentifier FMU reads; returns ``out``."""
     return DriftIdentifier(model_file).export_binary(out)
+
+
+def fmu_model_file(model_file: str | Path, folder: str | Path) -> Path:
+    """The binary model file the RBFIdentifier FMU reads for ``model_file``: the file itself when it is
+    one already, else its conversion ``folder/<stem>-<digest>.bin`` (named by the source's content, so a
+    campaign's runs share it; written once)."""
+    import hashlib
+
+    model_file = Path(model_file)
+    if netfile.is_netfile(model_file):
+        return model_file
+    try:
+        digest = hashlib.sha256(model_file.read_bytes()).hexdigest()[:16]
+    except OSError as exc:
+        raise ModelFileError(model_file, f"cannot read it: {exc.strerror or exc}") from None
+    out = Path(folder) / f"{model_file.stem}-{digest}{netfile.SUFFIX}"
+    if not out.is_file():
+        out.parent.mkdir(parents=True, exist_ok=True)
+        export_identifier(model_file, out)
+    return out

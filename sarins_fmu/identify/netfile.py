@@ -93,7 +93,7 @@ def write(path: str | Path, kind: str, arrays: dict) -> Path:
     """Write the model file (see :func:`to_bytes`) atomically; returns its path."""
     path = Path(path)
     data = to_bytes(kind, arrays)
-    tmp = path.with_name(path.name + ".tmp")
+    tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")  # one per process: parallel writers do not collide
     tmp.write_bytes(data)
     os.replace(tmp, path)
     return path
