@@ -411,3 +411,34 @@ def test_non_finite_or_non_positive_model_values_are_refused():
                                 ("net.scale", -np.ones(7), "positive")):
         with pytest.raises(ModelFileError, match=reason):
             nets.CompensatorModel(netfile.to_bytes("grnn", arrays | {name: value}))
+
+
+def test_the_fuzz_harness_builds_and_runs_clean_on_the_model_files(tmp_path):
+    """tests/fuzz/fuzz_netfile.c under clang's libFuzzer with ASan and UBSan: a short run from the
+    model files of every kind (the long runs are its header's command)."""
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    clang = shutil.which("clang")
+    if clang is None:
+        pytest.skip("clang is not installed (libFuzzer)")
+    root = Path(__file__).resolve().parents[1]
+    core = root / "sarins_fmu" / "core"
+    exe = tmp_path / "fuzz"
+    build = subprocess.run([clang, "-std=c11", "-g", "-O1", "-fsanitize=fuzzer,address,undefined",
+                            "-fno-sanitize-recover=undefined", "-DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION",
+                            f"-I{core}", str(root / "tests" / "fuzz" / "fuzz_netfile.c"),
+                            *(str(core / f) for f in ("netfile.c", "netmodel.c", "nets.c")), "-lm", "-o", str(exe)],
+                           capture_output=True, text=True)
+    if build.returncode != 0 and "fuzzer" in build.stderr:
+        pytest.skip(f"clang cannot link libFuzzer here: {build.stderr[-300:]}")
+    assert build.returncode == 0, build.stderr
+    corpus = tmp_path / "corpus"
+    corpus.mkdir()
+    (corpus / "hot.bin").write_bytes(DriftIdentifier(DEFAULT_MODELS["hot"]).binary())
+    for kind in compensators.KINDS:
+        (corpus / f"{kind}.bin").write_bytes(fitted(kind).binary())
+    run = subprocess.run([str(exe), "-runs=20000", "-max_len=65536", "-seed=1", str(corpus)], capture_output=True,
+                         text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-3000:]
