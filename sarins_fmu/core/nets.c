@@ -83,10 +83,26 @@ void sarins_grnn_eval(const sarins_grnn *net, int64_t n, const double *x, double
 
 int64_t sarins_rnn_state_size(const sarins_rnn *net) { return 2 * (int64_t)net->layers * net->hidden; }
 
-/* g[rows] = w[rows][cols] v[cols] + b, each row summed in order */
+/* g[rows] = w[rows][cols] v[cols] + b, each row summed in order j = 0 .. cols-1 (four rows at a time: four
+ * independent sums, each in the same order, so the result does not depend on the blocking) */
 static void affine(int64_t rows, int64_t cols, const double *w, const double *v, const double *b, double *g)
 {
-    for (int64_t i = 0; i < rows; i++) {
+    int64_t i = 0;
+    for (; i + 4 <= rows; i += 4) {
+        const double *w0 = w + i * cols, *w1 = w0 + cols, *w2 = w1 + cols, *w3 = w2 + cols;
+        double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+        for (int64_t j = 0; j < cols; j++) {
+            s0 += v[j] * w0[j];
+            s1 += v[j] * w1[j];
+            s2 += v[j] * w2[j];
+            s3 += v[j] * w3[j];
+        }
+        g[i] = s0 + b[i];
+        g[i + 1] = s1 + b[i + 1];
+        g[i + 2] = s2 + b[i + 2];
+        g[i + 3] = s3 + b[i + 3];
+    }
+    for (; i < rows; i++) {
         double s = 0.0;
         for (int64_t j = 0; j < cols; j++)
             s += v[j] * w[i * cols + j];
