@@ -24,7 +24,6 @@ from fmus.compensator_export import export_compensator
 from fmus.native_fmu import build_native_fmu
 from sarins_fmu.identify import compensators
 from sarins_fmu.identify.axial import DEFAULT_MODELS, DriftIdentifier
-from sarins_fmu.units import DEG_TO_RAD
 from test_nets import _toy, fitted
 
 HERE = Path(__file__).resolve().parent
