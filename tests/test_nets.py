@@ -442,3 +442,14 @@ def test_the_fuzz_harness_builds_and_runs_clean_on_the_model_files(tmp_path):
     run = subprocess.run([str(exe), "-runs=20000", "-max_len=65536", "-seed=1", str(corpus)], capture_output=True,
                          text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
+
+
+def test_drift_identifier_reads_its_binary_file(tmp_path):
+    src = DriftIdentifier(DEFAULT_MODELS["cold"])
+    back = DriftIdentifier(src.export_binary(tmp_path / "cold.bin"))
+    assert back.input_names == src.input_names and back.local_lat_deg == src.local_lat_deg
+    assert back.binary() == src.binary()
+    assert back.drift(2e-5, 30.0, 10.0) == src.drift(2e-5, 30.0, 10.0)
+    fitted("rbf").export_binary(tmp_path / "comp.bin")
+    with pytest.raises(ModelFileError, match="not an axial drift identifier"):
+        DriftIdentifier(tmp_path / "comp.bin")

@@ -78,7 +78,8 @@ class DriftIdentifier:
     Parameters
     ----------
     path : model file written by ``RBFNetwork.save`` with ``input_names``
-        among :data:`KNOWN_INPUTS` and a target in deg/h.
+        among :data:`KNOWN_INPUTS` and a target in deg/h, or the binary model
+        file of :meth:`export_binary` (its protocol is then :data:`DEFAULT_PROTOCOL`).
 
     Attributes: ``input_names``, ``local_lat_deg`` (the training site, deg)
     and ``protocol`` (:func:`model_protocol`).
@@ -91,7 +92,7 @@ class DriftIdentifier:
 
     def __init__(self, path: str | Path):
         self.path = Path(path)
-        self.network = RBFNetwork.load(self.path)
+        self.network = _network_from_binary(self.path) if netfile.is_netfile(self.path) else RBFNetwork.load(self.path)
         names = self.network.input_names
         if not names:
             raise ModelFileError(self.path, "the model does not name its inputs")
@@ -143,6 +144,28 @@ class DriftIdentifier:
     def drift(self, lat_error: float, temp_c: float = np.nan, temp_change_c: float = np.nan) -> float:
         """Identified axial drift, rad/s."""
         return self.drift_dph(lat_error, temp_c, temp_change_c) * DPH_TO_RPS
+
+
+def _network_from_binary(path: Path) -> RBFNetwork:
+    """The RBF network of a binary identifier file (kind ``axial_rbf``), with its input names and site."""
+    kind, arrays = netfile.read(path)
+    if kind != "axial_rbf":
+        raise ModelFileError(path, f"model kind {kind!r} is not an axial drift identifier")
+    try:
+        codes = arrays["inputs"]
+        if codes.ndim != 1 or not all(c in range(len(KNOWN_INPUTS)) for c in codes.tolist()):
+            raise ValueError(f"input codes {codes.tolist()} (0 .. {len(KNOWN_INPUTS) - 1})")
+        weights = arrays["weights"]
+        if weights.ndim != 2 or weights.shape[1] != 1:
+            raise ValueError(f"weights of shape {weights.shape}, expected (k, 1)")
+        meta = {"settings": {"spread": float(arrays["spread"])}, "n_features": len(codes), "single_output": True,
+                "input_names": [KNOWN_INPUTS[int(c)] for c in codes], "target_name": "drift_dph",
+                "metadata": {"local_lat_deg": float(arrays["local_lat_deg"])}}
+        payload = {"centers": arrays["centers"], "weights": weights[:, 0], "bias": arrays["bias"],
+                   "scaling_mean": arrays["mean"], "scaling_scale": arrays["scale"], "training_curve": np.zeros(0)}
+        return RBFNetwork.from_payload(meta, payload)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ModelFileError(path, f"not a consistent identifier: {exc}") from None
 
 
 def export_identifier(model_file: str | Path, out: str | Path) -> Path:
