@@ -35,19 +35,27 @@ TEMPS = [f"temp_{s}" for s in ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y
 
 @pytest.fixture(scope="module")
 def identifier_fmu(tmp_path_factory):
-    return build_native_fmu("RBFIdentifier", SLAVES["RBFIdentifier"], tmp_path_factory.mktemp("ident"))  # + win64
+    return build_native_fmu("RBFIdentifier", SLAVES["RBFIdentifier"], tmp_path_factory.mktemp("ident"),
+                            win64=False)  # linux64 only: fast (the session's FMUs carry win64, test_native_fmus)
 
 
 @pytest.fixture(scope="module")
-def compensator_fmus(tmp_path_factory):
-    """{kind: (model, FMU path)}: each kind exported into its own native FMU."""
+def compensator_fmu(tmp_path_factory):
+    """One IMUCompensator FMU (the GRU model in its resources; linux64 only: fast) and {kind: (model, its
+    binary model file)} for every kind, given to the same FMU as model_file."""
     out = tmp_path_factory.mktemp("comp")
-    result = {}
-    for kind in compensators.KINDS:
-        model = fitted(kind)
-        path = model.save(out / f"{kind}.npz")
-        result[kind] = (model, export_compensator(path, out, name=f"{kind}.fmu", win64=False))  # linux64: fast
-    return result
+    models = {kind: fitted(kind) for kind in compensators.KINDS}
+    fmu = export_compensator(models["gru"].save(out / "gru.npz"), out, win64=False)
+    return fmu, {kind: (m, m.export_binary(out / f"{kind}.bin")) for kind, m in models.items()}
+
+
+def _start(fmu, name, model_file=None):
+    slave = Slave(fmu, name)
+    if model_file is not None:
+        slave.set(model_file=str(model_file))
+    slave.fmu.enterInitializationMode()
+    slave.fmu.exitInitializationMode()
+    return slave
 
 
 def _rows(n=40, seed=9):
@@ -72,26 +80,27 @@ def _expected(model, x):
     return model.predict(seen) * H
 
 
-def test_the_fmus_validate(identifier_fmu, compensator_fmus):
+def test_the_fmus_validate(identifier_fmu, compensator_fmu):
+    fmu, models = compensator_fmu
     assert validate_fmu(str(identifier_fmu)) == []
-    assert validate_fmu(str(compensator_fmus["gru3"][1])) == []
+    assert validate_fmu(str(fmu)) == []
+    with zipfile.ZipFile(fmu) as z:
+        assert z.read("resources/compensator.bin") == models["gru"][1].read_bytes()
     with zipfile.ZipFile(identifier_fmu) as z:
         names = z.namelist()
         for kind, path in DEFAULT_MODELS.items():  # the shipped models, in the format the C model reads
             assert z.read(f"resources/axial_rbf_{kind}.bin") == DriftIdentifier(path).binary()
-    assert "binaries/win64/RBFIdentifier.dll" in names or shutil.which("x86_64-w64-mingw32-gcc") is None
     assert {"sources/nets.c", "sources/netmodel.c", "sources/netfile.c", "sources/model.c"} <= set(names)
     assert read_model_description(str(identifier_fmu)).coSimulation.needsExecutionTool is False
 
 
 @pytest.mark.parametrize("kind", compensators.KINDS)
-def test_compensator_fmu_equals_the_library_bit_for_bit(compensator_fmus, kind):
-    model, fmu = compensator_fmus[kind]
+def test_compensator_fmu_equals_the_library_bit_for_bit(compensator_fmu, kind):
+    fmu, models = compensator_fmu
+    model, path = models[kind]
     x = _rows()
-    slave = Slave(fmu, f"c_{kind}")
+    slave = _start(fmu, f"c_{kind}", None if kind == "gru" else path)  # gru: the model in resources
     try:
-        slave.fmu.enterInitializationMode()
-        slave.fmu.exitInitializationMode()
         got = np.array([_step(slave, k, row) for k, row in enumerate(x)])
         assert slave.fmu.getInteger([slave.vr["model_kind"]])[0] == compensators.KINDS.index(kind)
     finally:
@@ -100,15 +109,13 @@ def test_compensator_fmu_equals_the_library_bit_for_bit(compensator_fmus, kind):
 
 
 @pytest.mark.parametrize("kind", ["gru", "lstm3", "grnn"])
-def test_fmu_state_round_trip_mid_run_gives_the_same_outputs(compensator_fmus, kind):
+def test_fmu_state_round_trip_mid_run_gives_the_same_outputs(compensator_fmu, kind):
     """The recurrent state and the time tags are in the FMU state: restored (in memory or from its
     serialization) mid-run, the next steps repeat exactly."""
-    _, fmu = compensator_fmus[kind]
+    fmu, models = compensator_fmu
     x = _rows(30)
-    slave = Slave(fmu, f"s_{kind}")
+    slave = _start(fmu, f"s_{kind}", models[kind][1])
     try:
-        slave.fmu.enterInitializationMode()
-        slave.fmu.exitInitializationMode()
         for k in range(10):
             _step(slave, k, x[k])
         state = slave.fmu.getFMUState()
@@ -156,10 +163,10 @@ def _bad_files(tmp: Path) -> dict:
 
 
 def test_bad_model_files_are_an_error_at_exit_initialization_naming_file_and_reason(identifier_fmu,
-                                                                                    compensator_fmus, tmp_path):
+                                                                                    compensator_fmu, tmp_path):
     cases = _bad_files(tmp_path)
     cases[tmp_path / "missing.bin"] = "cannot open"
-    for fmu in (identifier_fmu, compensator_fmus["traditional"][1]):
+    for fmu in (identifier_fmu, compensator_fmu[0]):
         for path, reason in cases.items():
             if fmu != identifier_fmu and reason.startswith("not an axial"):
                 reason = "not a compensator"
@@ -178,11 +185,11 @@ def test_bad_model_files_are_an_error_at_exit_initialization_naming_file_and_rea
 
 
 # ----------------------------------------------------------------------------- FMI 3.0
-def test_fmi3_compensator_equals_the_fmi2_one(compensator_fmus, tmp_path):
+def test_fmi3_compensator_equals_the_library(compensator_fmu, tmp_path):
     from fmpy import extract
     from fmpy.fmi3 import FMU3Slave
 
-    model, fmu2 = compensator_fmus["lstm"]
+    model = compensator_fmu[1]["lstm"][0]
     fmu3 = export_compensator(model.save(tmp_path / "m.npz"), tmp_path, fmi=3, win64=False)
     assert validate_fmu(str(fmu3)) == []
     md = read_model_description(str(fmu3))
@@ -244,8 +251,9 @@ def test_identifier_fmu_in_the_c_host_with_an_empty_environment(host, identifier
     assert values[by_name["axial_drift"].valueReference] == DriftIdentifier(DEFAULT_MODELS["hot"]).drift(lat_error)
 
 
-def test_compensator_fmu_in_the_c_host_with_an_empty_environment(host, compensator_fmus, tmp_path):
-    model, fmu = compensator_fmus["gru"]
+def test_compensator_fmu_in_the_c_host_with_an_empty_environment(host, compensator_fmu, tmp_path):
+    fmu, models = compensator_fmu
+    model = models["gru"][0]  # the model in the FMU's resources
     row = _rows(1)[0]
     values, by_name = _run_host(host, fmu, tmp_path, 12, H,
                                 {**{n: repr(float(row[i] * H)) for i, n in enumerate(RAW)}, **{t: repr(float(row[6])) for t in TEMPS}},
