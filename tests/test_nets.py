@@ -453,3 +453,17 @@ def test_drift_identifier_reads_its_binary_file(tmp_path):
     fitted("rbf").export_binary(tmp_path / "comp.bin")
     with pytest.raises(ModelFileError, match="not an axial drift identifier"):
         DriftIdentifier(tmp_path / "comp.bin")
+
+
+def test_threads_share_a_model_safely():
+    """ctypes releases the GIL during the call: each call brings its own GRNN scratch, so threads that
+    share one model get the serial results."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    comp = fitted("grnn")
+    parts = [_toy(300, seed=s)[0] for s in range(6)]
+    serial = [comp.predict(p) for p in parts]
+    with ThreadPoolExecutor(3) as pool:
+        threaded = list(pool.map(comp.predict, parts))
+    for a, b in zip(serial, threaded):
+        np.testing.assert_array_equal(a, b)

@@ -1,6 +1,12 @@
 /* Trained models built from a binary model file (netmodel.h). */
 #include "netmodel.h"
 
+/* no fused multiply-add: a * b + c rounds twice on every compiler and flag (gcc in ISO C mode does not
+ * contract; clang contracts within an expression unless told not to) */
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#endif
+
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -334,8 +340,10 @@ int64_t sarins_comp_state_size(const sarins_comp *c)
     return c->kind >= SARINS_NET_KIND_LSTM ? sarins_rnn_state_size(&c->rnn) : 0;
 }
 
+int64_t sarins_comp_scratch_size(const sarins_comp *c) { return c->kind == SARINS_NET_KIND_GRNN ? c->grnn.n : 0; }
+
 /* one sample: x[7] -> y[6] */
-static int comp_one(sarins_comp *c, double *state, const double *x, double *y)
+static int comp_one(const sarins_comp *c, double *state, const double *x, double *y, double *scratch)
 {
     for (int i = 0; i < SARINS_COMP_N_IN; i++)
         if (!isfinite(x[i]))
@@ -351,7 +359,7 @@ static int comp_one(sarins_comp *c, double *state, const double *x, double *y)
         sarins_rbf_eval(&c->rbf, 1, x, z);
         break;
     case SARINS_NET_KIND_GRNN:
-        sarins_grnn_eval(&c->grnn, 1, x, z, c->scratch);
+        sarins_grnn_eval(&c->grnn, 1, x, z, scratch);
         break;
     default: {
         double zin[SARINS_COMP_N_IN];
@@ -370,10 +378,12 @@ static int comp_one(sarins_comp *c, double *state, const double *x, double *y)
     return SARINS_NET_OK;
 }
 
-int sarins_comp_run(sarins_comp *c, double *state, int64_t n, const double *x, double *y)
+int sarins_comp_run(const sarins_comp *c, double *state, int64_t n, const double *x, double *y, double *scratch)
 {
+    if (scratch == NULL)
+        scratch = c->scratch;
     for (int64_t i = 0; i < n; i++) {
-        int status = comp_one(c, state, x + i * SARINS_COMP_N_IN, y + i * SARINS_COMP_N_OUT);
+        int status = comp_one(c, state, x + i * SARINS_COMP_N_IN, y + i * SARINS_COMP_N_OUT, scratch);
         if (status != SARINS_NET_OK)
             return status;
     }

@@ -62,7 +62,7 @@ typedef struct {
     sarins_grnn grnn;
     sarins_rnn rnn;
     double *block;   /* owned: every array of the model */
-    double *scratch; /* owned: GRNN pattern distances [n] */
+    double *scratch; /* owned: GRNN pattern distances [n] (used when the caller gives none) */
 } sarins_comp;
 
 int sarins_axial_build(sarins_axial *a, const sarins_netfile *f, char *msg, size_t msg_len);
@@ -76,9 +76,13 @@ int sarins_comp_build(sarins_comp *c, const sarins_netfile *f, char *msg, size_t
 void sarins_comp_release(sarins_comp *c);
 /* doubles of the state a caller keeps between samples (0: none; at most SARINS_COMP_MAX_STATE) */
 int64_t sarins_comp_state_size(const sarins_comp *c);
+/* doubles of the scratch a GRNN needs per evaluation (0 for the other kinds) */
+int64_t sarins_comp_scratch_size(const sarins_comp *c);
 /* compensate n time-ordered samples x[n][7] -> y[n][6], the recurrent state advanced in place (zero it to
- * start a series); SARINS_NET_* status (x non-finite: SARINS_NET_INPUT, nothing written for that row on). */
-int sarins_comp_run(sarins_comp *c, double *state, int64_t n, const double *x, double *y);
+ * start a series); scratch: sarins_comp_scratch_size doubles of the caller's, or NULL to use the model's own
+ * (then one evaluation at a time per model; with the caller's, the model is only read and several threads
+ * may share it).  SARINS_NET_* status (x non-finite: SARINS_NET_INPUT, nothing written for that row on). */
+int sarins_comp_run(const sarins_comp *c, double *state, int64_t n, const double *x, double *y, double *scratch);
 
 /* Handles for the ctypes binding: parse + build from bytes (NULL with a reason on failure), free. */
 sarins_axial *sarins_axial_open(const unsigned char *buf, size_t n, char *msg, size_t msg_len);

@@ -1,6 +1,12 @@
 /* Inference kernels of the trained networks (nets.h). */
 #include "nets.h"
 
+/* no fused multiply-add: a * b + c rounds twice on every compiler and flag (gcc in ISO C mode does not
+ * contract; clang contracts within an expression unless told not to) */
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#endif
+
 #include <math.h>
 #include <string.h>
 

@@ -34,7 +34,8 @@ _axial_drift = function("sarins_axial_drift", ctypes.c_int, _P, _F64, _F64, _F64
 _comp_open = function("sarins_comp_open", _P, ctypes.c_char_p, _SZ, ctypes.c_char_p, _SZ)
 _comp_close = function("sarins_comp_close", None, _P)
 _comp_state = function("sarins_comp_state_size", _I64, _P)
-_comp_run = function("sarins_comp_run", ctypes.c_int, _P, _P, _I64, _P, _P)
+_comp_scratch = function("sarins_comp_scratch_size", _I64, _P)
+_comp_run = function("sarins_comp_run", ctypes.c_int, _P, _P, _I64, _P, _P, _P)
 
 
 def netfile_checksum(data: bytes) -> int:
@@ -145,6 +146,7 @@ class CompensatorModel(_Handle):
     def __init__(self, data: bytes, source="<model>"):
         super().__init__(data, _comp_open, _comp_close, source)
         self.state_size = int(_comp_state(self.ptr))
+        self.scratch_size = int(_comp_scratch(self.ptr))
 
     def zero_state(self) -> np.ndarray:
         """A zero recurrent state (empty for the stateless kinds)."""
@@ -156,7 +158,9 @@ class CompensatorModel(_Handle):
         x = _rows(x, COMP_N_IN)
         state = self.zero_state() if state is None else _arrays.written(state, (self.state_size,), "state")
         out = np.empty((x.shape[0], COMP_N_OUT))
-        status = _comp_run(self.ptr, state.ctypes.data, x.shape[0], x.ctypes.data, out.ctypes.data)
+        scratch = np.empty(self.scratch_size)  # per call: threads may share the model (ctypes drops the GIL)
+        status = _comp_run(self.ptr, state.ctypes.data, x.shape[0], x.ctypes.data, out.ctypes.data,
+                           scratch.ctypes.data)
         if status:
             raise ValueError(f"compensator: {STATUS[status]}")
         return out

@@ -288,7 +288,7 @@ class RBFCompensator(_NetworkResidual):
     def _net_binary_arrays(self):
         net = self.net
         return {"mean": net.scaling_.mean, "scale": net.scaling_.scale, "centers": net.centers_,
-                "weights": np.asarray(net.weights_, float).reshape(net.centers_.shape[0], -1),
+                "weights": np.asarray(net.weights_, float).reshape(net.centers_.shape[0], np.size(net.bias_)),
                 "bias": np.atleast_1d(net.bias_), "spread": np.float64(net.settings.spread)}
 
 

@@ -379,9 +379,9 @@ class RBFNetwork:
         self._check_fitted()
         x = check_inputs(X, "X", n_features=self.n_features)
         zc = nets.standardize(self.centers_, self.scaling_.mean, self.scaling_.scale)
-        w = np.asarray(self.weights_, dtype=float).reshape(zc.shape[0], -1)
-        out = nets.rbf_predict(x, self.scaling_.mean, self.scaling_.scale, zc, w, np.atleast_1d(self.bias_),
-                               self.settings.spread)
+        bias = np.atleast_1d(self.bias_)
+        w = np.asarray(self.weights_, dtype=float).reshape(zc.shape[0], bias.size)
+        out = nets.rbf_predict(x, self.scaling_.mean, self.scaling_.scale, zc, w, bias, self.settings.spread)
         return out[:, 0] if self._single_output else out
 
     def predict_reference(self, X: np.ndarray) -> np.ndarray:

@@ -34,7 +34,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         static const double x[SARINS_COMP_N_IN] = {0.01, -0.02, 0.03, 0.1, -0.2, 9.8, 25.0};
         double state[SARINS_COMP_MAX_STATE], y[SARINS_COMP_N_OUT];
         memset(state, 0, sizeof state);
-        (void)sarins_comp_run(&c, state, 1, x, y);
+        (void)sarins_comp_run(&c, state, 1, x, y, NULL);
         sarins_comp_release(&c);
     }
     return 0;

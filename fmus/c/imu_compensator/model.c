@@ -19,6 +19,10 @@
 #include "netmodel.h"
 #include "variables.h"
 
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF /* no fused multiply-add (gcc does not contract in ISO C mode) */
+#endif
+
 #define MODEL_IN_RESOURCES "compensator.bin"
 #define NO_TAG (-1.0e9) /* s: start value of raw_increment_end_time, not connected (fmus/slave_support.py) */
 #define STEP_TOL 1e-9   /* relative: a communication step equal to the first one */
@@ -157,7 +161,7 @@ static int ic_do_step(sarins_ctx *c, double t, double h)
     for (int i = 0; i < 6; i++)
         sum += c->r[TEMPS[i]];
     x[6] = sum / 6.0;
-    int status = sarins_comp_run(m, st->rnn, 1, x, y);
+    int status = sarins_comp_run(m, st->rnn, 1, x, y, NULL);
     if (status == SARINS_NET_INPUT) {
         sarins_log(c, SARINS_ERROR, "ValueError: non-finite IMU input at t=%.9g s", t);
         return SARINS_ERROR;

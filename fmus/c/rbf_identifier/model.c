@@ -20,6 +20,10 @@
 #include "netmodel.h"
 #include "variables.h"
 
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF /* no fused multiply-add (gcc does not contract in ISO C mode) */
+#endif
+
 #define DPH_TO_RPS ((3.141592653589793 / 180.0) / 3600.0) /* rad/s per deg/h, as sarins_fmu.units */
 #define STEP_TOL 1e-9 /* relative: a communication step equal to the first one */
 #define TAG_TOL 1e-6  /* of a step: two time tags closer than this name the same communication point */
@@ -63,17 +67,20 @@ static int check_parameters(sarins_ctx *c)
     return SARINS_OK;
 }
 
-/* The model file's path: model_file, else the shipped model of model_kind in resources. */
-static int model_path(sarins_ctx *c, char *path, size_t n, const char **param)
+/* The model file's path: model_file, else the shipped model of model_kind in resources; *param and *value
+ * name the parameter that chose it (for the messages). */
+static int model_path(sarins_ctx *c, char *path, size_t n, const char **param, const char **value)
 {
     char file[SARINS_STRING_MAX];
     strip(c->s[SARINS_S_model_file], file, sizeof file);
     if (file[0] != '\0') {
         *param = "model_file";
+        *value = c->s[SARINS_S_model_file];
         snprintf(path, n, "%s", file);
         return SARINS_OK;
     }
     *param = "model_kind";
+    *value = c->s[SARINS_S_model_kind];
     const char *kind = c->s[SARINS_S_model_kind];
     if (strcmp(kind, "hot") != 0 && strcmp(kind, "cold") != 0) {
         sarins_log(c, SARINS_ERROR, "parameter model_kind = '%s': cannot load the identifier model: model kind must "
@@ -106,8 +113,8 @@ static void ri_release(sarins_ctx *c)
 static int load(sarins_ctx *c)
 {
     char path[PATH_MAX_BYTES], msg[512];
-    const char *param = "model_file";
-    if (model_path(c, path, sizeof path, &param) != SARINS_OK)
+    const char *param = "model_file", *value = "";
+    if (model_path(c, path, sizeof path, &param, &value) != SARINS_OK)
         return SARINS_ERROR;
     unsigned char *buf = NULL;
     size_t n = 0;
@@ -129,7 +136,7 @@ static int load(sarins_ctx *c)
             free(a);
         }
         sarins_log(c, SARINS_ERROR, "parameter %s = '%s': cannot load the identifier model: model file '%s': %s",
-                   param, param[6] == 'f' ? c->s[SARINS_S_model_file] : c->s[SARINS_S_model_kind], path, msg);
+                   param, value, path, msg);
         return SARINS_ERROR;
     }
     c->work = a;
@@ -161,8 +168,12 @@ static int ri_do_step(sarins_ctx *c, double t, double h)
     }
     st->step = h;
     st->have_step = 1;
-    if (c->i[SARINS_I_identified] || a == NULL)
-        return a == NULL ? SARINS_ERROR : SARINS_OK;
+    if (a == NULL) {
+        sarins_log(c, SARINS_ERROR, "no model loaded");
+        return SARINS_ERROR;
+    }
+    if (c->i[SARINS_I_identified])
+        return SARINS_OK;
     double nav = c->r[SARINS_R_nav_time], trigger = c->r[SARINS_R_trigger_time];
     if (fabs(nav - trigger) <= TAG_TOL * h) {
         double drift_dph = 0.0;
