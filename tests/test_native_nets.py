@@ -273,12 +273,15 @@ def test_fmu_binaries_need_no_python(identifier_fmu, tmp_path):
 
 
 # ----------------------------------------------------------------------------- the portable host
-def _portable_run(compensator_fmu, tmp_path, kind, *extra, lib=None, host=None, env=None, prefix=(), model=None):
+def _portable_run(compensator_fmu, tmp_path, kind, *extra, lib=None, host=None, env=None, prefix=(), model=None,
+                  fmu=None):
     """The compensator in tests/native_host/native_fmu_host.c (1 s steps, constant raw inputs, the six
-    outputs printed as bit patterns), the model of ``kind`` given as model_file."""
+    outputs printed as bit patterns), the model of ``kind`` given as model_file (``fmu``: the build whose
+    binary ``lib`` is, default the fixture's)."""
     from test_native_fmus import run_host
 
-    fmu, models = compensator_fmu
+    models = compensator_fmu[1]
+    fmu = fmu or compensator_fmu[0]
     folder = tmp_path / "unzipped"
     if not folder.exists():
         zipfile.ZipFile(fmu).extractall(folder)
@@ -379,7 +382,8 @@ def test_win64_dll_under_wine_agrees_with_linux64(compensator_fmu, portable_host
     for kind in ("traditional", "grnn", "gru", "lstm3"):
         path = models[kind][1]
         w = _portable_run(compensator_fmu, tmp_path, kind, "roundtrip=30", lib=win / "u" / "binaries" / "win64" /
-                          "IMUCompensator.dll", host=exe, env=env, prefix=["wine"], model="Z:" + str(path))
+                          "IMUCompensator.dll", host=exe, env=env, prefix=["wine"], model="Z:" + str(path),
+                          fmu=fmu_win)
         lin = _portable_run(compensator_fmu, tmp_path, kind, host=portable_host)
         assert "STATUS" not in w.stdout, w.stdout[-2000:]
         assert table(w, "AGAIN") == {k: v for k, v in table(w).items() if k > 30}
