@@ -1,10 +1,11 @@
-"""Export a trained seed 003 compensator as a self-contained IMUCompensator FMU.
+"""Export a trained seed 003 compensator as a self-contained native IMUCompensator FMU.
 
 ``export_compensator(model_file, out_dir)`` checks the model file (any kind
-of :mod:`sarins_fmu.identify.compensators`), rewrites it as plain npz into
-the FMU's ``resources/compensator.npz`` and builds
-``<out_dir>/IMUCompensator.fmu``.  The FMU needs only numpy at run time
-(recurrent models run on numpy cells).
+of :mod:`sarins_fmu.identify.compensators`, JSON or npz), writes it as the
+binary model file the C model reads (:mod:`sarins_fmu.identify.netfile`) into
+the FMU's ``resources/compensator.bin`` and builds
+``<out_dir>/IMUCompensator.fmu`` (native: no Python at run time, FMI 2.0 or
+3.0).
 
 The system that uses it (Turntable -> IMUThermal -> IMUCompensator ->
 StrapdownINS) is :func:`sarins.systems.compensated_chain`.
@@ -19,10 +20,12 @@ from pathlib import Path
 from sarins_fmu.identify import compensators
 
 from . import SLAVES
-from .build import build_fmu
 from .imu_compensator_slave import MODEL_IN_RESOURCES
+from .native_fmu import build_native_fmu
 
-def export_compensator(model_file: str | Path, out_dir: str | Path, name: str | None = None) -> Path:
+
+def export_compensator(model_file: str | Path, out_dir: str | Path, name: str | None = None, fmi: int = 2,
+                       win64: bool | None = None) -> Path:
     """Build an IMUCompensator FMU carrying ``model_file``.
 
     Parameters
@@ -31,6 +34,8 @@ def export_compensator(model_file: str | Path, out_dir: str | Path, name: str | 
     out_dir : folder for the FMU (created)
     name : file name of the FMU (default ``IMUCompensator.fmu``; the model
         identifier stays IMUCompensator)
+    fmi : 2 or 3, the FMI version
+    win64 : also the Windows binary (default: when mingw-w64 is on PATH)
 
     Raises
     ------
@@ -39,8 +44,8 @@ def export_compensator(model_file: str | Path, out_dir: str | Path, name: str | 
     model = compensators.load(model_file)
     out_dir = Path(out_dir)
     with tempfile.TemporaryDirectory(prefix="sarins_compensator_") as tmp:
-        shipped = model.save(Path(tmp) / MODEL_IN_RESOURCES)
-        fmu = build_fmu(SLAVES["IMUCompensator"], Path(tmp) / "out", extra_files=[shipped])
+        fmu = build_native_fmu("IMUCompensator", SLAVES["IMUCompensator"], Path(tmp) / "out", fmi=fmi,
+                               win64=win64, resources={MODEL_IN_RESOURCES: model.binary()})
         target = out_dir / (name or fmu.name)
         out_dir.mkdir(parents=True, exist_ok=True)
         shutil.move(str(fmu), target)

@@ -29,6 +29,7 @@ import tempfile
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 from xml.etree import ElementTree as ET
 
 HERE = Path(__file__).resolve().parent
@@ -44,6 +45,7 @@ class NativeModel:
 
     folder: str
     extra_core: tuple[str, ...] = ()
+    resources: Callable[[], dict[str, bytes]] | None = None  # files shipped in resources/ ({name: bytes})
 
 
 @dataclass(frozen=True)
@@ -61,11 +63,22 @@ class ArrayVariable:
 
 MAX_DIM = 100_000  # largest length of an array (a structural parameter's upper bound)
 
+
+def identifier_resources() -> dict[str, bytes]:
+    """RBFIdentifier's resources: the shipped hot and cold models as binary model files
+    (``axial_rbf_<kind>.bin``, :meth:`sarins_fmu.identify.axial.DriftIdentifier.binary`)."""
+    from sarins_fmu.identify.axial import DEFAULT_MODELS, DriftIdentifier
+
+    return {f"axial_rbf_{kind}.bin": DriftIdentifier(path).binary() for kind, path in DEFAULT_MODELS.items()}
+
+
 # FMU name -> its native model (one row per native FMU)
 NATIVE = {
     "Turntable": NativeModel("turntable"),
     "StrapdownINS": NativeModel("strapdown_ins"),
     "IMUThermal": NativeModel("imu_thermal"),
+    "RBFIdentifier": NativeModel("rbf_identifier", resources=identifier_resources),
+    "IMUCompensator": NativeModel("imu_compensator"),  # its model: fmus.compensator_export
 }
 
 # setup.py's flags (sarins_fmu core) plus hidden visibility: only the fmi2* functions are exported
@@ -440,12 +453,13 @@ def _documentation(name: str, description: str, identifier: str, win64: bool, fm
 
 
 def build_native_fmu(name: str, slave_file: str | None, out_dir: Path, fmi: int = 2, win64: bool | None = None,
-                     model: NativeModel | None = None, slave=None) -> Path:
+                     model: NativeModel | None = None, slave=None, resources: dict[str, bytes] | None = None) -> Path:
     """Build the native FMU ``name`` (declared by ``fmus/<slave_file>``) for FMI ``fmi``.0 (2 or 3) into
     ``out_dir``; returns its path.  Both versions come from the same declaration and the same model.c.
     ``win64``: also the Windows binary (default: when mingw-w64 is on PATH).  ``model`` and ``slave`` (an
     instance of the declaring class) replace ``NATIVE[name]`` and ``slave_file`` (tests build models that
-    are not shipped)."""
+    are not shipped).  ``resources`` ({file name: bytes}) go into ``resources/`` beside the model's own
+    (:attr:`NativeModel.resources`)."""
     if fmi not in GLUE:
         raise ValueError(f"fmi = {fmi}: the native FMUs are built for FMI 2 or 3")
     compiler()  # fail early, with the reason, without a C compiler
@@ -454,6 +468,11 @@ def build_native_fmu(name: str, slave_file: str | None, out_dir: Path, fmi: int 
     dependencies = dict(getattr(slave, "_output_dependencies", {}))
     win64 = win64_compiler() is not None if win64 is None else win64
     linux, windows = PLATFORMS[fmi]
+    native = model or NATIVE[name]
+    files = (native.resources() if native.resources else {}) | dict(resources or {})
+    for arc in files:
+        if not re.fullmatch(r"[A-Za-z0-9_.-]+", arc) or arc.startswith("."):
+            raise ValueError(f"resource file name {arc!r}: a plain file name expected")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="sarins_native_fmu_") as tmp:
@@ -481,6 +500,8 @@ def build_native_fmu(name: str, slave_file: str | None, out_dir: Path, fmi: int 
                 z.writestr(info, path.read_bytes())
             for path in sorted(sources.iterdir()):
                 z.write(path, f"sources/{path.name}")
+            for arc, data in sorted(files.items()):
+                z.writestr(f"resources/{arc}", data)
             root = ET.fromstring(md)
             z.writestr("documentation/index.html",
                        _documentation(root.get("modelName"), root.get("description", ""), identifier, win64, fmi))
@@ -491,7 +512,9 @@ def build_native_fmus3(out_dir: Path | str = DEFAULT_OUT3, names=None) -> list[P
     """The FMI 3.0 variants of the native FMUs (default: all of :data:`NATIVE`) into ``out_dir``."""
     from . import SLAVES
 
-    names = list(NATIVE) if names is None else list(names)
+    from .build import NEEDS_MODEL
+
+    names = [n for n in NATIVE if n not in NEEDS_MODEL] if names is None else list(names)
     unknown = [n for n in names if n not in NATIVE]
     if unknown:
         raise ValueError(f"no native FMI 3.0 variant of {unknown}; native FMUs: {', '.join(NATIVE)}")

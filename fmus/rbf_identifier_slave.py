@@ -1,21 +1,23 @@
-"""RBFIdentifier FMU: seed 000's axial-drift identification from the latitude error."""
+"""RBFIdentifier FMU: seed 000's axial-drift identification from the latitude error.
 
-import math
+The declaration of the native RBFIdentifier FMU: its variables, descriptions, start values and the timing
+contract.  ``fmus/native_fmu.py`` writes the model description and the C variable table from it and ships
+the hot and cold models as binary model files in resources; ``fmus/c/rbf_identifier/model.c`` computes it
+(``sarins_axial_drift`` of the C core, the function :class:`sarins_fmu.identify.axial.DriftIdentifier` calls).
+"""
 
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_step, declare,
-                                discard_on_error, guarded, same_time)
-from sarins_fmu.identify.axial import APPLY_LATENCY, DriftIdentifier, default_model_path
-from sarins_fmu.identify.modelfile import ModelFileError
+from fmus.slave_support import INPUT, OUTPUT, PARAMETER, declare
+from sarins_fmu.identify.axial import APPLY_LATENCY
 
 
 class RBFIdentifier(Fmi2Slave):
 
     author = "sarins-fmu"
     description = (
-        "Axial (azimuth) gyro drift identifier of seed 000: an RBF network (model file, JSON) maps the "
+        "Axial (azimuth) gyro drift identifier of seed 000: an RBF network (binary model file) maps the "
         "INS latitude error, and for the cold-start model the azimuth gyro temperature and its change over "
         "the alignment, to the drift. Contract (standard FMI timing, time-tagged): the inputs are the INS "
         "outputs tagged nav_time. The network is evaluated once, on the inputs whose nav_time equals "
@@ -24,13 +26,17 @@ class RBFIdentifier(Fmi2Slave):
         "INS subtracts it from the navigation interval starting at apply_from on. latency (a few steps) "
         "covers the delay of any co-simulation scheme, so every scheme gives the same navigation solution. "
         "All outputs are state outputs (no direct feedthrough). Shipped models: model_kind 'hot' or 'cold' "
-        "(resources); model_file overrides them. Held between steps: the identified drift.")
+        "(resources/axial_rbf_hot.bin, axial_rbf_cold.bin); model_file overrides them: a binary model file "
+        "written by 'sarins identify train --out model.bin' (or DriftIdentifier.export_binary). The model is "
+        "read at the end of initialisation; a missing or bad file is an error there naming the file and the "
+        "reason. Held between steps: the identified drift.")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=88 * 3600.0, step_size=1.0)
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         declare(self, "string", "model_kind", PARAMETER, "shipped model: hot or cold", "hot")
-        declare(self, "string", "model_file", PARAMETER, "model file path (empty: the shipped model)", "")
+        declare(self, "string", "model_file", PARAMETER,
+                "binary model file path (empty: the shipped model of model_kind)", "")
         declare(self, "real", "trigger_time", PARAMETER, "navigation time of the identification [s]",
                 12 * 3600.0)
         declare(self, "real", "latency", PARAMETER,
@@ -44,34 +50,7 @@ class RBFIdentifier(Fmi2Slave):
         declare(self, "real", "apply_from", OUTPUT,
                 "navigation time from which the INS subtracts axial_drift [s]", 0.0)
         declare(self, "integer", "identified", OUTPUT, "1 once the drift is identified [1]", 0)
-        self._identifier = None
-        self._step = None
 
-    @guarded
-    def exit_initialization_mode(self):
-        check_finite(self, ["trigger_time", "latency"], non_negative=["trigger_time", "latency"])
-        name = "model_file" if self.model_file.strip() else "model_kind"
-        try:
-            path = self.model_file.strip() or default_model_path(self.model_kind)
-            self._identifier = DriftIdentifier(path)
-        except (ModelFileError, ValueError, OSError) as exc:
-            raise ParameterError(f"parameter {name} = {getattr(self, name)!r}: cannot load the identifier model: "
-                                 f"{exc}") from None
-        self.axial_drift, self.identified, self.apply_from = 0.0, 0, 0.0
-
-    @guarded
     def do_step(self, current_time, step_size):
-        try:
-            self._step = check_step(self, step_size, self._step)
-            if not self.identified and same_time(self.nav_time, self.trigger_time, step_size):
-                drift = self._identifier.drift(self.lat_error, self.temperature, self.temp_change)
-                if not math.isfinite(drift):
-                    raise ValueError("the identified drift is not finite")
-                self.axial_drift, self.identified = drift, 1
-                self.apply_from = self.trigger_time + self.latency
-            elif not self.identified and self.nav_time > self.trigger_time:
-                raise ValueError(f"nav_time {self.nav_time:.9g} s passed trigger_time {self.trigger_time:.9g} s "
-                                 "without meeting it (put the trigger on the communication grid)")
-        except ValueError as exc:
-            return discard_on_error(self, exc)
-        return True
+        raise NotImplementedError("the RBFIdentifier FMU is native: fmus/c/rbf_identifier/model.c computes it (this "
+                                  "class only declares its variables)")

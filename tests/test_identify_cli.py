@@ -211,3 +211,16 @@ def test_model_without_a_stored_range_is_bounded_from_its_scaling(tmp_path, caps
     data.write_text("lat_error_deg\n0.01\n1e308\n")
     assert main(["identify", "predict", "--model", str(old), "--data", str(data)]) == 2
     assert "line 3: lat_error_deg = 1e+308 is outside the range" in capsys.readouterr().err
+
+
+def test_train_writes_the_binary_model_the_fmu_reads(tmp_path):
+    from sarins_fmu.core import nets
+    from sarins_fmu.identify.axial import DriftIdentifier
+
+    fmu_model = tmp_path / "hot.bin"
+    rc, model = _train(tmp_path, "--spread", "2", "--fmu-model", str(fmu_model))
+    assert rc == 0
+    assert fmu_model.read_bytes() == DriftIdentifier(model).binary()
+    assert nets.AxialModel(fmu_model.read_bytes()).drift_dph(1e-5, 20.0, 0.0) == DriftIdentifier(model).drift_dph(1e-5)
+    rc, _ = _train(tmp_path, "--spread", "2", "--fmu-model", str(tmp_path / "missing" / "x.bin"), name="h2.json")
+    assert rc == 2

@@ -564,7 +564,7 @@ def _compensator_run(chain_fmus, fmu, stop=30.0, ins=True, scheme="gauss-seidel"
         imu=mems_calibration.imu_parameters(SHORT, seed=9), ins=dict(align_time=10.0, coarse_time=5.0,
                                                           lat0=mems_calibration.LAT_DEG * np.pi / 180), step=SHORT.step)
     record = record or ["imu.dtheta_?", "imu.dv_?", "imu.temp_*", "comp.dtheta_?", "comp.dv_?", "comp.model_kind",
-                        "ins.lat"]
+                        "comp.temperature", "ins.lat"]
     return simulate_system(system, stop, SHORT.step, scheme=scheme, record=record, progress=False)
 
 
@@ -595,7 +595,7 @@ def test_compensated_chain_gives_the_same_solution_under_both_schemes(chain_fmus
 @pytest.mark.parametrize("kind", ["traditional", "grnn", "gru", "lstm3"])
 def test_compensator_fmu_between_imu_and_ins(chain_fmus, short_training, tmp_path, kind):
     """Exported model as an FMU in Turntable -> IMUThermal -> IMUCompensator -> StrapdownINS:
-    fmpy validate is clean and its increments are the library's compensation (1e-12)."""
+    fmpy validate is clean and its increments are the library's compensation, bit for bit."""
     from fmpy.validation import validate_fmu
 
     from fmus.compensator_export import export_compensator
@@ -611,12 +611,13 @@ def test_compensator_fmu_between_imu_and_ins(chain_fmus, short_training, tmp_pat
     res = _compensator_run(chain_fmus, fmu)
     h = SHORT.step
     raw = np.column_stack([res[f"imu.{q}_{a}"] for q in ("dtheta", "dv") for a in "xyz"])[1:] / h
-    temp = np.column_stack([res[f"imu.temp_{s}"] for s in
-                            ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")]).mean(axis=1)[1:]
-    comp = np.column_stack([res[f"comp.{q}_{a}"] for q in ("dtheta", "dv") for a in "xyz"])[1:] / h
-    expected = model.predict(np.column_stack([raw, temp]))
-    tol = 1e-6 if kind in ("gru", "lstm3") else 1e-12  # the FMU runs the recurrent cells in float64, torch in float32
-    np.testing.assert_allclose(comp, expected, rtol=0, atol=tol * np.abs(expected).max())
+    temp = res["comp.temperature"][1:]  # the mean of the six temperatures, as the FMU summed them
+    temps = np.column_stack([res[f"imu.temp_{s}"] for s in
+                             ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")])[1:]
+    np.testing.assert_allclose(temp, temps.mean(axis=1), rtol=4 * np.finfo(float).eps)  # 6 additions
+    comp = np.column_stack([res[f"comp.{q}_{a}"] for q in ("dtheta", "dv") for a in "xyz"])[1:]
+    # the FMU and the library run the same C function over the same binary model: bit for bit
+    np.testing.assert_array_equal(comp, model.predict(np.column_stack([raw, temp])) * h)
     assert res["comp.model_kind"][-1] == compensators.KINDS.index(kind)
     assert np.all(np.isfinite(res["ins.lat"]))
 
@@ -680,8 +681,7 @@ def test_recurrent_compensator_fmu_reset_and_two_instances(short_training, tmp_p
             step(b, k, other)
         first = np.array(first)
         stream = model.stream()
-        np.testing.assert_allclose(first, np.array([stream.step(r) for r in x]), rtol=0,
-                                   atol=1e-12 * np.abs(first).max())
+        np.testing.assert_array_equal(first * h, np.array([stream.step(r) for r in x]) * h)
         a.fmu.reset()
         a.fmu.enterInitializationMode()
         a.fmu.exitInitializationMode()
@@ -702,8 +702,8 @@ def test_build_fmus_cli_ships_a_compensator(tmp_path):
            str(tmp_path / "out"), "--compensator"]
     done = subprocess.run(cmd + [str(model)], cwd=ROOT, capture_output=True, text=True, timeout=300, env=env)
     assert done.returncode == 0, done.stderr
-    with zipfile.ZipFile(tmp_path / "out" / "IMUCompensator.fmu") as z:
-        assert "resources/compensator.npz" in z.namelist()
+    with zipfile.ZipFile(tmp_path / "out" / "IMUCompensator.fmu") as z:  # the binary model the C model reads
+        assert z.read("resources/compensator.bin") == compensators.load(model).binary()
     cmd[cmd.index("--out") + 1] = str(tmp_path / "out_bad")
     bad = subprocess.run(cmd + [str(tmp_path / "missing.json")], cwd=ROOT, capture_output=True, text=True,
                          timeout=300, env=env)

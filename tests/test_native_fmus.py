@@ -27,6 +27,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from fmu_driver import Slave
+from fmus.build import NEEDS_MODEL
 from fmus.native_fmu import CFLAGS, MINGW, NATIVE, compile_line, fmi_headers_dir, slave_instance
 from orchestration import fmilog
 
@@ -155,7 +156,10 @@ def in_process_rows(values: dict, steps: int) -> dict[int, list[int]]:
 # ----------------------------------------------------------------- description and binary
 
 
-@pytest.mark.parametrize("name", list(NATIVE))
+BUILT = [n for n in NATIVE if n not in NEEDS_MODEL]  # IMUCompensator: tests/test_native_nets.py (needs a model)
+
+
+@pytest.mark.parametrize("name", BUILT)
 def test_native_fmu_validates_and_declares_its_capabilities(fmu_dir, name):
     fmu = fmu_dir / f"{name}.fmu"
     assert validate_fmu(str(fmu)) == []
@@ -169,7 +173,8 @@ def test_native_fmu_validates_and_declares_its_capabilities(fmu_dir, name):
     assert "fmi2_glue.c" in listed and "model.c" in listed
     assert sorted(s for s in sources if s.endswith(".c")) == sorted(listed)
     assert "variables.h" in sources and "model.h" in sources
-    assert not any(n.startswith("resources/") for n in names)  # nothing for a Python runtime
+    shipped = set(NATIVE[name].resources()) if NATIVE[name].resources else set()  # data files only (models)
+    assert {n[len("resources/"):] for n in names if n.startswith("resources/")} == shipped
     # the slave class's declaration: same names, value references, types and start values
     declared = slave_instance(f"{NATIVE[name].folder}_slave.py").vars.values()
     by_vr = {v.valueReference: v for v in md.modelVariables}
@@ -182,7 +187,7 @@ def test_native_fmu_validates_and_declares_its_capabilities(fmu_dir, name):
                                                                                         rel_tol=1e-15)
 
 
-@pytest.mark.parametrize("name", list(NATIVE))
+@pytest.mark.parametrize("name", BUILT)
 def test_native_binary_has_no_python_and_exports_only_fmi2(fmu_dir, name, tmp_path):
     if shutil.which("nm") is None:
         pytest.skip("nm not installed")

@@ -53,7 +53,6 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn)
 {
-    (void)fmuResourceLocation; /* a native model needs no resources */
     (void)visible;
     glue2 *g = (glue2 *)(void *)sg_alloc(sizeof(glue2));
     if (g == NULL) {
@@ -69,7 +68,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     g->core.emit = emit2;
     g->core.prefix = "fmi2";
     g->core.standard = "FMI 2.0 section 4.2.4";
-    if (!sg_init(&g->core, instanceName, fmuGUID, loggingOn, "fmi2Instantiate")) {
+    if (!sg_init(&g->core, instanceName, fmuGUID, loggingOn, "fmi2Instantiate")
+        || !sg_set_resources(&g->core, fmuResourceLocation, 1)) {
         sg_free(&g->core);
         return NULL;
     }

@@ -98,7 +98,6 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
                                          fmi3LogMessageCallback logMessage,
                                          fmi3IntermediateUpdateCallback intermediateUpdate)
 {
-    (void)resourcePath; /* a native model needs no resources */
     (void)visible;
     (void)earlyReturnAllowed; /* never returns early */
     (void)requiredIntermediateVariables;
@@ -114,7 +113,8 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
     g->core.emit = emit3;
     g->core.prefix = "fmi3";
     g->core.standard = STANDARD;
-    if (!sg_init(&g->core, instanceName, instantiationToken, loggingOn, "fmi3InstantiateCoSimulation")) {
+    if (!sg_init(&g->core, instanceName, instantiationToken, loggingOn, "fmi3InstantiateCoSimulation")
+        || !sg_set_resources(&g->core, resourcePath, 0)) {
         sg_free(&g->core);
         return NULL;
     }

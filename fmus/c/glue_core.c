@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "glue_core.h"
+#include "sarins_uri.h"
 
 static const char *const TYPE_NAMES[] = {"Real", "Integer", "Boolean", "String"};
 static const char *const CAUSALITY_NAMES[] = {"parameter", "calculatedParameter", "input", "output", "local",
@@ -335,6 +336,7 @@ void sg_free(sarins_glue *g)
     free((void *)g->outputs);
     free(g->cat_on);
     free(g->name);
+    free(g->resources);
     free(g);
 }
 
@@ -345,6 +347,44 @@ static char *copy_string(const char *s)
     if (c != NULL)
         memcpy(c, s, n);
     return c;
+}
+
+#define SG_PATH_MAX 4096 /* bytes of a resources path, NUL included */
+
+int sg_set_resources(sarins_glue *g, const char *location, int is_uri)
+{
+    g->ctx.resources = NULL;
+    if (location == NULL || location[0] == '\0') {
+        g->ctx.resources_problem = "the host gave no resource location";
+        return 1;
+    }
+    char *path = malloc(SG_PATH_MAX);
+    if (path == NULL) {
+        sg_log(g, SARINS_ERROR, "out of memory");
+        return 0;
+    }
+    if (is_uri) {
+        int code = sarins_uri_to_path(location, path, SG_PATH_MAX);
+        if (code != SARINS_URI_OK) {
+            free(path);
+            g->ctx.resources_problem = sarins_uri_error(code);
+            return 1;
+        }
+    } else {
+        size_t n = strlen(location);
+        if (n >= SG_PATH_MAX) {
+            free(path);
+            g->ctx.resources_problem = "the resource path is too long for this FMU's buffer";
+            return 1;
+        }
+        memcpy(path, location, n + 1);
+        while (n > 1 && (path[n - 1] == '/' || path[n - 1] == '\\'))
+            path[--n] = '\0'; /* no trailing separator */
+    }
+    g->resources = path;
+    g->ctx.resources = path;
+    g->ctx.resources_problem = NULL;
+    return 1;
 }
 
 int sg_init(sarins_glue *g, const char *instance_name, const char *token, int logging_on, const char *fn)

@@ -53,6 +53,7 @@ struct sarins_glue {
     double t_next;
     unsigned long problems; /* messages logged with status >= Discard (so a failure is never silent) */
     int arrays_visible;     /* FMI 3.0: array variables have value references (FMI 2.0: unknown there) */
+    char *resources;        /* the resources folder (ctx.resources), owned */
     double *array_block;    /* every array's elements, one block */
     size_t array_doubles;   /* its length */
 };
@@ -82,6 +83,10 @@ int sg_bad_state(sarins_glue *g, const char *fn);
  * time_vr and its logger, then sg_init checks the name and token and allocates (0 on failure, logged). */
 sarins_glue *sg_alloc(size_t size);
 int sg_init(sarins_glue *g, const char *instance_name, const char *token, int logging_on, const char *fn);
+/* The resources folder for c->resources: is_uri 1 for FMI 2.0's fmuResourceLocation (a file: URI), 0 for FMI
+ * 3.0's resourcePath (a path).  A missing or unusable location is not an error here (most models need none):
+ * c->resources stays NULL and c->resources_problem says why.  Returns 0 only when out of memory (logged). */
+int sg_set_resources(sarins_glue *g, const char *location, int is_uri);
 void sg_free(sarins_glue *g);
 
 int sg_set_debug_logging(sarins_glue *g, int on, size_t n, const char *const categories[], const char *fn);

@@ -56,6 +56,10 @@
  * no arrays (their value references are unknown there; c->a[k] still exists, sized by the parameter, so a
  * model needs no #ifdef) and its structural parameters are fixed Integer parameters.
  *
+ * Resources.  c->resources is the FMU's resources folder as a local path (set at instantiation, constant
+ * for the instance's life), for a model that reads data files at initialize() (a trained network); never
+ * read or write anything outside it and the files its parameters name.
+ *
  * No globals: the descriptor is const data, every mutable thing is per instance; instances are
  * independent and may run in different threads.
  */
@@ -116,6 +120,10 @@ typedef struct {
     unsigned char *set;              /* set[vr] = 1 once the host set variable vr (any fmi2Set*) since
                                       * instantiation or the last reset; see "Set flags" above */
     double **a;                      /* Real arrays, by SARINS_A_* slot: c->a[k][0 .. c->i[dim] - 1] */
+    const char *resources;           /* local path of the FMU's resources folder, no trailing separator
+                                      * (from fmi2Instantiate's file: URI or fmi3's resourcePath), or NULL;
+                                      * then resources_problem says why */
+    const char *resources_problem;   /* NULL, or why there is no resources path (for the model's message) */
 } sarins_ctx;
 
 typedef struct {

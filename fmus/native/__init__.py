@@ -37,7 +37,7 @@ LAYER = "sarins-fmi 1.0"
 PY_VERSION = f"{sys.version_info[0]}.{sys.version_info[1]}"
 HOST_REQUIREMENTS = (
     f"Host requirement: Linux x86-64 and CPython {PY_VERSION} (the version these FMUs were built with) with numpy "
-    "(scipy too for RBFIdentifier, DriftModelUpdater and IMUCompensator; the physics runs in the C core shipped inside). "
+    "(scipy too for DriftModelUpdater; the physics runs in the C core shipped inside). "
     "A Python host (e.g. FMPy) runs the FMU in its own interpreter. A native host needs no set-up: on the first "
     "fmi2Instantiate the FMU looks for the runtime in this order: (1) the environment variable "
     "SARINS_FMU_PYTHON (a python executable or a libpython .so), (2) the interpreter recorded at build time "

@@ -17,22 +17,35 @@ def register(subparsers) -> None:
     p.add_argument("--system", action="store_true",
                    help="also write the standard static system as one FMU (FMPy container, FMI 2.0)")
     p.add_argument("--compensator", type=Path, metavar="MODEL_FILE",
-                   help="ship this trained seed 003 compensator (JSON/npz) in IMUCompensator.fmu")
+                   help="ship this trained seed 003 compensator (JSON/npz) in IMUCompensator.fmu (as its binary model "
+                        "file, resources/compensator.bin)")
     p.set_defaults(func=run)
 
 
 def run_fmi3(args) -> int:
     """``--fmi 3``: the FMI 3.0 co-simulation variants of the native (Python-free) FMUs."""
+    from fmus.build import NEEDS_MODEL
     from fmus.native_fmu import DEFAULT_OUT3, NATIVE, build_native_fmus3
 
-    for option, given in (("--system", args.system), ("--compensator", args.compensator is not None)):
-        if given:
-            raise UsageError(f"{option}: not available with --fmi 3 (only the native FMUs have FMI 3.0 variants)")
+    if args.system:
+        raise UsageError("--system: not available with --fmi 3 (only the native FMUs have FMI 3.0 variants)")
     others = [n for n in args.only or [] if n not in NATIVE]
     if others:
         raise UsageError(f"--only {' '.join(others)}: no FMI 3.0 variant (native FMUs: {', '.join(NATIVE)})")
-    for path in build_native_fmus3(args.out or DEFAULT_OUT3, args.only):
+    if args.compensator is not None:  # a bad model file fails before anything is built
+        from sarins_fmu.identify.compensators import load
+
+        load(args.compensator)
+    names = None if args.only is None else [n for n in args.only if n not in NEEDS_MODEL]
+    if args.only and args.compensator is None and len(names) < len(args.only):
+        raise UsageError(f"--only IMUCompensator: it needs a trained model: {NEEDS_MODEL['IMUCompensator']}")
+    out = args.out or DEFAULT_OUT3
+    for path in build_native_fmus3(out, names) if names != [] else []:
         print(path)
+    if args.compensator is not None:
+        from fmus.compensator_export import export_compensator
+
+        print(export_compensator(args.compensator, out, fmi=3))
     return 0
 
 

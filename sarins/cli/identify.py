@@ -4,7 +4,7 @@
 
     sarins identify train --data records.csv \\
         --inputs lat_error_deg[,temp_c,temp_change_c] --target drift_dph \\
-        --spread 2 --goal 9e-8 [--max-neurons N] --out model.json
+        --spread 2 --goal 9e-8 [--max-neurons N] --out model.json [--fmu-model model.bin]
     sarins identify predict --model model.json --data tests.csv [--out predictions.csv]
 
 The ``sarins`` command adds these through :func:`register`.
@@ -23,6 +23,10 @@ Goal
     ``--goal`` is the mean squared training error in the target's unit
     squared, as MATLAB's ``newrb``. Seed 000 states a training error of
     0.0003 °/h; read as an RMS that is a goal of 9e-8 (°/h)², the default.
+
+``--fmu-model`` also writes the binary model file that the RBFIdentifier FMU
+reads as its ``model_file`` (the inputs must be among lat_error_deg, lat_deg,
+temp_c, temp_change_c and the target in deg/h).
 
 The model file (JSON) stores the input column names, the target name, the
 site latitude and the range of each training input; ``predict`` requires the
@@ -137,6 +141,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     )
     train.add_argument("--curve", type=Path, default=None, help="also write the training curve CSV")
     train.add_argument("--out", required=True, type=Path, help="model file to write (JSON, or .npz)")
+    train.add_argument("--fmu-model", type=Path, default=None, metavar="PATH",
+                       help="also write the binary model file the RBFIdentifier FMU reads (its model_file)")
 
     predict = sub.add_parser(
         "predict",
@@ -184,6 +190,8 @@ def _train(args: argparse.Namespace) -> None:
     if args.max_neurons is not None and not 1 <= args.max_neurons <= 100_000:
         raise _UsageError(f"--max-neurons must be in 1 .. 100000, got {args.max_neurons}")
     check_output_path(args.out, "--out")
+    if args.fmu_model is not None:
+        check_output_path(args.fmu_model, "--fmu-model")
     if args.curve is not None:
         check_output_path(args.curve, "--curve")
     table = read_table(args.data)
@@ -205,6 +213,13 @@ def _train(args: argparse.Namespace) -> None:
         "n_samples": int(x.shape[0]),
     }
     net.save(args.out)
+    if args.fmu_model is not None:
+        from sarins_fmu.identify.axial import export_identifier
+
+        try:
+            export_identifier(args.out, args.fmu_model)
+        except ModelFileError as exc:
+            raise _UsageError(f"--fmu-model: {exc.reason}") from None
     if args.curve is not None:
         write_table(args.curve, {
             "neurons": np.arange(len(net.training_curve_), dtype=float),

@@ -58,12 +58,18 @@ def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: floa
     INS subtracts it: ``run_static``'s ``correction_from_hours``.  Every
     output is a state output, so the loop INS -> identifier -> INS has no
     direct feedthrough; the result is the same under Gauss-Seidel and
-    Jacobi.  Default stop: 4 h alignment + 84 h.
+    Jacobi.  Default stop: 4 h alignment + 84 h.  A JSON/npz ``model_file`` in ``identifier`` is
+    converted into the binary model file the FMU reads, in ``fmu_dir/identifier_models``.
     """
     base = standard_static(fmu_dir, hours=hours, turntable=turntable, imu=imu, ins=ins)
     for name in IDENTIFIED_CORRECTION:  # fed by the identifier here
         base.components[2].parameters.pop(name, None)
-    identifier_fmu = Component("identifier", Path(fmu_dir) / "RBFIdentifier.fmu", dict(identifier or {}))
+    params = dict(identifier or {})
+    if params.get("model_file"):  # the native FMU reads binary model files: a JSON/npz one is converted
+        from sarins_fmu.identify.axial import fmu_model_file
+
+        params["model_file"] = str(fmu_model_file(params["model_file"], Path(fmu_dir) / "identifier_models"))
+    identifier_fmu = Component("identifier", Path(fmu_dir) / "RBFIdentifier.fmu", params)
     loop = [Connection("ins", "lat_error", "identifier", "lat_error"),
             Connection("ins", "nav_time", "identifier", "nav_time"),
             Connection("ins", "temp_change_align", "identifier", "temp_change"),

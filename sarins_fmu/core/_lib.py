@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-ABI = 7  # SARINS_CORE_ABI in sarins_core.h
+ABI = 8  # SARINS_CORE_ABI in sarins_core.h
 
 HERE = Path(__file__).resolve().parent
 NAME = "_sarins_core"

@@ -16,7 +16,7 @@
 #include <stdint.h>
 
 /* ABI version of the library; the binding refuses a library of another one. */
-#define SARINS_CORE_ABI 7
+#define SARINS_CORE_ABI 8
 
 int sarins_core_abi(void);
 
@@ -37,5 +37,10 @@ int sarins_core_abi(void);
 #include "schedule.h"
 #include "ambient.h"
 #include "ins_fmu_step.h"
+
+/* trained networks: model files, inference kernels, identifier and compensators */
+#include "netfile.h"
+#include "nets.h"
+#include "netmodel.h"
 
 #endif

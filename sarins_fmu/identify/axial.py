@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..units import DPH_TO_RPS, RAD_TO_DEG
+from . import netfile
 from .modelfile import ModelFileError
 from .rbf import RBFNetwork
 from ..site import SITE_LAT_DEG
@@ -77,7 +78,8 @@ class DriftIdentifier:
     Parameters
     ----------
     path : model file written by ``RBFNetwork.save`` with ``input_names``
-        among :data:`KNOWN_INPUTS` and a target in deg/h.
+        among :data:`KNOWN_INPUTS` and a target in deg/h, or the binary model
+        file of :meth:`export_binary` (its protocol is then :data:`DEFAULT_PROTOCOL`).
 
     Attributes: ``input_names``, ``local_lat_deg`` (the training site, deg)
     and ``protocol`` (:func:`model_protocol`).
@@ -90,16 +92,39 @@ class DriftIdentifier:
 
     def __init__(self, path: str | Path):
         self.path = Path(path)
-        self.network = RBFNetwork.load(self.path)
+        self.network = _network_from_binary(self.path) if netfile.is_netfile(self.path) else RBFNetwork.load(self.path)
         names = self.network.input_names
         if not names:
             raise ModelFileError(self.path, "the model does not name its inputs")
         unknown = [n for n in names if n not in KNOWN_INPUTS]
         if unknown:
             raise ModelFileError(self.path, f"unsupported model input(s) {unknown}; known: {KNOWN_INPUTS}")
+        if np.ndim(self.network.bias_) != 0:
+            raise ModelFileError(self.path, "an identifier has one output (the drift in deg/h)")
         self.input_names = tuple(names)
         self.local_lat_deg = site_latitude_deg(self.network.metadata, self.path)
         self.protocol = model_protocol(self.network.metadata, self.path)
+        from sarins_fmu.core.nets import AxialModel
+
+        self._native = AxialModel(self.binary(), self.path)
+
+    def binary_arrays(self) -> dict:
+        """The arrays of the binary model file (:mod:`.netfile`, kind ``axial_rbf``) that the RBFIdentifier
+        FMU and :meth:`drift_dph` evaluate (layout in ``sarins_fmu/core/netmodel.h``)."""
+        net = self.network
+        return {"mean": net.scaling_.mean, "scale": net.scaling_.scale, "centers": net.centers_,
+                "weights": np.asarray(net.weights_, float).reshape(-1, 1), "bias": np.atleast_1d(net.bias_),
+                "spread": np.float64(net.settings.spread),
+                "inputs": np.array([KNOWN_INPUTS.index(n) for n in self.input_names], float),
+                "local_lat_deg": np.float64(self.local_lat_deg)}
+
+    def binary(self) -> bytes:
+        """The binary model file's bytes (:meth:`binary_arrays`)."""
+        return netfile.to_bytes("axial_rbf", self.binary_arrays())
+
+    def export_binary(self, path: str | Path) -> Path:
+        """Write the binary model file the RBFIdentifier FMU reads (``model_file``); returns its path."""
+        return netfile.write(path, "axial_rbf", self.binary_arrays())
 
     def inputs(self, lat_error: float, temp_c: float = np.nan, temp_change_c: float = np.nan) -> np.ndarray:
         """Model input row (1, d) from the latitude error (rad) and temperatures (degC)."""
@@ -111,9 +136,59 @@ class DriftIdentifier:
         return row
 
     def drift_dph(self, lat_error: float, temp_c: float = np.nan, temp_change_c: float = np.nan) -> float:
-        """Identified axial drift, deg/h."""
-        return float(self.network.predict(self.inputs(lat_error, temp_c, temp_change_c))[0])
+        """Identified axial drift, deg/h, computed by the C core (``sarins_axial_drift``, the RBFIdentifier
+        FMU's function)."""
+        self.inputs(lat_error, temp_c, temp_change_c)  # the error message names the inputs
+        return self._native.drift_dph(lat_error, temp_c, temp_change_c)
 
     def drift(self, lat_error: float, temp_c: float = np.nan, temp_change_c: float = np.nan) -> float:
         """Identified axial drift, rad/s."""
         return self.drift_dph(lat_error, temp_c, temp_change_c) * DPH_TO_RPS
+
+
+def _network_from_binary(path: Path) -> RBFNetwork:
+    """The RBF network of a binary identifier file (kind ``axial_rbf``), with its input names and site."""
+    kind, arrays = netfile.read(path)
+    if kind != "axial_rbf":
+        raise ModelFileError(path, f"model kind {kind!r} is not an axial drift identifier")
+    try:
+        codes = arrays["inputs"]
+        if codes.ndim != 1 or not all(c in range(len(KNOWN_INPUTS)) for c in codes.tolist()):
+            raise ValueError(f"input codes {codes.tolist()} (0 .. {len(KNOWN_INPUTS) - 1})")
+        weights = arrays["weights"]
+        if weights.ndim != 2 or weights.shape[1] != 1:
+            raise ValueError(f"weights of shape {weights.shape}, expected (k, 1)")
+        meta = {"settings": {"spread": float(arrays["spread"])}, "n_features": len(codes), "single_output": True,
+                "input_names": [KNOWN_INPUTS[int(c)] for c in codes], "target_name": "drift_dph",
+                "metadata": {"local_lat_deg": float(arrays["local_lat_deg"])}}
+        payload = {"centers": arrays["centers"], "weights": weights[:, 0], "bias": arrays["bias"],
+                   "scaling_mean": arrays["mean"], "scaling_scale": arrays["scale"], "training_curve": np.zeros(0)}
+        return RBFNetwork.from_payload(meta, payload)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ModelFileError(path, f"not a consistent identifier: {exc}") from None
+
+
+def export_identifier(model_file: str | Path, out: str | Path) -> Path:
+    """Convert an identifier model file (JSON/npz, :meth:`RBFNetwork.save`) into the binary file the
+    RBFIdentifier FMU reads; returns ``out``."""
+    return DriftIdentifier(model_file).export_binary(out)
+
+
+def fmu_model_file(model_file: str | Path, folder: str | Path) -> Path:
+    """The binary model file the RBFIdentifier FMU reads for ``model_file``: the file itself when it is
+    one already, else its conversion ``folder/<stem>-<digest>.bin`` (named by the source's content, so a
+    campaign's runs share it; written once)."""
+    import hashlib
+
+    model_file = Path(model_file)
+    if netfile.is_netfile(model_file):
+        return model_file
+    try:
+        digest = hashlib.sha256(model_file.read_bytes()).hexdigest()[:16]
+    except OSError as exc:
+        raise ModelFileError(model_file, f"cannot read it: {exc.strerror or exc}") from None
+    out = Path(folder) / f"{model_file.stem}-{digest}{netfile.SUFFIX}"
+    if not out.is_file():
+        out.parent.mkdir(parents=True, exist_ok=True)
+        export_identifier(model_file, out)
+    return out

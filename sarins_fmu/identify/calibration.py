@@ -192,7 +192,7 @@ def fit_triad(true: object, measured: object) -> TriadCalibration:
 
 
 def compensate_triad(cal: TriadCalibration, measured: object) -> np.ndarray:
-    """Invert the model: u = K^-1 (y - b).
+    """Invert the model: u = K^-1 (y - b) (LU with partial pivoting in the C core, ``sarins_triad_compensate``).
 
     Parameters
     ----------
@@ -206,9 +206,11 @@ def compensate_triad(cal: TriadCalibration, measured: object) -> np.ndarray:
     ndarray, shape (n, 3)
         Compensated inputs, same unit.
     """
+    from sarins_fmu.core import nets
+
     y = _as_triad(measured, "measured")
-    # (y - b)' K^-T, one row per sample
-    return np.linalg.solve(cal.matrix, (y - cal.bias).T).T
+    # K u = y - b per sample, by the C core (the IMUCompensator FMU's function)
+    return nets.triad_compensate(cal.matrix, cal.bias, y)
 
 
 def cube_orientations() -> np.ndarray:

@@ -27,10 +27,15 @@ is 1e-3 of the signal (a skip connection; predicting the 100 deg/s signal
 itself would bury the 0.01 deg/s errors in the fit's own error).  The
 inputs are standardised inside each network.
 
-``fit(X, Y)`` trains, ``predict(X)`` compensates a time-ordered series (the
-recurrent models carry their state along it), ``stream()`` gives a
-stateful one-sample-at-a-time compensator (the FMU), ``save``/``load``
-write plain data (JSON or npz, :mod:`.modelfile`), never pickle.
+``fit(X, Y)`` trains (Python, torch for the recurrent models), ``predict(X)``
+compensates a time-ordered series (the recurrent models carry their state
+along it, from a zero state), ``stream()`` gives a stateful
+one-sample-at-a-time compensator, ``save``/``load`` write plain data (JSON or
+npz, :mod:`.modelfile`), never pickle.  ``binary()`` / ``export_binary(path)``
+give the model as the binary model file (:mod:`.netfile`) that the
+IMUCompensator FMU reads; ``predict`` and ``stream`` evaluate exactly that
+file with the C core (``sarins_comp_run``, float64), so the in-process and the
+co-simulated compensation are the same numbers bit for bit.
 """
 
 from __future__ import annotations
@@ -40,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import recurrent
+from . import netfile, recurrent
 from .calibration import TriadCalibration, compensate_triad
 from .grnn import GRNN
 from .modelfile import get_array, load_model_file, save_model_file
@@ -71,17 +76,44 @@ class Compensator:
 
     def __init__(self):
         self.fit_seconds: float | None = None
+        self._c_model = None
 
     def fit(self, X, Y) -> "Compensator":
         x, y = _check_xy(X, Y)
         t0 = time.perf_counter()
         self._fit(x, y)
         self.fit_seconds = time.perf_counter() - t0
+        self._c_model = None
         return self
 
     def predict(self, X) -> np.ndarray:
-        """Compensated outputs (n, 6) of a time-ordered series of inputs (n, 7)."""
-        return self._predict(_check_xy(X))
+        """Compensated outputs (n, 6) of a time-ordered series of inputs (n, 7), by the C core."""
+        return self.native().run(_check_xy(X))
+
+    def binary_arrays(self) -> dict:
+        """The arrays of the binary model file (layout in ``sarins_fmu/core/netmodel.h``)."""
+        return self._binary_arrays()
+
+    def binary(self) -> bytes:
+        """The binary model file's bytes (:mod:`.netfile`, kind :attr:`kind`)."""
+        return netfile.to_bytes(self.kind, self.binary_arrays())
+
+    def export_binary(self, path: str | Path) -> Path:
+        """Write the binary model file the IMUCompensator FMU reads; returns its path."""
+        return netfile.write(path, self.kind, self.binary_arrays())
+
+    def native(self):
+        """The model built by the C core from :meth:`binary` (kept until the next fit)."""
+        if self._c_model is None:
+            from sarins_fmu.core.nets import CompensatorModel
+
+            self._c_model = CompensatorModel(self.binary(), f"<{self.kind} compensator>")
+        return self._c_model
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_c_model"] = None  # a C handle does not cross processes; rebuilt on first use
+        return state
 
     def stream(self) -> "Stream":
         """A stateful compensator fed one sample at a time."""
@@ -97,22 +129,25 @@ class Compensator:
         header = {"kind": self.kind, "model": meta, "fit_seconds": self.fit_seconds}
         return save_model_file(path, FORMAT_TAG, FORMAT_VERSION, header, arrays)
 
-    # subclasses: _fit, _predict, _payload, _from_payload
+    # subclasses: _fit, _binary_arrays, _payload, _from_payload
 
 
 class Stream:
-    """Sample-by-sample compensation (stateless models call predict on one row)."""
+    """Sample-by-sample compensation by the C core; the recurrent state (zero at the start) is carried
+    from sample to sample, as in the IMUCompensator FMU."""
 
     def __init__(self, model: Compensator):
         self.model = model
+        self._c_model = model.native()
         self.reset()
 
     def reset(self) -> None:
-        self._state = None
+        self._state = self._c_model.zero_state()
 
     def step(self, x) -> np.ndarray:
         """Compensated (6,) outputs of one (7,) input sample."""
-        return self.model.predict(np.asarray(x, float).reshape(1, N_IN))[0]
+        x = _check_xy(np.asarray(x, float).reshape(1, N_IN))
+        return self._c_model.run(x, self._state)[0]
 
 
 class TraditionalCompensator(Compensator):
@@ -130,10 +165,18 @@ class TraditionalCompensator(Compensator):
         self.gyro = fit_triad(y[:, :3], x[:, :3])
         self.accel = fit_triad(y[:, 3:], x[:, 3:6])
 
-    def _predict(self, x):
+    def predict_triads(self, X) -> np.ndarray:
+        """:func:`.calibration.compensate_triad` on both triads (the same C function as :meth:`predict`)."""
+        x = _check_xy(X)
         if self.gyro is None:
             raise RuntimeError("traditional compensator is not fitted")
         return np.column_stack([compensate_triad(self.gyro, x[:, :3]), compensate_triad(self.accel, x[:, 3:6])])
+
+    def _binary_arrays(self):
+        if self.gyro is None:
+            raise RuntimeError("traditional compensator is not fitted")
+        return {"gyro_bias": self.gyro.bias, "gyro_matrix": self.gyro.matrix, "accel_bias": self.accel.bias,
+                "accel_matrix": self.accel.matrix}
 
     def _payload(self):
         if self.gyro is None:
@@ -171,6 +214,11 @@ class _Residual(Compensator):
     def _scaling_arrays(self):
         return {"target_mean": self.target_mean, "target_scale": self.target_scale}
 
+    def _binary_arrays(self):
+        if self.target_mean is None:
+            raise RuntimeError(f"{self.kind} compensator is not fitted")
+        return self._scaling_arrays() | _prefixed("net.", self._net_binary_arrays())
+
     def _load_scaling(self, arrays):
         self.target_mean = get_array(arrays, "target_mean", (N_OUT,))
         self.target_scale = get_array(arrays, "target_scale", (N_OUT,))
@@ -207,9 +255,6 @@ class _NetworkResidual(_Residual):
         idx = _subsample(len(x), self._limit())
         self.net.fit(x[idx], z[idx])
 
-    def _predict(self, x):
-        return self._output(x, self.net.predict(x))
-
     def _payload(self):
         meta, arrays = self.net.to_payload()
         return {"net": meta}, _prefixed("net.", arrays) | self._scaling_arrays()
@@ -240,6 +285,12 @@ class RBFCompensator(_NetworkResidual):
     def _limit(self):
         return self.max_samples
 
+    def _net_binary_arrays(self):
+        net = self.net
+        return {"mean": net.scaling_.mean, "scale": net.scaling_.scale, "centers": net.centers_,
+                "weights": np.asarray(net.weights_, float).reshape(net.centers_.shape[0], np.size(net.bias_)),
+                "bias": np.atleast_1d(net.bias_), "spread": np.float64(net.settings.spread)}
+
 
 class GRNNCompensator(_NetworkResidual):
     """GRNN (seed 003: smoothing factor 0.07, standardised inputs).
@@ -258,6 +309,11 @@ class GRNNCompensator(_NetworkResidual):
 
     def _limit(self):
         return self.max_patterns
+
+    def _net_binary_arrays(self):
+        net = self.net
+        return {"mean": net.scaling_.mean, "scale": net.scaling_.scale, "x_train": net.x_train_,
+                "y_train": net.y_train_, "sigma": np.float64(net.settings.sigma)}
 
 
 class RecurrentCompensator(_Residual):
@@ -300,10 +356,27 @@ class RecurrentCompensator(_Residual):
     def _z(self, x):
         return (x - self.input_mean) / self.input_scale
 
-    def _predict(self, x):
+    def predict_reference(self, X) -> np.ndarray:
+        """:meth:`predict` by the numpy cells (:meth:`.recurrent.RecurrentWeights.step`, float64, BLAS sums):
+        the reference the C core is tested against (equal to rounding, bound in tests/test_nets.py)."""
+        x = _check_xy(X)
+        w = self.weights
+        if not self.options["memory"]:
+            return self._output(x, w.step(self._z(x), w.zero_state(len(x)))[0])
+        return self._output(x, w.run(self._z(x)))
+
+    def predict_torch(self, X) -> np.ndarray:
+        """:meth:`predict` by torch (float32, :func:`.recurrent.run`): faster on long series, equal to
+        float32 rounding only."""
+        x = _check_xy(X)
+        return self._output(x, recurrent.run(self.weights, self._z(x), self.options["memory"]))
+
+    def _binary_arrays(self):
         if self.weights is None:
             raise RuntimeError(f"{self.cell} compensator is not fitted")
-        return self._output(x, recurrent.run(self.weights, self._z(x), self.options["memory"]))
+        return (_prefixed("net.", self.weights.arrays()) | self._scaling_arrays()
+                | {"input_mean": self.input_mean, "input_scale": self.input_scale,
+                   "memory": np.float64(1.0 if self.options["memory"] else 0.0)})
 
     @property
     def n_parameters(self) -> int:
@@ -312,9 +385,6 @@ class RecurrentCompensator(_Residual):
         if w is None:
             return recurrent.n_parameters(self.cell, N_IN, self.options["hidden"], N_OUT, self.options["layers"])
         return recurrent.n_parameters(self.cell, w.n_in, w.hidden, w.n_out, w.layers)
-
-    def stream(self) -> "RecurrentStream":
-        return RecurrentStream(self)
 
     def _payload(self):
         if self.weights is None:
@@ -337,20 +407,6 @@ class RecurrentCompensator(_Residual):
         out.input_scale = get_array(arrays, "input_scale", (N_IN,))
         out._load_scaling(arrays)
         return out
-
-
-class RecurrentStream(Stream):
-    """Sample-by-sample recurrent compensation: the hidden state is carried (numpy cells)."""
-
-    def reset(self) -> None:
-        self._state = self.model.weights.zero_state(1)
-
-    def step(self, x) -> np.ndarray:
-        x = _check_xy(np.asarray(x, float).reshape(1, N_IN))
-        if not self.model.options["memory"]:
-            self.reset()
-        z_out, self._state = self.model.weights.step(self.model._z(x), self._state)
-        return self.model._output(x, z_out)[0]
 
 
 _CLASSES = {"traditional": TraditionalCompensator, "rbf": RBFCompensator, "grnn": GRNNCompensator} | {

@@ -260,6 +260,19 @@ class GRNN:
             y = y[:, 0]
         return (y, nearest) if return_distance else y
 
+    def predict_dense(self, X: np.ndarray) -> np.ndarray:
+        """The dense GRNN of the C core (``sarins_grnn_eval``: every pattern, direct differences, sums in
+        pattern order), the IMUCompensator FMU's evaluation bit for bit; shape as :meth:`predict`.
+        :func:`grnn_predict` (numpy) equals it to rounding (bound in tests/test_nets.py)."""
+        from sarins_fmu.core import nets
+
+        if self.x_train_ is None or self.scaling_ is None:
+            raise RuntimeError("GRNN is not fitted: call fit() or load() first")
+        x = check_inputs(X, "X", n_features=self.n_features)
+        y = nets.grnn_predict_dense(x, self.scaling_.mean, self.scaling_.scale, self._z_train, self.y_train_,
+                                    self.settings.sigma)
+        return y[:, 0] if self._single_output else y
+
     # -------------------------------------------------------------- file IO
     def to_payload(self) -> tuple[dict, dict[str, np.ndarray]]:
         """Plain-data form ``(meta, arrays)`` as written to a model file."""

@@ -328,7 +328,7 @@ class RBFNetwork:
         self.target_name = None if target_name is None else str(target_name)
         self.input_range_ = np.vstack([x.min(axis=0), x.max(axis=0)])
         self.input_range_exact_ = True
-        fitted = self.predict(x)
+        fitted = self.predict_reference(x)  # numpy: the trained file does not depend on the C build
         self.training_mse_ = float(np.mean((t - (fitted[:, None] if single else fitted)) ** 2))
         return self
 
@@ -361,7 +361,8 @@ class RBFNetwork:
             raise RuntimeError("RBFNetwork is not fitted: call fit() or load() first")
 
     def predict(self, X: np.ndarray) -> np.ndarray:
-        """Network output for each input row.
+        """Network output for each input row, computed by the C core (``sarins_rbf_eval``, the kernel the
+        RBFIdentifier and IMUCompensator FMUs run: the same numbers bit for bit).
 
         Parameters
         ----------
@@ -373,6 +374,20 @@ class RBFNetwork:
         ndarray, shape (n,), or (n, m) if trained with m outputs
             Outputs, target unit.
         """
+        from sarins_fmu.core import nets
+
+        self._check_fitted()
+        x = check_inputs(X, "X", n_features=self.n_features)
+        zc = nets.standardize(self.centers_, self.scaling_.mean, self.scaling_.scale)
+        bias = np.atleast_1d(self.bias_)
+        w = np.asarray(self.weights_, dtype=float).reshape(zc.shape[0], bias.size)
+        out = nets.rbf_predict(x, self.scaling_.mean, self.scaling_.scale, zc, w, bias, self.settings.spread)
+        return out[:, 0] if self._single_output else out
+
+    def predict_reference(self, X: np.ndarray) -> np.ndarray:
+        """:meth:`predict` in numpy (cdist and a matrix product, chunked): the reference the C kernel is
+        tested against (they differ by rounding only: the summation orders differ) and the evaluation of
+        the training error, so that a trained model file does not depend on the C build."""
         self._check_fitted()
         x = check_inputs(X, "X", n_features=self.n_features)
         z = self.scaling_.apply(x)

@@ -1,0 +1,222 @@
+/* Inference kernels of the trained networks (nets.h). */
+#include "nets.h"
+
+/* no fused multiply-add: a * b + c rounds twice on every compiler and flag (gcc in ISO C mode does not
+ * contract; clang contracts within an expression unless told not to) */
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#endif
+
+#include <math.h>
+#include <string.h>
+
+/* ln 2 as the double nearest to it (numpy's log(2.0)) */
+#define NET_LN2 0x1.62e42fefa39efp-1
+
+/* ---- the only libm calls of the networks: exp and tanh ---- */
+static double net_exp(double x) { return exp(x); }
+static double net_tanh(double x) { return tanh(x); }
+/* logistic function as 0.5 (1 + tanh(x / 2)): exact in form, no overflow of exp(-x) */
+static double net_sigmoid(double x) { return 0.5 * (1.0 + net_tanh(0.5 * x)); }
+
+void sarins_standardize(int64_t n, int64_t d, const double *x, const double *mean, const double *scale, double *z)
+{
+    for (int64_t i = 0; i < n; i++)
+        for (int64_t j = 0; j < d; j++)
+            z[i * d + j] = (x[i * d + j] - mean[j]) / scale[j];
+}
+
+/* |a - b|^2 over d coordinates, summed in order */
+static double sq_dist(int64_t d, const double *a, const double *b)
+{
+    double s = 0.0;
+    for (int64_t i = 0; i < d; i++) {
+        double t = a[i] - b[i];
+        s += t * t;
+    }
+    return s;
+}
+
+void sarins_rbf_eval(const sarins_rbf *net, int64_t n, const double *x, double *y)
+{
+    const int64_t d = net->d, m = net->m;
+    /* a = exp(-(b dist)^2), b = sqrt(ln 2) / spread: the neuron answers 0.5 at distance spread */
+    const double factor = -NET_LN2 / (net->spread * net->spread);
+    double z[SARINS_NET_MAX_INPUTS];
+    for (int64_t r = 0; r < n; r++) {
+        double *out = y + r * m;
+        sarins_standardize(1, d, x + r * d, net->mean, net->scale, z);
+        for (int64_t o = 0; o < m; o++)
+            out[o] = 0.0;
+        for (int64_t j = 0; j < net->k; j++) {
+            double phi = net_exp(sq_dist(d, z, net->zc + j * d) * factor);
+            for (int64_t o = 0; o < m; o++)
+                out[o] += phi * net->w[j * m + o];
+        }
+        for (int64_t o = 0; o < m; o++)
+            out[o] = out[o] + net->bias[o];
+    }
+}
+
+void sarins_grnn_eval(const sarins_grnn *net, int64_t n, const double *x, double *y, double *scratch)
+{
+    const int64_t d = net->d, m = net->m;
+    const double inv_two_var = 1.0 / (2.0 * (net->sigma * net->sigma));
+    double z[SARINS_NET_MAX_INPUTS];
+    for (int64_t r = 0; r < n; r++) {
+        double *out = y + r * m;
+        sarins_standardize(1, d, x + r * d, net->mean, net->scale, z);
+        double d2_min = INFINITY;
+        for (int64_t j = 0; j < net->n; j++) {
+            scratch[j] = sq_dist(d, z, net->zt + j * d);
+            if (scratch[j] < d2_min)
+                d2_min = scratch[j];
+        }
+        /* P_j / max_j P_j = exp(-(D_j^2 - min D^2) / (2 sigma^2)), eq. (3) shifted: S_D >= 1 */
+        double s_d = 0.0;
+        for (int64_t o = 0; o < m; o++)
+            out[o] = 0.0;
+        for (int64_t j = 0; j < net->n; j++) {
+            double p = net_exp((d2_min - scratch[j]) * inv_two_var);
+            s_d += p;
+            for (int64_t o = 0; o < m; o++)
+                out[o] += net->y[j * m + o] * p; /* S_j, eq. (5) */
+        }
+        for (int64_t o = 0; o < m; o++)
+            out[o] = out[o] / s_d; /* eq. (6) */
+    }
+}
+
+int64_t sarins_rnn_state_size(const sarins_rnn *net) { return 2 * (int64_t)net->layers * net->hidden; }
+
+/* g[rows] = w[rows][cols] v[cols] + b, each row summed in order j = 0 .. cols-1 (four rows at a time: four
+ * independent sums, each in the same order, so the result does not depend on the blocking) */
+static void affine(int64_t rows, int64_t cols, const double *w, const double *v, const double *b, double *g)
+{
+    int64_t i = 0;
+    for (; i + 4 <= rows; i += 4) {
+        const double *w0 = w + i * cols, *w1 = w0 + cols, *w2 = w1 + cols, *w3 = w2 + cols;
+        double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+        for (int64_t j = 0; j < cols; j++) {
+            s0 += v[j] * w0[j];
+            s1 += v[j] * w1[j];
+            s2 += v[j] * w2[j];
+            s3 += v[j] * w3[j];
+        }
+        g[i] = s0 + b[i];
+        g[i + 1] = s1 + b[i + 1];
+        g[i + 2] = s2 + b[i + 2];
+        g[i + 3] = s3 + b[i + 3];
+    }
+    for (; i < rows; i++) {
+        double s = 0.0;
+        for (int64_t j = 0; j < cols; j++)
+            s += v[j] * w[i * cols + j];
+        g[i] = s + b[i];
+    }
+}
+
+/* One layer: input in[n_in], hidden h[hid] and cell c[hid] advanced in place. */
+static void rnn_layer(const sarins_rnn *net, int l, const double *in, int64_t n_in, double *h, double *c)
+{
+    const int64_t hid = net->hidden;
+    double gi[4 * SARINS_RNN_MAX_HIDDEN], gh[4 * SARINS_RNN_MAX_HIDDEN];
+    const int64_t g = net->cell == SARINS_RNN_LSTM ? 4 : 3;
+    affine(g * hid, n_in, net->w_ih[l], in, net->b_ih[l], gi);
+    affine(g * hid, hid, net->w_hh[l], h, net->b_hh[l], gh);
+    if (net->cell == SARINS_RNN_LSTM) {
+        for (int64_t k = 0; k < hid; k++) {
+            double i = net_sigmoid(gi[k] + gh[k]);
+            double f = net_sigmoid(gi[hid + k] + gh[hid + k]);
+            double gg = net_tanh(gi[2 * hid + k] + gh[2 * hid + k]);
+            double o = net_sigmoid(gi[3 * hid + k] + gh[3 * hid + k]);
+            c[k] = f * c[k] + i * gg;  /* c_t = f c_{t-1} + i g */
+            h[k] = o * net_tanh(c[k]); /* h_t = o tanh(c_t) */
+        }
+        return;
+    }
+    for (int64_t k = 0; k < hid; k++) {
+        double r = net_sigmoid(gi[k] + gh[k]);                               /* eq. (7) */
+        double z = net_sigmoid(gi[hid + k] + gh[hid + k]);                   /* eq. (8) */
+        double cand = net_tanh(gi[2 * hid + k] + r * gh[2 * hid + k]);       /* eq. (9) */
+        h[k] = (1.0 - z) * cand + z * h[k];                                  /* eq. (10) */
+    }
+}
+
+void sarins_rnn_step(const sarins_rnn *net, double *state, const double *x, double *y)
+{
+    const int64_t hid = net->hidden;
+    double *h = state, *c = state + (int64_t)net->layers * hid;
+    const double *in = x;
+    int64_t n_in = net->n_in;
+    for (int l = 0; l < net->layers; l++) {
+        rnn_layer(net, l, in, n_in, h + l * hid, c + l * hid);
+        in = h + l * hid;
+        n_in = hid;
+    }
+    affine(net->n_out, hid, net->w_out, in, net->b_out, y);
+}
+
+int sarins_triad_compensate(const double *k, const double *b, int64_t n, const double *y, double *u)
+{
+    /* P K = L U with partial pivoting; L unit lower (below the diagonal of a), U on and above it */
+    double a[9];
+    int perm[3] = {0, 1, 2};
+    memcpy(a, k, sizeof a);
+    for (int col = 0; col < 3; col++) {
+        int p = col;
+        for (int r = col + 1; r < 3; r++)
+            if (fabs(a[r * 3 + col]) > fabs(a[p * 3 + col]))
+                p = r;
+        if (!(a[p * 3 + col] != 0.0) || !isfinite(a[p * 3 + col]))
+            return 1;
+        if (p != col) {
+            for (int j = 0; j < 3; j++) {
+                double t = a[col * 3 + j];
+                a[col * 3 + j] = a[p * 3 + j];
+                a[p * 3 + j] = t;
+            }
+            int t = perm[col];
+            perm[col] = perm[p];
+            perm[p] = t;
+        }
+        for (int r = col + 1; r < 3; r++) {
+            double f = a[r * 3 + col] / a[col * 3 + col];
+            a[r * 3 + col] = f;
+            for (int j = col + 1; j < 3; j++)
+                a[r * 3 + j] -= f * a[col * 3 + j];
+        }
+    }
+    for (int64_t i = 0; i < n; i++) {
+        double r[3], v[3];
+        for (int j = 0; j < 3; j++)
+            r[j] = y[i * 3 + j] - b[j];
+        for (int j = 0; j < 3; j++) { /* L v = P r */
+            v[j] = r[perm[j]];
+            for (int q = 0; q < j; q++)
+                v[j] -= a[j * 3 + q] * v[q];
+        }
+        for (int j = 2; j >= 0; j--) { /* U u = v */
+            for (int q = j + 1; q < 3; q++)
+                v[j] -= a[j * 3 + q] * v[q];
+            v[j] = v[j] / a[j * 3 + j];
+        }
+        memcpy(u + i * 3, v, sizeof v);
+    }
+    return 0;
+}
+
+void sarins_rbf_predict(int64_t d, int64_t k, int64_t m, const double *mean, const double *scale, const double *zc,
+                        const double *w, const double *bias, double spread, int64_t n, const double *x, double *y)
+{
+    const sarins_rbf net = {d, k, m, mean, scale, zc, w, bias, spread};
+    sarins_rbf_eval(&net, n, x, y);
+}
+
+void sarins_grnn_predict(int64_t d, int64_t n_patterns, int64_t m, const double *mean, const double *scale,
+                         const double *zt, const double *yt, double sigma, int64_t n, const double *x, double *y,
+                         double *scratch)
+{
+    const sarins_grnn net = {d, n_patterns, m, mean, scale, zt, yt, sigma};
+    sarins_grnn_eval(&net, n, x, y, scratch);
+}

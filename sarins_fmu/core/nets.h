@@ -1,0 +1,81 @@
+/* Inference kernels of the trained networks: RBF (seed 000 eqs (1)-(2), seed 003), dense GRNN (seed 003
+ * eqs (3)-(6)), LSTM and GRU cells (seed 003 eqs (7)-(10)) and the triad calibration inverse (seed 003
+ * eqs (1)-(2)).  The Python library calls them through ctypes (sarins_fmu/core/nets.py) and the FMUs link
+ * them, so both compute the same numbers bit for bit.  Training stays in Python.
+ *
+ * Units: whatever the model was trained on; the kernels are unit-free (a standardised input z is
+ * dimensionless).  Arrays are row-major float64.  No allocation, no globals, reentrant; the exponential and
+ * the hyperbolic tangent are evaluated in nets.c's two math helpers only.
+ */
+#ifndef SARINS_NETS_H
+#define SARINS_NETS_H
+
+#include <stdint.h>
+
+#define SARINS_RNN_MAX_HIDDEN 256 /* most units of a recurrent layer */
+#define SARINS_RNN_MAX_LAYERS 3   /* most stacked recurrent layers */
+#define SARINS_RNN_MAX_IO 64      /* most inputs / outputs of a recurrent network */
+#define SARINS_NET_MAX_INPUTS 64  /* most inputs d of an RBF or GRNN row */
+
+enum { SARINS_RNN_LSTM = 0, SARINS_RNN_GRU = 1 };
+
+/* Gaussian RBF network with m outputs:
+ *   y_o = sum_j w[j][o] exp(-ln2 |z(x) - zc_j|^2 / spread^2) + bias_o,  z(x) = (x - mean) / scale,
+ * zc the standardised centres (sarins_standardize of the centres).  The sum runs over j = 0 .. k-1 in order. */
+typedef struct {
+    int64_t d, k, m;
+    const double *mean, *scale; /* [d] */
+    const double *zc;           /* [k][d] */
+    const double *w;            /* [k][m] */
+    const double *bias;         /* [m] */
+    double spread;              /* > 0, standardised units */
+} sarins_rbf;
+
+/* Dense GRNN (Nadaraya-Watson) with m outputs: P_j = exp(-(D_j^2 - min D^2) / (2 sigma^2)),
+ * y_o = sum_j y[j][o] P_j / sum_j P_j over every pattern, D_j = |z(x) - zt_j| (the largest weight is 1). */
+typedef struct {
+    int64_t d, n, m;
+    const double *mean, *scale; /* [d] */
+    const double *zt;           /* [n][d] standardised patterns */
+    const double *y;            /* [n][m] */
+    double sigma;               /* > 0, standardised units */
+} sarins_grnn;
+
+/* Stacked LSTM or GRU (PyTorch layout and gate order: LSTM i f g o, GRU r z n) with a linear output.
+ * Layer l: w_ih [G h][n_in or h], w_hh [G h][h], b_ih, b_hh [G h]; w_out [n_out][h], b_out [n_out]. */
+typedef struct {
+    int cell; /* SARINS_RNN_LSTM or SARINS_RNN_GRU */
+    int layers;
+    int64_t hidden, n_in, n_out;
+    const double *w_ih[SARINS_RNN_MAX_LAYERS], *w_hh[SARINS_RNN_MAX_LAYERS];
+    const double *b_ih[SARINS_RNN_MAX_LAYERS], *b_hh[SARINS_RNN_MAX_LAYERS];
+    const double *w_out, *b_out;
+} sarins_rnn;
+
+/* z[n][d] = (x[n][d] - mean) / scale (z may be x). */
+void sarins_standardize(int64_t n, int64_t d, const double *x, const double *mean, const double *scale, double *z);
+
+/* RBF outputs y[n][m] of the inputs x[n][d]. */
+void sarins_rbf_eval(const sarins_rbf *net, int64_t n, const double *x, double *y);
+
+/* GRNN outputs y[n][m] of the inputs x[n][d]; scratch holds net->n doubles. */
+void sarins_grnn_eval(const sarins_grnn *net, int64_t n, const double *x, double *y, double *scratch);
+
+/* Doubles of a network's state: h then c, each [layers][hidden] (c unused by the GRU). */
+int64_t sarins_rnn_state_size(const sarins_rnn *net);
+
+/* One time step: input x[n_in], state advanced in place, output y[n_out]. */
+void sarins_rnn_step(const sarins_rnn *net, double *state, const double *x, double *y);
+
+/* u[n][3] = K^-1 (y[n][3] - b), K (3 x 3, row-major) by LU with partial pivoting.  Returns 0, or 1 when K is
+ * singular (u untouched). */
+int sarins_triad_compensate(const double *k, const double *b, int64_t n, const double *y, double *u);
+
+/* Flat-argument forms for the ctypes binding (the same computations). */
+void sarins_rbf_predict(int64_t d, int64_t k, int64_t m, const double *mean, const double *scale, const double *zc,
+                        const double *w, const double *bias, double spread, int64_t n, const double *x, double *y);
+void sarins_grnn_predict(int64_t d, int64_t n_patterns, int64_t m, const double *mean, const double *scale,
+                         const double *zt, const double *yt, double sigma, int64_t n, const double *x, double *y,
+                         double *scratch);
+
+#endif
