@@ -2,7 +2,7 @@
 
 pyproject.toml holds the project's metadata; this file only declares the
 core as one shared library, built by ``pip install`` (regular or editable).
-The library is plain C11 + libm, loaded with ctypes
+The library is plain C11 with no libm (its math functions are its own, smath.c), loaded with ctypes
 (:mod:`sarins_fmu.core._lib`), so it exports no Python module init function.
 """
 
@@ -26,7 +26,6 @@ class BuildCore(build_ext):
             ext.extra_compile_args = ["/std:c11", "/O2", "/W4", "/WX", "/fp:precise"]
         else:
             ext.extra_compile_args = list(UNIX_FLAGS)
-            ext.extra_link_args = ["-lm"]
         try:
             super().build_extension(ext)
         except (CCompilerError, CompileError, ExecError, LinkError, PlatformError) as exc:
