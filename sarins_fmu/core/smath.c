@@ -28,6 +28,13 @@
 #include <arm_neon.h>
 #define SM_HW_NEON64 1
 #endif
+/* x86-64 without -mfma, GCC or clang: the FMA instruction when the CPU has it, chosen at run time */
+#if !defined(SM_HW_FMA_X86) && defined(__GNUC__) && defined(__x86_64__) && defined(__has_attribute)
+#if __has_attribute(target)
+#include <immintrin.h>
+#define SM_FMA_RUNTIME 1
+#endif
+#endif
 #endif
 
 /* ---------------------------------------------------------------- bits */
@@ -408,9 +415,19 @@ static double soft_fma(double a, double b, double c)
     return neg ? -v : v;
 }
 
+#if defined(SM_FMA_RUNTIME)
+__attribute__((target("fma"))) static double fma_x86(double a, double b, double c)
+{
+    return _mm_cvtsd_f64(_mm_fmadd_sd(_mm_set_sd(a), _mm_set_sd(b), _mm_set_sd(c)));
+}
+#endif
+
 double sm_fma(double a, double b, double c)
 {
-#if defined(SM_HW_FMA_X86)
+#if defined(SM_FMA_RUNTIME)
+    if (__builtin_cpu_supports("fma")) return fma_x86(a, b, c);
+    return soft_fma(a, b, c);
+#elif defined(SM_HW_FMA_X86)
     return _mm_cvtsd_f64(_mm_fmadd_sd(_mm_set_sd(a), _mm_set_sd(b), _mm_set_sd(c)));
 #elif defined(SM_HW_NEON64)
     return vget_lane_f64(vfma_f64(vdup_n_f64(c), vdup_n_f64(a), vdup_n_f64(b)), 0);
@@ -692,13 +709,14 @@ static void log_dd(double x, double *hi, double *lo)
     double m = from_bits((u & SM_MANT) | 0x3ff0000000000000ull);
     double mh = from_bits(bits_of(m) & ~0x1ffull), ml = m - mh;
     double c = SM_LOG_TAB[3 * j], lh = SM_LOG_TAB[3 * j + 1], ll = SM_LOG_TAB[3 * j + 2];
-    double rh, rl;
-    two_sum(mh * c - 1.0, ml * c, &rh, &rl);
+    double rh, rl; /* |mh c - 1| >= |ml c| unless mh c = 1 */
+    fast_two_sum(mh * c - 1.0, ml * c, &rh, &rl);
     double s = (double)k * SM_LN2_HI + lh; /* exact */
     double t, te;
     two_sum(s, rh, &t, &te);
-    double z = rh * rh;
-    double corr = (te + ((double)k * SM_LN2_LO + ll)) + (rl - rh * rl) + (z * rh * poly(SM_LOG_TAIL, 6, rh) - 0.5 * z);
+    const double *q = SM_LOG_TAIL;
+    double z = rh * rh, p = (q[0] + rh * q[1]) + z * ((q[2] + rh * q[3]) + z * (q[4] + rh * q[5]));
+    double corr = (te + ((double)k * SM_LN2_LO + ll)) + (rl - rh * rl) + (z * rh * p - 0.5 * z);
     fast_two_sum(t, corr, hi, lo);
 }
 
