@@ -249,7 +249,9 @@ def test_fmpy_builds_the_sources_and_the_result_runs_with_an_empty_environment(n
     unzipped = tmp_path / name
     shutil.copytree(folder, unzipped)
     shutil.rmtree(unzipped / "binaries")
-    build_platform_binary(unzipped, build_dir=tmp_path / "build", all_warnings=True)
+    build = tmp_path / "build"
+    build.mkdir()
+    build_platform_binary(unzipped, build_dir=build, all_warnings=True)
     lib = unzipped / "binaries" / "linux64" / f"{name}.so"
     assert lib.is_file()
     assert _rows_differ(run_fmu(name, native, host, lib, tmp_path, prefix=["env", "-i"]), shipped[name]) == ""

@@ -512,7 +512,7 @@ static int reduce_large(double x, double *rh, double *rl)
 /* x = k pi/2 + rh + rl, |rh + rl| <= pi/4 (a hair more where k x 2/pi rounds up); returns k mod 4.  Below
  * 2^26, Cody and Waite's reduction with pi/2 in three 27-bit parts (k p_i exact) and a tail: absolute
  * error < 2^-104, kept when |r| > 2^-40; else (near a multiple of pi/2, or larger x) the exact one. */
-static int reduce(double x, double *rh, double *rl)
+static inline int reduce(double x, double *rh, double *rl)
 {
     double a = fabs_i(x);
     if (a <= 0x1.921fb54442d18p-1) {
@@ -540,7 +540,7 @@ typedef struct {
 
 #define SM_SPLIT 134217729.0 /* 2^27 + 1 */
 
-static sm_reduced reduced(double rh, double rl)
+static inline sm_reduced reduced(double rh, double rl)
 {
     double t = SM_SPLIT * rh, ah = t - (t - rh), al = rh - ah, zh = rh * rh;
     sm_reduced r = {rh, rl, ah, al, zh, ((ah * ah - zh) + 2.0 * ah * al) + al * al};
@@ -548,7 +548,7 @@ static sm_reduced reduced(double rh, double rl)
 }
 
 /* sin r = r - r^3/6 + r^5 P(r^2) as h + l: r^3/6 = rh (z/6) with z/6 rounded once and the product exact */
-static void sin_kernel(const sm_reduced *r, double *h, double *l)
+static inline void sin_kernel(const sm_reduced *r, double *h, double *l)
 {
     const double *c = SM_SIN_TAIL;
     double z = r->zh, w = z * SM_SIXTH_HI + (r->zl * SM_SIXTH_HI + z * SM_SIXTH_LO);
@@ -562,7 +562,7 @@ static void sin_kernel(const sm_reduced *r, double *h, double *l)
 }
 
 /* cos r = 1 - r^2/2 + r^4 P(r^2) as h + l */
-static void cos_kernel(const sm_reduced *r, double *h, double *l)
+static inline void cos_kernel(const sm_reduced *r, double *h, double *l)
 {
     const double *c = SM_COS_TAIL;
     double z = r->zh, z2 = z * z, w, we;
@@ -648,7 +648,7 @@ double sm_tan(double x)
 /* exp(xh + xl), |xh| <= 746, |xl| <= 2^-40 |xh| or tiny: x = (64 m + j) ln2/64 + r, |r| <= ln2/128;
  * exp x = 2^m 2^(j/64) exp r, exp r - 1 = r + r^2/2 + r^3 P(r); 2^(j/64) (1 + p) summed as a
  * double-double and rounded once, also into the subnormal range. */
-static double exp_core(double xh, double xl)
+static inline double exp_core(double xh, double xl)
 {
     double n = (xh * SM_EXP_INV_L + SM_SHIFTER) - SM_SHIFTER; /* |n| < 2^17 */
     int64_t ni = (int64_t)n;
@@ -695,7 +695,7 @@ double sm_exp10(double x)
 
 /* log x as hi + lo for finite x > 0: x = 2^k m, m in [1, 2) in cell j (its top 7 bits);
  * log x = k ln2 - log c_j + log(1 + r), r = m c_j - 1 exact (m split into 44 + 9 bits, c_j has 9) */
-static void log_dd(double x, double *hi, double *lo)
+static inline void log_dd(double x, double *hi, double *lo)
 {
     int k = 0;
     uint64_t u = bits_of(x);
