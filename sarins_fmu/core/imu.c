@@ -122,7 +122,7 @@ static LANE_INLINE void rot_t_lane(double ax, double ay, double az, double c, do
 
 /* Gimbal j of the truth: w, f, s (v[0..8] lanes) turned by R^T as rot_t turns them, then s += thetadot a; the
  * gimbal state ang, rat, acc and the time tau (s) since the interval start per lane.  Lanes from n_valid on
- * hold no value: no math call for them (their cos, sin taken as 1, 0).  first: s is still the zero vector
+ * hold no value: their cos, sin taken as 1, 0.  first: s is still the zero vector
  * (+0.0 each), taken as literals rather than stored (a store of zeros becomes a memset, a slow rep stos here). */
 static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, const double *restrict ang,
                                      const double *restrict rat, const double *restrict acc,
@@ -132,6 +132,14 @@ static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, con
         th[l] = ang[l] + (rat[l] + 0.5 * acc[l] * tau[l]) * tau[l];
         thd[l] = rat[l] + acc[l] * tau[l];
     }
+#if LANES == 4
+    for (int l = n_valid; l < LANES; l++) th[l] = 1.0; /* no value: an ordinary argument, result unused */
+    sm_sincos4(th, sn, c);
+    for (int l = n_valid; l < LANES; l++) {
+        c[l] = 1.0;
+        sn[l] = 0.0;
+    }
+#else
     for (int l = 0; l < LANES; l++) {
         if (l < n_valid) {
             sm_sincos(th[l], &sn[l], &c[l]);
@@ -140,6 +148,7 @@ static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, con
             sn[l] = 0.0;
         }
     }
+#endif
     double ax = axis[0], ay = axis[1], az = axis[2];
     for (int l = 0; l < LANES; l++) {
         double s0 = first ? 0.0 : v[6][l], s1 = first ? 0.0 : v[7][l], s2 = first ? 0.0 : v[8][l];

@@ -623,6 +623,55 @@ void sm_sincos(double x, double *s, double *c)
     *c = ((k + 1) & 2) ? -cv : cv;
 }
 
+/* Four sincos side by side: the same operations as sm_sincos on each lane (so the same bits), written
+ * without branches for the ordinary case (pi/4 < |x| < 2^26 or |x| <= pi/4, the reduced argument not
+ * tiny) so that the compiler evaluates the lanes in SIMD registers; the other lanes go through sm_sincos.
+ * With GCC or clang on x86-64 glibc it is also compiled for AVX2 and the loader picks the variant. */
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && defined(__GLIBC__) && defined(__has_attribute)
+#if __has_attribute(target_clones)
+#define SM_LANE_CLONES __attribute__((target_clones("avx2", "default")))
+#endif
+#endif
+#ifndef SM_LANE_CLONES
+#define SM_LANE_CLONES
+#endif
+
+SM_LANE_CLONES void sm_sincos4(const double *x, double *s, double *c)
+{
+    /* selections as bit masks, not branches (which the vectorizers of GCC do not if-convert here) */
+    double sv[4], cv[4];
+    int64_t ok[4];
+    for (int l = 0; l < 4; l++) {
+        double xv = x[l], a = from_bits(bits_of(xv) & ~SM_SIGN);
+        uint64_t small = (uint64_t)0 - (uint64_t)(a <= 0x1.921fb54442d18p-1); /* all ones: no reduction */
+        double k = from_bits(bits_of((xv * SM_INV_PIO2 + SM_SHIFTER) - SM_SHIFTER) & ~small);
+        double t = xv - k * SM_PIO2_1, s1, e1, s2, e2, rh, rl;
+        two_sum(t, -(k * SM_PIO2_2), &s1, &e1);
+        two_sum(s1, -(k * SM_PIO2_3), &s2, &e2);
+        fast_two_sum(s2, (e1 + e2) - k * SM_PIO2_4, &rh, &rl);
+        double arh = from_bits(bits_of(rh) & ~SM_SIGN);
+        ok[l] = (int64_t)((a >= SM_TINY_TRIG) & (a < 0x1p26) & ((arh > 0x1p-40) | (a <= 0x1.921fb54442d18p-1)));
+        double n = k - 4.0 * ((k * 0.25 + SM_SHIFTER) - SM_SHIFTER); /* k mod 4, in -2 .. 2 */
+        n = n + 4.0 * (double)(n < 0.0);
+        sm_reduced r = reduced(rh, rl);
+        double sh, sl, ch, cl;
+        sin_kernel(&r, &sh, &sl);
+        cos_kernel(&r, &ch, &cl);
+        uint64_t odd = (uint64_t)0 - (uint64_t)((n == 1.0) | (n == 3.0));
+        uint64_t ss = (bits_of(ch) & odd) | (bits_of(sh) & ~odd), cc = (bits_of(sh) & odd) | (bits_of(ch) & ~odd);
+        sv[l] = from_bits(ss ^ ((uint64_t)(n >= 2.0) << 63));
+        cv[l] = from_bits(cc ^ ((uint64_t)((n == 1.0) | (n == 2.0)) << 63));
+    }
+    for (int l = 0; l < 4; l++) {
+        if (ok[l]) {
+            s[l] = sv[l];
+            c[l] = cv[l];
+        } else {
+            sm_sincos(x[l], &s[l], &c[l]);
+        }
+    }
+}
+
 /* (nh + nl) / (dh + dl) rounded once */
 static double dd_div(double nh, double nl, double dh, double dl)
 {
@@ -945,6 +994,17 @@ int sarins_smath_eval(int func, int64_t n, const double *x, const double *y, con
         case 24: v = sm_hypot(a, b); break;
         case 25: v = soft_sqrt(a); break;  /* the software versions, to compare with the hardware */
         case 26: v = soft_fma(a, b, c); break;
+        case 27: /* sincos4 over groups of four (the last group padded) */
+            if (i % 4 == 0) {
+                double xs[4], ss[4], cs[4];
+                for (int l = 0; l < 4; l++) xs[l] = i + l < n ? x[i + l] : 1.0;
+                sm_sincos4(xs, ss, cs);
+                for (int l = 0; l < 4 && i + l < n; l++) {
+                    out[i + l] = ss[l];
+                    out[n + i + l] = cs[l];
+                }
+            }
+            continue;
         default: return -1;
         }
         out[i] = v;

@@ -61,6 +61,7 @@ double sm_fmod(double x, double y);
 double sm_sin(double x); /* any finite x: exact range reduction by pi/2 */
 double sm_cos(double x);
 void sm_sincos(double x, double *s, double *c); /* *s = sm_sin(x), *c = sm_cos(x), one reduction */
+void sm_sincos4(const double *x, double *s, double *c); /* sm_sincos of x[0..3], in SIMD lanes where it can */
 double sm_tan(double x);
 double sm_exp(double x);
 double sm_exp10(double x); /* 10^x */
@@ -74,12 +75,12 @@ double sm_hypot(double x, double y);
 
 /* Every function above over n arguments, for the tests and benchmarks (through the Python binding):
  * func is the index of the function in SARINS_SMATH_NAMES (x, y, z: first, second, third argument, NULL
- * where unused); out[n] the results (sincos: out[2n], sin then cos of each x; soft_sqrt, soft_fma: the
+ * where unused); out[n] the results (sincos, sincos4: out[2n], sin then cos of each x; soft_sqrt, soft_fma: the
  * software versions of sm_sqrt and sm_fma, which use the hardware instruction where there is one).  Returns 0, or -1 for an unknown func
  * or n < 0. */
 #define SARINS_SMATH_NAMES                                                                                  \
     "sqrt fma fabs copysign fmin fmax floor ceil trunc round nearbyint fmod sin cos sincos tan exp exp10 "  \
-    "log log10 atan atan2 asin acos hypot soft_sqrt soft_fma"
+    "log log10 atan atan2 asin acos hypot soft_sqrt soft_fma sincos4"
 int sarins_smath_eval(int func, int64_t n, const double *x, const double *y, const double *z, double *out);
 
 #endif

@@ -15,7 +15,7 @@ from ._lib import c_double_p, function
 
 # SARINS_SMATH_NAMES in smath.h, in order
 NAMES = ("sqrt fma fabs copysign fmin fmax floor ceil trunc round nearbyint fmod sin cos sincos tan exp exp10 "
-         "log log10 atan atan2 asin acos hypot soft_sqrt soft_fma").split()
+         "log log10 atan atan2 asin acos hypot soft_sqrt soft_fma sincos4").split()
 ARITY = {"fma": 3, "soft_fma": 3, "copysign": 2, "fmin": 2, "fmax": 2, "fmod": 2, "atan2": 2, "hypot": 2}
 
 _eval = function("sarins_smath_eval", ctypes.c_int, ctypes.c_int, ctypes.c_int64, c_double_p, c_double_p,
@@ -23,8 +23,8 @@ _eval = function("sarins_smath_eval", ctypes.c_int, ctypes.c_int, ctypes.c_int64
 
 
 def evaluate(name: str, *args) -> np.ndarray:
-    """``sm_<name>`` of the arguments (array-likes broadcast together, float64) element-wise; ``sincos``
-    returns an array (2, n): the sines, then the cosines.  ``soft_sqrt``, ``soft_fma``: the software
+    """``sm_<name>`` of the arguments (array-likes broadcast together, float64) element-wise; ``sincos`` and
+    ``sincos4`` (four arguments at a time) return an array (2, n): the sines, then the cosines.  ``soft_sqrt``, ``soft_fma``: the software
     versions behind ``sm_sqrt``, ``sm_fma`` (which use the hardware instruction where there is one)."""
     if name not in NAMES:
         raise ValueError(f"unknown smath function {name!r}; known: {', '.join(NAMES)}")
@@ -32,8 +32,8 @@ def evaluate(name: str, *args) -> np.ndarray:
         raise ValueError(f"{name} takes {ARITY.get(name, 1)} argument(s), got {len(args)}")
     arrays = [np.ascontiguousarray(a, dtype=np.float64).ravel() for a in np.broadcast_arrays(*args)]
     n = arrays[0].size
-    out = np.empty(2 * n if name == "sincos" else n)
+    out = np.empty(2 * n if name in ("sincos", "sincos4") else n)
     pointers = [a.ctypes.data_as(c_double_p) for a in arrays] + [None] * (3 - len(arrays))
     if _eval(NAMES.index(name), n, *pointers, out.ctypes.data_as(c_double_p)) != 0:
         raise RuntimeError(f"sarins_smath_eval refused {name}")
-    return out.reshape(2, n) if name == "sincos" else out
+    return out.reshape(2, n) if name in ("sincos", "sincos4") else out
