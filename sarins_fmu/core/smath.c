@@ -67,23 +67,6 @@ static double fabs_i(double x) { return from_bits(bits_of(x) & ~SM_SIGN); }
 
 static double copysign_i(double x, double y) { return from_bits((bits_of(x) & ~SM_SIGN) | (bits_of(y) & SM_SIGN)); }
 
-double sm_fabs(double x) { return fabs_i(x); }
-
-double sm_copysign(double x, double y) { return copysign_i(x, y); }
-
-double sm_fmin(double x, double y)
-{
-    if (isnan(x)) return y;
-    if (isnan(y)) return x;
-    return x < y ? x : y;
-}
-
-double sm_fmax(double x, double y)
-{
-    if (isnan(x)) return y;
-    if (isnan(y)) return x;
-    return x > y ? x : y;
-}
 
 /* 2^n, n in [-1022, 1023] */
 static double pow2(int n) { return from_bits((uint64_t)(n + 1023) << 52); }

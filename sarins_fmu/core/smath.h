@@ -46,10 +46,47 @@
 /* exact (correctly rounded, as IEEE 754 requires of these) */
 double sm_sqrt(double x);
 double sm_fma(double a, double b, double c); /* a b + c rounded once */
-double sm_fabs(double x);
-double sm_copysign(double x, double y);
-double sm_fmin(double x, double y); /* a NaN argument gives the other */
-double sm_fmax(double x, double y);
+/* fabs, copysign, fmin, fmax: inline (they sit in SIMD loops; a call would stop the vectorizer) */
+typedef union {
+    double d;
+    uint64_t u;
+} sm_bits64;
+
+static inline double sm_fabs(double x)
+{
+#if defined(__GNUC__)
+    return __builtin_fabs(x); /* a bit operation, never a call */
+#else
+    sm_bits64 b;
+    b.d = x;
+    b.u &= 0x7fffffffffffffffull;
+    return b.d;
+#endif
+}
+
+static inline double sm_copysign(double x, double y)
+{
+#if defined(__GNUC__)
+    return __builtin_copysign(x, y);
+#else
+    sm_bits64 a, b;
+    a.d = x;
+    b.d = y;
+    a.u = (a.u & 0x7fffffffffffffffull) | (b.u & 0x8000000000000000ull);
+    return a.d;
+#endif
+}
+
+static inline double sm_fmin(double x, double y) /* a NaN argument gives the other */
+{
+    return isnan(x) ? y : isnan(y) ? x : x < y ? x : y;
+}
+
+static inline double sm_fmax(double x, double y)
+{
+    return isnan(x) ? y : isnan(y) ? x : x > y ? x : y;
+}
+
 double sm_floor(double x);
 double sm_ceil(double x);
 double sm_trunc(double x);
