@@ -457,7 +457,7 @@ LANE_CLONES static void interval_lanes(int64_t k0, int64_t n_axes, const double 
     load_lanes(a_bias, k0, 3, ab);
     Fixed fx = fixed_terms(g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad);
     double dt = h / (double)n_sub;
-    Lanes t0[6], t1[6];
+    Lanes t0[6] = {{0.0}}, t1[6]; /* t0 set at i = 0 (initialised: GCC -O3 cannot see it and warns) */
     Lanes q[4], v[3], pa[3], pv[3]; /* as in interval(): pa, pv the previous step's increments */
     for (int l = 0; l < LANES; l++) {
         q[0][l] = 1.0;

@@ -293,7 +293,8 @@ static void rest(sink *k, double n)
 /* The seconds form: one gimbal (single-axis). */
 static void emit_seconds(sink *k, double duration, double acc)
 {
-    write_segment(k, duration, &acc);
+    const double a[SARINS_SCHEDULE_MAX_AXES] = {acc}; /* n_axes is 1 here; a whole row keeps GCC -O3 quiet */
+    write_segment(k, duration, a);
 }
 
 static void push_window(sink *k, const sarins_schedule_window *w)

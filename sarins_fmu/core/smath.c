@@ -619,7 +619,7 @@ void sm_sincos(double x, double *s, double *c)
 #define SM_LANE_CLONES
 #endif
 
-SM_LANE_CLONES void sm_sincos4(const double *x, double *s, double *c)
+SM_LANE_CLONES static void sincos4_lanes(const double *x, double *s, double *c)
 {
     /* selections as bit masks, not branches (which the vectorizers of GCC do not if-convert here) */
     double sv[4], cv[4];
@@ -654,6 +654,9 @@ SM_LANE_CLONES void sm_sincos4(const double *x, double *s, double *c)
         }
     }
 }
+
+/* the clones on a static function: clang 14 emits no symbol for an exported target_clones function */
+void sm_sincos4(const double *x, double *s, double *c) { sincos4_lanes(x, s, c); }
 
 /* (nh + nl) / (dh + dl) rounded once */
 static double dd_div(double nh, double nl, double dh, double dl)
@@ -690,8 +693,8 @@ static inline double exp_core(double xh, double xl)
     double r = rh + rl;
     const double *c = SM_EXP_TAIL;
     double p = rh + (rl + r * r * (0.5 + r * ((c[0] + r * c[1]) + (r * r) * (c[2] + r * c[3]))));
-    double th = SM_EXP_TAB[2 * j], tl = SM_EXP_TAB[2 * j + 1];
-    double h, l;
+    double th = SM_EXP_TAB[2 * j], tl = SM_EXP_TAB[2 * j + 1], h, l;
+    if (m > -1000 && m < 1000) return (th + (tl + th * p)) * pow2(m); /* = fast_two_sum's h, scaled exactly */
     fast_two_sum(th, tl + th * p, &h, &l);
     if (m > -1000) return scale2(h, m);
     return round_scaled(h, l, m);
@@ -702,6 +705,17 @@ static inline double exp_core(double xh, double xl)
 
 double sm_exp(double x)
 {
+    double a = fabs_i(x);
+    if (a > 0x1p-60 && a < 708.0) { /* the ordinary case: exp_core's path for a normal result, |m| <= 1022 */
+        double n = (x * SM_EXP_INV_L + SM_SHIFTER) - SM_SHIFTER;
+        int64_t ni = (int64_t)n;
+        int j = (int)(ni & 63), m = (int)((ni - j) / 64);
+        double rh = x - n * SM_EXP_L1, rl = 0.0 - n * SM_EXP_L2, r = rh + rl;
+        const double *c = SM_EXP_TAIL;
+        double p = rh + (rl + r * r * (0.5 + r * ((c[0] + r * c[1]) + (r * r) * (c[2] + r * c[3]))));
+        double th = SM_EXP_TAB[2 * j], tl = SM_EXP_TAB[2 * j + 1];
+        return (th + (tl + th * p)) * pow2(m);
+    }
     if (isnan(x)) return x + x;
     if (x > SM_EXP_MAX) return x * 0x1p1023; /* inf */
     if (x < SM_EXP_MIN) return 0.0;
