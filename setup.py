@@ -3,9 +3,9 @@
 
 pyproject.toml holds the project's metadata; this file only declares the
 core as one shared library, built by ``pip install`` (regular or editable).
-Both are plain C11 libraries (the core with libm), loaded with ctypes
-(:mod:`sarins_fmu.core._lib`, :mod:`orchestration.steploop`), so they export no Python module init
-function.
+Both are plain C11 libraries with no libm (the core's math functions are its own, smath.c), loaded
+with ctypes (:mod:`sarins_fmu.core._lib`, :mod:`orchestration.steploop`), so they export no Python module
+init function.
 """
 
 import runpy
@@ -28,7 +28,6 @@ class BuildCore(build_ext):
             ext.extra_compile_args = ["/std:c11", "/O2", "/W4", "/WX", "/fp:precise"]
         else:
             ext.extra_compile_args = list(UNIX_FLAGS)
-            ext.extra_link_args = ["-lm"]
         try:
             super().build_extension(ext)
         except (CCompilerError, CompileError, ExecError, LinkError, PlatformError) as exc:

@@ -11,8 +11,12 @@ build instantiates it and writes from the same objects
   values, the GUID and the log categories) that model.c and the glue read.
 
 The FMU holds ``binaries/linux64/<id>.so``, ``binaries/win64/<id>.dll`` when
-``x86_64-w64-mingw32-gcc`` is on PATH, ``sources/`` (every .c and .h, the FMI 2.0 headers included) and
-``documentation/index.html`` with the one compile line that builds ``sources/``.
+``x86_64-w64-mingw32-gcc`` is on PATH, ``binaries/aarch64-linux/<id>.so`` when ``aarch64-linux-gnu-gcc`` is
+(64-bit ARM Linux: FMI 3.0's platform tuple, which FMI 2.0.4 and later name for every platform beyond
+x86 Windows, Linux and macOS), ``sources/`` (every .c and .h, the FMI 2.0 headers included) and
+``documentation/index.html`` with the one compile line that builds ``sources/``.  The C uses no libm (the
+core's smath.h) and fixes its floating-point contract itself, so every binary and every compile line of
+``sources/`` gives the same numbers.
 
 To make a model native: write ``fmus/c/<folder>/model.c`` against model.h and add one row to
 :data:`NATIVE` (FMU name: its folder; the core .c files are found from the includes).
@@ -81,16 +85,18 @@ NATIVE = {
     "IMUCompensator": NativeModel("imu_compensator"),  # its model: fmus.compensator_export
 }
 
-# setup.py's flags (sarins_fmu core) plus hidden visibility: only the fmi2* functions are exported
-CFLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-fno-fast-math", "-ffp-contract=off",
-          "-fvisibility=hidden")
+# setup.py's flags (sarins_fmu core) plus hidden visibility: only the fmi2* functions are exported.  No
+# floating-point flags and no -lm: the sources fix their contract themselves and call no libm (smath.h).
+CFLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-fvisibility=hidden")
 MINGW = "x86_64-w64-mingw32-gcc"
+AARCH64 = "aarch64-linux-gnu-gcc"
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 FMI3_HEADERS = ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
 # FMI version -> (glue file, headers, platform folders linux/windows, default output folder)
 GLUE = {2: "fmi2_glue.c", 3: "fmi3_glue.c"}
 HEADERS = {2: FMI_HEADERS, 3: FMI3_HEADERS}
 PLATFORMS = {2: ("linux64", "win64"), 3: ("x86_64-linux", "x86_64-windows")}
+ARM_PLATFORM = "aarch64-linux"  # FMI 3.0's platform tuple, also FMI 2.0.4's name for platforms it does not list
 DEFAULT_OUT3 = Path("build") / "fmus3"
 TYPES = {"Real": 0, "Integer": 1, "Boolean": 2, "String": 3}
 CAUSALITIES = ("parameter", "calculatedParameter", "input", "output", "local", "independent")
@@ -113,13 +119,22 @@ def win64_compiler() -> str | None:
     return shutil.which(MINGW)
 
 
+def aarch64_compiler() -> str | None:
+    """The aarch64 Linux cross compiler, or None."""
+    return shutil.which(AARCH64)
+
+
 def platform_note() -> str:
     """One line for the build output: which binaries the native FMUs carry."""
     names = ", ".join(NATIVE)
-    if win64_compiler():
-        return f"native FMUs ({names}): binaries/linux64, binaries/win64 and sources/"
-    return (f"native FMUs ({names}): binaries/linux64 and sources/; binaries/win64 not built: {MINGW} is not on "
-            "PATH (Debian: apt-get install gcc-mingw-w64-x86-64)")
+    built = ["binaries/linux64"] + (["binaries/win64"] if win64_compiler() else []) + (
+        [f"binaries/{ARM_PLATFORM}"] if aarch64_compiler() else [])
+    missing = ([f"binaries/win64 ({MINGW} not on PATH; Debian: apt-get install gcc-mingw-w64-x86-64)"]
+               if not win64_compiler() else []) + (
+        [f"binaries/{ARM_PLATFORM} ({AARCH64} not on PATH; Debian: apt-get install gcc-aarch64-linux-gnu)"]
+        if not aarch64_compiler() else [])
+    note = f"native FMUs ({names}): {', '.join(built)} and sources/"
+    return note + (f"; not built: {'; '.join(missing)}" if missing else "")
 
 
 def slave_instance(slave_file: str, resources: str = "."):
@@ -269,12 +284,13 @@ def compile_line(identifier: str, cc: str = "cc", win64: bool = False) -> list[s
     """The one command (run in ``sources/``) that builds the binary from the sources."""
     if win64:
         return [cc, *CFLAGS, "-shared", "-static", "-I.", "*.c", "-o", f"{identifier}.dll"]
-    return [cc, *CFLAGS, "-fPIC", "-shared", "-I.", "*.c", "-lm", "-o", f"{identifier}.so"]
+    return [cc, *CFLAGS, "-fPIC", "-shared", "-I.", "*.c", "-o", f"{identifier}.so"]
 
 
-def compile_sources(sources: Path, identifier: str, out: Path, win64: bool = False) -> Path:
-    """Compile ``sources/`` with :func:`compile_line` into ``out``; RuntimeError with the compiler's message."""
-    cc = win64_compiler() if win64 else compiler()
+def compile_sources(sources: Path, identifier: str, out: Path, win64: bool = False, cc: str | None = None) -> Path:
+    """Compile ``sources/`` with :func:`compile_line` into ``out`` (``cc``: another compiler, e.g. the aarch64
+    cross compiler); RuntimeError with the compiler's message."""
+    cc = cc or (win64_compiler() if win64 else compiler())
     cmd = compile_line(identifier, cc, win64)
     files = sorted(p.name for p in sources.glob("*.c"))
     cmd = [a for a in cmd if a != "*.c"]
@@ -408,7 +424,6 @@ def build_description(identifier: str, c_files: list[str]) -> bytes:
     files = ET.SubElement(config, "SourceFileSet", language="C11")
     for name in c_files:
         ET.SubElement(files, "SourceFile", name=name)
-    ET.SubElement(config, "Library", name="m")
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
@@ -434,29 +449,39 @@ _CONTRACT3 = ("<h2>FMI 3.0 contract</h2><p>Co-simulation only, no Event Mode, no
               "FMU-state calls. sources/buildDescription.xml lists the sources.")
 
 
-def _documentation(name: str, description: str, identifier: str, win64: bool, fmi: int = 2) -> str:
+def _documentation(name: str, description: str, identifier: str, win64: bool, fmi: int = 2,
+                   aarch64: bool = False) -> str:
     line = " ".join(compile_line(identifier))
     wline = " ".join(compile_line(identifier, MINGW, win64=True))
     linux, windows = PLATFORMS[fmi]
-    platforms = (f"binaries/{linux} (x86-64 Linux) and binaries/{windows} (x86-64 Windows, built with mingw-w64)"
-                 if win64 else f"binaries/{linux} (x86-64 Linux) only: {MINGW} was not on PATH when this FMU was "
-                 "built; compile sources/ for other platforms")
+    built = [f"binaries/{linux} (x86-64 Linux, glibc 2.17 or later)"]
+    if win64:
+        built.append(f"binaries/{windows} (x86-64 Windows, built with mingw-w64)")
+    if aarch64:
+        built.append(f"binaries/{ARM_PLATFORM} (64-bit ARM Linux, glibc 2.17 or later; FMPy 0.3.32 looks for FMI 2.0 "
+                     "binaries in binaries/linux64 on ARM too: load this one by its path)")
+    platforms = "; ".join(built) + ". Every binary gives the same numbers, bit for bit; for another platform "\
+        "compile sources/"
     contract = _CONTRACT3 if fmi == 3 else _CONTRACT2
     return (f"<html><head><title>{html.escape(name)}</title></head><body><h1>{html.escape(name)}</h1>"
             f"<p>{html.escape(description)}</p><p>Units: each variable's description ends in [unit; display unit].</p>"
-            "<h2>Requirements</h2><p>None: a native FMU. Every FMI call is answered in C (C11 + libm); the "
-            "binary loads no interpreter and needs no Python.</p>"
+            "<h2>Requirements</h2><p>None: a native FMU. Every FMI call is answered in C (C11, no libm: its "
+            "math functions are its own, in smath.c); the binary loads no interpreter and needs no Python.</p>"
             f"<h2>Platforms</h2><p>{html.escape(platforms)}.</p>"
-            "<h2>Building from sources/</h2><p>In the sources folder, with any C11 compiler:</p>"
+            "<h2>Building from sources/</h2><p>In the sources folder, with any C11 compiler (gcc, clang, "
+            "mingw-w64, at any optimisation level, with or without -march=native; not -ffast-math): the sources "
+            "fix their floating-point contract themselves, so the numbers are those of the shipped binaries:</p>"
             f"<pre>{html.escape(line)}</pre><p>Windows (mingw-w64):</p><pre>{html.escape(wline)}</pre>"
             f"{contract}</p></body></html>")
 
 
 def build_native_fmu(name: str, slave_file: str | None, out_dir: Path, fmi: int = 2, win64: bool | None = None,
-                     model: NativeModel | None = None, slave=None, resources: dict[str, bytes] | None = None) -> Path:
+                     model: NativeModel | None = None, slave=None, resources: dict[str, bytes] | None = None,
+                     aarch64: bool | None = None) -> Path:
     """Build the native FMU ``name`` (declared by ``fmus/<slave_file>``) for FMI ``fmi``.0 (2 or 3) into
     ``out_dir``; returns its path.  Both versions come from the same declaration and the same model.c.
-    ``win64``: also the Windows binary (default: when mingw-w64 is on PATH).  ``model`` and ``slave`` (an
+    ``win64``: also the Windows binary (default: when mingw-w64 is on PATH); ``aarch64``: also the 64-bit ARM
+    Linux one (default: when its cross compiler is on PATH).  ``model`` and ``slave`` (an
     instance of the declaring class) replace ``NATIVE[name]`` and ``slave_file`` (tests build models that
     are not shipped).  ``resources`` ({file name: bytes}) go into ``resources/`` beside the model's own
     (:attr:`NativeModel.resources`)."""
@@ -467,6 +492,7 @@ def build_native_fmu(name: str, slave_file: str | None, out_dir: Path, fmi: int 
     identifier = slave.modelName
     dependencies = dict(getattr(slave, "_output_dependencies", {}))
     win64 = win64_compiler() is not None if win64 is None else win64
+    aarch64 = aarch64_compiler() is not None if aarch64 is None else aarch64
     linux, windows = PLATFORMS[fmi]
     native = model or NATIVE[name]
     files = (native.resources() if native.resources else {}) | dict(resources or {})
@@ -490,6 +516,11 @@ def build_native_fmu(name: str, slave_file: str | None, out_dir: Path, fmi: int 
         binaries = {f"binaries/{linux}/{identifier}.so": compile_sources(sources, identifier, tmp)}
         if win64:
             binaries[f"binaries/{windows}/{identifier}.dll"] = compile_sources(sources, identifier, tmp, win64=True)
+        if aarch64:
+            arm = tmp / "aarch64"
+            arm.mkdir()
+            binaries[f"binaries/{ARM_PLATFORM}/{identifier}.so"] = compile_sources(sources, identifier, arm,
+                                                                                   cc=aarch64_compiler() or AARCH64)
         target = out_dir / f"{identifier}.fmu"
         with zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("modelDescription.xml", md)
@@ -504,7 +535,8 @@ def build_native_fmu(name: str, slave_file: str | None, out_dir: Path, fmi: int 
                 z.writestr(f"resources/{arc}", data)
             root = ET.fromstring(md)
             z.writestr("documentation/index.html",
-                       _documentation(root.get("modelName"), root.get("description", ""), identifier, win64, fmi))
+                       _documentation(root.get("modelName"), root.get("description", ""), identifier, win64, fmi,
+                                      aarch64))
     return target
 
 

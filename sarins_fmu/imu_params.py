@@ -185,7 +185,8 @@ def c_sources() -> tuple[str, str]:
         values = ",\n".join(f"        {flat[n]!r}" for n in names)
         rows.append(f"    {{\"{preset}\",\n     {{\n{values}\n     }}}}")
     name_list = ",\n".join(f'    "{n}"' for n in names)
-    source = (_GENERATED + "#include <stddef.h>\n#include <stdint.h>\n#include <string.h>\n\n#include \"imu_params.h\"\n\n"
+    source = (_GENERATED + "#include \"smath.h\"\n\n"
+              "#include <stddef.h>\n#include <stdint.h>\n#include <string.h>\n\n#include \"imu_params.h\"\n\n"
               f"static const char *const NAMES[SARINS_IMU_N_PARAMS] = {{\n{name_list}\n}};\n\n"
               "static const struct {\n    const char *name;\n    double values[SARINS_IMU_N_PARAMS];\n}"
               f" PRESETS[SARINS_IMU_N_PRESETS] = {{\n{(',' + chr(10)).join(rows)}\n}};\n\n"

@@ -2,27 +2,15 @@
 
 tests/core_driver/core_driver.c runs a fixed workload through the core's
 public functions and prints every output's bit pattern.  It is built with the
-system gcc (linux64, glibc's libm) and with x86_64-w64-mingw32-gcc (win64,
-mingw-w64's libm, statically linked), the .exe is run under wine, and the
-outputs are compared group by group.
+system gcc (linux64, glibc) and with x86_64-w64-mingw32-gcc (win64, msvcrt,
+statically linked), the .exe is run under wine, and the outputs are compared
+group by group.
 
-What is asserted, and why:
-
-* Groups whose kernels use only + - * / and sqrt on libm-free inputs
-  (``IEEE_ONLY``) must be bit-identical: IEEE 754 rounds each of those
-  operations exactly, both builds use SSE2 doubles with -ffp-contract=off,
-  so any difference is a compiler or ABI fault.
-* The other groups call sin, cos, tan, exp, asin, atan2, which are not
-  correctly rounded in either C runtime; glibc and mingw-w64 disagree by one
-  ulp on a few arguments in a hundred (tan, asin) to a few in ten thousand
-  (sin, cos, exp, atan2; measured on 20000 arguments each).  A 1-ulp change
-  (1.1e-16 relative) of one libm result propagates through the IMU minor loop
-  and the INS recursions roughly linearly: the longest chain here is 400
-  navigation/alignment steps with about ten libm calls each, so the
-  accumulated relative change stays below 400 * 10 * 2.2e-16 ~ 1e-12 unless
-  the computation itself is ill-conditioned (which a stable filter on this
-  well-observed workload is not).  Those groups are held to
-  ``LIBM_REL_BOUND`` = 1e-12 per output; the measured worst case is ~5e-16.
+What is asserted: every output of every group is bit-identical.  The core calls
+no libm (its math is smath.c: plain IEEE binary64 + - * / and integer
+operations, sqrt and fma correctly rounded in hardware or software) and fixes
+its floating-point contract in the source, so the two toolchains and C
+runtimes cannot differ; any difference is a compiler or ABI fault.
 
 The printed table (run with -s) gives per group the outputs, how many are
 bit-identical, the largest relative difference and the largest ulp distance.
@@ -47,8 +35,6 @@ DRIVER = ROOT / "tests" / "core_driver" / "core_driver.c"
 MINGW = "x86_64-w64-mingw32-gcc"
 MINGW_OBJDUMP = "x86_64-w64-mingw32-objdump"
 
-IEEE_ONLY = {"turntable", "filter"}  # interval_terms, correlated: the streams' polar normals call log
-LIBM_REL_BOUND = 1e-12
 GROUPS = ["turntable", "earth", "rotations", "thermal", "interval_terms", "correlated", "filter",
           "imu_increments", "ins_coarse", "ins_align", "ins_nav", "stop_filter"]
 SYSTEM_DLLS = {"kernel32.dll", "msvcrt.dll"}
@@ -129,7 +115,7 @@ def test_win64_core_matches_linux64(tmp_path, wine_env):
     _need("gcc", MINGW, "wine")
     lin_exe, win_exe = tmp_path / "core_driver", tmp_path / "core_driver.exe"
     common = [*FLAGS, f"-I{CORE}", str(DRIVER), *SOURCES]
-    _run(["gcc", *common, "-lm", "-o", str(lin_exe)])
+    _run(["gcc", *common, "-o", str(lin_exe)])
     _run([MINGW, *common, "-static", "-o", str(win_exe)])
 
     lin = _parse(_run([str(lin_exe)]).stdout)
@@ -144,10 +130,7 @@ def test_win64_core_matches_linux64(tmp_path, wine_env):
     for group, (n, same, rel, ulp) in rows.items():
         print(f"{group:16s} {n:7d} {same:13d} {rel:17.3g} {ulp:4d}")
     for group, (n, same, rel, _) in rows.items():
-        if group in IEEE_ONLY:
-            assert same == n, f"{group}: {n - same} of {n} outputs differ in IEEE-only arithmetic"
-        else:
-            assert rel <= LIBM_REL_BOUND, f"{group}: relative difference {rel:.3g} > {LIBM_REL_BOUND}"
+        assert same == n, f"{group}: {n - same} of {n} outputs differ (largest relative difference {rel:.3g})"
 
 
 def _dll_imports_exports(dll):
@@ -163,13 +146,13 @@ def test_core_builds_as_win64_dll(tmp_path):
     _need("gcc", "nm", MINGW, MINGW_OBJDUMP)
     dll, so = tmp_path / "sarins_core.dll", tmp_path / "libsarins_core.so"
     _run([MINGW, *FLAGS, "-shared", f"-I{CORE}", *SOURCES, "-o", str(dll)])
-    _run(["gcc", *FLAGS, "-fPIC", "-shared", f"-I{CORE}", *SOURCES, "-lm", "-o", str(so)])
+    _run(["gcc", *FLAGS, "-fPIC", "-shared", f"-I{CORE}", *SOURCES, "-o", str(so)])
     imports, exports = _dll_imports_exports(dll)
     # needs nothing beyond Windows' own DLLs (the C runtime is msvcrt, libgcc linked in)
     assert imports <= SYSTEM_DLLS, imports
     # the same public functions as the linux library
     nm = _run(["nm", "-D", "--defined-only", str(so)]).stdout
-    linux = {line.split()[-1] for line in nm.splitlines() if line.split()[1] == "T"}
+    linux = {line.split()[-1] for line in nm.splitlines() if line.split()[1] in ("T", "i")}  # i: an ifunc (target_clones)
     assert "sarins_core_abi" in linux
     assert exports == linux
 

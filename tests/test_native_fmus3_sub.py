@@ -317,8 +317,7 @@ def _host_table(stdout: str, tag: str = "OUT") -> np.ndarray:
 def test_fmi3_win64_dlls_under_wine_match_linux(tmp_path):
     """The FMI 3.0 IMUThermal (n_sub = 200, two presets) and StrapdownINS (sub_inputs = 1, fed the linux IMU's
     arrays) from their win64 DLLs under wine through the FMI 3.0 C host (tests/native_host/native_fmu3_host.c)
-    against x86_64-linux; mingw's libm may round differently from glibc's (the FMI 2.0 wine tests): the
-    largest relative difference is printed and must stay below 1e-9 (IMU) and 1e-8 (INS)."""
+    against x86_64-linux, bit for bit (the C calls no libm: smath.h)."""
     from fmus.native_fmu import MINGW, fmi_headers_dir
 
     missing = [t for t in (MINGW, "wine") if shutil.which(t) is None]
@@ -366,7 +365,7 @@ def test_fmi3_win64_dlls_under_wine_match_linux(tmp_path):
         lin, worst = run("IMUThermal", steps, f"u{vr['n_sub']}={K}", f"s{vr['preset']}={preset}",
                          f"r{vr['angle_1']}=0.3", f"r{vr['rate_1']}=0.0", "roundtrip=20",
                          "out=" + ",".join(str(vr[n]) for n in imu_out), f"nout={1 + 7 * K}")
-        assert worst < 1e-9
+        assert worst == 0.0
         if preset == "nav-rlg":
             imu_rows = lin
     md, _ = fmus["StrapdownINS"]
@@ -379,5 +378,5 @@ def test_fmi3_win64_dlls_under_wine_match_linux(tmp_path):
                      f"r{vr_ins['align_time']}=20.0", f"r{vr_ins['coarse_time']}=10.0", "roundtrip=25",
                      "in=" + ",".join(str(vr_ins[n]) for n in imu_out), f"nin={1 + 7 * K}", f"rows={rows}",
                      "out=" + ",".join(str(vr_ins[n]) for n in ins_out), f"nout={len(ins_out)}")
-    assert worst < 1e-8
+    assert worst == 0.0
     assert lin[-1, ins_out.index("nav_time")] == 20.0  # aligned, then navigated 20 s of 200 sub-intervals each

@@ -22,7 +22,8 @@
  * allocates except the FMU-state calls (fmi2GetFMUstate and fmi2DeSerializeFMUstate allocate the blob,
  * fmi2SetFMUstate may rebuild the model's work from restored parameters).  No globals.
  */
-#include <math.h>
+#include "smath.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>

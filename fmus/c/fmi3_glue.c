@@ -24,7 +24,8 @@
  * Memory: fmi3InstantiateCoSimulation allocates the instance; the model allocates in initialize(); after
  * that nothing allocates except the FMU-state calls.  No globals.
  */
-#include <math.h>
+#include "smath.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>

@@ -7,7 +7,8 @@
  * except the FMU-state calls (sg_get_state and sg_deserialize allocate the blob, sg_set_state may rebuild
  * the model's work from restored parameters).  No globals.
  */
-#include <math.h>
+#include "smath.h"
+
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -486,11 +487,11 @@ int sg_do_step(sarins_glue *g, double t, double h, const char *fn)
         return sg_fail(g, "%s: communication point %g is not finite", fn, t);
     if (!(h > 0.0) || !isfinite(h))
         return sg_fail(g, "%s: communication step size %g must be positive and finite", fn, h);
-    if (g->have_time && fabs(t - g->t_next) > 1e-9 * fmax(1.0, fabs(g->t_next)))
+    if (g->have_time && sm_fabs(t - g->t_next) > 1e-9 * sm_fmax(1.0, sm_fabs(g->t_next)))
         return sg_fail(g, "%s: communication point %.17g does not continue the previous step, which ended at "
                        "%.17g", fn, t, g->t_next);
     double start = g->ctx.start_time;
-    if (!g->have_time && fabs(t - start) > 1e-9 * fmax(1.0, fabs(start)))
+    if (!g->have_time && sm_fabs(t - start) > 1e-9 * sm_fmax(1.0, sm_fabs(start)))
         return sg_fail(g, "%s: the first communication point %.17g is not the start time %.17g", fn, t, start);
     unsigned long before = g->problems;
     int st = sg_model_status(g, g->model->do_step(&g->ctx, t, h), before, fn);

@@ -1,9 +1,10 @@
 /* Ambient temperature and the thermal chamber's programme (ambient.h). */
+#include "smath.h"
+
 #include "ambient.h"
 #include "report.h"
 #include "schedule.h"
 
-#include <math.h>
 #include <string.h>
 
 #define PI 3.14159265358979323846
@@ -44,7 +45,7 @@ double sarins_ambient_at(const sarins_ambient *a, double t)
     if (a->amplitude == 0.0 && a->slope == 0.0)
         return a->mean;
     /* T = mean + amplitude sin(2 pi t / period + phase) + slope t */
-    return a->mean + a->amplitude * sin(2 * PI * t / a->period + a->phase) + a->slope * t;
+    return a->mean + a->amplitude * sm_sin(2 * PI * t / a->period + a->phase) + a->slope * t;
 }
 
 void sarins_ambient_values(const sarins_ambient *a, int64_t n, const double *t, double *out)
@@ -136,7 +137,7 @@ static double n_stops(double from, double to, double step)
 {
     if (step <= 0)
         return 0.0;
-    double n = ceil(fabs(to - from) / step - 1e-9) - 1;
+    double n = sm_ceil(sm_fabs(to - from) / step - 1e-9) - 1;
     return n > 0 ? n : 0.0;
 }
 
@@ -196,11 +197,11 @@ static void ramp_to(chamber *c, const sarins_chamber_params *p, double target, d
                     double stops)
 {
     for (double i = 0; i < stops && !c->r->code; i++) {
-        double point = from + copysign(p->step * (i + 1), to_end - from);
-        to(c, c->t_last + fabs(point - c->v_last) / p->ramp, point);
+        double point = from + sm_copysign(p->step * (i + 1), to_end - from);
+        to(c, c->t_last + sm_fabs(point - c->v_last) / p->ramp, point);
         to(c, c->t_last + p->step_hold, point);
     }
-    to(c, c->t_last + fabs(target - c->v_last) / p->ramp, target);
+    to(c, c->t_last + sm_fabs(target - c->v_last) / p->ramp, target);
 }
 
 static int chamber_run(const sarins_chamber_params *p, report *r, int64_t capacity, double *times, double *temps,

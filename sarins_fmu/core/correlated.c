@@ -3,7 +3,8 @@
  * sarins_fmu/imu_correlated.py; the loop runs interval by interval (each
  * sensor's chain is independent of the others), so that the driving noise
  * is drawn in interval order whatever the batch length. */
-#include <math.h>
+#include "smath.h"
+
 #include <stddef.h>
 
 #include "correlated.h"
@@ -19,7 +20,7 @@ void sarins_correlated_terms(int64_t n_steps, const double *die0, const double *
     const double *c_grad = corr_par + 6, *s_grad = corr_par + 12, *c_hyst = corr_par + 18;
     const double *w_hyst = corr_par + 24, *rrw = corr_par + 30, *turn_on = corr_par + 36;
     double *play = corr_state + 6, *x_rrw = corr_state + 12;
-    double sqrt_h = sqrt(h);
+    double sqrt_h = sm_sqrt(h);
     double prev[6];
     for (int64_t j = 0; j < 6; j++) prev[j] = die0[j];
     for (int64_t k = 0; k < n_steps; k++) {
@@ -36,7 +37,7 @@ void sarins_correlated_terms(int64_t n_steps, const double *die0, const double *
             for (int64_t i = 0; i < n_flicker; i++) {
                 double w = flicker_rng != NULL ? sarins_rng_normal(flicker_rng) : 0.0;
                 /* exact Gauss-Markov step x <- phi x + q sqrt(1 - phi^2) w */
-                x_flicker[i * 6 + j] = phi[i] * x_flicker[i * 6 + j] + q[i * 6 + j] * sqrt(1.0 - phi[i] * phi[i]) * w;
+                x_flicker[i * 6 + j] = phi[i] * x_flicker[i * 6 + j] + q[i * 6 + j] * sm_sqrt(1.0 - phi[i] * phi[i]) * w;
                 flick += x_flicker[i * 6 + j];
             }
             /* rate random walk x <- x + K sqrt(h) w */

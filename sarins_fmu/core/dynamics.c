@@ -1,5 +1,6 @@
 /* Sensor dynamics with memory at the output rate: see dynamics.h. */
-#include <math.h>
+
+#include "smath.h"
 
 #include "dynamics.h"
 
@@ -35,7 +36,7 @@ void sarins_dynamics_apply(int64_t n_steps, double h, const double *temps, const
     for (int j = 0; j < 6; j++) {
         double tau_f = par[6 * P_TAU_F + j], tau_r = par[6 * P_TAU_R + j];
         a_f[j] = h / (h + tau_f); /* low-frequency group delay (1 - a) h / a = tau_f exactly */
-        decay_r[j] = tau_r > 0.0 ? exp(-h / tau_r) : 1.0;
+        decay_r[j] = tau_r > 0.0 ? sm_exp(-h / tau_r) : 1.0;
     }
     for (int64_t k = 0; k < n_steps; k++) {
         double x[6], omega[3], alpha[3];
@@ -55,7 +56,7 @@ void sarins_dynamics_apply(int64_t n_steps, double h, const double *temps, const
             if (c != 0.0 && w > 0.0) {
                 if (first) play[j] = x[j];
                 play[j] = x[j] + (play[j] - x[j]) * decay_r[j];
-                play[j] = fmax(x[j] - w, fmin(x[j] + w, play[j]));
+                play[j] = sm_fmax(x[j] - w, sm_fmin(x[j] + w, play[j]));
                 double gain = 1.0 + par[6 * P_HYST_TC + j] * (temps[6 * k + j] - t_ref);
                 x[j] += c * gain * (x[j] - play[j]) / w;
             }

@@ -1,6 +1,7 @@
+#include "smath.h"
+
 #include "earth.h"
 
-#include <math.h>
 
 void sarins_earth_constants(double *out)
 {
@@ -18,10 +19,10 @@ void sarins_earth_constants(double *out)
 
 void sarins_earth_radii(double lat, double *r_meridian, double *r_prime_vertical)
 {
-    double s = sin(lat);
+    double s = sm_sin(lat);
     double s2 = s * s;
     /* w = sqrt(1 - e^2 sin^2 L) */
-    double w = sqrt(1.0 - SARINS_EARTH_E2 * s2);
+    double w = sm_sqrt(1.0 - SARINS_EARTH_E2 * s2);
     /* R_M = a (1 - e^2) / w^3 ; R_N = a / w */
     *r_meridian = SARINS_EARTH_A * (1.0 - SARINS_EARTH_E2) / (w * (w * w));
     *r_prime_vertical = SARINS_EARTH_A / w;
@@ -29,10 +30,10 @@ void sarins_earth_radii(double lat, double *r_meridian, double *r_prime_vertical
 
 double sarins_earth_gravity(double lat, double height)
 {
-    double s = sin(lat);
+    double s = sm_sin(lat);
     double s2 = s * s;
     /* g0 = gamma_e (1 + k sin^2 L) / sqrt(1 - e^2 sin^2 L) */
-    double g0 = SARINS_EARTH_GAMMA_E * (1.0 + SARINS_EARTH_K_SOMIGLIANA * s2) / sqrt(1.0 - SARINS_EARTH_E2 * s2);
+    double g0 = SARINS_EARTH_GAMMA_E * (1.0 + SARINS_EARTH_K_SOMIGLIANA * s2) / sm_sqrt(1.0 - SARINS_EARTH_E2 * s2);
     /* g = g0 [1 - 2/a (1 + f + m - 2 f sin^2 L) h + 3 h^2 / a^2] */
     return g0 * (1.0 - 2.0 / SARINS_EARTH_A * (1.0 + SARINS_EARTH_F + SARINS_EARTH_M - 2.0 * SARINS_EARTH_F * s2) * height
                  + 3.0 * (height * height) / (SARINS_EARTH_A * SARINS_EARTH_A));

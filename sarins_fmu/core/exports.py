@@ -2,8 +2,8 @@
 
 GNU ld exports every non-static function of the shared library; MSVC's
 linker exports only the names it is given (``setup.py`` passes this list as
-``/EXPORT:`` options).  The list is every non-static ``sarins_*`` function
-declared at the start of a line in the core's headers.  ``setup.py`` runs this file
+``/EXPORT:`` options).  The list is every non-static ``sarins_*`` and ``sm_*`` (the
+core's math, smath.h) function declared at the start of a line in the core's headers.  ``setup.py`` runs this file
 without importing the package (which is not built yet), so it imports only
 the standard library.
 """
@@ -14,8 +14,8 @@ import re
 from pathlib import Path
 
 # a declaration at the start of a line, not static (inline helpers): return type words and pointers,
-# then sarins_name(
-_PROTOTYPE = re.compile(r"^(?!static\b)[A-Za-z_][\w \t*]*?\b(sarins_\w+)\s*\(", re.MULTILINE)
+# then sarins_name( or sm_name(
+_PROTOTYPE = re.compile(r"^(?!static\b)[A-Za-z_][\w \t*]*?\b((?:sarins|sm)_\w+)\s*\(", re.MULTILINE)
 
 
 def public_functions(core_dir: str | Path | None = None) -> list[str]:

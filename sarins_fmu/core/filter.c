@@ -1,6 +1,7 @@
+#include "smath.h"
+
 #include "filter.h"
 
-#include <math.h>
 
 #include "earth.h"
 #include "rotations.h"
@@ -111,7 +112,7 @@ void sarins_stop_filter_steps(int64_t k, double *x, double *p, const double *vel
     double f[N * N] = {0.0}, fh[N * N], fh2[N * N], fh3[N * N], phi_m[N * N], c[9];
     double r_m, r_n;
     sarins_earth_radii(lat, &r_m, &r_n);
-    double w_c = SARINS_EARTH_RATE * cos(lat), w_s = SARINS_EARTH_RATE * sin(lat);
+    double w_c = SARINS_EARTH_RATE * sm_cos(lat), w_s = SARINS_EARTH_RATE * sm_sin(lat);
     double g = sarins_earth_gravity(lat, 0.0);
     /* continuous-time F, static base (the attitude columns are set per step) */
     f[N * 0 + 1] = w_s;
@@ -120,7 +121,7 @@ void sarins_stop_filter_steps(int64_t k, double *x, double *p, const double *vel
     f[N * 1 + 0] = -w_s;
     f[N * 1 + 3] = 1.0 / r_n;
     f[N * 2 + 0] = w_c;
-    f[N * 2 + 3] = tan(lat) / r_n;
+    f[N * 2 + 3] = sm_tan(lat) / r_n;
     f[N * 3 + 1] = -g;
     f[N * 3 + 4] = 2.0 * w_s;
     f[N * 4 + 0] = g;
@@ -151,6 +152,6 @@ void sarins_stop_filter_steps(int64_t k, double *x, double *p, const double *vel
         sarins_filter_propagate(N, x, p, phi_m, q_diag, dt);
         sarins_filter_velocity_update(N, x, p, r_var, velocity_en[2 * s], velocity_en[2 * s + 1]);
         out[2 * s] = x[SARINS_STOP_EPS_Z];
-        out[2 * s + 1] = sqrt(p[N * SARINS_STOP_EPS_Z + SARINS_STOP_EPS_Z]);
+        out[2 * s + 1] = sm_sqrt(p[N * SARINS_STOP_EPS_Z + SARINS_STOP_EPS_Z]);
     }
 }

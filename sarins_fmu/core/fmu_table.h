@@ -9,7 +9,7 @@
 #ifndef SARINS_FMU_TABLE_H
 #define SARINS_FMU_TABLE_H
 
-#include <math.h>
+#include "smath.h"
 #include <stdint.h>
 
 /* Row i of a table as a double pointer. */
@@ -28,7 +28,7 @@ static inline int sarins_table_shape(const int64_t *table, int64_t i, int64_t n0
 static inline int sarins_slots_ok(const double *slots, int64_t count, int64_t n)
 {
     for (int64_t i = 0; i < count; i++)
-        if (!(slots[i] >= 0.0 && slots[i] < (double)n && slots[i] == floor(slots[i])))
+        if (!(slots[i] >= 0.0 && slots[i] < (double)n && slots[i] == sm_floor(slots[i])))
             return 0;
     return 1;
 }

@@ -1,7 +1,8 @@
 /* The IMU: see imu.h.  The evaluation order of every expression follows the
  * former numba kernels (sarins_fmu/imu_kernel.py, imu_step.py) term by term,
  * so the results are the same bit for bit. */
-#include <math.h>
+#include "smath.h"
+
 #include <stdint.h>
 #include <string.h>
 
@@ -32,7 +33,8 @@ void sarins_imu_truth(int64_t n_axes, const double *axes, const double *angle0, 
         /* theta = theta0 + (rate0 + accel tau / 2) tau, thetadot = rate0 + accel tau */
         double th = angle0[j] + (rate0[j] + 0.5 * accel[j] * tau) * tau;
         double thd = rate0[j] + accel[j] * tau;
-        double c = cos(th), sn = sin(th);
+        double c, sn;
+        sm_sincos(th, &sn, &c);
         double ax = axes[3 * j], ay = axes[3 * j + 1], az = axes[3 * j + 2];
         rot_t(ax, ay, az, c, sn, w);
         rot_t(ax, ay, az, c, sn, f);
@@ -56,8 +58,8 @@ static void finish(double q[4], const double v[3], double *dtheta_k, double *dv_
     if (q[0] < 0.0) {
         for (int a = 0; a < 4; a++) q[a] = -q[a];
     }
-    double vn = sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    double scale = vn > 1e-300 ? 2.0 * atan2(vn, q[0]) / vn : 2.0;
+    double vn = sm_sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    double scale = vn > 1e-300 ? 2.0 * sm_atan2(vn, q[0]) / vn : 2.0;
     dtheta_k[0] = q[1] * scale;
     dtheta_k[1] = q[2] * scale;
     dtheta_k[2] = q[3] * scale;
@@ -71,8 +73,8 @@ static void finish(double q[4], const double v[3], double *dtheta_k, double *dv_
  * the terms that do not depend on the loop's serial state, i.e. all but the quaternion and the velocity
  * sum).  Every lane does the operations of the one-value formulas in the same order, so the results do not
  * depend on the layout, bit for bit, and equal those of the scalar formulas (sarins_imu_truth); the loops
- * over lanes carry no dependence, so the compiler evaluates them in SIMD registers.  The libm calls (sin,
- * cos, exp, atan2) stay one per value. */
+ * over lanes carry no dependence, so the compiler evaluates them in SIMD registers.  The math calls (sincos,
+ * exp, atan2) stay one per value. */
 #define LANES SARINS_IMU_LANES
 typedef double Lanes[LANES];
 /* Lane arrays are passed as Lanes * even where a function only reads them (its comment names its outputs):
@@ -120,7 +122,7 @@ static LANE_INLINE void rot_t_lane(double ax, double ay, double az, double c, do
 
 /* Gimbal j of the truth: w, f, s (v[0..8] lanes) turned by R^T as rot_t turns them, then s += thetadot a; the
  * gimbal state ang, rat, acc and the time tau (s) since the interval start per lane.  Lanes from n_valid on
- * hold no value: no libm call for them (their cos, sin taken as 1, 0).  first: s is still the zero vector
+ * hold no value: their cos, sin taken as 1, 0.  first: s is still the zero vector
  * (+0.0 each), taken as literals rather than stored (a store of zeros becomes a memset, a slow rep stos here). */
 static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, const double *restrict ang,
                                      const double *restrict rat, const double *restrict acc,
@@ -130,15 +132,23 @@ static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, con
         th[l] = ang[l] + (rat[l] + 0.5 * acc[l] * tau[l]) * tau[l];
         thd[l] = rat[l] + acc[l] * tau[l];
     }
+#if LANES == 4
+    for (int l = n_valid; l < LANES; l++) th[l] = 1.0; /* no value: an ordinary argument, result unused */
+    sm_sincos4(th, sn, c);
+    for (int l = n_valid; l < LANES; l++) {
+        c[l] = 1.0;
+        sn[l] = 0.0;
+    }
+#else
     for (int l = 0; l < LANES; l++) {
         if (l < n_valid) {
-            c[l] = cos(th[l]);
-            sn[l] = sin(th[l]);
+            sm_sincos(th[l], &sn[l], &c[l]);
         } else {
             c[l] = 1.0;
             sn[l] = 0.0;
         }
     }
+#endif
     double ax = axis[0], ay = axis[1], az = axis[2];
     for (int l = 0; l < LANES; l++) {
         double s0 = first ? 0.0 : v[6][l], s1 = first ? 0.0 : v[7][l], s2 = first ? 0.0 : v[8][l];
@@ -246,7 +256,7 @@ static LANE_INLINE void minor_terms(Lanes *restrict t0, Lanes *restrict t1, doub
             }
         }
         for (int a = 0; a < 3; a++) {
-            for (int l = 0; l < LANES; l++) x[a][l] = l < n_valid ? exp(x[a][l]) : 0.0;
+            for (int l = 0; l < LANES; l++) x[a][l] = l < n_valid ? sm_exp(x[a][l]) : 0.0;
         }
         for (int a = 0; a < 3; a++) {
             for (int l = 0; l < LANES; l++) g[a][l] += fx->g_lowrate[a] * e[a][l] * x[a][l];
@@ -255,21 +265,21 @@ static LANE_INLINE void minor_terms(Lanes *restrict t0, Lanes *restrict t1, doub
     for (int l = 0; l < LANES; l++) {
         double d0 = e[0][l], d1 = e[1][l], d2 = e[2][l];
         double da0 = d0 * (1.0 + gsf[0][l]) + g_mis[1] * d1 + g_mis[2] * d2 + gb[0][l] * dt
-                     + g_quad[0] * d0 * fabs(d0) / dt;
+                     + g_quad[0] * d0 * sm_fabs(d0) / dt;
         double da1 = d1 * (1.0 + gsf[1][l]) + g_mis[3] * d0 + g_mis[5] * d2 + gb[1][l] * dt
-                     + g_quad[1] * d1 * fabs(d1) / dt;
+                     + g_quad[1] * d1 * sm_fabs(d1) / dt;
         double da2 = d2 * (1.0 + gsf[2][l]) + g_mis[6] * d0 + g_mis[7] * d1 + gb[2][l] * dt
-                     + g_quad[2] * d2 * fabs(d2) / dt;
+                     + g_quad[2] * d2 * sm_fabs(d2) / dt;
         da[0][l] = da0 + g[0][l];
         da[1][l] = da1 + g[1][l];
         da[2][l] = da2 + g[2][l];
         double u0 = u[0][l], u1 = u[1][l], u2 = u[2][l];
         dvm[0][l] = u0 * (1.0 + asf[0][l]) + a_mis[1] * u1 + a_mis[2] * u2 + ab[0][l] * dt
-                    + a_quad[0] * u0 * fabs(u0) / dt;
+                    + a_quad[0] * u0 * sm_fabs(u0) / dt;
         dvm[1][l] = u1 * (1.0 + asf[1][l]) + a_mis[3] * u0 + a_mis[5] * u2 + ab[1][l] * dt
-                    + a_quad[1] * u1 * fabs(u1) / dt;
+                    + a_quad[1] * u1 * sm_fabs(u1) / dt;
         dvm[2][l] = u2 * (1.0 + asf[2][l]) + a_mis[6] * u0 + a_mis[7] * u1 + ab[2][l] * dt
-                    + a_quad[2] * u2 * fabs(u2) / dt;
+                    + a_quad[2] * u2 * sm_fabs(u2) / dt;
     }
 }
 
@@ -447,7 +457,7 @@ LANE_CLONES static void interval_lanes(int64_t k0, int64_t n_axes, const double 
     load_lanes(a_bias, k0, 3, ab);
     Fixed fx = fixed_terms(g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad);
     double dt = h / (double)n_sub;
-    Lanes t0[6], t1[6];
+    Lanes t0[6] = {{0.0}}, t1[6]; /* t0 set at i = 0 (initialised: GCC -O3 cannot see it and warns) */
     Lanes q[4], v[3], pa[3], pv[3]; /* as in interval(): pa, pv the previous step's increments */
     for (int l = 0; l < LANES; l++) {
         q[0][l] = 1.0;
@@ -537,7 +547,7 @@ void sarins_imu_interval_terms(int64_t n_steps, const double *temp0, const doubl
         for (int j = 0; j < 6; j++) {
             /* Gauss-Markov exact step x_k = phi x_{k-1} + std sqrt(1 - phi^2) w_k */
             double w = gm_rng != NULL ? sarins_rng_normal(gm_rng) : 0.0;
-            gm[j] = gm_phi[j] * gm[j] + gm_std[j] * sqrt(1.0 - gm_phi[j] * gm_phi[j]) * w;
+            gm[j] = gm_phi[j] * gm[j] + gm_std[j] * sm_sqrt(1.0 - gm_phi[j] * gm_phi[j]) * w;
         }
         for (int t = 0; t < 2; t++) {
             for (int i = 0; i < 3; i++) {
@@ -571,8 +581,8 @@ void sarins_imu_axial_thermal_terms(int64_t n_steps, double temp0, const double 
                                     const double *par, double *state, double *bias, int64_t b_stride) {
     double k_grad = par[0], tau_b = par[1], hyst = par[2], width = par[3], tau_r = par[4];
     if (k_grad == 0.0 && hyst == 0.0) return;
-    double e_b = tau_b > 0.0 ? exp(-h / tau_b) : 0.0;
-    double e_r = tau_r > 0.0 ? exp(-h / tau_r) : 1.0;
+    double e_b = tau_b > 0.0 ? sm_exp(-h / tau_b) : 0.0;
+    double e_r = tau_r > 0.0 ? sm_exp(-h / tau_r) : 1.0;
     double prev = temp0;
     for (int64_t k = 0; k < n_steps; k++) {
         double now = temps[k * t_stride];
@@ -585,7 +595,7 @@ void sarins_imu_axial_thermal_terms(int64_t n_steps, double temp0, const double 
         }
         double grad = 0.5 * (grad0 + (now - state[0]));
         double mid = 0.5 * (prev + now);
-        double play = fmax(mid - width, fmin(mid + width, state[1]));
+        double play = sm_fmax(mid - width, sm_fmin(mid + width, state[1]));
         state[1] = mid + (play - mid) * e_r;
         bias[k * b_stride] += k_grad * grad + hyst * (mid - state[1]) / width;
         prev = now;
@@ -753,7 +763,7 @@ int sarins_imu_dynamics(const int64_t *table, int64_t rows, int64_t n_steps, con
 static int white_noise_view(ImuView *v, int64_t n_steps, double *dtheta, double *dv) {
     SarinsRng rng;
     if (!load_stream(v, SARINS_IMU_STREAM_WHITE, &rng)) return SARINS_IMU_BAD_TABLE;
-    double sqrt_h = sqrt(v->consts[1]);
+    double sqrt_h = sm_sqrt(v->consts[1]);
     const double *rw_g = v->triad + 15, *rw_a = v->triad + 18; /* triad rows 5 and 6 */
     if (any_nonzero(rw_g, 6)) { /* rows 5 and 6 are adjacent */
         for (int64_t k = 0; k < n_steps; k++) {
@@ -852,10 +862,10 @@ void sarins_imu_aged_poly(uint64_t seed, int64_t n, const double *t, const doubl
     sarins_rng_stream(&r, seed, SARINS_IMU_STREAM_AGEING);
     double m[3] = {0.0, 0.0, 0.0}, prev = 0.0;
     for (int64_t k = 0; k < n; k++) {
-        double d = exp(-(t[k] - prev) / tau);
+        double d = sm_exp(-(t[k] - prev) / tau);
         for (int i = 0; i < 3; i++) {
             /* m <- d m + sigma sqrt(1 - d^2) w */
-            m[i] = d * m[i] + sigma[i] * sqrt(1.0 - d * d) * sarins_rng_normal(&r);
+            m[i] = d * m[i] + sigma[i] * sm_sqrt(1.0 - d * d) * sarins_rng_normal(&r);
             out[3 * k + i] = poly[i] + m[i];
         }
         prev = t[k];
@@ -872,7 +882,7 @@ enum { IO_STEP = SARINS_IMU_IO_STEP, IO_START = SARINS_IMU_IO_START, IO_GIMBALS 
        IO_OUT = SARINS_IMU_IO_OUT, IO_END_TIME = SARINS_IMU_IO_END_TIME, IO_VEHICLE = SARINS_IMU_IO_VEHICLE,
        IO_SIZE = SARINS_IMU_IO_SIZE };
 
-static int same_time(double a, double b, double step) { return fabs(a - b) <= TAG_TOL * step; }
+static int same_time(double a, double b, double step) { return sm_fabs(a - b) <= TAG_TOL * step; }
 
 /* Buffer index of a slot (a float64 holding an index), or -1 outside buf[0..n). */
 static int64_t slot_index(double slot, int64_t n) {
@@ -944,9 +954,9 @@ static int fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double
     double *held = table_array(table, SARINS_IMU_N_ARRAYS + 1);
     double *v_held = table_array(table, SARINS_IMU_N_ARRAYS + 2);
     const double *consts = v.consts, *clock = v.clock;
-    if (!(fabs(h - io[IO_STEP]) <= 1e-9 * io[IO_STEP])) return 1;
+    if (!(sm_fabs(h - io[IO_STEP]) <= 1e-9 * io[IO_STEP])) return 1;
     if (!same_time(consts[0] + clock[0] * consts[1] + io[IO_START], t, h)) return 1;
-    if (k_sub < 1 || (k_sub > 1 && !(fabs(consts[1] * (double)k_sub - h) <= 1e-9 * h))) return 1;
+    if (k_sub < 1 || (k_sub > 1 && !(sm_fabs(consts[1] * (double)k_sub - h) <= 1e-9 * h))) return 1;
     if (!(io[IO_GIMBALS] >= 1.0 && io[IO_GIMBALS] <= 3.0)) return 1;
     int na = (int)io[IO_GIMBALS];
     int count = 3 * na + 2;

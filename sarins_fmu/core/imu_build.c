@@ -1,6 +1,7 @@
 /* The IMU built from its flat parameters: see imu_build.h.  Every expression follows the former Python
  * construction (sarins_fmu/imu.py IMU._allocate, imu_correlated.CorrelatedErrors) term by term. */
-#include <math.h>
+#include "smath.h"
+
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
@@ -28,14 +29,14 @@ static const int AGING[3] = {SARINS_IMU_P_AGING_SIGMA_A, SARINS_IMU_P_AGING_SIGM
 
 int64_t sarins_imu_flicker_count(double tau_min, double tau_max) {
     if (!(tau_min > 0.0 && tau_min < tau_max && tau_max < INFINITY)) return 0;
-    double n = ceil(SARINS_IMU_FLICKER_PER_DECADE * log10(tau_max / tau_min)) + 1.0;
+    double n = sm_ceil(SARINS_IMU_FLICKER_PER_DECADE * sm_log10(tau_max / tau_min)) + 1.0;
     return n > 2.0 ? (int64_t)n : 2;
 }
 
 void sarins_imu_flicker_taus(double tau_min, double tau_max, int64_t n, double *taus) {
     /* 10^(log10 tau_min + i step), step = (log10 tau_max - log10 tau_min) / (F - 1): numpy.geomspace's sum */
-    double low = log10(tau_min), step = (log10(tau_max) - low) / (double)(n - 1);
-    for (int64_t i = 0; i < n; i++) taus[i] = pow(10.0, (double)i * step + low);
+    double low = sm_log10(tau_min), step = (sm_log10(tau_max) - low) / (double)(n - 1);
+    for (int64_t i = 0; i < n; i++) taus[i] = sm_exp10((double)i * step + low);
     taus[0] = tau_min;
     taus[n - 1] = tau_max;
 }
@@ -178,7 +179,7 @@ int sarins_imu_build(const int64_t *table, int64_t rows, const double *par, doub
         int t = j / 3, i = j % 3;
         a.sensor_par[j] = par[SP(SARINS_IMU_P_SELF_HEATING_GYRO_X, j)];
         a.sensor_par[6 + j] = par[SP(SARINS_IMU_P_TIME_CONSTANT_GYRO_X, j)];
-        a.sensor_par[12 + j] = exp(-h / par[TP(SARINS_IMU_P_GYRO_BIAS_CORR_TIME_X, t, i)]);
+        a.sensor_par[12 + j] = sm_exp(-h / par[TP(SARINS_IMU_P_GYRO_BIAS_CORR_TIME_X, t, i)]);
         a.sensor_par[18 + j] = par[TP(SARINS_IMU_P_GYRO_BIAS_INSTABILITY_X, t, i)];
     }
     /* coef: per triad bias, tc1, tc2, scale factor, sf_tc */
@@ -232,9 +233,9 @@ int sarins_imu_build(const int64_t *table, int64_t rows, const double *par, doub
     }
     /* flicker terms: phi_i = exp(-h / tau_i), q = B sqrt(ln(tau_1 / tau_0) / pi) (imu_correlated.py) */
     sarins_imu_flicker_taus(par[SARINS_IMU_P_FLICKER_TAU_MIN], par[SARINS_IMU_P_FLICKER_TAU_MAX], n_flicker, a.phi);
-    double unit_std = 1.0 * sqrt(log(a.phi[1] / a.phi[0]) / PI);
+    double unit_std = 1.0 * sm_sqrt(sm_log(a.phi[1] / a.phi[0]) / PI);
     for (int64_t k = 0; k < n_flicker; k++) {
-        a.phi[k] = exp(-h / a.phi[k]);
+        a.phi[k] = sm_exp(-h / a.phi[k]);
         for (int j = 0; j < 6; j++) {
             a.q[6 * k + j] = unit_std * par[TP(SARINS_IMU_P_GYRO_FLICKER_X, j / 3, j % 3)];
         }

@@ -1,6 +1,7 @@
+#include "smath.h"
+
 #include "ins.h"
 
-#include <math.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <string.h>
@@ -12,7 +13,7 @@
 /* q /= |q| */
 static void normalize_into(const double *qn, double *q)
 {
-    double norm = sqrt(qn[0] * qn[0] + qn[1] * qn[1] + qn[2] * qn[2] + qn[3] * qn[3]);
+    double norm = sm_sqrt(qn[0] * qn[0] + qn[1] * qn[1] + qn[2] * qn[2] + qn[3] * qn[3]);
     for (int i = 0; i < 4; i++)
         q[i] = qn[i] / norm;
 }
@@ -24,12 +25,12 @@ static void mech_step(double *q, double *v, double *pos, const double *phi, cons
     double lat = pos[0], hgt = pos[2];
     double r_m, r_n;
     sarins_earth_radii(lat, &r_m, &r_n);
-    double w_c = SARINS_EARTH_RATE * cos(lat), w_s = SARINS_EARTH_RATE * sin(lat);
+    double w_c = SARINS_EARTH_RATE * sm_cos(lat), w_s = SARINS_EARTH_RATE * sm_sin(lat);
     double ve = v[0], vn = v[1];
     /* omega_en^n = (-v_N / (R_M + h), v_E / (R_N + h), v_E tan L / (R_N + h)) */
     double en_x = -vn / (r_m + hgt);
     double en_y = ve / (r_n + hgt);
-    double en_z = ve * tan(lat) / (r_n + hgt);
+    double en_z = ve * sm_tan(lat) / (r_n + hgt);
     /* zeta = (omega_ie^n + omega_en^n) h */
     double zeta[3] = {en_x * h, (w_c + en_y) * h, (w_s + en_z) * h};
     double c[9], u[3];
@@ -51,7 +52,7 @@ static void mech_step(double *q, double *v, double *pos, const double *phi, cons
         /* L += mean v_N h / (R_M + h) ; lambda += mean v_E h / ((R_N + h) cos L_mid) */
         pos[0] = lat + 0.5 * (v_old1 + v[1]) * h / (r_m + hgt);
         double lat_mid = 0.5 * (lat + pos[0]);
-        pos[1] = pos[1] + 0.5 * (v_old0 + v[0]) * h / ((r_n + hgt) * cos(lat_mid));
+        pos[1] = pos[1] + 0.5 * (v_old0 + v[0]) * h / ((r_n + hgt) * sm_cos(lat_mid));
     }
     /* q_nb = q(-zeta) * q_nb * q(phi), normalised */
     double minus_zeta[3] = {-zeta[0], -zeta[1], -zeta[2]};
@@ -77,10 +78,10 @@ static void record(const double *q, const double *v, const double *pos, double *
     /* pitch = asin(C_21) clipped to [-1, 1] as Python's min(1, max(-1, x)) */
     double s = (c[7] > -1.0) ? c[7] : -1.0;
     s = (s < 1.0) ? s : 1.0;
-    row[7] = asin(s);
+    row[7] = sm_asin(s);
     /* roll = atan2(-C_20, C_22) ; yaw = atan2(-C_01, C_11) */
-    row[8] = atan2(-c[6], c[8]);
-    row[6] = atan2(-c[1], c[4]);
+    row[8] = sm_atan2(-c[6], c[8]);
+    row[6] = sm_atan2(-c[1], c[4]);
 }
 
 void sarins_ins_held_row(const double *q, const double *pos, double *row)
@@ -115,7 +116,7 @@ void sarins_ins_align_steps(int64_t k, double *q, double *v, double *pos, const 
     double lat = pos[0];
     double r_m, r_n;
     sarins_earth_radii(lat, &r_m, &r_n);
-    double w_c = SARINS_EARTH_RATE * cos(lat), w_s = SARINS_EARTH_RATE * sin(lat);
+    double w_c = SARINS_EARTH_RATE * sm_cos(lat), w_s = SARINS_EARTH_RATE * sm_sin(lat);
     double g = sarins_earth_gravity(lat, pos[2]);
     for (int64_t s = 0; s < k; s++) {
         for (int j = 0; j < 3; j++) {
@@ -135,7 +136,7 @@ void sarins_ins_align_steps(int64_t k, double *q, double *v, double *pos, const 
         f[N * 1 + 0] = -w_s;
         f[N * 1 + 3] = 1.0 / (r_n + pos[2]);
         f[N * 2 + 0] = w_c;
-        f[N * 2 + 3] = tan(lat) / (r_n + pos[2]);
+        f[N * 2 + 3] = sm_tan(lat) / (r_n + pos[2]);
         f[N * 3 + 1] = -g;
         f[N * 3 + 4] = 2.0 * w_s;
         f[N * 4 + 0] = g;
@@ -203,8 +204,8 @@ static const char *const CONFIG_NAMES[SARINS_INS_CONFIG] = {
 /* round half to even, as Python's round() */
 static double round_even(double x)
 {
-    double r = floor(x), d = x - r;
-    if (d > 0.5 || (d == 0.5 && fmod(r, 2.0) != 0.0))
+    double r = sm_floor(x), d = x - r;
+    if (d > 0.5 || (d == 0.5 && sm_fmod(r, 2.0) != 0.0))
         r += 1.0;
     return r;
 }
@@ -212,7 +213,7 @@ static double round_even(double x)
 /* a b + c d + e f as a fused multiply-add chain (the rounding of the BLAS products this replaced) */
 static double dot3(double a, double b, double c, double d, double e, double f)
 {
-    return fma(e, f, fma(c, d, a * b));
+    return sm_fma(e, f, sm_fma(c, d, a * b));
 }
 
 /* c = a b, 3x3 row-major, each entry a dot3 */
@@ -223,7 +224,7 @@ static void mat3_mult(const double *a, const double *b, double *c)
             c[3 * i + j] = dot3(a[3 * i], b[j], a[3 * i + 1], b[3 + j], a[3 * i + 2], b[6 + j]);
 }
 
-static double norm3(const double *a) { return sqrt(dot3(a[0], a[0], a[1], a[1], a[2], a[2])); }
+static double norm3(const double *a) { return sm_sqrt(dot3(a[0], a[0], a[1], a[1], a[2], a[2])); }
 
 /* c = a x b (each component a product difference, not fused) */
 static void cross3(const double *a, const double *b, double *c)
@@ -253,7 +254,7 @@ int sarins_ins_config_check(const double *c, char *msg, size_t size)
             return SARINS_INS_BAD_CONFIG;
         }
     double align = c[SARINS_INS_ALIGN_TIME], coarse = c[SARINS_INS_COARSE_TIME], step = c[SARINS_INS_STEP];
-    if (fabs(c[SARINS_INS_LAT]) > SARINS_INS_LAT_LIMIT) {
+    if (sm_fabs(c[SARINS_INS_LAT]) > SARINS_INS_LAT_LIMIT) {
         snprintf(msg, size, "latitude %.6g deg is outside +-89.9 deg", c[SARINS_INS_LAT] * (180.0 / SARINS_INS_PI));
         return SARINS_INS_BAD_CONFIG;
     }
@@ -290,31 +291,31 @@ void sarins_mat_to_quat(const double *m, double *q)
             i = j;
     double r[4];
     if (i == 0) {
-        double w = 0.5 * sqrt(1.0 + tr);
+        double w = 0.5 * sm_sqrt(1.0 + tr);
         r[0] = w;
         r[1] = (m[7] - m[5]) / (4.0 * w);
         r[2] = (m[2] - m[6]) / (4.0 * w);
         r[3] = (m[3] - m[1]) / (4.0 * w);
     } else if (i == 1) {
-        double x = 0.5 * sqrt((1.0 + 2.0 * m[0]) - tr);
+        double x = 0.5 * sm_sqrt((1.0 + 2.0 * m[0]) - tr);
         r[0] = (m[7] - m[5]) / (4.0 * x);
         r[1] = x;
         r[2] = (m[1] + m[3]) / (4.0 * x);
         r[3] = (m[2] + m[6]) / (4.0 * x);
     } else if (i == 2) {
-        double y = 0.5 * sqrt((1.0 + 2.0 * m[4]) - tr);
+        double y = 0.5 * sm_sqrt((1.0 + 2.0 * m[4]) - tr);
         r[0] = (m[2] - m[6]) / (4.0 * y);
         r[1] = (m[1] + m[3]) / (4.0 * y);
         r[2] = y;
         r[3] = (m[5] + m[7]) / (4.0 * y);
     } else {
-        double z = 0.5 * sqrt((1.0 + 2.0 * m[8]) - tr);
+        double z = 0.5 * sm_sqrt((1.0 + 2.0 * m[8]) - tr);
         r[0] = (m[3] - m[1]) / (4.0 * z);
         r[1] = (m[2] + m[6]) / (4.0 * z);
         r[2] = (m[5] + m[7]) / (4.0 * z);
         r[3] = z;
     }
-    double norm = sqrt(fma(r[3], r[3], fma(r[2], r[2], fma(r[1], r[1], r[0] * r[0]))));
+    double norm = sm_sqrt(sm_fma(r[3], r[3], sm_fma(r[2], r[2], sm_fma(r[1], r[1], r[0] * r[0]))));
     double sign = (r[0] >= 0.0) ? 1.0 : -1.0;
     for (int j = 0; j < 4; j++)
         q[j] = r[j] / norm * sign;
@@ -395,13 +396,13 @@ int sarins_ins_phase(const sarins_ins *s)
 /* int_0^t mat_n0n(s) (0, 0, g) ds for a static point (see the header), m/s */
 static void gravity_integral_n0(double lat, double height, double t, double *out)
 {
-    double u[3] = {0.0, cos(lat), sin(lat)};
+    double u[3] = {0.0, sm_cos(lat), sm_sin(lat)};
     double k[9] = {0.0, -u[2], u[1], u[2], 0.0, -u[0], -u[1], u[0], 0.0};
     double w = SARINS_EARTH_RATE;
     double f[3] = {0.0, 0.0, sarins_earth_gravity(lat, height)};
     double kk[9], m[9];
     mat3_mult(k, k, kk);
-    double c1 = (1.0 - cos(w * t)) / w, c2 = t - sin(w * t) / w;
+    double c1 = (1.0 - sm_cos(w * t)) / w, c2 = t - sm_sin(w * t) / w;
     for (int i = 0; i < 9; i++)
         m[i] = (t * ((i % 4 == 0) ? 1.0 : 0.0) + c1 * k[i]) + c2 * kk[i];
     for (int i = 0; i < 3; i++)
@@ -444,8 +445,8 @@ static void finish_coarse(sarins_ins *s)
     /* mat_n0b0 = F_r F_b' */
     mat3_mult(fr, fbt, mat_n0b0);
     /* mat_nb(T) = mat_nn0(T) mat_n0b0 mat_b0b(T); n has turned by -omega_ie^n T wrt n0 (static) */
-    double minus_zeta[3] = {-(0.0 * t_end), -((SARINS_EARTH_RATE * cos(lat)) * t_end),
-                            -((SARINS_EARTH_RATE * sin(lat)) * t_end)};
+    double minus_zeta[3] = {-(0.0 * t_end), -((SARINS_EARTH_RATE * sm_cos(lat)) * t_end),
+                            -((SARINS_EARTH_RATE * sm_sin(lat)) * t_end)};
     double qz[4], mat_nn0[9], mat_b0b[9], tmp[9], mat_nb[9];
     sarins_rotvec_to_quat(minus_zeta, qz);
     sarins_quat_to_mat(qz, mat_nn0);
@@ -526,7 +527,7 @@ void sarins_ins_position_error(const sarins_ins *s, int64_t k, const double *row
     double r_m, r_n;
     sarins_earth_radii(c[SARINS_INS_LAT], &r_m, &r_n);
     double north_scale = r_m + c[SARINS_INS_HEIGHT], east_scale = r_n + c[SARINS_INS_HEIGHT];
-    double cos_lat = cos(c[SARINS_INS_LAT]);
+    double cos_lat = sm_cos(c[SARINS_INS_LAT]);
     for (int64_t i = 0; i < k; i++) {
         double dlat = rows[SARINS_INS_ROW * i] - c[SARINS_INS_LAT];
         double dlon = rows[SARINS_INS_ROW * i + 1] - c[SARINS_INS_LON];

@@ -1,6 +1,7 @@
+#include "smath.h"
+
 #include "ins_fmu_step.h"
 
-#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -16,7 +17,7 @@
     } while (0)
 
 /* Two time tags name the same communication point (to SARINS_INS_TAG_TOL of a step h). */
-static int same_time(double a, double b, double h) { return fabs(a - b) <= SARINS_INS_TAG_TOL * h; }
+static int same_time(double a, double b, double h) { return sm_fabs(a - b) <= SARINS_INS_TAG_TOL * h; }
 
 static const sarins_ins_comp_pair *queued(const sarins_ins_comp *c, int64_t i)
 {
@@ -190,7 +191,7 @@ static void publish(sarins_ins_fmu *f, const double *row, double temp)
     sarins_ins_position_error(s, 1, row, err);
     for (int i = 0; i < 4; i++)
         f->out[SARINS_INS_OUT_LAT_ERROR + i] = err[i];
-    f->out[SARINS_INS_OUT_POSITION_ERROR] = hypot(err[2], err[3]);
+    f->out[SARINS_INS_OUT_POSITION_ERROR] = sm_hypot(err[2], err[3]);
     f->phase = sarins_ins_phase(s);
     double time = (double)s->steps * s->config[SARINS_INS_STEP]; /* since the start, s */
     double nav_time = time - s->config[SARINS_INS_ALIGN_TIME];
@@ -201,7 +202,7 @@ static void publish(sarins_ins_fmu *f, const double *row, double temp)
     f->out[SARINS_INS_OUT_ACCEL_BIAS_EST_X] = s->accel_comp[0];
     f->out[SARINS_INS_OUT_ACCEL_BIAS_EST_Y] = s->accel_comp[1];
     f->out[SARINS_INS_OUT_TEMP_AZIMUTH_GYRO] = temp;
-    if (f->phase != 2 || fabs(nav_time) < 0.5 * f->step) { /* aligning, or the first navigation point */
+    if (f->phase != 2 || sm_fabs(nav_time) < 0.5 * f->step) { /* aligning, or the first navigation point */
         f->out[SARINS_INS_OUT_TEMP_ALIGN_END] = temp;
         f->out[SARINS_INS_OUT_TEMP_CHANGE_ALIGN] = temp - f->out[SARINS_INS_OUT_TEMP_ALIGN_START];
     }
@@ -214,7 +215,7 @@ int sarins_ins_fmu_do_step(sarins_ins_fmu *f, const double *in, double t, double
         REASON("communication step %.17g must be positive and finite", h);
         return SARINS_INS_BAD_STEP;
     }
-    if (f->step != 0.0 && fabs(h - f->step) > 1e-9 * f->step) {
+    if (f->step != 0.0 && sm_fabs(h - f->step) > 1e-9 * f->step) {
         REASON("communication step changed from %.17g s to %.17g s; this FMU needs a fixed step", f->step, h);
         return SARINS_INS_BAD_STEP;
     }

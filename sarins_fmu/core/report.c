@@ -1,6 +1,7 @@
+#include "smath.h"
+
 #include "report.h"
 
-#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -1,5 +1,6 @@
 /* Seeded random streams: see rng.h. */
-#include <math.h>
+#include "smath.h"
+
 #include <stdint.h>
 
 #include "rng.h"
@@ -44,7 +45,7 @@ void sarins_rng_pack(const SarinsRng *r, uint64_t stream, double *words) {
 }
 
 /* a whole number in [0, limit) */
-static int whole_below(double x, double limit) { return x >= 0.0 && x < limit && floor(x) == x; }
+static int whole_below(double x, double limit) { return x >= 0.0 && x < limit && sm_floor(x) == x; }
 
 int sarins_rng_unpack(const double *words, SarinsRng *r) {
     for (int i = 0; i < 4; i++) {

@@ -34,7 +34,7 @@
 #ifndef SARINS_RNG_H
 #define SARINS_RNG_H
 
-#include <math.h>
+#include "smath.h"
 #include <stdint.h>
 
 typedef struct {
@@ -78,7 +78,7 @@ static inline double sarins_rng_normal(SarinsRng *r) {
         v2 = 2.0 * sarins_rng_uniform(r) - 1.0;
         s = v1 * v1 + v2 * v2;
     } while (s >= 1.0 || s == 0.0);
-    double f = sqrt(-2.0 * log(s) / s);
+    double f = sm_sqrt(-2.0 * sm_log(s) / s);
     r->spare = v2 * f;
     r->has_spare = 1;
     return v1 * f;

@@ -1,18 +1,19 @@
+#include "smath.h"
+
 #include "rotations.h"
 
-#include <math.h>
 
 void sarins_rotvec_to_mat(const double *phi, double *mat)
 {
     double theta2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2];
-    double theta = sqrt(theta2);
+    double theta = sm_sqrt(theta2);
     double a, b;
     if (theta < 1e-8) { /* series: sin(th)/th ~ 1 - th^2/6, (1 - cos th)/th^2 ~ 1/2 - th^2/24 */
         a = 1.0 - theta2 / 6.0;
         b = 0.5 - theta2 / 24.0;
     } else {
-        a = sin(theta) / theta;
-        b = (1.0 - cos(theta)) / theta2;
+        a = sm_sin(theta) / theta;
+        b = (1.0 - sm_cos(theta)) / theta2;
     }
     double k[9] = {0.0, -phi[2], phi[1], phi[2], 0.0, -phi[0], -phi[1], phi[0], 0.0};
     /* mat = I + a K + b K K */
@@ -26,14 +27,14 @@ void sarins_rotvec_to_mat(const double *phi, double *mat)
 void sarins_rotvec_to_quat(const double *phi, double *q)
 {
     double theta2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2];
-    double theta = sqrt(theta2);
+    double theta = sm_sqrt(theta2);
     double s, c;
     if (theta < 1e-8) { /* series: sin(th/2)/th ~ 1/2 - th^2/48, cos(th/2) ~ 1 - th^2/8 */
         s = 0.5 - theta2 / 48.0;
         c = 1.0 - theta2 / 8.0;
     } else {
-        s = sin(0.5 * theta) / theta;
-        c = cos(0.5 * theta);
+        s = sm_sin(0.5 * theta) / theta;
+        c = sm_cos(0.5 * theta);
     }
     q[0] = c;
     q[1] = s * phi[0];
@@ -65,9 +66,9 @@ void sarins_quat_to_mat(const double *q, double *mat)
 
 void sarins_euler_to_mat(double yaw, double pitch, double roll, double *mat)
 {
-    double cy = cos(yaw), sy = sin(yaw);
-    double cp = cos(pitch), sp = sin(pitch);
-    double cr = cos(roll), sr = sin(roll);
+    double cy = sm_cos(yaw), sy = sm_sin(yaw);
+    double cp = sm_cos(pitch), sp = sm_sin(pitch);
+    double cr = sm_cos(roll), sr = sm_sin(roll);
     /* Rz(yaw) Rx(pitch) Ry(roll), written out */
     mat[0] = cy * cr - sy * sp * sr;
     mat[1] = -sy * cp;

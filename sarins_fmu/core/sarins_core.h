@@ -1,6 +1,6 @@
 /* sarins_core: the C physics core of sarins-fmu.
  *
- * Plain C11 + libm.  No globals, no heap allocation inside the step
+ * Plain C11, no libm: the math functions are the core's own (smath.h).  No globals, no heap allocation inside the step
  * functions, reentrant: every function works on the arrays or the state
  * struct it is given.  Units are SI (rad, rad/s, m, m/s, s; temperatures in
  * degC where stated); frames follow the Python library: navigation frame
@@ -14,6 +14,8 @@
 #define SARINS_CORE_H
 
 #include <stdint.h>
+
+#include "smath.h"
 
 /* ABI version of the library; the binding refuses a library of another one. */
 #define SARINS_CORE_ABI 8

@@ -1,9 +1,10 @@
 /* Turntable schedules generated from parameters (schedule.h). */
+#include "smath.h"
+
 #include "schedule.h"
 #include "report.h"
 
 #include <ctype.h>
-#include <math.h>
 #include <string.h>
 
 #define PI 3.14159265358979323846
@@ -104,7 +105,7 @@ static int check(report *r, const char *name, double v, int positive, int kind)
 /* Whole grid steps covering duration (0 for 0), as a double: max(0, ceil(duration / grid - 1e-9)). */
 static double ceil_steps(report *r, double duration, double grid)
 {
-    double n = ceil(duration / grid - 1e-9);
+    double n = sm_ceil(duration / grid - 1e-9);
     if (!(n <= MAX_STEPS)) {
         sarins_fail(r, SARINS_SCHEDULE_TOO_BIG, "a span of %.9g s is more than 2^53 steps of the %.9g s grid",
                     duration, grid);
@@ -123,8 +124,8 @@ static double ceil_to_grid(report *r, double duration, double grid)
 /* x rounded half to even, checked to be a whole number of at most 2^53 */
 static double round_steps(report *r, double x)
 {
-    double n = nearbyint(x);
-    if (!(fabs(n) <= MAX_STEPS)) {
+    double n = sm_nearbyint(x);
+    if (!(sm_fabs(n) <= MAX_STEPS)) {
         sarins_fail(r, SARINS_SCHEDULE_TOO_BIG, "%.9g grid steps are more than 2^53", x);
         return 0.0;
     }
@@ -141,10 +142,10 @@ static int move(report *r, double angle, double rate_max, double accel_max, doub
     if (angle == 0.0)
         return 0;
     double sign = angle > 0 ? 1.0 : -1.0;
-    angle = fabs(angle);
+    angle = sm_fabs(angle);
     double t_acc = ceil_to_grid(r, rate_max / accel_max, grid), t_cruise;
     if (rate_max * t_acc >= angle) { /* triangular profile: no cruise phase */
-        t_acc = ceil_to_grid(r, sqrt(angle / accel_max), grid);
+        t_acc = ceil_to_grid(r, sm_sqrt(angle / accel_max), grid);
         t_cruise = 0.0;
     } else {
         t_cruise = ceil_to_grid(r, angle / rate_max - t_acc, grid);
@@ -292,7 +293,8 @@ static void rest(sink *k, double n)
 /* The seconds form: one gimbal (single-axis). */
 static void emit_seconds(sink *k, double duration, double acc)
 {
-    write_segment(k, duration, &acc);
+    const double a[SARINS_SCHEDULE_MAX_AXES] = {acc}; /* n_axes is 1 here; a whole row keeps GCC -O3 quiet */
+    write_segment(k, duration, a);
 }
 
 static void push_window(sink *k, const sarins_schedule_window *w)
@@ -489,7 +491,7 @@ static void single_axis(const sarins_schedule_params *p, int scheme, sink *k)
     int n_moves;
     if (scheme == FORWARD_REVERSE) {
         double rev = p->revolutions;
-        if (!(rev >= 1 && floor(rev) == rev && isfinite(rev))) { /* 0 turns: a cycle of no time, never ending */
+        if (!(rev >= 1 && sm_floor(rev) == rev && isfinite(rev))) { /* 0 turns: a cycle of no time, never ending */
             char num[40];
             sarins_format_number(num, sizeof num, rev);
             sarins_fail(r, SARINS_SCHEDULE_BAD_PARAM, "revolutions must be a positive whole number, got %s", num);
@@ -612,7 +614,7 @@ static void rate_table_3axis(const sarins_schedule_params *p, sink *k)
         double a = rates[j] / (q * grid);
         /* accel +a for T_q, -a for 2 T_q, +a for T_q: rate 0 -> +max -> -max -> 0, angle back to its start */
         track *t = &tracks[j];
-        *t = (track){3, {q, 2 * q, q}, {a, -a, a}, ceil(n_motion / (4 * q))};
+        *t = (track){3, {q, 2 * q, q}, {a, -a, a}, sm_ceil(n_motion / (4 * q))};
         use[j] = t;
     }
     rest(k, n_warm);
@@ -679,20 +681,20 @@ static void tumble_24(const sarins_schedule_params *p, sink *k)
 static void whole_revolutions(report *r, double rate, double grid, double min_duration, double rate_tol,
                               double *k_out, double *n_out)
 {
-    double steps_per_rev = 2 * PI / (fabs(rate) * grid);
-    double k_min = ceil(min_duration * fabs(rate) / (2 * PI) - 1e-9);
+    double steps_per_rev = 2 * PI / (sm_fabs(rate) * grid);
+    double k_min = sm_ceil(min_duration * sm_fabs(rate) / (2 * PI) - 1e-9);
     if (!(k_min >= 1))
         k_min = 1;
     for (double k = k_min; k < k_min + 100000; k++) {
-        double n = nearbyint(k * steps_per_rev);
+        double n = sm_nearbyint(k * steps_per_rev);
         if (!(n <= MAX_STEPS) || !(k <= MAX_STEPS)) {
             sarins_fail(r, SARINS_SCHEDULE_TOO_BIG, "a rate-test window at %.9g deg/s is more than 2^53 grid steps",
-                        fabs(rate) / DEG_TO_RAD);
+                        sm_fabs(rate) / DEG_TO_RAD);
             return;
         }
         if (!(n >= 1.0))
             n = 1.0;
-        if (fabs(k * steps_per_rev / n - 1.0) <= rate_tol && n * grid >= min_duration - 1e-9) {
+        if (sm_fabs(k * steps_per_rev / n - 1.0) <= rate_tol && n * grid >= min_duration - 1e-9) {
             *k_out = k;
             *n_out = n;
             return;
@@ -703,7 +705,7 @@ static void whole_revolutions(report *r, double rate, double grid, double min_du
     sarins_format_number(tol, sizeof tol, rate_tol);
     sarins_fail(r, SARINS_SCHEDULE_BAD_PARAM,
                 "cannot fit whole revolutions at %.9g deg/s on a %s s grid within a relative rate change of %s; "
-                "use a finer grid or a larger rate_tol", fabs(rate) / DEG_TO_RAD, g, tol);
+                "use a finer grid or a larger rate_tol", sm_fabs(rate) / DEG_TO_RAD, g, tol);
 }
 
 /* (middle, inner) quarter turns that point each body axis up: Rx(m) Ry(i) e_axis = +z */
@@ -808,8 +810,8 @@ static void rate_test(const sarins_schedule_params *p, sink *k)
         for (int64_t i = 0; i < n_rates && !r->code; i++) {
             double w_nominal = NOMINAL(i);
             whole_revolutions(r, w_nominal, grid, min_duration, rate_tol, &k_rev, &n_rev);
-            double w = copysign(2 * PI * k_rev / (n_rev * grid), w_nominal);
-            double q = ceil_steps(r, fabs(w) / acc, grid);
+            double w = sm_copysign(2 * PI * k_rev / (n_rev * grid), w_nominal);
+            double q = ceil_steps(r, sm_fabs(w) / acc, grid);
             if (q < 1)
                 q = 1;
             double a = w / (q * grid);

@@ -1,14 +1,15 @@
 /* Lumped thermal model: see thermal.h.  The evaluation order follows
  * sarins_fmu/thermal.py's former compiled loops term by term, so results
  * are the same bit for bit. */
-#include <math.h>
+
+#include "smath.h"
 
 #include "thermal.h"
 
 double sarins_thermal_exact_step(double x, double amb0, double amb1, double dt, double heat, double tau) {
     /* s = ambient slope; T <- e T + (amb0 + dT - s tau)(1 - e) + s dt, e = exp(-dt/tau) */
     double slope = dt > 0 ? (amb1 - amb0) / dt : 0.0;
-    double decay = exp(-dt / tau);
+    double decay = sm_exp(-dt / tau);
     return decay * x + (amb0 + heat - slope * tau) * (1.0 - decay) + slope * dt;
 }
 
@@ -51,7 +52,7 @@ void sarins_die_temperatures(int64_t n_steps, int64_t n_sensors, const double *r
             if (tau[j] > 0.0) {
                 /* T_rep linear over the interval (slope s): T_die <- e T_die + (T_rep0 - s tau)(1 - e) + s h */
                 double slope = (rep - prev) / h;
-                double decay = exp(-h / tau[j]);
+                double decay = sm_exp(-h / tau[j]);
                 die[j] = decay * die[j] + (prev - slope * tau[j]) * (1.0 - decay) + slope * h;
             } else {
                 die[j] = rep;

@@ -1,3 +1,5 @@
+#include "smath.h"
+
 #include "turntable.h"
 
 /* Number of breakpoints <= t, less one: the segment holding t (-1 before the start). */

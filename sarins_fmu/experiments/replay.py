@@ -23,6 +23,7 @@ import warnings
 import numpy as np
 
 from .. import earth
+from ..core import smath  # the C core's hypot: the FMU's position_error, bit for bit
 from ..imu_log import ImuLog, LogError
 from ..ins import InsConfig, StrapdownINS
 from ..identify.axial import APPLY_LATENCY
@@ -189,7 +190,7 @@ def _result(log, nav, err, n_align, compensator, gyro_comp, accel_comp) -> dict:
     temps_all = log.temps if log.temps is not None else np.full((n_total, 6), np.nan)
     return dict(
         time=np.arange(1, n_nav + 1) * h, lat_error=err[:, 0], lon_error=err[:, 1], north_error=err[:, 2],
-        east_error=err[:, 3], position_error=np.hypot(err[:, 2], err[:, 3]), velocity_n=nav[:, 3:6],
+        east_error=err[:, 3], position_error=smath.evaluate("hypot", err[:, 2], err[:, 3]), velocity_n=nav[:, 3:6],
         attitude=nav[:, 6:9], time_all=np.arange(1, n_total + 1) * h - n_align * h, temperature=temps_all,
         info={"lat_deg": math.degrees(log.lat), "align_hours": n_align * h / HOUR, "nav_hours": n_nav * h / HOUR,
               "source": "log", "quantity": log.quantity, "compensated": compensator is not None,

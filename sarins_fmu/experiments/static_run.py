@@ -16,6 +16,7 @@ import numpy as np
 from .. import imu as imu_mod
 from .. import turntable
 from ..imu import IMU, StaticBase
+from ..core import smath  # the C core's hypot: the FMU's position_error, bit for bit
 from ..rotations import rotvec_to_mat, small_angle_error
 from ..ins import InsConfig, StrapdownINS
 from ..thermal import Ambient
@@ -177,7 +178,7 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
     return StaticRunResult(
         time=np.arange(1, n_nav + 1) * step,
         lat_error=err[:, 0], lon_error=err[:, 1], north_error=err[:, 2], east_error=err[:, 3],
-        position_error=np.hypot(err[:, 2], err[:, 3]),
+        position_error=smath.evaluate("hypot", err[:, 2], err[:, 3]),
         velocity_n=nav[:, 3:6], attitude=nav[:, 6:9],
         time_all=np.arange(1, n_total + 1) * step - align_time, temperature=temps,
         info={"lat_deg": lat_deg, "align_hours": align_time / HOUR, "nav_hours": nav_hours,

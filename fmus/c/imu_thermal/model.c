@@ -18,7 +18,8 @@
  * of sarins_imu_fmu_step_sub are a second allocation (c->work's sub), not state: rewritten every step.
  * Units: rad, rad/s, rad/s^2, m, m/s, m/s^2, s, degC (the declaration's non-SI display units are the host's).
  */
-#include <math.h>
+#include "smath.h"
+
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -139,7 +140,7 @@ static int model_params(const sarins_ctx *c, double *par)
         double value = c->r[SARINS_TABLE.vars[k].slot];
         if (!isfinite(value))
             return refuse(c, name, value, "is not a finite number");
-        if (strncmp(name, "self_heating_", 13) == 0 && !(fabs(value) <= SELF_HEATING_LIMIT)) {
+        if (strncmp(name, "self_heating_", 13) == 0 && !(sm_fabs(value) <= SELF_HEATING_LIMIT)) {
             sarins_log(c, SARINS_ERROR, "parameter %s = %.9g degC is outside [%.9g, %.9g] degC", name, value,
                        -SELF_HEATING_LIMIT, SELF_HEATING_LIMIT);
             return SARINS_ERROR;
@@ -171,7 +172,7 @@ static int check_parameters(sarins_ctx *c, double axes[MAX_GIMBALS][3], int *n_g
         return refuse(c, "internal_rate", r[SARINS_R_internal_rate], "must be positive");
     if (!(r[SARINS_R_aging_days] >= 0.0))
         return refuse(c, "aging_days", r[SARINS_R_aging_days], "must not be negative");
-    if (!(fabs(r[SARINS_R_lat]) <= LAT_LIMIT)) {
+    if (!(sm_fabs(r[SARINS_R_lat]) <= LAT_LIMIT)) {
         sarins_log(c, SARINS_ERROR, "parameter lat = %.9g deg is outside [%.9g, %.9g] deg", r[SARINS_R_lat] * 180.0 / PI,
                    -LAT_LIMIT * 180.0 / PI, LAT_LIMIT * 180.0 / PI);
         return SARINS_ERROR;
@@ -207,9 +208,9 @@ static int check_parameters(sarins_ctx *c, double axes[MAX_GIMBALS][3], int *n_g
  * mat_nt^T (0, W cos L, W sin L) and -mat_nt^T (0, 0, -g), term by term as sarins_fmu.imu.StaticBase. */
 static void static_base(double lat, double height, double yaw, double *base)
 {
-    double c = cos(yaw), s = sin(yaw);
+    double c = sm_cos(yaw), s = sm_sin(yaw);
     double mat_tn[3][3] = {{c, s, 0.0}, {-s, c, 0.0}, {0.0, 0.0, 1.0}};
-    double w[3] = {0.0, SARINS_EARTH_RATE * cos(lat), SARINS_EARTH_RATE * sin(lat)};
+    double w[3] = {0.0, SARINS_EARTH_RATE * sm_cos(lat), SARINS_EARTH_RATE * sm_sin(lat)};
     double g[3] = {0.0, 0.0, -sarins_earth_gravity(lat, height)};
     for (int i = 0; i < 3; i++) {
         base[i] = (mat_tn[i][0] * w[0] + mat_tn[i][1] * w[1]) + mat_tn[i][2] * w[2];
@@ -410,11 +411,11 @@ static int select_set(const sarins_ctx *c, const double *held, double tag, doubl
         snprintf(msg, sizeof msg, "%s is not finite", tag_name);
         return step_error(c, msg);
     }
-    if (fabs(tag - t) <= SARINS_IMU_TAG_TOL * h) {
+    if (sm_fabs(tag - t) <= SARINS_IMU_TAG_TOL * h) {
         *from_held = 0;
         return 1;
     }
-    if (held[0] != 0.0 && fabs(held[1] - t) <= SARINS_IMU_TAG_TOL * h) {
+    if (held[0] != 0.0 && sm_fabs(held[1] - t) <= SARINS_IMU_TAG_TOL * h) {
         *from_held = 1;
         return 1;
     }
@@ -430,7 +431,7 @@ static int explain(const sarins_ctx *c, const imu_work *w, double t, double h)
 {
     const imu_state *st = c->state;
     char msg[400];
-    if (fabs(h - st->step) > 1e-9 * st->step) {
+    if (sm_fabs(h - st->step) > 1e-9 * st->step) {
         snprintf(msg, sizeof msg, "communication step changed from %.17g s to %.17g s; this FMU needs a fixed step",
                  st->step, h);
         return step_error(c, msg);
@@ -445,7 +446,7 @@ static int explain(const sarins_ctx *c, const imu_work *w, double t, double h)
         return SARINS_ERROR;
     const double *consts = row(w, SARINS_IMU_CONSTS), *clock = row(w, SARINS_IMU_CLOCK);
     double now = consts[0] + clock[0] * consts[1] + c->start_time;
-    if (fabs(now - t) > SARINS_IMU_TAG_TOL * h) {
+    if (sm_fabs(now - t) > SARINS_IMU_TAG_TOL * h) {
         snprintf(msg, sizeof msg, "doStep at t=%.9g s but the IMU stands at %.9g s (steps must follow each other)",
                  t, now);
         return step_error(c, msg);
@@ -472,7 +473,7 @@ static int start(sarins_ctx *c, imu_work *w, double t, double h)
     double internal_rate = c->r[SARINS_R_internal_rate];
     double interval = w->n_sub > 1 ? h / (double)w->n_sub : h; /* the IMU's output interval */
     double n_sub = interval * internal_rate; /* minor steps per output interval */
-    if (fabs(n_sub - nearbyint(n_sub)) > 1e-6 || nearbyint(n_sub) < 1.0) {
+    if (sm_fabs(n_sub - sm_nearbyint(n_sub)) > 1e-6 || sm_nearbyint(n_sub) < 1.0) {
         if (w->n_sub > 1)
             sarins_log(c, SARINS_ERROR, "ValueError: output interval %.17g s / n_sub %d = %.17g s is not a whole "
                        "number of minor steps at %.17g Hz", h, (int)w->n_sub, interval, internal_rate);
@@ -496,7 +497,7 @@ static int start(sarins_ctx *c, imu_work *w, double t, double h)
     if (!(ambient0 >= ABSOLUTE_ZERO))
         return step_error(c, "ambient temperature must be finite and above absolute zero (degC)");
     uint64_t seed = (uint64_t)c->i[SARINS_I_seed];
-    if (sarins_imu_build(w->table, TABLE_ROWS, w->par, 0.0, interval, (int64_t)nearbyint(n_sub),
+    if (sarins_imu_build(w->table, TABLE_ROWS, w->par, 0.0, interval, (int64_t)sm_nearbyint(n_sub),
                          c->r[SARINS_R_aging_days] * SARINS_IMU_DAY, seed) != SARINS_IMU_OK
         || sarins_imu_start(w->table, TABLE_ROWS, ambient0, w->hot, seed) != SARINS_IMU_OK)
         return step_error(c, "the IMU could not be built from its parameters");

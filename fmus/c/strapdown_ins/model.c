@@ -13,7 +13,8 @@
  * (increment_end_time - (n_sub - 1 - k) h / n_sub): the same calls, in the
  * same order, as an INS stepped at h / n_sub with the scalar inputs.
  */
-#include <math.h>
+#include "smath.h"
+
 #include <stdio.h>
 
 #include "ins_fmu_step.h"
@@ -174,7 +175,7 @@ static int do_sub_steps(sarins_ctx *c, sarins_ins_fmu *f, double *in, double t, 
                 return SARINS_ERROR;
             }
     /* the start time as the tag before anything was integrated: Jacobi's first step, nothing to do yet */
-    if (!(f->running && f->ins.steps > 0) && fabs(tag - f->start_time) <= SARINS_INS_TAG_TOL * h_sub) {
+    if (!(f->running && f->ins.steps > 0) && sm_fabs(tag - f->start_time) <= SARINS_INS_TAG_TOL * h_sub) {
         if (sarins_ins_fmu_do_step(f, in, t, h_sub, msg, sizeof msg) != SARINS_INS_OK) {
             sarins_log(c, SARINS_ERROR, "%s", msg);
             return SARINS_ERROR;

@@ -7,7 +7,8 @@
  * there; ambient_temp at motion_time and its slope over [motion_time, motion_time + h] (before the first
  * step over [start, start + grid]).  Units: rad, rad/s, rad/s^2, s, degC, degC/s.
  */
-#include <math.h>
+#include "smath.h"
+
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -278,7 +279,7 @@ static int check_grid(sarins_ctx *c, const sarins_schedule *s, double step)
 {
     for (int64_t m = 0; m < s->n_times; m++) {
         double n = s->times[m] / step;
-        if (fabs(n - nearbyint(n)) > GRID_TOL * fmax(1.0, fabs(n))) {
+        if (sm_fabs(n - sm_nearbyint(n)) > GRID_TOL * sm_fmax(1.0, sm_fabs(n))) {
             sarins_log(c, SARINS_ERROR, "ValueError: turntable breakpoint at t=%.9g s is not on the output grid of "
                        "step %.17g s: the IMU cannot rebuild the motion inside a step exactly", s->times[m], step);
             return SARINS_ERROR;
@@ -294,7 +295,7 @@ static int tt_do_step(sarins_ctx *c, double t, double h)
     if (!st->have_step) {
         if (check_grid(c, &w->schedule, h) != SARINS_OK)
             return SARINS_ERROR;
-    } else if (fabs(h - st->step) > STEP_TOL * st->step) {
+    } else if (sm_fabs(h - st->step) > STEP_TOL * st->step) {
         sarins_log(c, SARINS_ERROR, "ValueError: communication step changed from %.17g s to %.17g s; this FMU needs a "
                    "fixed step", st->step, h);
         return SARINS_ERROR;

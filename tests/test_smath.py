@@ -1,0 +1,140 @@
+"""The core's portable math (sarins_fmu/core/smath.h) through the Python binding.
+
+Accuracy against mpmath (120 bits) on random arguments over each function's range: the largest error stays
+below the bound stated per function (``BOUND``, ulps of the exact value; the measured figures over 200 000
+arguments a function are in docs/native-layer.md, from benchmarks/smath_accuracy.py).  The correctly
+rounded functions bit for bit against numpy and glibc on random bit patterns (every class of double: zeros,
+subnormals, normals, infinities, NaNs), the software sqrt and fma against the hardware ones, sm_sincos4
+against sm_sincos, and the special values of C's Annex F.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sarins_fmu.core.smath import evaluate
+
+mpmath = pytest.importorskip("mpmath")
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+from smath_accuracy import EXACT, _ulp_errors, argument_sets  # noqa: E402
+
+# largest error in ulps allowed per function: the measured maximum (docs/native-layer.md) plus a margin
+BOUND = {"sin": 0.6, "cos": 0.6, "tan": 0.65, "exp": 0.52, "exp10": 0.52, "log": 0.51, "log10": 0.51,
+         "atan": 0.51, "asin": 0.65, "acos": 0.7, "atan2": 0.51, "hypot": 0.51}
+
+
+def _bits(x: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(x, dtype=np.float64).view(np.uint64)
+
+
+def _same(a, b) -> bool:
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    return bool(np.all((_bits(a) == _bits(b)) | (np.isnan(a) & np.isnan(b))))
+
+
+def _accuracy(name: str, n: int, seed: int) -> tuple[float, str]:
+    worst, where = 0.0, ""
+    for _, args in argument_sets(np.random.default_rng(seed), n)[name]:
+        got = evaluate(name, *args)
+        exact = [EXACT[name](*(mpmath.mpf(float(a[i])) for a in args)) for i in range(len(got))]
+        err = _ulp_errors(got, exact)
+        i = int(np.argmax(err))
+        if err[i] > worst:
+            worst, where = float(err[i]), ", ".join(repr(float(a[i])) for a in args)
+    return worst, where
+
+
+@pytest.mark.parametrize("name", list(BOUND))
+def test_accuracy_against_mpmath(name):
+    worst, where = _accuracy(name, 400, seed=11)
+    assert worst < BOUND[name], f"{name}: {worst:.3f} ulp at {where}"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(BOUND))
+def test_accuracy_against_mpmath_on_many_arguments(name):
+    worst, where = _accuracy(name, 10_000, seed=12)
+    assert worst < BOUND[name], f"{name}: {worst:.3f} ulp at {where}"
+
+
+def _random_doubles(n: int, seed: int) -> np.ndarray:
+    return np.random.default_rng(seed).integers(0, 2 ** 64, n, dtype=np.uint64).view(np.float64)
+
+
+SPECIALS = np.array([0.0, -0.0, np.inf, -np.inf, np.nan, 5e-324, -5e-324, 2.2250738585072014e-308,
+                     1.7976931348623157e308, -1.7976931348623157e308, 1.0, -1.0, 0.5, -0.5, 1.5, 2.5, -2.5,
+                     0.49999999999999994, 4503599627370495.5, 4503599627370496.0, 9007199254740993.0])
+
+
+def test_correctly_rounded_functions_are_bit_identical_to_numpy():
+    x = np.concatenate([_random_doubles(100_000, 1), SPECIALS])
+    y = np.concatenate([_random_doubles(100_000, 2), SPECIALS[::-1]])
+    with np.errstate(all="ignore"):
+        for name, ref in (("sqrt", np.sqrt), ("soft_sqrt", np.sqrt), ("floor", np.floor), ("ceil", np.ceil),
+                          ("trunc", np.trunc), ("nearbyint", np.rint), ("fabs", np.abs)):
+            assert _same(evaluate(name, x), ref(x)), name
+        for name, ref in (("fmod", np.fmod), ("fmin", np.fmin), ("fmax", np.fmax), ("copysign", np.copysign)):
+            assert _same(evaluate(name, x, y), ref(x, y)), name
+        t = np.trunc(np.abs(x))
+        away = np.where(np.abs(x) < 2.0 ** 52, np.copysign(t + (np.abs(x) - t >= 0.5), x), x)
+        assert _same(evaluate("round", x), away)
+
+
+def test_fma_is_correctly_rounded_in_hardware_and_software():
+    rng = np.random.default_rng(3)
+    n = 20_000
+    a, b = rng.normal(size=n) * 2.0 ** rng.integers(-60, 60, n), rng.normal(size=n)
+    c = -a * b * (1 + rng.normal(size=n) * 2.0 ** -rng.integers(0, 60, n).astype(float))  # cancellation
+    x, y, z = _random_doubles(n, 4), _random_doubles(n, 5), _random_doubles(n, 6)
+    libm = ctypes.CDLL(ctypes.util.find_library("m"))
+    libm.fma.restype, libm.fma.argtypes = ctypes.c_double, [ctypes.c_double] * 3
+    for p, q, r in ((a, b, c), (x, y, z)):
+        hw, sw = evaluate("fma", p, q, r), evaluate("soft_fma", p, q, r)
+        assert _same(hw, sw)
+        assert _same(hw, [libm.fma(p[i], q[i], r[i]) for i in range(n)])
+
+
+def test_sincos_and_sincos4_give_the_bits_of_sin_and_cos():
+    rng = np.random.default_rng(7)
+    x = np.concatenate([rng.uniform(-1e3, 1e3, 20_000), rng.uniform(-1, 1, 4_000),
+                        np.exp(rng.uniform(-80, 700, 4_000)) * rng.choice([-1, 1], 4_000), SPECIALS,
+                        [math.pi / 4, -math.pi / 4, math.nextafter(math.pi / 4, 1), 2.0 ** 26, 2.0 ** 26 - 1,
+                         math.pi / 2, math.pi, 1e-8, 6381956970095103 * 2.0 ** 797]])
+    both = evaluate("sincos", x)
+    assert _same(both[0], evaluate("sin", x)) and _same(both[1], evaluate("cos", x))
+    assert _same(evaluate("sincos4", x), both)
+
+
+def test_special_values_follow_annex_f():
+    inf, nan = math.inf, math.nan
+
+    def one(name, *args):
+        return float(evaluate(name, *[[a] for a in args])[0])
+
+    def same(a, b):
+        return (math.isnan(a) and math.isnan(b)) or (a == b and math.copysign(1, a) == math.copysign(1, b))
+
+    cases = [("sin", (-0.0,), -0.0), ("sin", (inf,), nan), ("cos", (nan,), nan), ("cos", (0.0,), 1.0),
+             ("tan", (-0.0,), -0.0), ("exp", (-inf,), 0.0), ("exp", (inf,), inf), ("exp", (-0.0,), 1.0),
+             ("exp", (710.0,), inf), ("exp", (-746.0,), 0.0), ("exp", (-745.0,), 5e-324), ("exp10", (3.0,), 1000.0),
+             ("exp10", (-2.0,), 0.01), ("log", (1.0,), 0.0), ("log", (0.0,), -inf), ("log", (-0.0,), -inf),
+             ("log", (-1.0,), nan), ("log", (inf,), inf), ("log10", (1000.0,), 3.0), ("log10", (1e-5,), -5.0),
+             ("atan", (-inf,), -math.pi / 2), ("atan", (-0.0,), -0.0), ("atan2", (0.0, -0.0), math.pi),
+             ("atan2", (-0.0, -0.0), -math.pi), ("atan2", (-0.0, 0.0), -0.0), ("atan2", (inf, -inf), 3 * math.pi / 4),
+             ("atan2", (-inf, inf), -math.pi / 4), ("atan2", (1.0, 0.0), math.pi / 2), ("atan2", (1.0, -inf), math.pi),
+             ("asin", (1.0,), math.pi / 2), ("asin", (-0.0,), -0.0), ("asin", (1.5,), nan), ("acos", (1.0,), 0.0),
+             ("acos", (-1.0,), math.pi), ("acos", (0.0,), math.pi / 2), ("hypot", (inf, nan), inf),
+             ("hypot", (nan, 1.0), nan), ("hypot", (3.0, 4.0), 5.0), ("hypot", (-0.0, 0.0), 0.0),
+             ("hypot", (1e308, 1e308), 1.4142135623730951e308), ("hypot", (3e-320, 4e-320), 5e-320),
+             ("sqrt", (-0.0,), -0.0), ("sqrt", (-1.0,), nan), ("fmod", (5.5, inf), 5.5), ("fmod", (inf, 1.0), nan),
+             ("fmod", (-0.0, 1.0), -0.0), ("fma", (2.0, 3.0, -6.0), 0.0), ("fma", (1e308, 10.0, -inf), -inf)]
+    for name, args, expected in cases:
+        got = one(name, *args)
+        assert same(got, expected), (name, args, got, expected)
