@@ -80,6 +80,9 @@ def argument_sets(rng, n: int) -> dict[str, list[tuple[str, tuple[np.ndarray, ..
         "atan2": [("normal(0, 1) pairs", (rng.normal(size=2 * q), rng.normal(size=2 * q))),
                   ("1e-300 .. 1e300 pairs", (_log_uniform(rng, 1e-300, 1e300, 2 * q),
                                              _log_uniform(rng, 1e-300, 1e300, 2 * q)))],
+        "tanh": [("|x| < 1 (both branches)", (rng.uniform(-1.0, 1.0, 2 * q),)),
+                 ("near the branch point 5/8", (rng.uniform(0.6, 0.65, q) * rng.choice([-1.0, 1.0], q),)),
+                 ("1e-300 .. 30, both signs", (_log_uniform(rng, 1e-300, 30.0, 2 * q),))],
         "hypot": [("normal(0, 1) pairs", (rng.normal(size=2 * q), rng.normal(size=2 * q))),
                   ("1e-300 .. 1e300 pairs", (_log_uniform(rng, 1e-300, 1e300, 2 * q),
                                              _log_uniform(rng, 1e-300, 1e300, 2 * q)))],
@@ -89,7 +92,7 @@ def argument_sets(rng, n: int) -> dict[str, list[tuple[str, tuple[np.ndarray, ..
 EXACT = {"sin": mpmath.sin, "cos": mpmath.cos, "tan": mpmath.tan, "exp": mpmath.exp,
          "exp10": lambda x: mpf(10) ** x, "log": mpmath.log, "log10": mpmath.log10, "atan": mpmath.atan,
          "asin": mpmath.asin, "acos": mpmath.acos, "atan2": mpmath.atan2,
-         "hypot": lambda x, y: mpmath.sqrt(x * x + y * y)}
+         "hypot": lambda x, y: mpmath.sqrt(x * x + y * y), "tanh": mpmath.tanh}
 
 
 def accuracy(n: int, seed: int) -> list[tuple[str, float, str, int]]:

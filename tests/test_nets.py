@@ -1,7 +1,8 @@
 """The C core's network kernels and binary model files (sarins_fmu/core/nets.c, netmodel.c, netfile.c).
 
 * Every model kind evaluated by the core equals an independent scalar Python evaluation in the same
-  operation order bit for bit (math.exp / math.tanh are the same libm functions the core calls).
+  operation order bit for bit (its exp and tanh are the core's own, sm_exp and sm_tanh of smath.h, through
+  sarins_fmu.core.smath).
 * The numpy references (RBFNetwork.predict_reference, grnn.grnn_predict, np.linalg.solve) differ from the
   core by rounding only, within bounds derived here from the summation lengths.
 * The binary model file: Python writer/reader and the C reader agree, and every malformed file is refused
@@ -17,6 +18,7 @@ import numpy as np
 import pytest
 
 from sarins_fmu.core import nets
+from sarins_fmu.core.smath import evaluate
 from sarins_fmu.identify import compensators, netfile, recurrent
 from sarins_fmu.identify.axial import DEFAULT_MODELS, DriftIdentifier
 from sarins_fmu.identify.calibration import TriadCalibration, compensate_triad
@@ -25,6 +27,16 @@ from sarins_fmu.identify.modelfile import ModelFileError
 from sarins_fmu.identify.rbf import RBFNetwork
 
 U = np.finfo(float).eps / 2  # unit roundoff
+
+
+def _exp(x: float) -> float:
+    """The core's exp (sm_exp), the function the kernels call."""
+    return float(evaluate("exp", x)[0])
+
+
+def _tanh(x: float) -> float:
+    """The core's tanh (sm_tanh)."""
+    return float(evaluate("tanh", x)[0])
 
 
 def gamma(n: int) -> float:
@@ -88,7 +100,7 @@ def rbf_scalar(x, mean, scale, centers, w, bias, spread):
         z = [(v - m) / s for v, m, s in zip(row, mean, scale)]
         acc = [0.0] * len(bias)
         for j, c in enumerate(zc):
-            phi = math.exp(_sq(z, c) * factor)
+            phi = _exp(_sq(z, c) * factor)
             for o in range(len(bias)):
                 acc[o] += phi * w[j][o]
         out.append([a + b for a, b in zip(acc, bias)])
@@ -105,7 +117,7 @@ def grnn_scalar(x, mean, scale, xt, yt, sigma):
         dmin = min(d2)
         sd, acc = 0.0, [0.0] * len(yt[0])
         for j, dj in enumerate(d2):
-            p = math.exp((dmin - dj) * inv)
+            p = _exp((dmin - dj) * inv)
             sd += p
             for o in range(len(acc)):
                 acc[o] += yt[j][o] * p
@@ -114,7 +126,7 @@ def grnn_scalar(x, mean, scale, xt, yt, sigma):
 
 
 def _sigmoid(v):
-    return 0.5 * (1.0 + math.tanh(0.5 * v))
+    return 0.5 * (1.0 + _tanh(0.5 * v))
 
 
 def _affine(w, v, b):
@@ -146,13 +158,13 @@ def rnn_scalar(comp, x):
             for q in range(n):
                 if w.cell == "lstm":
                     i_, f_ = _sigmoid(gi[q] + gh[q]), _sigmoid(gi[n + q] + gh[n + q])
-                    g_, o_ = math.tanh(gi[2 * n + q] + gh[2 * n + q]), _sigmoid(gi[3 * n + q] + gh[3 * n + q])
+                    g_, o_ = _tanh(gi[2 * n + q] + gh[2 * n + q]), _sigmoid(gi[3 * n + q] + gh[3 * n + q])
                     c[k][q] = f_ * c[k][q] + i_ * g_
-                    h[k][q] = o_ * math.tanh(c[k][q])
+                    h[k][q] = o_ * _tanh(c[k][q])
                 else:
                     r_ = _sigmoid(gi[q] + gh[q])
                     z_ = _sigmoid(gi[n + q] + gh[n + q])
-                    cand = math.tanh(gi[2 * n + q] + r_ * gh[2 * n + q])
+                    cand = _tanh(gi[2 * n + q] + r_ * gh[2 * n + q])
                     h[k][q] = (1.0 - z_) * cand + z_ * h[k][q]
             v = h[k]
         zo = _affine(w.w_out.tolist(), v, w.b_out.tolist())
@@ -429,7 +441,7 @@ def test_the_fuzz_harness_builds_and_runs_clean_on_the_model_files(tmp_path):
     build = subprocess.run([clang, "-std=c11", "-g", "-O1", "-fsanitize=fuzzer,address,undefined",
                             "-fno-sanitize-recover=undefined", "-DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION",
                             f"-I{core}", str(root / "tests" / "fuzz" / "fuzz_netfile.c"),
-                            *(str(core / f) for f in ("netfile.c", "netmodel.c", "nets.c")), "-lm", "-o", str(exe)],
+                            *(str(core / f) for f in ("netfile.c", "netmodel.c", "nets.c", "smath.c")), "-o", str(exe)],
                            capture_output=True, text=True)
     if build.returncode != 0 and "fuzzer" in build.stderr:
         pytest.skip(f"clang cannot link libFuzzer here: {build.stderr[-300:]}")

@@ -20,11 +20,12 @@ from pathlib import Path
 # <math.h> function -> smath function
 PROVIDED = {name: f"sm_{name}" for name in (
     "sqrt", "fma", "fabs", "copysign", "fmin", "fmax", "floor", "ceil", "trunc", "round", "nearbyint", "fmod",
-    "sin", "cos", "sincos", "tan", "exp", "exp10", "log", "log10", "atan", "atan2", "asin", "acos", "hypot")}
+    "sin", "cos", "sincos", "tan", "exp", "exp10", "log", "log10", "atan", "atan2", "asin", "acos", "hypot",
+    "tanh")}
 # every other <math.h> (C11 + common extensions) function: not allowed, no automatic rewrite
 OTHERS = ("acosh", "asinh", "atanh", "cbrt", "cosh", "erf", "erfc", "exp2", "expm1", "fdim", "frexp", "ilogb",
           "ldexp", "lgamma", "llrint", "llround", "log1p", "log2", "logb", "lrint", "lround", "modf", "nan",
-          "nextafter", "nexttoward", "pow", "remainder", "remquo", "rint", "scalbln", "scalbn", "sinh", "tanh",
+          "nextafter", "nexttoward", "pow", "remainder", "remquo", "rint", "scalbln", "scalbn", "sinh",
           "tgamma", "exp10", "pow10")
 ALL = sorted(set(PROVIDED) | set(OTHERS))
 CALL = re.compile(r"(?<![\w.>])(" + "|".join(ALL) + r")([fl]?)\s*\(")

@@ -28,6 +28,7 @@ LOG_N = 128  # log: cells of the mantissa [1, 2) by its top 7 bits
 LOG_INV_BITS = 9  # log: significant bits of each cell's reciprocal c_j (so that m c_j is exact, see smath.c)
 ATAN_N = 64  # atan: table of atan(j/64), j = 0 .. 64
 ATAN_DIRECT = mpf(1) / 16  # atan: below this ratio the polynomial alone
+TANH_POLY_MAX = mpf(1) / 16  # tanh: below this |x| the polynomial, above 1 - 2 / (exp(2|x|) + 1)
 
 
 def d(x) -> float:
@@ -113,6 +114,12 @@ def asin_tail(z):
     """(asin x - x) / x^3 with z = x^2."""
     x = mpmath.sqrt(z)
     return (mpmath.asin(x) - x) / x ** 3
+
+
+def tanh_tail(z):
+    """(tanh x - x) / x^3 with z = x^2."""
+    x = mpmath.sqrt(z)
+    return (mpmath.tanh(x) - x) / x ** 3
 
 
 def log_cells():
@@ -230,6 +237,11 @@ def header() -> str:
     # asin: x + x^3 P(x^2) on [0, 1/2]
     array("SM_ASIN_TAIL", fit(asin_tail, mpf(2) ** -80, mpf(1) / 4 * (1 + mpf(2) ** -20), 13, "asin"),
           "asin x = x + x^3 P(x^2), |x| <= 1/2: P's coefficients c_0 .. c_13")
+
+    # tanh: x + x^3 P(x^2) on [0, 5/8]
+    const("SM_TANH_POLY_MAX", d(TANH_POLY_MAX), "tanh: the polynomial below this |x|")
+    array("SM_TANH_TAIL", fit(tanh_tail, mpf(2) ** -80, TANH_POLY_MAX ** 2 * (1 + mpf(2) ** -20), 5, "tanh"),
+          "tanh x = x + x^3 P(x^2), |x| <= 1/16: P's coefficients c_0 .. c_5")
     lines += ["", "#endif", ""]
     return "\n".join(lines)
 

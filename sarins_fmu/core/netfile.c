@@ -1,4 +1,6 @@
 /* Binary model files: the container reader (netfile.h has the layout). */
+#include "smath.h"
+
 #include "netfile.h"
 
 #include <stdarg.h>

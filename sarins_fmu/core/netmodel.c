@@ -1,13 +1,8 @@
 /* Trained models built from a binary model file (netmodel.h). */
+#include "smath.h"
+
 #include "netmodel.h"
 
-/* no fused multiply-add: a * b + c rounds twice on every compiler and flag (gcc in ISO C mode does not
- * contract; clang contracts within an expression unless told not to) */
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF
-#endif
-
-#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -136,7 +131,7 @@ int sarins_axial_build(sarins_axial *a, const sarins_netfile *f, char *msg, size
     if (lat == NULL)
         return SARINS_NETFILE_CONTENT;
     a->local_lat_deg = scalar(f, lat);
-    if (!(fabs(a->local_lat_deg) <= 90.0))
+    if (!(sm_fabs(a->local_lat_deg) <= 90.0))
         return fail(msg, msg_len, SARINS_NETFILE_CONTENT, "local_lat_deg %.17g is not a latitude within +-90 deg",
                     a->local_lat_deg);
     return build_rbf(&a->rbf, &a->block, f, "", d, 1, msg, msg_len);

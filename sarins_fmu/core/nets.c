@@ -1,21 +1,16 @@
 /* Inference kernels of the trained networks (nets.h). */
+#include "smath.h"
+
 #include "nets.h"
 
-/* no fused multiply-add: a * b + c rounds twice on every compiler and flag (gcc in ISO C mode does not
- * contract; clang contracts within an expression unless told not to) */
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF
-#endif
-
-#include <math.h>
 #include <string.h>
 
 /* ln 2 as the double nearest to it (numpy's log(2.0)) */
 #define NET_LN2 0x1.62e42fefa39efp-1
 
-/* ---- the only libm calls of the networks: exp and tanh ---- */
-static double net_exp(double x) { return exp(x); }
-static double net_tanh(double x) { return tanh(x); }
+/* the networks' transcendental functions: the core's own exp and tanh (smath.h) */
+static double net_exp(double x) { return sm_exp(x); }
+static double net_tanh(double x) { return sm_tanh(x); }
 /* logistic function as 0.5 (1 + tanh(x / 2)): exact in form, no overflow of exp(-x) */
 static double net_sigmoid(double x) { return 0.5 * (1.0 + net_tanh(0.5 * x)); }
 
@@ -166,7 +161,7 @@ int sarins_triad_compensate(const double *k, const double *b, int64_t n, const d
     for (int col = 0; col < 3; col++) {
         int p = col;
         for (int r = col + 1; r < 3; r++)
-            if (fabs(a[r * 3 + col]) > fabs(a[p * 3 + col]))
+            if (sm_fabs(a[r * 3 + col]) > sm_fabs(a[p * 3 + col]))
                 p = r;
         if (!(a[p * 3 + col] != 0.0) || !isfinite(a[p * 3 + col]))
             return 1;

@@ -737,6 +737,47 @@ double sm_exp10(double x)
     return exp_core(zh, zl);
 }
 
+/* ---------------------------------------------------------------- tanh */
+
+/* exp x = h + l (a double-double, relative error ~2^-63) for 0 < x < 708: exp_core's ordinary path */
+static void exp_dd(double x, double *h, double *l)
+{
+    double n = (x * SM_EXP_INV_L + SM_SHIFTER) - SM_SHIFTER;
+    int64_t ni = (int64_t)n;
+    int j = (int)(ni & 63), m = (int)((ni - j) / 64);
+    double rh = x - n * SM_EXP_L1, rl = 0.0 - n * SM_EXP_L2, r = rh + rl;
+    const double *c = SM_EXP_TAIL;
+    double p = rh + (rl + r * r * (0.5 + r * ((c[0] + r * c[1]) + (r * r) * (c[2] + r * c[3]))));
+    double th = SM_EXP_TAB[2 * j], tl = SM_EXP_TAB[2 * j + 1];
+    fast_two_sum(th, tl + th * p, h, l);
+    *h *= pow2(m); /* exact: 0 <= m < 1022 */
+    *l *= pow2(m);
+}
+
+/* |x| < 1/16: x + x^3 P(x^2) (the correction is below 0.13 % of x, so its rounding errors stay far below
+ * an ulp); above: 1 - q, q = 2 / (exp(2|x|) + 1), with exp, the sum, q and 1 - q carried as double-doubles
+ * (relative error about 2^-61 before the one final rounding: 1 - q cancels at most 5 bits at |x| = 1/16);
+ * |x| >= 22: +-1 (tanh 22 = 1 - 1.6e-19). */
+double sm_tanh(double x)
+{
+    double a = fabs_i(x);
+    if (!(a < 22.0)) return isnan(x) ? x + x : copysign_i(1.0, x);
+    if (a < 0x1p-28) return x; /* x^3 / 3 is below a quarter ulp of x */
+    if (a < SM_TANH_POLY_MAX) {
+        double z = x * x;
+        return x + x * (z * poly(SM_TANH_TAIL, (int)(sizeof SM_TANH_TAIL / sizeof SM_TANH_TAIL[0]), z));
+    }
+    double eh, el, dh, dl, t, ph, pl, sh, sl;
+    exp_dd(2.0 * a, &eh, &el);
+    two_sum(eh, 1.0, &dh, &t); /* D = exp(2a) + 1 = dh + dl */
+    dl = t + el;
+    double qh = 2.0 / dh; /* q = 2 / D = qh + ql */
+    two_prod(qh, dh, &ph, &pl);
+    double ql = (((2.0 - ph) - pl) - qh * dl) / dh;
+    two_sum(1.0, -qh, &sh, &sl); /* exact */
+    return copysign_i(sh + (sl - ql), x);
+}
+
 /* ---------------------------------------------------------------- log, log10 */
 
 /* log x as hi + lo for finite x > 0: x = 2^k m, m in [1, 2) in cell j (its top 7 bits);
@@ -991,6 +1032,7 @@ int sarins_smath_eval(int func, int64_t n, const double *x, const double *y, con
         case 24: v = sm_hypot(a, b); break;
         case 25: v = soft_sqrt(a); break;  /* the software versions, to compare with the hardware */
         case 26: v = soft_fma(a, b, c); break;
+        case 28: v = sm_tanh(a); break;
         case 27: /* sincos4 over groups of four (the last group padded) */
             if (i % 4 == 0) {
                 double xs[4], ss[4], cs[4];

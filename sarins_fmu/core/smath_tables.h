@@ -240,5 +240,11 @@ static const double SM_ASIN_TAIL[14] = {
     0x1.3b49dc30f1e33p-7, 0x1.31623167de3f9p-7, 0x1.8f186d47038e2p-9, 0x1.4061d1f7664dbp-6,
     -0x1.3b41c77f78d21p-6, 0x1.e52a01e1799edp-6,
 };
+#define SM_TANH_POLY_MAX 0x1.0000000000000p-4  /* tanh: the polynomial below this |x| */
+/* tanh x = x + x^3 P(x^2), |x| <= 1/16: P's coefficients c_0 .. c_5 */
+static const double SM_TANH_TAIL[6] = {
+    -0x1.5555555555555p-2, 0x1.111111111110fp-3, -0x1.ba1ba1ba16c34p-5, 0x1.664f485931d08p-6,
+    -0x1.226d94fee75c4p-7, 0x1.d4990da1634c7p-9,
+};
 
 #endif

@@ -7,7 +7,7 @@
  *   clang -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
  *       -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION \
  *       -Isarins_fmu/core tests/fuzz/fuzz_netfile.c sarins_fmu/core/netfile.c sarins_fmu/core/netmodel.c \
- *       sarins_fmu/core/nets.c -lm -o /tmp/fuzz_netfile
+ * sarins_fmu/core/nets.c sarins_fmu/core/smath.c -o /tmp/fuzz_netfile
  *   /tmp/fuzz_netfile -max_total_time=60 -max_len=65536 CORPUS_DIR
  */
 #include <stddef.h>

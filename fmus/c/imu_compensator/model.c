@@ -9,7 +9,8 @@
  * Held between steps (the FMU state, plain bytes): the communication step, the last time tag and the
  * recurrent state (zero at initialisation).  The model in c->work depends on the parameters only.
  */
-#include <math.h>
+#include "smath.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,10 +19,6 @@
 #include "netfile.h"
 #include "netmodel.h"
 #include "variables.h"
-
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF /* no fused multiply-add (gcc does not contract in ISO C mode) */
-#endif
 
 #define MODEL_IN_RESOURCES "compensator.bin"
 #define NO_TAG (-1.0e9) /* s: start value of raw_increment_end_time, not connected (fmus/slave_support.py) */
@@ -122,10 +119,10 @@ static int interval(sarins_ctx *c, ic_state *st, double t, double h, double *end
         sarins_log(c, SARINS_ERROR, "ValueError: raw_increment_end_time is not finite");
         return -1;
     }
-    if (tag <= c->start_time + 1e-6 * h || (st->have_last && fabs(tag - st->last_tag) <= TAG_TOL * h))
+    if (tag <= c->start_time + 1e-6 * h || (st->have_last && sm_fabs(tag - st->last_tag) <= TAG_TOL * h))
         return 0;
     double expected = (st->have_last ? st->last_tag : c->start_time) + h;
-    if (!(fabs(tag - expected) <= TAG_TOL * h)) {
+    if (!(sm_fabs(tag - expected) <= TAG_TOL * h)) {
         sarins_log(c, SARINS_ERROR, "ValueError: raw increments tagged raw_increment_end_time=%.9g s where the "
                    "interval ending at %.9g s was due (each interval once, in order)", tag, expected);
         return -1;
@@ -144,7 +141,7 @@ static int ic_do_step(sarins_ctx *c, double t, double h)
         sarins_log(c, SARINS_ERROR, "no model loaded");
         return SARINS_ERROR;
     }
-    if (st->have_step && fabs(h - st->step) > STEP_TOL * st->step) {
+    if (st->have_step && sm_fabs(h - st->step) > STEP_TOL * st->step) {
         sarins_log(c, SARINS_ERROR, "ValueError: communication step changed from %.17g s to %.17g s; this FMU needs a "
                    "fixed step", st->step, h);
         return SARINS_ERROR;

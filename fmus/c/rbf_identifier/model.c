@@ -9,8 +9,9 @@
  * Held between steps (the FMU state): the outputs (axial_drift, apply_from, identified) in the value arrays
  * and the communication step in the state struct; the model in c->work depends on the parameters only.
  */
+#include "smath.h"
+
 #include <ctype.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,10 +20,6 @@
 #include "netfile.h"
 #include "netmodel.h"
 #include "variables.h"
-
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF /* no fused multiply-add (gcc does not contract in ISO C mode) */
-#endif
 
 #define DPH_TO_RPS ((3.141592653589793 / 180.0) / 3600.0) /* rad/s per deg/h, as sarins_fmu.units */
 #define STEP_TOL 1e-9 /* relative: a communication step equal to the first one */
@@ -161,7 +158,7 @@ static int ri_do_step(sarins_ctx *c, double t, double h)
     (void)t;
     ri_state *st = c->state;
     const sarins_axial *a = c->work;
-    if (st->have_step && fabs(h - st->step) > STEP_TOL * st->step) {
+    if (st->have_step && sm_fabs(h - st->step) > STEP_TOL * st->step) {
         sarins_log(c, SARINS_ERROR, "ValueError: communication step changed from %.17g s to %.17g s; this FMU needs a "
                    "fixed step", st->step, h);
         return SARINS_ERROR;
@@ -175,7 +172,7 @@ static int ri_do_step(sarins_ctx *c, double t, double h)
     if (c->i[SARINS_I_identified])
         return SARINS_OK;
     double nav = c->r[SARINS_R_nav_time], trigger = c->r[SARINS_R_trigger_time];
-    if (fabs(nav - trigger) <= TAG_TOL * h) {
+    if (sm_fabs(nav - trigger) <= TAG_TOL * h) {
         double drift_dph = 0.0;
         int status = sarins_axial_drift(a, c->r[SARINS_R_lat_error], c->r[SARINS_R_temperature],
                                         c->r[SARINS_R_temp_change], &drift_dph);
