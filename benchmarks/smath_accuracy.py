@@ -44,6 +44,21 @@ def _ulp_errors(got: np.ndarray, exact: list) -> np.ndarray:
     return out
 
 
+def _pow_sets(rng, q: int) -> list:
+    """pow's arguments: results across the whole normal range, bases near 1 with large exponents, negative
+    bases with integer exponents, the RLS forgetting factor's form lambda^(dt/m)."""
+    x = _log_uniform(rng, 1e-300, 1e300, 2 * q, signed=False)
+    y = rng.uniform(-700.0, 700.0, 2 * q) / np.log(x)
+    near = 1.0 + rng.uniform(-1e-6, 1e-6, q)
+    big = rng.uniform(-700.0, 700.0, q) / np.log(near)
+    neg = -_log_uniform(rng, 1e-3, 1e3, q, signed=False)
+    ints = np.round(rng.uniform(-60.0, 60.0, q))
+    return [("x 1e-300 .. 1e300, results 1e-304 .. 1e304", (x, y)),
+            ("x near 1, |y| up to 1e9", (near, big)),
+            ("x < 0, integer y", (neg, ints)),
+            ("0.8 ** (dt / m), dt/m in 0 .. 2", (np.full(q, 0.8), rng.uniform(0.0, 2.0, q)))]
+
+
 def _log_uniform(rng, lo: float, hi: float, n: int, signed: bool = True) -> np.ndarray:
     x = np.exp(rng.uniform(np.log(lo), np.log(hi), n))
     return x * rng.choice([-1.0, 1.0], n) if signed else x
@@ -80,6 +95,7 @@ def argument_sets(rng, n: int) -> dict[str, list[tuple[str, tuple[np.ndarray, ..
         "atan2": [("normal(0, 1) pairs", (rng.normal(size=2 * q), rng.normal(size=2 * q))),
                   ("1e-300 .. 1e300 pairs", (_log_uniform(rng, 1e-300, 1e300, 2 * q),
                                              _log_uniform(rng, 1e-300, 1e300, 2 * q)))],
+        "pow": _pow_sets(rng, q),
         "tanh": [("|x| < 1 (both branches)", (rng.uniform(-1.0, 1.0, 2 * q),)),
                  ("near the branch point 5/8", (rng.uniform(0.6, 0.65, q) * rng.choice([-1.0, 1.0], q),)),
                  ("1e-300 .. 30, both signs", (_log_uniform(rng, 1e-300, 30.0, 2 * q),))],
@@ -92,7 +108,7 @@ def argument_sets(rng, n: int) -> dict[str, list[tuple[str, tuple[np.ndarray, ..
 EXACT = {"sin": mpmath.sin, "cos": mpmath.cos, "tan": mpmath.tan, "exp": mpmath.exp,
          "exp10": lambda x: mpf(10) ** x, "log": mpmath.log, "log10": mpmath.log10, "atan": mpmath.atan,
          "asin": mpmath.asin, "acos": mpmath.acos, "atan2": mpmath.atan2,
-         "hypot": lambda x, y: mpmath.sqrt(x * x + y * y), "tanh": mpmath.tanh}
+         "hypot": lambda x, y: mpmath.sqrt(x * x + y * y), "tanh": mpmath.tanh, "pow": mpmath.power}
 
 
 def accuracy(n: int, seed: int) -> list[tuple[str, float, str, int]]:

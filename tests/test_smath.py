@@ -27,7 +27,7 @@ from smath_accuracy import EXACT, _ulp_errors, argument_sets  # noqa: E402
 
 # largest error in ulps allowed per function: the measured maximum (docs/native-layer.md) plus a margin
 BOUND = {"sin": 0.6, "cos": 0.6, "tan": 0.65, "exp": 0.52, "exp10": 0.52, "log": 0.51, "log10": 0.51,
-         "atan": 0.51, "asin": 0.65, "acos": 0.7, "atan2": 0.51, "hypot": 0.51, "tanh": 0.55}
+         "atan": 0.51, "asin": 0.65, "acos": 0.7, "atan2": 0.51, "hypot": 0.51, "tanh": 0.55, "pow": 0.55}
 
 
 def _bits(x: np.ndarray) -> np.ndarray:
@@ -136,7 +136,14 @@ def test_special_values_follow_annex_f():
              ("sqrt", (-0.0,), -0.0), ("sqrt", (-1.0,), nan), ("fmod", (5.5, inf), 5.5), ("fmod", (inf, 1.0), nan),
              ("fmod", (-0.0, 1.0), -0.0), ("fma", (2.0, 3.0, -6.0), 0.0), ("fma", (1e308, 10.0, -inf), -inf),
              ("tanh", (-0.0,), -0.0), ("tanh", (inf,), 1.0), ("tanh", (-inf,), -1.0), ("tanh", (nan,), nan),
-             ("tanh", (30.0,), 1.0), ("tanh", (5e-324,), 5e-324)]
+             ("tanh", (30.0,), 1.0), ("tanh", (5e-324,), 5e-324),
+             ("pow", (nan, 0.0), 1.0), ("pow", (1.0, nan), 1.0), ("pow", (nan, 1.0), nan), ("pow", (-0.0, -3.0), -inf),
+             ("pow", (0.0, -2.0), inf), ("pow", (-0.0, 3.0), -0.0), ("pow", (-0.0, 2.0), 0.0), ("pow", (-1.0, inf), 1.0),
+             ("pow", (0.5, -inf), inf), ("pow", (2.0, -inf), 0.0), ("pow", (0.5, inf), 0.0), ("pow", (2.0, inf), inf),
+             ("pow", (-inf, -3.0), -0.0), ("pow", (-inf, -2.0), 0.0), ("pow", (-inf, 3.0), -inf), ("pow", (-inf, 2.5), inf),
+             ("pow", (inf, -1.0), 0.0), ("pow", (-2.0, 0.5), nan), ("pow", (-2.0, 3.0), -8.0), ("pow", (2.0, 10.0), 1024.0),
+             ("pow", (10.0, 400.0), inf), ("pow", (10.0, -400.0), 0.0), ("pow", (2.0, -1074.0), 5e-324),
+             ("pow", (-2.0, 1e300), inf)]
     for name, args, expected in cases:
         got = one(name, *args)
         assert same(got, expected), (name, args, got, expected)

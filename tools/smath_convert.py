@@ -21,11 +21,11 @@ from pathlib import Path
 PROVIDED = {name: f"sm_{name}" for name in (
     "sqrt", "fma", "fabs", "copysign", "fmin", "fmax", "floor", "ceil", "trunc", "round", "nearbyint", "fmod",
     "sin", "cos", "sincos", "tan", "exp", "exp10", "log", "log10", "atan", "atan2", "asin", "acos", "hypot",
-    "tanh")}
+    "tanh", "pow")}
 # every other <math.h> (C11 + common extensions) function: not allowed, no automatic rewrite
 OTHERS = ("acosh", "asinh", "atanh", "cbrt", "cosh", "erf", "erfc", "exp2", "expm1", "fdim", "frexp", "ilogb",
           "ldexp", "lgamma", "llrint", "llround", "log1p", "log2", "logb", "lrint", "lround", "modf", "nan",
-          "nextafter", "nexttoward", "pow", "remainder", "remquo", "rint", "scalbln", "scalbn", "sinh",
+          "nextafter", "nexttoward", "remainder", "remquo", "rint", "scalbln", "scalbn", "sinh",
           "tgamma", "exp10", "pow10")
 ALL = sorted(set(PROVIDED) | set(OTHERS))
 CALL = re.compile(r"(?<![\w.>])(" + "|".join(ALL) + r")([fl]?)\s*\(")

@@ -110,6 +110,7 @@ double sm_asin(double x);
 double sm_acos(double x);
 double sm_hypot(double x, double y);
 double sm_tanh(double x);
+double sm_pow(double x, double y); /* the special cases of C's Annex F */
 
 /* Every function above over n arguments, for the tests and benchmarks (through the Python binding):
  * func is the index of the function in SARINS_SMATH_NAMES (x, y, z: first, second, third argument, NULL
@@ -118,7 +119,7 @@ double sm_tanh(double x);
  * or n < 0. */
 #define SARINS_SMATH_NAMES                                                                                  \
     "sqrt fma fabs copysign fmin fmax floor ceil trunc round nearbyint fmod sin cos sincos tan exp exp10 "  \
-    "log log10 atan atan2 asin acos hypot soft_sqrt soft_fma sincos4 tanh"
+    "log log10 atan atan2 asin acos hypot soft_sqrt soft_fma sincos4 tanh pow"
 int sarins_smath_eval(int func, int64_t n, const double *x, const double *y, const double *z, double *out);
 
 #endif
