@@ -109,12 +109,12 @@ static uint64_t parse_entry(const unsigned char *buf, uint64_t at, uint64_t end,
 int sarins_mf_parse(const unsigned char *buf, size_t n, const char *kind, sarins_mf *mf, char *msg, size_t size)
 {
     report r = sarins_report(msg, size);
-    if (buf == NULL || n < SARINS_MF_MIN_SIZE)
-        return sarins_fail(&r, SARINS_MF_BAD, "%llu bytes: too short for a model file (at least %d)",
-                           (unsigned long long)n, SARINS_MF_MIN_SIZE);
-    if (memcmp(buf, MAGIC, sizeof MAGIC) != 0)
+    if (buf == NULL || n < sizeof MAGIC || memcmp(buf, MAGIC, sizeof MAGIC) != 0)
         return sarins_fail(&r, SARINS_MF_BAD, "not a binary model file (no SARINSMF magic; write one with the "
                                               "library's save(path.smf))");
+    if (n < SARINS_MF_MIN_SIZE)
+        return sarins_fail(&r, SARINS_MF_BAD, "%llu bytes: too short for a model file (at least %d)",
+                           (unsigned long long)n, SARINS_MF_MIN_SIZE);
     uint32_t version = get_u32(buf + 8);
     if (version != SARINS_MF_VERSION)
         return sarins_fail(&r, SARINS_MF_BAD, "container version %lu not supported (readable: %d)",

@@ -565,8 +565,8 @@ class ForgettingRLS:
     @classmethod
     def _load_binary(cls, path: Path) -> "ForgettingRLS":
         try:
-            if not path.is_file():
-                raise ModelFileError(path, "no such file" if not path.exists() else "not a regular file")
+            if not path.exists():
+                raise ModelFileError(path, "no such file")
             check_file_size(path, core_online.RLS_FILE_MAX, "an RLS model file (SARINS_RLS_FILE_MAX)")
             state = core_online.RlsState.from_model_bytes(path.read_bytes())
         except BudgetError as exc:
