@@ -1,7 +1,8 @@
 """Benchmark of the DriftModelUpdater FMU per communication step against the in-process library.
 
 The yardstick is the library's :class:`~sarins_fmu.identify.online.OnlineDriftUpdater` fed one row per
-call (the same C core through ctypes: the cost of the row logic, the stop filter step and the Python call).
+call (the same C core through ctypes: the cost of the row logic, the stop filter step and the Python call);
+for reference the library fed all rows in one call (the in-process engines' way).
 Against it, in the same process and on the same rows (a parked, navigating vehicle: the stop filter runs
 at every step; and a drive with stops), the FMU through FMPy's ``FMU2Slave`` with the inputs set and the
 outputs read every step as a master would: the FMU built from this tree (native, ``--fmu-dir``) and, with
@@ -43,6 +44,14 @@ def library(table: np.ndarray) -> float:
     t0 = time.perf_counter()
     for r in table:
         up.step([r[7]], [r[8]], [r[0:2]], [r[2:5]], [r[6]], [r[5]])
+    return time.perf_counter() - t0
+
+
+def library_block(table: np.ndarray) -> float:
+    """Seconds for the library fed every row in one call (how the in-process engines feed it)."""
+    up = OnlineDriftUpdater(ForgettingRLS(COEF, prior_covariance(), 0.0, RLSSettings(0.8)), 0.7)
+    t0 = time.perf_counter()
+    up.step(table[:, 7], table[:, 8], table[:, 0:2], table[:, 2:5], table[:, 6], table[:, 5])
     return time.perf_counter() - t0
 
 
@@ -88,7 +97,8 @@ def main() -> None:
             path = build_native_fmu("DriftModelUpdater", "drift_model_updater_slave.py", Path(tmp), win64=False)
         else:
             path = args.fmu_dir / "DriftModelUpdater.fmu"
-        runners = {"library, one row per call (yardstick)": library, "native FMU (FMPy)": lambda t: fmu(path, t)}
+        runners = {"library, one row per call (yardstick)": library, "library, all rows in one call": library_block,
+                   "native FMU (FMPy)": lambda t: fmu(path, t)}
         if args.other is not None:
             runners[f"other FMU {args.other.name} (FMPy)"] = lambda t: fmu(args.other, t)
         for case, parked in (("parked (filter every step)", True), ("drive with 200 s stops", False)):

@@ -327,7 +327,7 @@ static int initialize(sarins_ctx *c)
     dmu_state *s = (dmu_state *)c->state;
     dmu_state fresh;
     memset(&fresh, 0, sizeof fresh);
-    if (!c->quiet && check_parameters(c) != SARINS_OK)
+    if (check_parameters(c) != SARINS_OK) /* quiet (Initialization Mode): no output, nothing logged */
         return SARINS_ERROR;
     if (initial_model(c, &fresh.initial) != SARINS_OK || build_updater(c, &fresh, 1.0) != SARINS_OK)
         return SARINS_ERROR;
@@ -353,12 +353,12 @@ static int check_step(sarins_ctx *c, dmu_state *s, double h)
         }
         return SARINS_OK;
     }
-    s->step = h;
     if (h != s->kf.dt) {
         if (build_updater(c, s, h) != SARINS_OK)
-            return SARINS_ERROR;
+            return SARINS_ERROR; /* nothing changed: the filter's settings are checked before it is written */
         s->rls = s->initial;
     }
+    s->step = h;
     return SARINS_OK;
 }
 
