@@ -484,7 +484,7 @@ def test_sanitized_build_runs_clean_through_the_c_host(unzipped, tmp_path):
 def test_win64_dll_under_wine_runs_and_agrees_with_linux64(unzipped, host, tmp_path):
     """The shipped win64 DLL under wine: the run with its state round trip repeats itself bit for bit, and
     agrees with linux64 to 1e-12 relative (the filter's sin, cos, tan and the RLS's pow come from mingw's
-    C runtime there, glibc's here)."""
+    C runtime there, glibc's here; on this run they agreed bit for bit, the test prints the comparison)."""
     import shutil
 
     from fmus.native_fmu import MINGW, fmi_headers_dir
@@ -512,4 +512,8 @@ def test_win64_dll_under_wine_runs_and_agrees_with_linux64(unzipped, host, tmp_p
     def values(t):
         return np.array([[struct.unpack("<d", struct.pack("<Q", x))[0] for x in t[j]] for j in sorted(t)])
 
-    np.testing.assert_allclose(values(table(win)), values(table(lin)), rtol=1e-12, atol=1e-300)
+    w, lin_values = values(table(win)), values(table(lin))
+    worst = float(np.max(np.abs(w - lin_values) / np.maximum(np.abs(lin_values), 1e-300)))
+    print(f"win64 == linux64: {np.array_equal(w, lin_values)}, {int(np.sum(w != lin_values))} of {w.size} values "
+          f"differ, largest relative difference {worst:.3g}")
+    assert worst <= 1e-12
