@@ -48,7 +48,7 @@ class DriftModelUpdater(Fmi2Slave):
         "the interval it integrates). All outputs are state outputs (no direct feedthrough). The initial model "
         "is a0, b0, c0 with prior_points equivalent calibration points spread over prior_t_min..prior_t_max, or "
         "the RLS state in model_file (the binary model file written by sarins_fmu.identify.rls.ForgettingRLS."
-        "save('name.smf'), every byte described in sources/modelfile.h and rls.h, read at initialisation; its "
+        "export_binary('name.bin'), every byte described in sources/netfile.h and rls.h, read at initialisation; its "
         "forgetting settings must equal forgetting_factor and forgetting_time_scale); the outputs p_aa..p_cc (its inverse "
         "information) and model_time (the time of its last update) with drift_a/b/c give the state back, so a "
         "next run can continue from it. last_stop_* describe the last finished stop (last_stop_used 1: it "
@@ -107,7 +107,7 @@ class DriftModelUpdater(Fmi2Slave):
         declare(self, "integer", "n_updates", OUTPUT, "model updates so far [1]", 0)
         declare(self, "integer", "n_resets", OUTPUT, "stops discarded as too short [1]", 0)
         declare(self, "string", "model_file", PARAMETER,
-                "initial RLS state (binary model file of ForgettingRLS.save('name.smf')); empty: a0, b0, c0 and "
+                "initial RLS state (binary model file of ForgettingRLS.export_binary); empty: a0, b0, c0 and "
                 "prior_*", "")
         declare(self, "real", "solution_time", INPUT, "time tag of the INS inputs: INS solution_time [s]", NO_TAG)
         declare(self, "real", "speed_time", INPUT, "time tag of vehicle_speed [s]", NO_TAG)

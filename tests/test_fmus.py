@@ -255,10 +255,10 @@ def test_model_description_states_the_requirements(fmu_dir):
 
     from fmpy import read_model_description
 
-    md = read_model_description(str(fmu_dir / "DriftModelUpdater.fmu"))
+    md = read_model_description(str(fmu_dir / "VehicleMotion.fmu"))  # a Python-hosted FMU
     assert md.coSimulation.needsExecutionTool is True
     assert "sarins-fmi" in md.generationTool and "PythonFMU" in md.generationTool
-    with zipfile.ZipFile(fmu_dir / "DriftModelUpdater.fmu") as z:
+    with zipfile.ZipFile(fmu_dir / "VehicleMotion.fmu") as z:
         doc = z.read("documentation/index.html").decode()
         assert not any(n.startswith("binaries/win64") for n in z.namelist())
     assert "CPython 3." in doc and "SARINS_FMU_PYTHON" in doc and "Linux x86-64" in doc

@@ -24,7 +24,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 
 from fmu_driver import Slave, check_parameter_error
-from sarins_fmu.identify.modelfile import binary_model_bytes
+from sarins_fmu.identify import netfile
 from sarins_fmu.identify.online import OnlineDriftUpdater, UpdaterSettings, prior_covariance
 from sarins_fmu.identify.rls import ForgettingRLS, RLSSettings
 from sarins_fmu.kalman import StopFilterSettings
@@ -200,7 +200,7 @@ def test_model_file_starts_the_fmu_where_the_library_is(fmu, tmp_path):
     rls = ForgettingRLS([PARAMS["a0"], PARAMS["b0"], PARAMS["c0"]], prior_covariance(), 0.0, RLSSettings(0.7))
     for k, t in enumerate((5.0, 35.0, 47.0)):
         rls.update(t, 1e-8 * (1 + k), (k + 1) * DAY)
-    path = rls.save(tmp_path / "start.smf")
+    path = rls.export_binary(tmp_path / "start.bin")
     rows = _rows(400, seed=9)
     got = _fmu_run(fmu, rows, {}, model_file=path)
     up = OnlineDriftUpdater(ForgettingRLS.load(path), 0.7, 1.0, StopFilterSettings(arw=PARAMS["kf_arw"]),
@@ -280,13 +280,12 @@ def test_bad_parameters_are_refused_at_exit_initialization(fmu, params, text):
     check_parameter_error(fmu, params, text)
 
 
-def _rls_bytes(**change):
-    meta = {"time": 0.0, "n_updates": 0, "settings": {"forgetting_factor": 0.8, "time_scale": 30 * DAY}}
-    arrays = {"parameters": np.array([1e-11, -2e-10, 1e-8]), "covariance": prior_covariance()}
-    tag, version = change.pop("tag", "sarins_fmu.identify.rls"), change.pop("version", 1)
-    meta["settings"].update(change.pop("settings", {}))
-    arrays.update(change)
-    return binary_model_bytes(tag, version, meta, arrays)
+def _rls_bytes(version=1, kind="rls", **change):
+    arrays = {"parameters": np.array([1e-11, -2e-10, 1e-8]), "covariance": prior_covariance(), "time": 0.0,
+              "n_updates": 0.0, "forgetting_factor": 0.8, "time_scale": 30 * DAY, **change}
+    data = bytearray(netfile.to_bytes(kind, arrays))
+    struct.pack_into("<I", data, 8, version)
+    return bytes(data[:-8]) + struct.pack("<Q", netfile.checksum(bytes(data[:-8])))
 
 
 def _bad_files(tmp_path):
@@ -294,18 +293,18 @@ def _bad_files(tmp_path):
     flipped = bytearray(good)
     flipped[100] ^= 0x10
     cases = {
-        "missing.smf": (None, "no such file"),
-        "folder.smf": ("dir", "cannot be read"),
-        "text.json": (b'{"format": "sarins_fmu.identify.rls"}', "not a binary model file"),
-        "short.smf": (good[:-9], "the header says"),
-        "flipped.smf": (bytes(flipped), "checksum mismatch"),
-        "huge.smf": (good + bytes(4096), "4096 bytes"),
-        "kind.smf": (_rls_bytes(tag="sarins_fmu.identify.rbf"), "format tag is 'sarins_fmu.identify.rbf'"),
-        "version.smf": (_rls_bytes(version=2), "format version 2"),
-        "notpd.smf": (_rls_bytes(covariance=-prior_covariance()), "not positive definite"),
-        "shape.smf": (_rls_bytes(parameters=np.zeros(4)), "entry 'parameters' must be float64 of shape (3,)"),
-        "perupdate.smf": (_rls_bytes(settings={"time_scale": None}), "per update"),
-        "lambda.smf": (_rls_bytes(settings={"forgetting_factor": 0.5}), "forgetting factor 0.5"),
+        "missing.bin": (None, "no such file"),
+        "folder.bin": ("dir", "cannot be read"),
+        "text.json": (b'{"format": "sarins_fmu.identify.rls"}', "not a sarins binary model file"),
+        "short.bin": (good[:-9], "declared size"),
+        "flipped.bin": (bytes(flipped), "checksum mismatch"),
+        "huge.bin": (good + bytes(4096), "4096 bytes"),
+        "kind.bin": (_rls_bytes(kind="rbf"), "model kind 3"),
+        "version.bin": (_rls_bytes(version=2), "format version 2"),
+        "notpd.bin": (_rls_bytes(covariance=-prior_covariance()), "not positive definite"),
+        "shape.bin": (_rls_bytes(parameters=np.zeros(4)), "array 'parameters' must have shape (3,)"),
+        "perupdate.bin": (_rls_bytes(time_scale=0.0), "per update"),
+        "lambda.bin": (_rls_bytes(forgetting_factor=0.5), "forgetting factor 0.5"),
     }
     for name, (data, _) in cases.items():
         if data == "dir":
@@ -331,16 +330,16 @@ def test_bad_model_files_are_refused_at_exit_initialization_naming_the_file_and_
 
 
 def test_the_library_refuses_the_same_model_files(tmp_path):
-    """ForgettingRLS.load reads .smf files with the core's reader: the same files refused for the same
-    reasons (the settings mismatch is the FMU's own check)."""
+    """ForgettingRLS.load reads binary files with the core's reader: the same files refused for the same
+    reasons (the settings mismatch is the FMU's own check; a folder or a JSON file go to the JSON reader)."""
     from sarins_fmu.identify.modelfile import ModelFileError
 
     for name, (_, why) in _bad_files(tmp_path).items():
-        if name in ("text.json", "lambda.smf", "perupdate.smf"):
+        if name in ("text.json", "folder.bin", "lambda.bin", "perupdate.bin"):
             continue
         with pytest.raises(ModelFileError, match=why.replace("(", r"\(").replace(")", r"\)")):
             ForgettingRLS.load(tmp_path / name)
-    rls = ForgettingRLS.load(tmp_path / "perupdate.smf")
+    rls = ForgettingRLS.load(tmp_path / "perupdate.bin")
     assert rls.settings.time_scale is None
 
 

@@ -87,7 +87,7 @@ def test_a_session_is_the_same_under_every_engine(fmu_dir, tmp_path):
     assert [e[1] for e in ref.events] == ["update"]
     n = len(ref_rows)
     engine = CosimEngine(fmu_dir)
-    system = engine.session_system(run, updater(), updater().rls.save(tmp_path / "rls.smf"))
+    system = engine.session_system(run, updater(), updater().rls.export_binary(tmp_path / "rls.bin"))
     record = ["ins." + v for v in ["solution_time", *NAV]] + ["updater.drift_a", "updater.drift_b", "updater.drift_c"]
     stop = n + 2.0  # Jacobi engines: the updater's row two steps behind
     runs = {}
@@ -207,10 +207,10 @@ def test_updater_model_file_errors_name_the_file(fmu_dir, tmp_path):
     from sarins_fmu.identify.rls import ForgettingRLS, RLSSettings
 
     path = fmu_dir / "DriftModelUpdater.fmu"
-    check_parameter_error(path, {"model_file": str(tmp_path / "missing.smf")}, "missing.smf")
-    (tmp_path / "bad.smf").write_bytes(b"SARINSMF" + bytes(200))
-    check_parameter_error(path, {"model_file": str(tmp_path / "bad.smf")}, "bad.smf")
+    check_parameter_error(path, {"model_file": str(tmp_path / "missing.bin")}, "missing.bin")
+    (tmp_path / "bad.bin").write_bytes(b"SARNET\0\1" + bytes(200))
+    check_parameter_error(path, {"model_file": str(tmp_path / "bad.bin")}, "bad.bin")
     json_file = ForgettingRLS([0.0, 0.0, 1e-8], np.eye(3), 0.0, RLSSettings(0.8)).save(tmp_path / "rls.json")
-    check_parameter_error(path, {"model_file": str(json_file)}, "not a binary model file")
-    other = ForgettingRLS([0.0, 0.0, 1e-8], np.eye(3), 0.0, RLSSettings(0.5)).save(tmp_path / "lam.smf")
+    check_parameter_error(path, {"model_file": str(json_file)}, "not a sarins binary model file")
+    other = ForgettingRLS([0.0, 0.0, 1e-8], np.eye(3), 0.0, RLSSettings(0.5)).export_binary(tmp_path / "lam.bin")
     check_parameter_error(path, {"model_file": str(other)}, "forgetting factor 0.5")

@@ -1,6 +1,6 @@
 """ctypes binding of seed 002's online model update in the C core: the forgetting-factor RLS (``rls.h``),
-the stop filter's state (``stop_filter.h``), Fig. 2's row logic (``online.h``) and the binary model file
-(``modelfile.h``).
+the stop filter's state (``stop_filter.h``), Fig. 2's row logic (``online.h``) and the RLS model file (``rls.h``
+over the binary model file reader ``netfile.h``).
 
 As in :mod:`sarins_fmu.core.ins`, each C struct lives in a numpy byte buffer owned by a Python object, with
 numpy views into it at the offsets the library reports (no layout written twice); the structs hold no
@@ -25,10 +25,7 @@ N_STATES = 11
 # the settings array of stop_filter.h, in order (sarins_fmu.kalman.StopFilterSettings's fields)
 STOP_SETTINGS = ("arw", "vrw", "drift_rw", "bias_rw", "velocity_meas_std", "tilt0_std", "heading0_std",
                  "velocity0_std", "drift0_std", "azimuth_drift0_std", "bias0_std", "position0_std")
-RLS_KIND = "sarins_fmu.identify.rls"  # SARINS_RLS_KIND
-RLS_FILE_MAX = 4096  # SARINS_RLS_FILE_MAX, bytes
-MF_MAX_ENTRIES = 64  # SARINS_MF_MAX_ENTRIES
-MF_NAME, MF_KIND = 32, 48  # SARINS_MF_NAME, SARINS_MF_KIND (bytes, NUL included)
+RLS_FILE_MAX = 4096  # SARINS_RLS_FILE_MAX, bytes: the budget of an RLS model file
 
 _drift_model = function("sarins_drift_model_value", _F64, _P, _F64)
 _factor = function("sarins_rls_factor", _F64, _F64, _F64, _F64)
@@ -56,9 +53,6 @@ _online_rows = function("sarins_online_rows", _INT, _P, _P, _P, _I64, _P, _P, _P
                         _P, _STR, _SIZE)
 _online_check = function("sarins_online_check", _INT, _P, _STR, _SIZE)
 _online_layout = function("sarins_online_layout", _I64, _P, _P)
-_mf_parse = function("sarins_mf_parse", _INT, _P, _SIZE, _STR, _P, _STR, _SIZE)
-_mf_layout = function("sarins_mf_layout", _I64, _P)
-_mf_crc32 = function("sarins_mf_crc32", ctypes.c_uint32, _P, _SIZE)
 
 
 def _layout(fn, count: int) -> tuple[int, np.ndarray]:
@@ -72,9 +66,6 @@ _EVENT_SIZE = np.zeros(1, dtype=np.int64)
 _ONLINE_OFF = np.zeros(5, dtype=np.int64)
 _ONLINE_SIZE = int(_online_layout(_EVENT_SIZE.ctypes.data, _ONLINE_OFF.ctypes.data))
 _EVENT_SIZE = int(_EVENT_SIZE[0])
-_MF_ENTRY = np.zeros(1, dtype=np.int64)
-_MF_SIZE = int(_mf_layout(_MF_ENTRY.ctypes.data))
-_MF_ENTRY = int(_MF_ENTRY[0])
 # sarins_online_event: time, duration, temperature, drift, drift_std (float64), used (int64)
 EVENT_DTYPE = np.dtype([("time", "<f8"), ("duration", "<f8"), ("temperature", "<f8"), ("drift", "<f8"),
                         ("drift_std", "<f8"), ("used", "<i8")])
@@ -325,33 +316,3 @@ class OnlineState:
     def check(self) -> None:
         reason = _Reason()
         reason.check(_online_check(self.buffer.ctypes.data, reason.buf, _MSG))
-
-
-# -------------------------------------------------------------------------------------- model files
-_MF_DTYPE = np.dtype([("name", f"S{MF_NAME}"), ("dtype", "<u4"), ("ndim", "<u4"), ("dims", "<u4", (2,)),
-                      ("count", "<u8"), ("offset", "<u8")])
-if _MF_DTYPE.itemsize != _MF_ENTRY or MF_KIND + 8 + MF_MAX_ENTRIES * _MF_ENTRY != _MF_SIZE:
-    raise ImportError("sarins_mf has another layout than this binding expects: rebuild the core")
-
-
-def crc32(data: bytes) -> int:
-    """``sarins_mf_crc32`` (equals zlib.crc32)."""
-    raw = np.frombuffer(bytes(data), dtype=np.uint8)
-    return int(_mf_crc32(raw.ctypes.data if raw.size else None, raw.size))
-
-
-def parse_model_file(data: bytes, kind: str | None = None) -> tuple[str, int, list[tuple[str, int, tuple, int]]]:
-    """``sarins_mf_parse``: (kind, kind version, [(name, dtype, shape, byte offset), ...]) of a binary model
-    file's bytes (dtype 0 null, 1 float64, 2 int64); ValueError with the reason."""
-    raw = np.frombuffer(bytes(data), dtype=np.uint8)
-    mf = np.zeros(_MF_SIZE, dtype=np.uint8)
-    reason = _Reason()
-    reason.check(_mf_parse(raw.ctypes.data if raw.size else None, raw.size,
-                           None if kind is None else kind.encode(), mf.ctypes.data, reason.buf, _MSG))
-    head = mf[:MF_KIND + 8]
-    kind_out = bytes(head[:MF_KIND]).split(b"\0", 1)[0].decode("ascii")
-    kind_version, n_entries = (int(v) for v in head[MF_KIND:].view("<u4"))
-    table = mf[MF_KIND + 8:].view(_MF_DTYPE)[:n_entries]
-    entries = [(e["name"].decode("ascii"), int(e["dtype"]), tuple(int(d) for d in e["dims"][:int(e["ndim"])]),
-                int(e["offset"])) for e in table]
-    return kind_out, kind_version, entries

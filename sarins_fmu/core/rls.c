@@ -1,11 +1,15 @@
+#if defined(_MSC_VER) && !defined(_CRT_SECURE_NO_WARNINGS)
+#define _CRT_SECURE_NO_WARNINGS /* fopen and fread are the portable C11 calls; MSVC's /W4 would flag them */
+#endif
 #include "rls.h"
 
 #include <math.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "matrix.h"
-#include "modelfile.h"
+#include "netfile.h"
 #include "report.h"
 
 double sarins_drift_model_value(const double *coef, double t) { return (coef[0] * t + coef[1]) * t + coef[2]; }
@@ -111,7 +115,20 @@ int sarins_rls_update(sarins_rls *s, double temperature, double drift, double ti
     }
     double lam = sarins_rls_factor(s->forgetting_factor, time - s->time, s->time_scale);
     const double h[3] = {temperature * temperature, temperature, 1.0};
-    sarins_rls_gain_step(s->x, s->p, h, drift, lam);
+    double x[3], p[9];
+    for (int i = 0; i < 3; i++)
+        x[i] = s->x[i];
+    for (int i = 0; i < 9; i++)
+        p[i] = s->p[i];
+    sarins_rls_gain_step(x, p, h, drift, lam);
+    for (int i = 0; i < 9; i++)
+        if (!isfinite(p[i]) || (i < 3 && !isfinite(x[i])) || (i % 4 == 0 && !(p[i] > 0.0)))
+            return sarins_fail(&r, SARINS_RLS_BAD, "the update at %.9g degC overflows or loses the model's "
+                                                   "information (P not finite or not positive)", temperature);
+    for (int i = 0; i < 3; i++)
+        s->x[i] = x[i];
+    for (int i = 0; i < 9; i++)
+        s->p[i] = p[i];
     s->time = time;
     s->n_updates += 1;
     return SARINS_RLS_OK;
@@ -172,87 +189,92 @@ int sarins_rls_check(const sarins_rls *s, char *msg, size_t size)
     return sarins_rls_check_settings(s->forgetting_factor, s->time_scale, msg, size);
 }
 
-/* The entry name with this dtype and shape (ndim 0: a scalar), or NULL with the reason. */
-static const sarins_mf_entry *entry(const sarins_mf *mf, const char *name, uint32_t dtype, uint32_t ndim,
-                                    uint32_t d0, uint32_t d1, report *r)
+/* The array name of shape (d0, d1) (ndim 0: a scalar), or NULL with the reason. */
+static const sarins_netfile_array *array(const sarins_netfile *f, const char *name, uint32_t ndim, uint64_t d0,
+                                         uint64_t d1, report *r)
 {
-    static const char *const TYPES[3] = {"null", "float64", "int64"};
-    const sarins_mf_entry *e = sarins_mf_find(mf, name);
-    if (e == NULL) {
-        sarins_fail(r, SARINS_RLS_BAD, "missing entry '%s'", name);
+    const sarins_netfile_array *a = sarins_netfile_find(f, name);
+    if (a == NULL) {
+        sarins_fail(r, SARINS_RLS_BAD, "missing array '%s'", name);
         return NULL;
     }
-    if (e->dtype != dtype || e->ndim != ndim || e->dims[0] != d0 || e->dims[1] != d1) {
-        sarins_fail(r, SARINS_RLS_BAD, "entry '%s' must be %s of shape (%s%s%s), got %s of rank %lu", name,
-                    TYPES[dtype], ndim > 0 ? "3" : "", ndim > 1 ? ", 3" : "", ndim == 1 ? "," : "",
-                    TYPES[e->dtype], (unsigned long)e->ndim);
+    if (a->ndim != ndim || a->dim[0] != d0 || a->dim[1] != d1) {
+        sarins_fail(r, SARINS_RLS_BAD, "array '%s' must have shape (%s), got ndim %u (%llu, %llu)", name,
+                    ndim == 0 ? "" : ndim == 1 ? "3," : "3, 3", (unsigned)a->ndim, (unsigned long long)a->dim[0],
+                    (unsigned long long)a->dim[1]);
         return NULL;
     }
-    return e;
+    for (uint64_t i = 0; i < a->count; i++)
+        if (!isfinite(sarins_netfile_value(f, a, i))) {
+            sarins_fail(r, SARINS_RLS_BAD, "array '%s' holds NaN or infinity", name);
+            return NULL;
+        }
+    return a;
 }
 
 int sarins_rls_from_model(const unsigned char *buf, size_t n, sarins_rls *s, char *msg, size_t size)
 {
-    static const char *const NAMES[6] = {"parameters", "covariance", "time", "n_updates",
-                                         "settings.forgetting_factor", "settings.time_scale"};
+    static const char *const NAMES[6] = {"parameters", "covariance", "time", "n_updates", "forgetting_factor",
+                                         "time_scale"};
     report r = sarins_report(msg, size);
-    sarins_mf mf;
+    sarins_netfile f;
     if (n > SARINS_RLS_FILE_MAX)
-        return sarins_fail(&r, SARINS_RLS_BAD, "larger than the %d bytes an RLS model file may have",
-                           SARINS_RLS_FILE_MAX);
-    if (sarins_mf_parse(buf, n, SARINS_RLS_KIND, &mf, msg, size) != SARINS_MF_OK)
+        return sarins_fail(&r, SARINS_RLS_BAD, "%llu bytes: larger than the %d bytes an RLS model file may have",
+                           (unsigned long long)n, SARINS_RLS_FILE_MAX);
+    if (sarins_netfile_parse(buf, n, &f, msg, size) != SARINS_NETFILE_OK)
         return SARINS_RLS_BAD;
-    if (mf.kind_version != SARINS_RLS_KIND_VERSION)
-        return sarins_fail(&r, SARINS_RLS_BAD, "format version %lu not supported (readable: [%d])",
-                           (unsigned long)mf.kind_version, SARINS_RLS_KIND_VERSION);
-    for (uint32_t k = 0; k < mf.n_entries; k++) {
+    if (f.kind != SARINS_NET_KIND_RLS)
+        return sarins_fail(&r, SARINS_RLS_BAD, "model kind %u, an RLS model file has kind %d", (unsigned)f.kind,
+                           SARINS_NET_KIND_RLS);
+    for (uint32_t k = 0; k < f.n_arrays; k++) {
         int known = 0;
         for (int j = 0; j < 6; j++)
-            known |= strcmp(mf.entries[k].name, NAMES[j]) == 0;
+            known |= strcmp(f.arrays[k].name, NAMES[j]) == 0;
         if (!known)
-            return sarins_fail(&r, SARINS_RLS_BAD, "unexpected entry '%s'", mf.entries[k].name);
+            return sarins_fail(&r, SARINS_RLS_BAD, "unexpected array '%s'", f.arrays[k].name);
     }
-    const sarins_mf_entry *x = entry(&mf, "parameters", SARINS_MF_F64, 1, 3, 0, &r);
-    const sarins_mf_entry *p = x ? entry(&mf, "covariance", SARINS_MF_F64, 2, 3, 3, &r) : NULL;
-    const sarins_mf_entry *t = p ? entry(&mf, "time", SARINS_MF_F64, 0, 0, 0, &r) : NULL;
-    const sarins_mf_entry *u = t ? entry(&mf, "n_updates", SARINS_MF_I64, 0, 0, 0, &r) : NULL;
-    const sarins_mf_entry *lam = u ? entry(&mf, "settings.forgetting_factor", SARINS_MF_F64, 0, 0, 0, &r) : NULL;
-    const sarins_mf_entry *m = lam ? sarins_mf_find(&mf, "settings.time_scale") : NULL;
-    if (lam == NULL)
-        return SARINS_RLS_BAD;
-    if (m == NULL)
-        return sarins_fail(&r, SARINS_RLS_BAD, "missing entry 'settings.time_scale'");
-    if (!(m->dtype == SARINS_MF_NULL || (m->dtype == SARINS_MF_F64 && m->ndim == 0)))
-        return sarins_fail(&r, SARINS_RLS_BAD, "entry 'settings.time_scale' must be a float64 scalar or null");
-    double xv[3], pv[9];
+    const sarins_netfile_array *a[6];
+    for (int j = 0; j < 6; j++) {
+        a[j] = array(&f, NAMES[j], j == 0 ? 1 : j == 1 ? 2 : 0, 3 - 2 * (j > 1), j == 1 ? 3 : 1, &r);
+        if (a[j] == NULL)
+            return SARINS_RLS_BAD;
+    }
+    double x[3], p[9];
     for (int i = 0; i < 3; i++)
-        xv[i] = sarins_mf_f64(buf, x, (uint64_t)i);
+        x[i] = sarins_netfile_value(&f, a[0], (uint64_t)i);
     for (int i = 0; i < 9; i++)
-        pv[i] = sarins_mf_f64(buf, p, (uint64_t)i);
-    double time_scale = 0.0;
-    if (m->dtype == SARINS_MF_F64) {
-        time_scale = sarins_mf_f64(buf, m, 0);
-        if (!(time_scale > 0.0))
-            return sarins_fail(&r, SARINS_RLS_BAD, "settings.time_scale must be positive (s) or null");
-    }
-    int64_t n_updates = sarins_mf_i64(buf, u, 0);
-    if (n_updates < 0)
-        return sarins_fail(&r, SARINS_RLS_BAD, "'n_updates' must be an integer >= 0, got %lld", (long long)n_updates);
+        p[i] = sarins_netfile_value(&f, a[1], (uint64_t)i);
+    double count = sarins_netfile_value(&f, a[3], 0), time_scale = sarins_netfile_value(&f, a[5], 0);
+    if (!(count >= 0.0 && count <= 9007199254740992.0 && count == (double)(int64_t)count))
+        return sarins_fail(&r, SARINS_RLS_BAD, "'n_updates' must be a whole number 0 .. 2^53, got %.17g", count);
+    if (time_scale < 0.0)
+        return sarins_fail(&r, SARINS_RLS_BAD, "'time_scale' must be positive (s) or 0 (per update), got %.17g",
+                           time_scale);
     sarins_rls state;
-    if (sarins_rls_init(&state, xv, pv, sarins_mf_f64(buf, t, 0), sarins_mf_f64(buf, lam, 0), time_scale, msg, size)
-        != SARINS_RLS_OK)
+    if (sarins_rls_init(&state, x, p, sarins_netfile_value(&f, a[2], 0), sarins_netfile_value(&f, a[4], 0),
+                        time_scale, msg, size) != SARINS_RLS_OK)
         return SARINS_RLS_BAD;
-    state.n_updates = n_updates;
+    state.n_updates = (int64_t)count;
     *s = state;
     return SARINS_RLS_OK;
 }
 
 int sarins_rls_load_file(const char *path, sarins_rls *s, char *msg, size_t size)
 {
-    unsigned char buf[SARINS_RLS_FILE_MAX];
-    size_t n;
-    if (sarins_mf_read_file(path, buf, sizeof buf, &n, msg, size) != SARINS_MF_OK)
-        return SARINS_RLS_BAD;
+    report r = sarins_report(msg, size);
+    unsigned char buf[SARINS_RLS_FILE_MAX + 1]; /* one byte more: a longer file is seen as such */
+    if (path == NULL || path[0] == '\0')
+        return sarins_fail(&r, SARINS_RLS_BAD, "no file named");
+    FILE *fp = fopen(path, "rb");
+    if (fp == NULL)
+        return sarins_fail(&r, SARINS_RLS_BAD, "no such file or it cannot be opened");
+    size_t n = 0, k;
+    while (n < sizeof buf && (k = fread(buf + n, 1, sizeof buf - n, fp)) > 0)
+        n += k;
+    int failed = ferror(fp);
+    fclose(fp);
+    if (failed)
+        return sarins_fail(&r, SARINS_RLS_BAD, "cannot be read (a directory, or a read error)");
     return sarins_rls_from_model(buf, n, s, msg, size);
 }
 

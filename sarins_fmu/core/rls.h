@@ -52,7 +52,8 @@ int sarins_rls_check_settings(double forgetting_factor, double time_scale, char 
 int sarins_rls_init(sarins_rls *s, const double *x, const double *p, double time, double forgetting_factor,
                     double time_scale, char *msg, size_t size);
 
-/* Adds the measurement (temperature degC, drift, time s) taken no earlier than s->time. */
+/* Adds the measurement (temperature degC, drift, time s) taken no earlier than s->time; refused (state
+ * unchanged) if the result would not be finite or P's diagonal not positive (an overflow). */
 int sarins_rls_update(sarins_rls *s, double temperature, double drift, double time, char *msg, size_t size);
 
 /* P0 of an initial model worth `points` calibration points spread evenly over t_min .. t_max degC:
@@ -61,19 +62,19 @@ int sarins_rls_update(sarins_rls *s, double temperature, double drift, double ti
  * invertible information matrix. */
 int sarins_rls_prior_covariance(double points, double t_min, double t_max, double *p0, char *msg, size_t size);
 
-/* The RLS model file: the binary model file (modelfile.h) of kind SARINS_RLS_KIND, version 1, written by
- * sarins_fmu.identify.rls.ForgettingRLS.save(path.smf), with exactly these entries: parameters (float64,
- * 3), covariance (float64, 3 x 3), time (float64 scalar, s), n_updates (int64 scalar >= 0),
- * settings.forgetting_factor (float64 scalar), settings.time_scale (float64 scalar s, or null: per update).
- * At most SARINS_RLS_FILE_MAX bytes.  The state is checked like sarins_rls_init's arguments. */
-#define SARINS_RLS_KIND "sarins_fmu.identify.rls"
-#define SARINS_RLS_KIND_VERSION 1
+/* The RLS model file: a binary model file (netfile.h, the core's one container reader) of kind
+ * SARINS_NET_KIND_RLS, written by sarins_fmu.identify.rls.ForgettingRLS.export_binary, with exactly these
+ * float64 arrays: parameters (3), covariance (3 x 3), and the scalars time (s), n_updates (a whole number
+ * 0 .. 2^53), forgetting_factor and time_scale (s; 0: forget per update).  At most SARINS_RLS_FILE_MAX
+ * bytes (the kind's budget, below the container's).  The state is checked like sarins_rls_init's
+ * arguments. */
 #define SARINS_RLS_FILE_MAX 4096
 
 /* The state in the n bytes of an RLS model file. */
 int sarins_rls_from_model(const unsigned char *buf, size_t n, sarins_rls *s, char *msg, size_t size);
 
-/* The state in the RLS model file at path (read into a buffer of SARINS_RLS_FILE_MAX bytes). */
+/* The state in the RLS model file at path (read into a buffer of SARINS_RLS_FILE_MAX bytes on the stack: a
+ * longer file is refused without reading it all; nothing is allocated). */
 int sarins_rls_load_file(const char *path, sarins_rls *s, char *msg, size_t size);
 
 /* Every field of a state within the invariants the functions above keep (finite values, an exactly

@@ -48,6 +48,5 @@ int sarins_core_abi(void);
 #include "stop_filter.h"
 #include "rls.h"
 #include "online.h"
-#include "modelfile.h"
 
 #endif

@@ -2,19 +2,12 @@
 
 A model file holds a *format tag* naming the model kind, an integer format
 *version*, a small ``meta`` mapping (numbers, strings, lists) and named
-float arrays. Three encodings are accepted, chosen by the file suffix:
+float arrays. Two encodings are accepted, chosen by the file suffix:
 
 ``.npz``
     numpy's zip of ``.npy`` arrays, read with ``allow_pickle=False``; the tag,
     version and ``meta`` are stored as one JSON string under ``__header__``.
     Compact for large sample sets (a GRNN keeps all its training samples).
-``.smf``
-    the binary model file a native FMU reads without any library
-    (``sarins_fmu/core/modelfile.h`` describes every byte; its C reader is
-    also the one this module uses, through ctypes).  Named float64 / int64
-    arrays and scalars; ``meta`` must be flat numbers or None in nested
-    mappings (a key ``settings.time_scale`` for ``{"settings": {"time_scale":
-    ...}}``), no strings or lists.  Budget :data:`MAX_BINARY_BYTES`.
 anything else (``.json`` recommended)
     one JSON object ``{"format", "version", "meta", "arrays"}`` where each
     array is ``{"shape": [...], "data": [flat values]}``. Floats are written
@@ -23,8 +16,7 @@ anything else (``.json`` recommended)
 
 Every failure to read a file (missing, not JSON / not a zip, wrong format
 tag, unsupported version, missing key, wrong shape, NaN or infinity, a file
-over its size budget, a binary file that fails any check of its reader)
-raises :class:`ModelFileError`, a :class:`ValueError`
+over its size budget) raises :class:`ModelFileError`, a :class:`ValueError`
 subclass whose message starts with the file name.  Budgets: a JSON file of
 at most :data:`MAX_JSON_BYTES`, an ``.npz`` whose arrays expand to at most
 :data:`MAX_NPZ_BYTES` (checked before anything is decompressed).
@@ -33,7 +25,6 @@ at most :data:`MAX_JSON_BYTES`, an ``.npz`` whose arrays expand to at most
 from __future__ import annotations
 
 import json
-import struct
 import zipfile
 import zlib
 from collections.abc import Callable, Collection, Mapping
@@ -57,12 +48,6 @@ _HEADER_KEY = "__header__"
 MAX_JSON_BYTES = 256 * 2**20  # a JSON model file larger than this is refused before reading
 MAX_NPZ_BYTES = 256 * 2**20  # an .npz model file whose arrays expand to more is refused before reading
 MAX_NPZ_MEMBERS = 1000  # arrays in an .npz model file
-MAX_BINARY_BYTES = 256 * 2**20  # a binary (.smf) model file larger than this is refused before reading
-BINARY_SUFFIX = ".smf"  # the binary model file of sarins_fmu/core/modelfile.h
-_MF_MAGIC = b"SARINSMF"
-_MF_VERSION = 1  # SARINS_MF_VERSION
-_MF_NAME, _MF_KIND, _MF_MAX_ENTRIES = 32, 48, 64  # bytes of a name and of the kind (NUL included); entries
-_MF_NULL, _MF_F64, _MF_I64 = 0, 1, 2  # dtypes
 
 
 class ModelFileError(ValueError):
@@ -86,106 +71,6 @@ def _is_npz(path: Path) -> bool:
     return path.suffix.lower() == ".npz"
 
 
-def _is_binary(path: Path) -> bool:
-    return path.suffix.lower() == BINARY_SUFFIX
-
-
-def _flat_meta(meta: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
-    """(dotted name, value) of every leaf of a nested mapping of numbers and None."""
-    leaves = []
-    for key, value in meta.items():
-        name = f"{prefix}{key}"
-        if isinstance(value, Mapping):
-            leaves += _flat_meta(value, name + ".")
-        elif value is None or isinstance(value, (int, float, np.integer, np.floating)):
-            leaves.append((name, value))
-        else:
-            raise ValueError(f"meta entry '{name}' is a {type(value).__name__}: the binary model file holds numbers "
-                             "and None only")
-    return leaves
-
-
-def _entry(name: str, dtype: int, shape: tuple, data: bytes) -> bytes:
-    raw = name.encode("ascii")
-    if not (0 < len(raw) < _MF_NAME and raw[:1].isalpha() and all(chr(c).isalnum() or chr(c) in "_." for c in raw)):
-        raise ValueError(f"name '{name}' does not fit the binary model file ([A-Za-z][A-Za-z0-9_.]*, "
-                         f"< {_MF_NAME} bytes)")
-    if len(shape) > 2 or any(not 1 <= d < 2**32 for d in shape):
-        raise ValueError(f"array '{name}' of shape {shape}: the binary model file holds scalars, vectors and "
-                         "matrices")
-    dims = list(shape) + [0] * (2 - len(shape))
-    return raw.ljust(_MF_NAME, b"\0") + struct.pack("<4I", dtype, len(shape), *dims) + data
-
-
-def binary_model_bytes(format_tag: str, version: int, meta: Mapping[str, Any],
-                       arrays: Mapping[str, np.ndarray]) -> bytes:
-    """The bytes of a binary model file (layout: ``sarins_fmu/core/modelfile.h``): the arrays as float64,
-    then the meta leaves (int: int64 scalar, float: float64 scalar, None: null)."""
-    entries = []
-    for name, arr in arrays.items():
-        a = np.asarray(arr, dtype="<f8")
-        entries.append(_entry(name, _MF_F64, a.shape, a.tobytes(order="C")))
-    for name, value in _flat_meta(meta):
-        if value is None:
-            entries.append(_entry(name, _MF_NULL, (), b""))
-        elif isinstance(value, (bool, np.bool_)):
-            raise ValueError(f"meta entry '{name}' is a bool: the binary model file holds numbers and None only")
-        elif isinstance(value, (int, np.integer)):
-            entries.append(_entry(name, _MF_I64, (), struct.pack("<q", int(value))))
-        else:
-            entries.append(_entry(name, _MF_F64, (), struct.pack("<d", float(value))))
-    if not 1 <= len(entries) <= _MF_MAX_ENTRIES:
-        raise ValueError(f"{len(entries)} entries: the binary model file holds 1 .. {_MF_MAX_ENTRIES}")
-    kind = format_tag.encode("ascii")
-    if not (0 < len(kind) < _MF_KIND and all(0x20 <= c <= 0x7e for c in kind)) or not 1 <= int(version) < 2**32:
-        raise ValueError(f"format tag {format_tag!r} / version {version!r} do not fit the binary model file")
-    body = b"".join(entries)
-    total = 80 + len(body) + 4
-    head = (_MF_MAGIC + struct.pack("<2I", _MF_VERSION, len(entries)) + kind.ljust(_MF_KIND, b"\0")
-            + struct.pack("<2IQ", int(version), 0, total))
-    content = head + body
-    return content + struct.pack("<I", zlib.crc32(content))
-
-
-def _read_binary(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
-    from ..core.online import parse_model_file
-
-    try:
-        check_file_size(path, MAX_BINARY_BYTES, "a binary model file (MAX_BINARY_BYTES)")
-        data = path.read_bytes()
-    except BudgetError as exc:
-        raise ModelFileError(path, exc.reason) from None
-    except OSError as exc:
-        raise ModelFileError(path, f"cannot be read: {exc.strerror or exc}") from None
-    try:
-        kind, version, entries = parse_model_file(data)
-    except ValueError as exc:
-        raise ModelFileError(path, str(exc)) from None
-    meta: dict[str, Any] = {}
-    arrays: dict[str, np.ndarray] = {}
-    for name, dtype, shape, offset in entries:
-        count = int(np.prod(shape)) if dtype != _MF_NULL else 0
-        if dtype == _MF_NULL:
-            value: Any = None
-        elif dtype == _MF_I64:
-            value = np.frombuffer(data, "<i8", count, offset).reshape(shape)
-        else:
-            value = np.frombuffer(data, "<f8", count, offset).reshape(shape).astype(float)
-        if isinstance(value, np.ndarray) and value.ndim > 0 and dtype == _MF_F64:
-            arrays[name] = value
-            continue
-        if isinstance(value, np.ndarray):
-            value = int(value) if dtype == _MF_I64 else float(value)
-        node = meta
-        *parents, leaf = name.split(".")
-        for key in parents:
-            node = node.setdefault(key, {})
-            if not isinstance(node, dict):
-                raise ModelFileError(path, f"entry '{name}' is inside a value")
-        node[leaf] = value
-    return {"format": kind, "version": version, "meta": meta}, arrays
-
-
 def _reject_constant(name: str) -> float:
     raise ValueError(f"non-finite number {name} is not allowed")
 
@@ -202,7 +87,7 @@ def save_model_file(
     Parameters
     ----------
     path : str or Path
-        Destination; the suffix ``.npz`` selects the npz encoding, ``.smf`` the binary one.
+        Destination; the suffix ``.npz`` selects the npz encoding.
     format_tag : str
         Names the model kind, e.g. ``"sarins_fmu.identify.rbf"``.
     version : int
@@ -230,11 +115,7 @@ def save_model_file(
             raise ValueError(f"array '{name}' holds NaN or infinity; not saved")
         clean[name] = arr
     header = {"format": format_tag, "version": int(version), "meta": dict(meta)}
-    if _is_binary(path):
-        data = binary_model_bytes(format_tag, version, meta, clean)
-        with naming_path(path):
-            path.write_bytes(data)
-    elif _is_npz(path):
+    if _is_npz(path):
         header_json = json.dumps(header, allow_nan=False)
         with naming_path(path), open(path, "wb") as fh:
             np.savez(fh, **{_HEADER_KEY: np.array(header_json)}, **clean)
@@ -355,10 +236,7 @@ def load_model_file(
         raise ModelFileError(path, "no such file")
     if not path.is_file():
         raise ModelFileError(path, "not a regular file")
-    if _is_binary(path):
-        header, arrays = _read_binary(path)
-    else:
-        header, arrays = _read_npz(path) if _is_npz(path) else _read_json(path)
+    header, arrays = _read_npz(path) if _is_npz(path) else _read_json(path)
     tag = header.get("format")
     if tag != format_tag:
         raise ModelFileError(path, f"format tag is {tag!r}, expected {format_tag!r}")

@@ -67,7 +67,8 @@ from scipy.linalg import solve_triangular
 from ..core import online as core_online
 from ..drift_model import drift_model_value
 from ..files import BudgetError, check_file_size
-from .modelfile import BINARY_SUFFIX, ModelFileError, get_array, load_model_file, save_model_file
+from . import netfile
+from .modelfile import ModelFileError, get_array, load_model_file, save_model_file
 
 __all__ = [
     "MONTH",
@@ -538,20 +539,35 @@ class ForgettingRLS:
         return rls
 
     def save(self, path: str | Path) -> Path:
-        """Write the state as a JSON model file (npz for ``.npz``; for ``.smf`` the binary model file that
-        the DriftModelUpdater FMU reads, ``sarins_fmu/core/rls.h``)."""
-        settings = self.settings
-        time_scale = None if settings.time_scale is None else float(settings.time_scale)
-        meta = {"time": self.time, "n_updates": self.n_updates,
-                "settings": {"forgetting_factor": float(settings.forgetting_factor), "time_scale": time_scale}}
+        """Write the state as a JSON model file (or npz for ``.npz``)."""
+        state = self.to_dict()
+        meta = {k: state[k] for k in ("time", "n_updates", "settings")}
         arrays = {"parameters": self.parameters, "covariance": self.covariance}
         return save_model_file(path, FORMAT_TAG, FORMAT_VERSION, meta, arrays)
 
+    def binary_arrays(self) -> dict:
+        """The arrays of the binary model file (kind ``rls``, ``sarins_fmu/core/rls.h``): parameters,
+        covariance, time, n_updates, forgetting_factor, time_scale (0: per update)."""
+        m = self.settings.time_scale
+        return {"parameters": self.parameters, "covariance": self.covariance, "time": np.float64(self.time),
+                "n_updates": np.float64(self.n_updates),
+                "forgetting_factor": np.float64(self.settings.forgetting_factor),
+                "time_scale": np.float64(0.0 if m is None else m)}
+
+    def binary(self) -> bytes:
+        """The state as a binary model file's bytes (what the DriftModelUpdater FMU's ``model_file`` reads)."""
+        return netfile.to_bytes("rls", self.binary_arrays())
+
+    def export_binary(self, path: str | Path) -> Path:
+        """Write :meth:`binary` to ``path`` (suffix ``.bin`` by convention); returns it."""
+        return netfile.write(path, "rls", self.binary_arrays())
+
     @classmethod
     def load(cls, path: str | Path) -> "ForgettingRLS":
-        """Read a state written by :meth:`save`; a bad file raises ``ModelFileError``.  A binary ``.smf``
-        file is read by the C core's reader, the FMU's (``sarins_rls_from_model``)."""
-        if Path(path).suffix.lower() == BINARY_SUFFIX:
+        """Read a state written by :meth:`save` or :meth:`export_binary` (told apart by the binary file's
+        magic); a bad file raises ``ModelFileError``.  A binary file is read by the C core's reader, the
+        FMU's (``sarins_rls_from_model``, at most 4096 bytes)."""
+        if netfile.is_netfile(path):
             return cls._load_binary(Path(path))
 
         def build(meta: dict, arrays: dict) -> "ForgettingRLS":
@@ -563,21 +579,25 @@ class ForgettingRLS:
         return load_model_file(path, FORMAT_TAG, {FORMAT_VERSION}, build)
 
     @classmethod
-    def _load_binary(cls, path: Path) -> "ForgettingRLS":
+    def from_binary(cls, data: bytes, source="<bytes>") -> "ForgettingRLS":
+        """The state in a binary model file's bytes (``sarins_rls_from_model``); ModelFileError naming
+        ``source`` and the reason."""
         try:
-            if not path.exists():
-                raise ModelFileError(path, "no such file")
-            check_file_size(path, core_online.RLS_FILE_MAX, "an RLS model file (SARINS_RLS_FILE_MAX)")
-            state = core_online.RlsState.from_model_bytes(path.read_bytes())
-        except BudgetError as exc:
-            raise ModelFileError(path, exc.reason) from None
-        except OSError as exc:
-            raise ModelFileError(path, f"cannot be read: {exc.strerror or exc}") from None
-        except ModelFileError:
-            raise
+            state = core_online.RlsState.from_model_bytes(data)
         except ValueError as exc:
-            raise ModelFileError(path, str(exc)) from None
+            raise ModelFileError(source, str(exc)) from None
         rls = cls.__new__(cls)
         rls.settings = RLSSettings(state.forgetting_factor, state.time_scale)
         rls._state = state
         return rls
+
+    @classmethod
+    def _load_binary(cls, path: Path) -> "ForgettingRLS":
+        try:
+            check_file_size(path, core_online.RLS_FILE_MAX, "an RLS model file (SARINS_RLS_FILE_MAX)")
+            data = path.read_bytes()
+        except BudgetError as exc:
+            raise ModelFileError(path, exc.reason) from None
+        except OSError as exc:
+            raise ModelFileError(path, f"cannot be read: {exc.strerror or exc}") from None
+        return cls.from_binary(data, path)

@@ -4,7 +4,7 @@
  * The declaration (variables, descriptions, the timing contract) is fmus/drift_model_updater_slave.py.
  * The physics is the C core's, the code the library runs in process: Fig. 2's row logic (online.h), the
  * stop Kalman filter (stop_filter.h, filter.h) and the forgetting-factor RLS with its prior and its
- * binary model file (rls.h, modelfile.h).  This file pairs the time-tagged inputs into rows (the INS row
+ * binary model file (rls.h over the core's model-file reader netfile.h).  This file pairs the time-tagged inputs into rows (the INS row
  * tagged solution_time, else nav_time, with the vehicle speed tagged speed_time from the last 8 kept) and
  * publishes the outputs.  Units: s, m/s, rad, rad/s, degC.
  *
@@ -140,15 +140,17 @@ static int initial_model(const sarins_ctx *c, sarins_rls *rls)
         return SARINS_ERROR;
     }
     if (rls->forgetting_factor != lam || rls->time_scale != m) {
-        char file_lam[40], file_m[40], par_lam[40], par_m[40];
+        char file_lam[40], file_m[48], par_lam[40], par_m[40];
         sarins_format_number(file_lam, sizeof file_lam, rls->forgetting_factor);
-        if (rls->time_scale == 0.0)
-            snprintf(file_m, sizeof file_m, "update (no time scale),");
-        else
-            sarins_format_number(file_m, sizeof file_m, rls->time_scale);
+        if (rls->time_scale == 0.0) {
+            snprintf(file_m, sizeof file_m, "update (no time scale)");
+        } else {
+            sarins_format_number(file_m, sizeof file_m - 2, rls->time_scale);
+            strcat(file_m, " s");
+        }
         sarins_format_number(par_lam, sizeof par_lam, lam);
         sarins_format_number(par_m, sizeof par_m, m);
-        sarins_log(c, SARINS_ERROR, "model_file %s has forgetting factor %s per %s s; the parameters say %s per %s s",
+        sarins_log(c, SARINS_ERROR, "model_file %s has forgetting factor %s per %s; the parameters say %s per %s s",
                    path, file_lam, file_m, par_lam, par_m);
         return SARINS_ERROR;
     }
