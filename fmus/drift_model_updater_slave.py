@@ -1,15 +1,17 @@
-"""DriftModelUpdater FMU: seed 002's online update of the azimuth-drift model (Fig. 2)."""
+"""DriftModelUpdater FMU: seed 002's online update of the azimuth-drift model (Fig. 2).
 
-import math
+The declaration of the native DriftModelUpdater FMU: its variables, descriptions, start values and the
+timing contract.  ``fmus/native_fmu.py`` writes the model description and the C variable table from it;
+``fmus/c/drift_model_updater/model.c`` computes it on the C core's stop filter, forgetting-factor RLS and
+Fig. 2 row logic (``sarins_fmu/core/online.h``), which the library's
+:class:`~sarins_fmu.identify.online.OnlineDriftUpdater` runs in process.
+"""
 
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import (INPUT, NO_TAG, OUTPUT, PARAMETER, ParameterError, TaggedHistory, check_finite,
-                                check_step, declare, discard_on_error, guarded, same_time)
+from fmus.slave_support import INPUT, NO_TAG, OUTPUT, PARAMETER, declare
 from sarins_fmu.identify.axial import APPLY_LATENCY
-from sarins_fmu.identify.online import OnlineDriftUpdater, UpdaterSettings, prior_covariance
-from sarins_fmu.identify.rls import ForgettingRLS, RLSSettings
 from sarins_fmu.kalman import StopFilterSettings
 from sarins_fmu.units import DAY, DEG_TO_RAD, DPH_TO_RPS
 
@@ -45,12 +47,14 @@ class DriftModelUpdater(Fmi2Slave):
         "of latency is enough for any scheme (under Jacobi the INS reads the updater's output of the row before "
         "the interval it integrates). All outputs are state outputs (no direct feedthrough). The initial model "
         "is a0, b0, c0 with prior_points equivalent calibration points spread over prior_t_min..prior_t_max, or "
-        "the RLS state in model_file (JSON/npz of sarins_fmu.identify.rls.ForgettingRLS.save; its forgetting "
-        "settings must equal forgetting_factor and forgetting_time_scale); the outputs p_aa..p_cc (its inverse "
+        "the RLS state in model_file (the binary model file written by sarins_fmu.identify.rls.ForgettingRLS."
+        "export_binary('name.bin'), every byte described in sources/netfile.h and rls.h, read at initialisation; its "
+        "forgetting settings must equal forgetting_factor and forgetting_time_scale); the outputs p_aa..p_cc (its inverse "
         "information) and model_time (the time of its last update) with drift_a/b/c give the state back, so a "
         "next run can continue from it. last_stop_* describe the last finished stop (last_stop_used 1: it "
         "updated the model). Held between steps: the model and its RLS information, the filter, the stop "
-        "timer, the last speeds.")
+        "timer, the last speeds (all in the FMU state). The first doStep fixes the step: the filter's interval "
+        "is the communication step (a step other than 1 s rebuilds the filter and the initial model then).")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=6 * 3600.0, step_size=1.0)
 
     def __init__(self, **kwargs):
@@ -103,7 +107,8 @@ class DriftModelUpdater(Fmi2Slave):
         declare(self, "integer", "n_updates", OUTPUT, "model updates so far [1]", 0)
         declare(self, "integer", "n_resets", OUTPUT, "stops discarded as too short [1]", 0)
         declare(self, "string", "model_file", PARAMETER,
-                "initial RLS state (ForgettingRLS JSON/npz); empty: a0, b0, c0 and prior_*", "")
+                "initial RLS state (binary model file of ForgettingRLS.export_binary); empty: a0, b0, c0 and "
+                "prior_*", "")
         declare(self, "real", "solution_time", INPUT, "time tag of the INS inputs: INS solution_time [s]", NO_TAG)
         declare(self, "real", "speed_time", INPUT, "time tag of vehicle_speed [s]", NO_TAG)
         declare(self, "real", "row_time", OUTPUT, "tag (solution_time, else nav_time) of the last row processed [s]",
@@ -119,141 +124,7 @@ class DriftModelUpdater(Fmi2Slave):
                                  ("last_stop_drift_std", "rad/s; deg/h", "its filter standard deviation")):
             declare(self, "real", name, OUTPUT, f"last finished stop: {text} [{unit}]", 0.0)
         declare(self, "integer", "last_stop_used", OUTPUT, "last finished stop updated the model (1) or not [1]", 0)
-        self._core = None
-        self._step = None
-        self._last_tag = None
-        self._speeds = TaggedHistory("vehicle_speed", "speed_time")
-        self._start_time = 0.0
 
-    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
-        self._start_time = float(start_time)
-
-    def _make_core(self, dt=1.0):
-        names = ["a0", "b0", "c0", "prior_points", "prior_t_min", "prior_t_max", "start_day", "forgetting_factor",
-                 "forgetting_time_scale", "time_threshold", "speed_threshold", "kf_arw", "kf_vrw",
-                 "kf_velocity_meas_std", "kf_heading0_std", "latency"]
-        check_finite(self, names, positive=["prior_points", "forgetting_factor", "forgetting_time_scale",
-                                            "time_threshold", "speed_threshold", "kf_arw", "kf_vrw",
-                                            "kf_velocity_meas_std", "kf_heading0_std"],
-                     non_negative=["start_day", "latency"])
-        if not self.prior_t_max > self.prior_t_min:
-            raise ParameterError("prior_t_max must exceed prior_t_min")
-        try:
-            settings = RLSSettings(self.forgetting_factor, self.forgetting_time_scale)
-            rls = self._initial_model(settings)
-            kf = StopFilterSettings(arw=self.kf_arw, vrw=self.kf_vrw, velocity_meas_std=self.kf_velocity_meas_std,
-                                    heading0_std=self.kf_heading0_std)
-            upd = UpdaterSettings(self.time_threshold, self.speed_threshold)
-            return OnlineDriftUpdater(rls, self.lat, dt, kf, upd)
-        except ValueError as exc:
-            raise ParameterError(str(exc)) from None
-
-    def _initial_model(self, settings: RLSSettings) -> ForgettingRLS:
-        """The RLS state of model_file, else a0, b0, c0 worth prior_points calibration points."""
-        if not self.model_file:
-            p0 = prior_covariance(self.prior_points, self.prior_t_min, self.prior_t_max)
-            return ForgettingRLS([self.a0, self.b0, self.c0], p0, 0.0, settings)
-        try:
-            rls = ForgettingRLS.load(self.model_file)
-        except (ValueError, OSError) as exc:
-            raise ParameterError(f"parameter model_file = {self.model_file!r}: {exc}") from None
-        if rls.settings != settings:
-            raise ParameterError(f"model_file {self.model_file} has forgetting factor "
-                                 f"{rls.settings.forgetting_factor} per {rls.settings.time_scale} s; the parameters "
-                                 f"say {settings.forgetting_factor} per {settings.time_scale} s")
-        return rls
-
-    def enter_initialization_mode(self):
-        try:  # the initial outputs, for a host that reads them in Initialization Mode
-            self._core = self._make_core()
-            self._publish(float(self._core.compensation(self.temp_gyro_z)), NO_TAG)
-        except ValueError:  # a bad parameter is reported at exit_initialization_mode
-            self._core = None
-
-    @guarded
-    def exit_initialization_mode(self):
-        self._core = self._make_core()
-        self._last_tag = None
-        self._speeds = TaggedHistory("vehicle_speed", "speed_time")
-        if self.speed_time != NO_TAG:
-            self._speeds.push(self.speed_time, float(self.vehicle_speed))
-        self._publish(float(self._core.compensation(self.temp_gyro_z)), NO_TAG)
-
-    @guarded
     def do_step(self, current_time, step_size):
-        try:
-            first = self._step is None
-            self._step = check_step(self, step_size, self._step)
-            if first and step_size != self._core.dt:  # the filter's interval is the communication step
-                self._core = self._make_core(step_size)
-            inputs = [self.v_e, self.v_n, self.yaw, self.pitch, self.roll, self.temp_gyro_z, self.vehicle_speed,
-                      self.lat, self.nav_time]
-            if not all(math.isfinite(x) for x in inputs):
-                raise ValueError("an input (velocity, attitude, temperature, speed or nav_time) is NaN or infinite")
-            speed = self._vehicle_speed(step_size)
-            tag = self._row_tag(step_size)
-            if tag is None:
-                return True  # no new INS row
-            self._last_tag = tag
-            speed = speed(tag)
-            time = self.start_day * DAY + float(self.nav_time)
-            comp = self._core.step([time], [speed], [[self.v_e, self.v_n]],
-                                   [[self.yaw, self.pitch, self.roll]], [self.temp_gyro_z], [self.lat],
-                                   [int(self.ins_phase) == NAVIGATE and self.nav_time >= 0.0])
-        except ValueError as exc:
-            return discard_on_error(self, exc)
-        self.row_time = tag
-        self._publish(float(comp[0]), float(self.nav_time) + self.latency)
-        return True
-
-    def _vehicle_speed(self, step):
-        """Keep the speed just read; returns the speed of a row tag (tag -> m/s)."""
-        if self.speed_time == NO_TAG:
-            return lambda tag: float(self.vehicle_speed)
-        if self.solution_time == NO_TAG:
-            raise ValueError("vehicle_speed is tagged (speed_time is connected) but the INS rows are not: "
-                             "connect the INS's solution_time to pair each row with the speed of its time")
-        self._speeds.push(self.speed_time, float(self.vehicle_speed), step)
-        return lambda tag: self._speeds.at(tag, step)
-
-    def _row_tag(self, step):
-        """Tag of the INS row to process now, or None if it is no new row."""
-        tagged = self.solution_time != NO_TAG
-        tag = float(self.solution_time if tagged else self.nav_time)
-        last = self._last_tag
-        if tagged and tag <= self._start_time + 1e-6 * step:
-            return None  # the INS's initial outputs: no interval integrated yet
-        if last is not None and same_time(tag, last, step):
-            return None  # the same row again (Jacobi's first steps)
-        expected = (self._start_time + step) if (tagged and last is None) else (None if last is None else last + step)
-        if expected is not None and not same_time(tag, expected, step):
-            name = "solution_time" if tagged else "nav_time"
-            raise ValueError(f"INS row tagged {name}={tag:.9g} s where the row at {expected:.9g} s was due: rows "
-                             "must follow each other one step apart (none skipped or repeated)")
-        return tag
-
-    def _publish(self, compensation, apply_from):
-        core = self._core
-        self.drift_a, self.drift_b, self.drift_c = (float(x) for x in core.rls.parameters)
-        p = core.rls.covariance
-        for name, (i, j) in zip(P_UNITS, P_INDEX):
-            setattr(self, name, float(p[i, j]))
-        self.model_time = core.rls.time
-        self.compensation_drift = compensation
-        self.apply_from = apply_from
-        self.stopped = int(core.stopped)
-        self.stop_timer = core.timer
-        kf = core.filter
-        self.drift_estimate = kf.drift_estimate if core.stopped else 0.0
-        self.drift_estimate_std = kf.drift_std if core.stopped else 0.0
-        kinds = [e[1] for e in core.events]
-        self.n_updates = kinds.count("update")
-        self.n_resets = kinds.count("reset")
-        updates = [e for e in core.events if e[1] == "update"]
-        if updates:
-            self.last_update_temp, self.last_update_drift = float(updates[-1][3]), float(updates[-1][4])
-        if core.events:
-            time, kind, duration, temp, drift, std = core.events[-1]
-            self.last_stop_time, self.last_stop_duration, self.last_stop_temp = time, duration, temp
-            self.last_stop_drift, self.last_stop_drift_std = drift, std
-            self.last_stop_used = int(kind == "update")
+        raise NotImplementedError("the DriftModelUpdater FMU is native: fmus/c/drift_model_updater/model.c computes "
+                                  "it (this class only declares its variables)")

@@ -83,6 +83,7 @@ NATIVE = {
     "IMUThermal": NativeModel("imu_thermal"),
     "RBFIdentifier": NativeModel("rbf_identifier", resources=identifier_resources),
     "IMUCompensator": NativeModel("imu_compensator"),  # its model: fmus.compensator_export
+    "DriftModelUpdater": NativeModel("drift_model_updater"),
 }
 
 # setup.py's flags (sarins_fmu core) plus hidden visibility: only the fmi2* functions are exported.  No

@@ -56,6 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import earth
+from .core import online as core_online
 from .core._arrays import read, written
 from .core._lib import function
 from .imu import ImuModel
@@ -135,6 +136,11 @@ class StopFilterSettings:
                          self.drift_rw, self.bias_rw, self.bias_rw, 0.0]) ** 2
 
 
+def settings_array(settings: StopFilterSettings) -> np.ndarray:
+    """The settings as the C core's array (``stop_filter.h``; :data:`sarins_fmu.core.online.STOP_SETTINGS`)."""
+    return np.array([float(getattr(settings, name)) for name in core_online.STOP_SETTINGS])
+
+
 _stop_steps = function("sarins_stop_filter_steps", None, ctypes.c_int64, ctypes.c_void_p, ctypes.c_void_p,
                        ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_void_p,
                        ctypes.c_double, ctypes.c_void_p)
@@ -184,8 +190,9 @@ def check_stop_arguments(lat: float, dt: float, history_limit: int) -> None:
 
 
 class StopRecord:
-    """What a stop filter keeps of a stop besides its state: the timer, the running means of the INS's
-    compensation and the azimuth gyro's temperature, and the first ``history_limit`` estimate rows.
+    """What a stop filter written in Python (the indexed stop's) keeps of a stop besides its state: the
+    timer, the running means of the INS's compensation and the azimuth gyro's temperature, and the first
+    ``history_limit`` estimate rows.
 
     A filter sets ``x`` (state), ``p`` (covariance), ``dt`` (s), ``history_limit`` and the class
     attribute ``eps_index`` (where the azimuth drift sits in ``x``), calls :meth:`_clear_record` on
@@ -245,8 +252,11 @@ class StopRecord:
         return np.column_stack([t, h])
 
 
-class StopKalmanFilter(StopRecord):
+class StopKalmanFilter:
     """The stop filter of seed 002 (eqs 4-6) on the outputs of a free INS.
+
+    Its state, covariance and record of the stop live in the C core's ``sarins_stop_kf`` struct
+    (``sarins_fmu/core/stop_filter.h``): the code the DriftModelUpdater FMU runs.
 
     Parameters
     ----------
@@ -262,8 +272,7 @@ class StopKalmanFilter(StopRecord):
 
     Attributes
     ----------
-    elapsed : float
-        Time since the last reset, s.
+    x : (11,) state estimate; p : (11, 11) covariance (views of the C struct).
     history : list of (K, 2) arrays
         ε_z estimate and its standard deviation after each step, rad/s, the
         first ``history_limit`` steps of the stop.
@@ -274,20 +283,31 @@ class StopKalmanFilter(StopRecord):
     def __init__(self, lat: float, settings: StopFilterSettings = StopFilterSettings(), dt: float = 1.0,
                  history_limit: int = 0):
         check_stop_arguments(lat, dt, history_limit)
-        self.lat, self.settings, self.dt = float(lat), settings, float(dt)
-        self.history_limit = int(history_limit)
-        self._q = settings.process_noise()
-        self._r = settings.velocity_meas_std**2
-        self.reset()
+        self.settings, self.history_limit = settings, int(history_limit)
+        self._state = core_online.StopKfState(settings_array(settings), float(lat), float(dt))
+        self.x, self.p = self._state.x, self._state.p
+        self._clear_history()
+
+    @property
+    def lat(self) -> float:
+        """Latitude of the stop, rad."""
+        return self._state.lat
+
+    @property
+    def dt(self) -> float:
+        """Measurement interval, s."""
+        return self._state.dt
+
+    def _clear_history(self) -> None:
+        self.history: list[np.ndarray] = []
+        self._history_rows = 0
 
     def reset(self, lat: float | None = None) -> None:
         """Restart the estimation (new stop): state 0, covariance P0, timer 0."""
         if lat is not None:
             check_stop_arguments(lat, self.dt, self.history_limit)
-            self.lat = float(lat)
-        self.x = np.zeros(N_STATES)
-        self.p = self.settings.initial_covariance()
-        self._clear_record()
+        self._state.reset(self.lat if lat is None else float(lat))
+        self._clear_history()
 
     def step(self, velocity_en, attitude, axial_correction=0.0, temperature=np.nan) -> np.ndarray:
         """Process K INS output rows taken at the stop.
@@ -311,8 +331,43 @@ class StopKalmanFilter(StopRecord):
         n = vel.shape[0]
         corr = np.broadcast_to(np.asarray(axial_correction, float), (n,))
         temp = np.broadcast_to(np.asarray(temperature, float), (n,))
-        if not (np.isfinite(vel).all() and np.isfinite(att).all() and np.isfinite(corr).all()):
-            raise ValueError("INS outputs contain NaN or infinity")
-        out = stop_filter_steps(self.x, self.p, vel, att, self.lat, self.dt, self._q, self._r)
-        self._record(out, corr, temp)
+        out = self._state.steps(vel, att, corr, temp)  # refuses a NaN or infinite INS output or correction
+        room = self.history_limit - self._history_rows
+        if room > 0:  # bounded: a parked vehicle's stop may last months
+            self.history.append(out[:room].copy())
+            self._history_rows += min(room, n)
         return out
+
+    @property
+    def elapsed(self) -> float:
+        """Time since the last reset, s."""
+        return self._state.elapsed()
+
+    @property
+    def residual_drift(self) -> float:
+        """Estimated azimuth drift left after the INS's compensation, rad/s."""
+        return float(self.x[EPS_Z])
+
+    @property
+    def drift_std(self) -> float:
+        """Filter standard deviation of the azimuth drift, rad/s."""
+        return self._state.drift_std()
+
+    @property
+    def drift_estimate(self) -> float:
+        """The stop's drift measurement ε_U: mean compensation + residual, rad/s."""
+        return self._state.drift_estimate()
+
+    @property
+    def mean_temperature(self) -> float:
+        """Mean azimuth gyro temperature over the stop (T_gz), °C; NaN if not given."""
+        return self._state.mean_temperature()
+
+    def convergence(self) -> np.ndarray:
+        """(K, 3): time since reset (s), ε_z residual estimate and std (rad/s),
+        the first ``history_limit`` steps of the stop."""
+        if not self.history:
+            return np.empty((0, 3))
+        h = np.concatenate(self.history)
+        t = np.arange(1, h.shape[0] + 1) * self.dt
+        return np.column_stack([t, h])

@@ -196,10 +196,10 @@ def test_fmu_runs_in_a_host_without_this_project(fmu_dir, tmp_path):
                          record=("lat", "nav_time"))
         assert rows[-1][1] > 0 and abs(rows[-1][0] - 0.4925668) < 1e-3, rows[-1]
         from fmu_driver import Slave  # the chain is native (no Python); a Python-hosted FMU brings its library
-        updater = Slave(Path({str(fmu_dir)!r}) / "DriftModelUpdater.fmu", "updater")
-        updater.fmu.enterInitializationMode()
-        updater.fmu.exitInitializationMode()
-        updater.free()
+        vehicle = Slave(Path({str(fmu_dir)!r}) / "VehicleMotion.fmu", "vehicle")
+        vehicle.fmu.enterInitializationMode()
+        vehicle.fmu.exitInitializationMode()
+        vehicle.free()
         assert "sarins_fmu" not in sys.modules  # the FMUs run their own copy, under its own name
         shipped = [m for name, m in sys.modules.items() if name.endswith(".sarins_fmu")]
         assert shipped and "sarins-fmu" in shipped[0].__file__, shipped
@@ -255,10 +255,10 @@ def test_model_description_states_the_requirements(fmu_dir):
 
     from fmpy import read_model_description
 
-    md = read_model_description(str(fmu_dir / "DriftModelUpdater.fmu"))
+    md = read_model_description(str(fmu_dir / "VehicleMotion.fmu"))  # a Python-hosted FMU
     assert md.coSimulation.needsExecutionTool is True
     assert "sarins-fmi" in md.generationTool and "PythonFMU" in md.generationTool
-    with zipfile.ZipFile(fmu_dir / "DriftModelUpdater.fmu") as z:
+    with zipfile.ZipFile(fmu_dir / "VehicleMotion.fmu") as z:
         doc = z.read("documentation/index.html").decode()
         assert not any(n.startswith("binaries/win64") for n in z.namelist())
     assert "CPython 3." in doc and "SARINS_FMU_PYTHON" in doc and "Linux x86-64" in doc

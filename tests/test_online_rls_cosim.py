@@ -87,7 +87,7 @@ def test_a_session_is_the_same_under_every_engine(fmu_dir, tmp_path):
     assert [e[1] for e in ref.events] == ["update"]
     n = len(ref_rows)
     engine = CosimEngine(fmu_dir)
-    system = engine.session_system(run, updater(), updater().rls.save(tmp_path / "rls.json"))
+    system = engine.session_system(run, updater(), updater().rls.export_binary(tmp_path / "rls.bin"))
     record = ["ins." + v for v in ["solution_time", *NAV]] + ["updater.drift_a", "updater.drift_b", "updater.drift_c"]
     stop = n + 2.0  # Jacobi engines: the updater's row two steps behind
     runs = {}
@@ -200,14 +200,17 @@ def test_ins_applies_a_temperature_model_like_the_constant_it_evaluates_to(fmu_d
 
 
 def test_updater_model_file_errors_name_the_file(fmu_dir, tmp_path):
-    """A missing or corrupt model_file, or one with other forgetting settings than the parameters, is
-    an fmi2Error at the end of initialisation naming the file."""
+    """A missing or corrupt model_file, one in a format the native FMU does not read (JSON), or one with
+    other forgetting settings than the parameters, is an fmi2Error at the end of initialisation naming
+    the file."""
     from fmu_driver import check_parameter_error
     from sarins_fmu.identify.rls import ForgettingRLS, RLSSettings
 
     path = fmu_dir / "DriftModelUpdater.fmu"
-    check_parameter_error(path, {"model_file": str(tmp_path / "missing.json")}, "missing.json")
-    (tmp_path / "bad.json").write_text("{not json")
-    check_parameter_error(path, {"model_file": str(tmp_path / "bad.json")}, "bad.json")
-    other = ForgettingRLS([0.0, 0.0, 1e-8], np.eye(3), 0.0, RLSSettings(0.5)).save(tmp_path / "lam.json")
+    check_parameter_error(path, {"model_file": str(tmp_path / "missing.bin")}, "missing.bin")
+    (tmp_path / "bad.bin").write_bytes(b"SARNET\0\1" + bytes(200))
+    check_parameter_error(path, {"model_file": str(tmp_path / "bad.bin")}, "bad.bin")
+    json_file = ForgettingRLS([0.0, 0.0, 1e-8], np.eye(3), 0.0, RLSSettings(0.8)).save(tmp_path / "rls.json")
+    check_parameter_error(path, {"model_file": str(json_file)}, "not a sarins binary model file")
+    other = ForgettingRLS([0.0, 0.0, 1e-8], np.eye(3), 0.0, RLSSettings(0.5)).export_binary(tmp_path / "lam.bin")
     check_parameter_error(path, {"model_file": str(other)}, "forgetting factor 0.5")

@@ -8,8 +8,9 @@ in-process engine (:class:`~sarins_fmu.experiments.online_rls_vehicle.InProcessE
 so the two give the same numbers bit for bit.
 
 Between sessions (different days) the updater's state travels as plain
-data: the RLS state is written to a JSON model file the next session's
-DriftModelUpdater starts from (``model_file``), and read back from its
+data: the RLS state is written to a binary model file (``.bin``, read by
+the native FMU without any library) the next session's DriftModelUpdater
+starts from (``model_file``), and read back from its
 outputs (model, inverse information, time of the last update); each
 finished stop is read from its ``last_stop_*`` outputs.  What stays in
 process for every engine: the day-0 calibration (static stop-filter runs),
@@ -122,7 +123,7 @@ class CosimEngine:
                                           "n_resets", "stopped", *LAST_STOP, "last_stop_used"]]
         names += ["ins." + n for n in ["solution_time", *NAV]]
         with tempfile.TemporaryDirectory(prefix="sarins_online_rls_") as tmp:
-            system = self.session_system(run, updater, updater.rls.save(Path(tmp) / "rls.json"), latency)
+            system = self.session_system(run, updater, updater.rls.export_binary(Path(tmp) / "rls.bin"), latency)
             res = self._simulate(system, traj.n_steps * run.step, run.step, names)
         if res["updater.stopped"][-1]:
             raise ValueError("a session must end moving (the stop in progress would be lost between sessions)")

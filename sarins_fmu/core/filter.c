@@ -4,32 +4,10 @@
 
 
 #include "earth.h"
+#include "matrix.h"
 #include "rotations.h"
 
 #define MAXN SARINS_FILTER_MAX_STATES
-
-void sarins_matmul(int n, const double *a, const double *b, double *c)
-{
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < n; j++) {
-            double s = 0.0;
-            for (int k = 0; k < n; k++)
-                s += a[n * i + k] * b[n * k + j];
-            c[n * i + j] = s;
-        }
-}
-
-/* c = a b' */
-static void matmul_bt(int n, const double *a, const double *b, double *c)
-{
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < n; j++) {
-            double s = 0.0;
-            for (int k = 0; k < n; k++)
-                s += a[n * i + k] * b[n * j + k];
-            c[n * i + j] = s;
-        }
-}
 
 void sarins_filter_propagate(int n, double *x, double *p, const double *phi, const double *q_diag, double dt)
 {
@@ -47,7 +25,7 @@ void sarins_filter_propagate(int n, double *x, double *p, const double *phi, con
         x[i] = xn[i];
     /* P = (Phi P) Phi' + diag(q) dt */
     sarins_matmul(n, phi, p, tmp);
-    matmul_bt(n, tmp, phi, p);
+    sarins_matmul_bt(n, tmp, phi, p);
     for (int i = 0; i < n; i++)
         p[n * i + i] += q_diag[i] * dt;
 }

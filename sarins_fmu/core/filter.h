@@ -11,6 +11,8 @@
 
 #include <stdint.h>
 
+#include "matrix.h" /* sarins_matmul and the other small-matrix helpers */
+
 #define SARINS_FILTER_MAX_STATES 11
 
 /* x = Phi x ; P = Phi P Phi' + diag(q) dt   (q: continuous noise densities, dt s) */
@@ -35,8 +37,5 @@ void sarins_filter_velocity_update(int n, double *x, double *p, double r_var, do
 #define SARINS_STOP_EPS_Z 7
 void sarins_stop_filter_steps(int64_t k, double *x, double *p, const double *velocity_en, const double *attitude,
                               double lat, double dt, const double *q_diag, double r_var, double *out);
-
-/* c = a b for n x n row-major matrices (plain loop, sums in index order) */
-void sarins_matmul(int n, const double *a, const double *b, double *c);
 
 #endif

@@ -50,9 +50,10 @@ enum {
     SARINS_NET_KIND_LSTM = 5,
     SARINS_NET_KIND_GRU = 6,
     SARINS_NET_KIND_LSTM3 = 7,
-    SARINS_NET_KIND_GRU3 = 8
+    SARINS_NET_KIND_GRU3 = 8,
+    SARINS_NET_KIND_RLS = 9          /* seed 002 forgetting-factor RLS of the azimuth drift model [rls] (rls.h) */
 };
-#define SARINS_NET_KIND_LAST 8
+#define SARINS_NET_KIND_LAST 9
 
 enum {
     SARINS_NETFILE_OK = 0,

@@ -45,4 +45,10 @@ int sarins_core_abi(void);
 #include "nets.h"
 #include "netmodel.h"
 
+/* seed 002's online model update: the stop filter, the forgetting-factor RLS, Fig. 2's logic */
+#include "matrix.h"
+#include "stop_filter.h"
+#include "rls.h"
+#include "online.h"
+
 #endif

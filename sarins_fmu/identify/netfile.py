@@ -43,7 +43,7 @@ MAX_ARRAYS = 64
 MAX_BYTES = 64 << 20
 MAX_ELEMENTS = 1 << 23
 SUFFIX = ".bin"  # the file name ending the tools use for this format
-KINDS = {"axial_rbf": 1, "traditional": 2, "rbf": 3, "grnn": 4, "lstm": 5, "gru": 6, "lstm3": 7, "gru3": 8}
+KINDS = {"axial_rbf": 1, "traditional": 2, "rbf": 3, "grnn": 4, "lstm": 5, "gru": 6, "lstm3": 7, "gru3": 8, "rls": 9}
 _NAME = re.compile(r"[a-z0-9_.]{1,31}")
 _FNV_OFFSET, _FNV_PRIME, _MASK = 0xCBF29CE484222325, 0x100000001B3, (1 << 64) - 1
 

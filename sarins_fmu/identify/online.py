@@ -16,6 +16,10 @@ the vehicle's speed and the free INS's outputs:
 4. at every row the **compensation drift** is the current model at the
    current temperature, ε(T) = a T² + b T + c, which the INS subtracts.
 
+The row logic, the stop filter and the RLS run in the C core
+(``sarins_fmu/core/online.h``, ``stop_filter.h``, ``rls.h``): the code the
+DriftModelUpdater FMU runs row by row, so the two agree bit for bit.
+
 Units: s, m/s, rad, rad/s, °C.
 """
 
@@ -26,8 +30,9 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ..core import online as core_online
 from ..kalman import STOP_TIME_THRESHOLD, StopFilterSettings, StopKalmanFilter
-from .rls import ForgettingRLS, quadratic_regressors
+from .rls import ForgettingRLS
 
 EVENT_DTYPE = np.dtype([("time", float), ("kind", "U6"), ("duration", float), ("temperature", float),
                         ("drift", float), ("drift_std", float)])
@@ -35,13 +40,9 @@ EVENT_DTYPE = np.dtype([("time", float), ("kind", "U6"), ("duration", float), ("
 
 def prior_covariance(points: float = 11.0, t_min: float = 0.0, t_max: float = 50.0) -> np.ndarray:
     """P0 of an initial model worth ``points`` calibration points spread evenly
-    over ``t_min``..``t_max`` °C: (Σ w h h')^-1 with 11 nodes of weight points/11."""
-    if not (math.isfinite(points) and points > 0 and math.isfinite(t_min) and math.isfinite(t_max)
-            and t_max > t_min):
-        raise ValueError("prior points must be positive and t_max > t_min")
-    h = quadratic_regressors(np.linspace(t_min, t_max, 11))
-    p0 = np.linalg.inv(h.T @ h * (points / 11.0))
-    return 0.5 * (p0 + p0.T)
+    over ``t_min``..``t_max`` °C: (Σ w h h')^-1 with 11 nodes of weight points/11
+    (the C core's ``sarins_rls_prior_covariance``, Cholesky inverse, symmetrized)."""
+    return core_online.prior_covariance(points, t_min, t_max)
 
 
 @dataclass(frozen=True)
@@ -83,7 +84,7 @@ class OnlineDriftUpdater:
     Attributes
     ----------
     stopped : bool
-        The vehicle is in a stop being estimated.
+        The vehicle is in a stop being estimated (the C core's flag).
     timer : float
         Estimation time of the current stop, s.
     events : list of tuples
@@ -96,8 +97,13 @@ class OnlineDriftUpdater:
         self.rls, self.settings = rls, settings
         self.filter = StopKalmanFilter(lat, filter_settings, dt)
         self.dt = float(dt)
-        self.stopped = False
+        self._state = core_online.OnlineState(settings.time_threshold, settings.speed_threshold)
         self.events: list[tuple] = []
+
+    @property
+    def stopped(self) -> bool:
+        """The vehicle is in a stop being estimated."""
+        return self._state.stopped
 
     @property
     def timer(self) -> float:
@@ -120,51 +126,32 @@ class OnlineDriftUpdater:
             treated as moving).
 
         The compensation of a row is computed with the model after an
-        update triggered at that row (the first moving row after a stop).  Work is done per block of rows of
-        equal state (one filter call per stop block), not per row.
+        update triggered at that row (the first moving row after a stop).
+        The rows run through the C core's ``sarins_online_rows`` (one call);
+        ValueError if a row is refused (the rows before it are processed).
         """
         t = np.atleast_1d(np.asarray(time, float))
         n = t.size
-        spd = np.broadcast_to(np.asarray(speed, float), (n,))
         vel = np.atleast_2d(np.asarray(velocity_en, float)).reshape(n, 2)
         att = np.atleast_2d(np.asarray(attitude, float)).reshape(n, 3)
-        temp = np.broadcast_to(np.asarray(temperature, float), (n,))
-        act = np.broadcast_to(np.asarray(active, bool), (n,))
-        lats = None if lat is None else np.broadcast_to(np.asarray(lat, float), (n,))
-        for name, arr in (("time", t), ("speed", spd), ("temperature", temp)):
-            if not np.isfinite(arr).all():
-                raise ValueError(f"{name} contains NaN or infinity")
-        still = (np.abs(spd) < self.settings.speed_threshold) & act
-        comp = np.empty(n)
-        edges = np.flatnonzero(np.diff(still.astype(np.int8))) + 1
-        for k0, k1 in zip(np.concatenate([[0], edges]), np.concatenate([edges, [n]])):
-            if not still[k0] and self.stopped:  # the vehicle moves off at row k0
-                self.finish_stop(float(t[k0]))
-            comp[k0:k1] = self.compensation(temp[k0:k1])
-            if still[k0]:
-                if not self.stopped:  # a stop begins: reset the filter, start the timer
-                    self.filter.reset(None if lats is None else float(lats[k0]))
-                    self.stopped = True
-                self.filter.step(vel[k0:k1], att[k0:k1], comp[k0:k1], temp[k0:k1])
+        comp, events, why = self._state.rows(self.rls._state, self.filter._state, t, speed, vel, att, temperature,
+                                             lat, active)
+        self._record(events)
+        if why is not None:
+            raise ValueError(why)
         return comp
+
+    def _record(self, events: np.ndarray) -> None:
+        for e in events:
+            self.events.append((float(e["time"]), "update" if e["used"] else "reset", float(e["duration"]),
+                                float(e["temperature"]), float(e["drift"]), float(e["drift_std"])))
 
     def finish_stop(self, time: float) -> None:
         """The vehicle moves off at ``time`` (s): update the model if the stop
         lasted the threshold, else discard it; reset the filter and timer.
         :meth:`step` calls it at the first moving row; call it directly to
         get the updated compensation before the INS processes that row."""
-        if not self.stopped:
-            return
-        kf = self.filter
-        duration = kf.elapsed
-        record = (time, "", duration, kf.mean_temperature, kf.drift_estimate, kf.drift_std)
-        if duration >= self.settings.time_threshold - 1e-9:
-            self.rls.update(kf.mean_temperature, kf.drift_estimate, time)
-            self.events.append((record[0], "update", *record[2:]))
-        else:
-            self.events.append((record[0], "reset", *record[2:]))
-        kf.reset()
-        self.stopped = False
+        self._record(self._state.finish(self.rls._state, self.filter._state, float(time)))
 
     def event_table(self) -> np.ndarray:
         """Finished stops as a structured array (:data:`EVENT_DTYPE`)."""

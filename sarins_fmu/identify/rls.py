@@ -42,6 +42,12 @@ Initialisation
     covariance is :math:`\sigma_z^2 P` for drift-measurement noise
     :math:`\sigma_z`.
 
+Implementation
+    The recursion, the forgetting factor, the covariance checks and the
+    binary model file run in the C core (``sarins_fmu/core/rls.h``), the
+    same code the DriftModelUpdater FMU runs, so the library and the FMU
+    agree bit for bit; the batch fits stay here (numpy).
+
 Units
     Temperature in °C (the seed's model is in °C). The drift may be in any
     unit (rad/s inside the library, °/h at the edges); the coefficients carry
@@ -58,8 +64,11 @@ from pathlib import Path
 import numpy as np
 from scipy.linalg import solve_triangular
 
+from ..core import online as core_online
 from ..drift_model import drift_model_value
-from .modelfile import get_array, load_model_file, save_model_file
+from ..files import BudgetError, check_file_size
+from . import netfile
+from .modelfile import ModelFileError, get_array, load_model_file, save_model_file
 
 __all__ = [
     "MONTH",
@@ -182,23 +191,21 @@ def time_scaled_factor(forgetting_factor: float, dt: float, time_scale: float | 
     """
     if not np.isfinite(dt) or dt < 0.0:
         raise ValueError(f"time gap must be finite and >= 0 s, got {dt!r}")
-    if time_scale is None:
-        return float(forgetting_factor)
-    return float(forgetting_factor ** (dt / time_scale))
+    return core_online.rls_factor(forgetting_factor, dt, time_scale)
 
 
 def rls_update(
     x: np.ndarray, P: np.ndarray, h: np.ndarray, z: float, lam: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """One forgetting-factor RLS step (pure function).
+    """One forgetting-factor RLS step (pure function; the C core's ``sarins_rls_gain_step``).
 
     Parameters
     ----------
-    x : ndarray, shape (p,)
+    x : ndarray, shape (3,)
         Parameters before the step.
-    P : ndarray, shape (p, p)
+    P : ndarray, shape (3, 3)
         Inverse weighted information before the step.
-    h : ndarray, shape (p,)
+    h : ndarray, shape (3,)
         Regressor of the new measurement.
     z : float
         New measurement.
@@ -208,16 +215,9 @@ def rls_update(
     Returns
     -------
     x, P : ndarray
-        After the step.
+        After the step: K = P h / (lam + h' P h), x + K (z - h' x), (P - K (P h)') / lam symmetrized.
     """
-    ph = P @ h
-    # K = P h / (lam + h' P h)
-    k = ph / (lam + h @ ph)
-    # x = x + K (z - h' x)
-    x_new = x + k * (z - h @ x)
-    # P = (I - K h') P / lam
-    p_new = (P - np.outer(k, ph)) / lam
-    return x_new, 0.5 * (p_new + p_new.T)
+    return core_online.rls_gain_step(x, P, h, z, lam)
 
 
 def weighted_least_squares(
@@ -382,14 +382,7 @@ def _check_covariance(P: object) -> np.ndarray:
     p = np.asarray(P, dtype=float)
     if p.shape != (3, 3):
         raise ValueError(f"covariance must have shape (3, 3), got {p.shape}")
-    if not np.all(np.isfinite(p)):
-        raise ValueError("covariance holds NaN or infinity")
-    if not np.allclose(p, p.T, rtol=1e-9, atol=0.0):
-        raise ValueError("covariance is not symmetric")
-    try:
-        np.linalg.cholesky(p)
-    except np.linalg.LinAlgError:
-        raise ValueError("covariance is not positive definite") from None
+    core_online.check_covariance(p)  # finite, symmetric (1e-9), positive definite: the FMU's check
     return 0.5 * (p + p.T)
 
 
@@ -429,10 +422,22 @@ class ForgettingRLS:
         if not np.isfinite(time):
             raise ValueError(f"time must be finite, got {time!r}")
         self.settings = settings
-        self._x = x.copy()
-        self._P = _check_covariance(covariance)
-        self.time = float(time)
-        self.n_updates = 0
+        p = _check_covariance(covariance)
+        self._state = core_online.RlsState(x, p, float(time), settings.forgetting_factor, settings.time_scale)
+
+    @property
+    def time(self) -> float:
+        """Time of the last update (or of the initialisation), s."""
+        return self._state.time
+
+    @property
+    def n_updates(self) -> int:
+        """Updates since initialisation."""
+        return self._state.n_updates
+
+    @n_updates.setter
+    def n_updates(self, value: int) -> None:
+        self._state.n_updates = int(value)
 
     @classmethod
     def from_calibration(
@@ -464,15 +469,15 @@ class ForgettingRLS:
     @property
     def parameters(self) -> np.ndarray:
         """Current [a, b, c], shape (3,) (a copy)."""
-        return self._x.copy()
+        return self._state.x.copy()
 
     @property
     def covariance(self) -> np.ndarray:
         """Current inverse weighted information P, shape (3, 3) (a copy)."""
-        return self._P.copy()
+        return self._state.p.copy()
 
     def __repr__(self) -> str:
-        a, b, c = self._x
+        a, b, c = self._state.x
         return (
             f"ForgettingRLS(a={a:.6g}, b={b:.6g}, c={c:.6g}, "
             f"time={self.time:.6g} s, updates={self.n_updates})"
@@ -495,29 +500,20 @@ class ForgettingRLS:
         ndarray, shape (3,)
             Updated [a, b, c].
         """
-        values = np.array([temperature, drift, time], dtype=float)
-        if not np.all(np.isfinite(values)):
-            raise ValueError("temperature, drift and time must be finite")
-        if time < self.time:
-            raise ValueError(f"update at {time} s is earlier than the state time {self.time} s")
-        lam = time_scaled_factor(self.settings.forgetting_factor, time - self.time, self.settings.time_scale)
-        h = quadratic_regressors(temperature)[0]
-        self._x, self._P = rls_update(self._x, self._P, h, float(drift), lam)
-        self.time = float(time)
-        self.n_updates += 1
+        self._state.update(temperature, drift, time)  # the C core's sarins_rls_update (checks, eqs 15-18)
         return self.parameters
 
     def predict(self, temperature: object) -> np.ndarray:
         """Model drift at ``temperature`` (°C), same shape as the input."""
         t = np.asarray(temperature, dtype=float)
-        return _evaluate(self._x, t)
+        return _evaluate(self._state.x, t)
 
     # ------------------------------------------------------------ plain data
     def to_dict(self) -> dict:
         """State as plain JSON-ready data."""
         return {
-            "parameters": self._x.tolist(),
-            "covariance": self._P.tolist(),
+            "parameters": self.parameters.tolist(),
+            "covariance": self.covariance.tolist(),
             "time": self.time,
             "n_updates": self.n_updates,
             "settings": asdict(self.settings),
@@ -546,12 +542,33 @@ class ForgettingRLS:
         """Write the state as a JSON model file (or npz for ``.npz``)."""
         state = self.to_dict()
         meta = {k: state[k] for k in ("time", "n_updates", "settings")}
-        arrays = {"parameters": self._x, "covariance": self._P}
+        arrays = {"parameters": self.parameters, "covariance": self.covariance}
         return save_model_file(path, FORMAT_TAG, FORMAT_VERSION, meta, arrays)
+
+    def binary_arrays(self) -> dict:
+        """The arrays of the binary model file (kind ``rls``, ``sarins_fmu/core/rls.h``): parameters,
+        covariance, time, n_updates, forgetting_factor, time_scale (0: per update)."""
+        m = self.settings.time_scale
+        return {"parameters": self.parameters, "covariance": self.covariance, "time": np.float64(self.time),
+                "n_updates": np.float64(self.n_updates),
+                "forgetting_factor": np.float64(self.settings.forgetting_factor),
+                "time_scale": np.float64(0.0 if m is None else m)}
+
+    def binary(self) -> bytes:
+        """The state as a binary model file's bytes (what the DriftModelUpdater FMU's ``model_file`` reads)."""
+        return netfile.to_bytes("rls", self.binary_arrays())
+
+    def export_binary(self, path: str | Path) -> Path:
+        """Write :meth:`binary` to ``path`` (suffix ``.bin`` by convention); returns it."""
+        return netfile.write(path, "rls", self.binary_arrays())
 
     @classmethod
     def load(cls, path: str | Path) -> "ForgettingRLS":
-        """Read a state written by :meth:`save`; a bad file raises ``ModelFileError``."""
+        """Read a state written by :meth:`save` or :meth:`export_binary` (told apart by the binary file's
+        magic); a bad file raises ``ModelFileError``.  A binary file is read by the C core's reader, the
+        FMU's (``sarins_rls_from_model``, at most 4096 bytes)."""
+        if netfile.is_netfile(path):
+            return cls._load_binary(Path(path))
 
         def build(meta: dict, arrays: dict) -> "ForgettingRLS":
             state = dict(meta)
@@ -560,3 +577,27 @@ class ForgettingRLS:
             return cls.from_dict(state)
 
         return load_model_file(path, FORMAT_TAG, {FORMAT_VERSION}, build)
+
+    @classmethod
+    def from_binary(cls, data: bytes, source="<bytes>") -> "ForgettingRLS":
+        """The state in a binary model file's bytes (``sarins_rls_from_model``); ModelFileError naming
+        ``source`` and the reason."""
+        try:
+            state = core_online.RlsState.from_model_bytes(data)
+        except ValueError as exc:
+            raise ModelFileError(source, str(exc)) from None
+        rls = cls.__new__(cls)
+        rls.settings = RLSSettings(state.forgetting_factor, state.time_scale)
+        rls._state = state
+        return rls
+
+    @classmethod
+    def _load_binary(cls, path: Path) -> "ForgettingRLS":
+        try:
+            check_file_size(path, core_online.RLS_FILE_MAX, "an RLS model file (SARINS_RLS_FILE_MAX)")
+            data = path.read_bytes()
+        except BudgetError as exc:
+            raise ModelFileError(path, exc.reason) from None
+        except OSError as exc:
+            raise ModelFileError(path, f"cannot be read: {exc.strerror or exc}") from None
+        return cls.from_binary(data, path)
