@@ -24,7 +24,7 @@ def fmus(tmp_path_factory):
 @pytest.fixture(scope="module")
 def log_file(tmp_path_factory):
     chunks = []
-    run_static(imu="mems", align_hours=ALIGN / 3600, nav_hours=NAV / 3600, seed=2,
+    run_static(imu="nav-rlg", align_hours=ALIGN / 3600, nav_hours=NAV / 3600, seed=2,
                on_increments=lambda *c: chunks.append(c))
     cols = [np.concatenate([c[j] for c in chunks]) for j in range(4)]
     return write_log(tmp_path_factory.mktemp("log") / "run.npz", *cols[:3], temps=cols[3], lat_deg=28.222)
