@@ -11,6 +11,7 @@ import pytest
 
 from sarins_fmu import earth, rotations
 from sarins_fmu.core import online as core
+from sarins_fmu.core.smath import evaluate
 from sarins_fmu.identify.online import OnlineDriftUpdater, UpdaterSettings, prior_covariance
 from sarins_fmu.identify.rls import ForgettingRLS, RLSSettings, forgetting_least_squares, quadratic_regressors
 from sarins_fmu.kalman import EPS_Z, StopFilterSettings, StopKalmanFilter
@@ -21,6 +22,11 @@ DAY = 86400.0
 
 
 # ------------------------------------------------------------------------------------------ the RLS
+def _pow(x: float, y: float) -> float:
+    """x ** y as the core computes it (sm_pow, smath.h)."""
+    return float(evaluate("pow", x, y)[0])
+
+
 def _dot(a, b) -> float:
     """sum a_i b_i from 0.0 in index order (the core's order)."""
     s = 0.0
@@ -57,7 +63,7 @@ def test_rls_equals_plain_python_bit_for_bit_on_random_sequences(forgetting, tim
         temp = float(rng.uniform(0.0, 50.0))
         drift = float((x0[0] * temp + x0[1]) * temp + x0[2] + 1e-9 * rng.standard_normal())
         t_new = t + gap
-        lam = forgetting if time_scale is None else forgetting ** ((t_new - t) / time_scale)  # eq. 15
+        lam = forgetting if time_scale is None else _pow(forgetting, (t_new - t) / time_scale)  # eq. 15
         x, p = _reference_update(x, p, temp, drift, lam)
         t = t_new
         rls.update(temp, drift, t)

@@ -23,7 +23,7 @@ from sarins_fmu.identify.rls import ForgettingRLS, RLSSettings
 ROOT = Path(__file__).resolve().parents[1]
 CORE = ROOT / "sarins_fmu" / "core"
 HARNESS = ROOT / "tests" / "fuzz" / "fuzz_rls_model.c"
-CORE_FILES = [CORE / f for f in ("rls.c", "netfile.c", "matrix.c", "report.c")]
+CORE_FILES = [CORE / f for f in ("rls.c", "netfile.c", "matrix.c", "report.c", "smath.c")]
 NO_CHECKSUM = "-DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION"
 
 
@@ -114,7 +114,7 @@ def test_harness_under_sanitizers_on_mutated_files(tmp_path):
     accepted model that fails the state check, before or after an update)."""
     exe = tmp_path / "fuzz_main"
     subprocess.run([_cc(), "-std=c11", "-g", "-O1", "-fsanitize=address,undefined", "-fno-sanitize-recover=all",
-                    "-DSARINS_FUZZ_MAIN", NO_CHECKSUM, f"-I{CORE}", str(HARNESS), *map(str, CORE_FILES), "-lm",
+                    "-DSARINS_FUZZ_MAIN", NO_CHECKSUM, f"-I{CORE}", str(HARNESS), *map(str, CORE_FILES),
                     "-o", str(exe)], check=True)
     corpus = tmp_path / "corpus"
     corpus.mkdir()
@@ -145,7 +145,7 @@ def test_libfuzzer_finds_nothing_in_a_minute(tmp_path):
     exe = tmp_path / "fuzz"
     subprocess.run([clang, "-std=c11", "-g", "-O1", "-fsanitize=fuzzer,address,undefined",
                     "-fno-sanitize-recover=all", NO_CHECKSUM, f"-I{CORE}", str(HARNESS), *map(str, CORE_FILES),
-                    "-lm", "-o", str(exe)], check=True)
+                    "-o", str(exe)], check=True)
     corpus = tmp_path / "corpus"
     corpus.mkdir()
     for k, data in enumerate(_valid_files()):

@@ -1,6 +1,7 @@
+#include "smath.h"
+
 #include "matrix.h"
 
-#include <math.h>
 
 void sarins_matmul(int n, const double *a, const double *b, double *c)
 {
@@ -57,7 +58,7 @@ int sarins_cholesky(int n, const double *a, double *l)
             d -= l[n * j + k] * l[n * j + k];
         if (!(d > 0.0) || !isfinite(d))
             return -1;
-        double ljj = sqrt(d);
+        double ljj = sm_sqrt(d);
         l[n * j + j] = ljj;
         /* l_ij = (a_ij - sum_k<j l_ik l_jk) / l_jj, i > j */
         for (int i = j + 1; i < n; i++) {

@@ -1,3 +1,6 @@
+#if defined(_MSC_VER) && !defined(_CRT_SECURE_NO_WARNINGS)
+#define _CRT_SECURE_NO_WARNINGS /* fopen and fread are the portable C11 calls; MSVC's /W4 would flag them */
+#endif
 /* Binary model files: the container reader (netfile.h has the layout). */
 #include "smath.h"
 

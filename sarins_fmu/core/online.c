@@ -1,6 +1,7 @@
+#include "smath.h"
+
 #include "online.h"
 
-#include <math.h>
 #include <stddef.h>
 
 #include "report.h"
@@ -75,7 +76,7 @@ int sarins_online_rows(sarins_online *u, sarins_rls *rls, sarins_stop_kf *kf, in
             if (!isfinite(columns[c][s]))
                 return sarins_fail(&r, SARINS_ONLINE_BAD, "%s contains NaN or infinity", NAMES[c]);
     for (int64_t s = 0; s < k; s++) {
-        int still = fabs(speed[s]) < u->speed_threshold && (active == NULL || active[s]);
+        int still = sm_fabs(speed[s]) < u->speed_threshold && (active == NULL || active[s]);
         if (!still && u->stopped) {
             int finished;
             if (sarins_online_finish(u, rls, kf, time[s], events + *n_events, &finished, msg, size)

@@ -1,9 +1,10 @@
 #if defined(_MSC_VER) && !defined(_CRT_SECURE_NO_WARNINGS)
 #define _CRT_SECURE_NO_WARNINGS /* fopen and fread are the portable C11 calls; MSVC's /W4 would flag them */
 #endif
+#include "smath.h"
+
 #include "rls.h"
 
-#include <math.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <string.h>
@@ -18,7 +19,7 @@ double sarins_rls_factor(double forgetting_factor, double dt, double time_scale)
 {
     if (time_scale == 0.0)
         return forgetting_factor;
-    return pow(forgetting_factor, dt / time_scale);
+    return sm_pow(forgetting_factor, dt / time_scale);
 }
 
 void sarins_rls_gain_step(double *x, double *p, const double *h, double z, double lam)
@@ -56,7 +57,7 @@ int sarins_rls_check_covariance(const double *p, char *msg, size_t size)
             return sarins_fail(&r, SARINS_RLS_BAD, "covariance holds NaN or infinity");
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
-            if (!(fabs(p[3 * i + j] - p[3 * j + i]) <= 1e-9 * fabs(p[3 * j + i])))
+            if (!(sm_fabs(p[3 * i + j] - p[3 * j + i]) <= 1e-9 * sm_fabs(p[3 * j + i])))
                 return sarins_fail(&r, SARINS_RLS_BAD, "covariance is not symmetric");
     if (sarins_cholesky(3, p, l) != 0)
         return sarins_fail(&r, SARINS_RLS_BAD, "covariance is not positive definite");

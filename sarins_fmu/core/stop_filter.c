@@ -1,6 +1,7 @@
+#include "smath.h"
+
 #include "stop_filter.h"
 
-#include <math.h>
 #include <stddef.h>
 
 #include "earth.h"
@@ -51,7 +52,7 @@ int sarins_stop_check_lat_dt(double lat, double dt, char *msg, size_t size)
 {
     report r = sarins_report(msg, size);
     char text[40];
-    if (!(isfinite(lat) && fabs(lat) <= SARINS_STOP_LAT_LIMIT)) {
+    if (!(isfinite(lat) && sm_fabs(lat) <= SARINS_STOP_LAT_LIMIT)) {
         sarins_format_number(text, sizeof text, lat);
         return sarins_fail(&r, SARINS_STOP_BAD, "latitude must be finite and within +-89.9 deg, got %s rad", text);
     }
@@ -140,7 +141,7 @@ double sarins_stop_kf_residual(const sarins_stop_kf *kf) { return kf->x[SARINS_S
 
 double sarins_stop_kf_drift_std(const sarins_stop_kf *kf)
 {
-    return sqrt(kf->p[N * SARINS_STOP_EPS_Z + SARINS_STOP_EPS_Z]);
+    return sm_sqrt(kf->p[N * SARINS_STOP_EPS_Z + SARINS_STOP_EPS_Z]);
 }
 
 double sarins_stop_kf_drift_estimate(const sarins_stop_kf *kf)

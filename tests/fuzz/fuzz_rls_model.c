@@ -9,7 +9,7 @@
  *   clang -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
  *       -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION -Isarins_fmu/core tests/fuzz/fuzz_rls_model.c \
  *       sarins_fmu/core/rls.c sarins_fmu/core/netfile.c sarins_fmu/core/matrix.c sarins_fmu/core/report.c \
- *       -lm -o /tmp/fuzz_rls_model
+ *       sarins_fmu/core/smath.c -o /tmp/fuzz_rls_model
  *   /tmp/fuzz_rls_model -max_len=8192 -max_total_time=60 CORPUS_DIR
  * Seeds: files written by ForgettingRLS.export_binary (tests/test_fuzz_model_file.py writes some).  Without
  * libFuzzer (any C11 compiler, e.g. gcc -fsanitize=address,undefined), add -DSARINS_FUZZ_MAIN: the program

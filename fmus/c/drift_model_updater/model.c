@@ -12,7 +12,8 @@
  * file is read at initialisation only and its model kept in the state, so do_step does no I/O and
  * nothing allocates at all.  libm: fabs (and through the core: pow, sqrt, sin, cos, tan).
  */
-#include <math.h>
+#include "smath.h"
+
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -51,7 +52,7 @@ static const unsigned P_SLOTS[6] = {SARINS_R_p_aa, SARINS_R_p_ab, SARINS_R_p_ac,
                                     SARINS_R_p_cc};
 static const int P_INDEX[6] = {0, 1, 2, 4, 5, 8}; /* (0,0) (0,1) (0,2) (1,1) (1,2) (2,2) of the 3 x 3 P */
 
-static int same_time(double a, double b, double step) { return fabs(a - b) <= TAG_TOL * step; }
+static int same_time(double a, double b, double step) { return sm_fabs(a - b) <= TAG_TOL * step; }
 
 /* ------------------------------------------------------------------------------------------ parameters */
 
@@ -348,7 +349,7 @@ static int initialize(sarins_ctx *c)
 static int check_step(sarins_ctx *c, dmu_state *s, double h)
 {
     if (s->step > 0.0) {
-        if (fabs(h - s->step) > STEP_TOL * s->step) {
+        if (sm_fabs(h - s->step) > STEP_TOL * s->step) {
             sarins_log(c, SARINS_ERROR, "communication step changed from %.17g s to %.17g s; this FMU needs a fixed "
                        "step", s->step, h);
             return SARINS_ERROR;
