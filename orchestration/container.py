@@ -76,7 +76,7 @@ def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
         If the installed fmpy has no (JSON-configured) ``container_fmu``.
     """
     from fmpy import read_model_description
-    from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription
+    from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, Unknown
 
     try:
         from fmpy.container_fmu import Configuration
@@ -123,6 +123,11 @@ def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
             defaultExperiment=DefaultExperiment(startTime=system.start_time,
                                                 stopTime=system.stop_time, stepSize=step),
             modelVariables=[_time_variable()] + list(mappings))
+        # FMI 2.0 (2.2.8): ModelStructure lists every output, and (initial = calculated) every output
+        # among the initial unknowns; importers such as fmusim refuse a description without them
+        outputs = [v for v in description.modelVariables if v.causality == "output"]
+        description.outputs = [Unknown(variable=v) for v in outputs]
+        description.initialUnknowns = [Unknown(variable=v) for v in outputs]
         configuration = Configuration(parallelDoStep=parallel, modelDescription=description,
                                       components=components, connections=connections,
                                       variableMappings=mappings)

@@ -154,6 +154,39 @@ def test_the_standard_system_as_one_container_fmu_runs_in_a_c_host(host, fmu_dir
         assert values[vrs[name]] == expected, name
 
 
+def test_the_identified_system_as_one_container_fmu_runs_in_a_c_host(host, fmu_dir, tmp_path):
+    """Seed 000's whole loop (turntable -> IMU -> INS -> RBF identifier -> INS) as one FMU in a process
+    with no Python: the identifier fires 600 s into navigation, the INS subtracts the drift from
+    apply_from on, and every final output equals the master's Jacobi run bit for bit."""
+    from orchestration import simulate_system
+    from orchestration.container import build_container_fmu
+    from sarins.systems import standard_static_identified
+
+    for name in ("Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier"):
+        shutil.copy2(fmu_dir / f"{name}.fmu", tmp_path / f"{name}.fmu")
+    system = standard_static_identified(tmp_path, hours=0.6, turntable=dict(align_time=600.0),
+                                        imu=dict(internal_rate=10.0), ins=dict(align_time=600.0),
+                                        identifier=dict(trigger_time=600.0, latency=60.0))
+    fmu = build_container_fmu(system, tmp_path / "Identified.fmu", step_size=1.0)
+    from fmpy.validation import validate_fmu
+
+    assert validate_fmu(str(fmu)) == []  # fmusim, for one, refuses a description FMPy finds problems in
+    folder, md = _unzip(fmu, tmp_path / "unzipped")
+    outputs = ["ins.lat_error", "ins.position_error", "ins.nav_time", "identifier.axial_drift",
+               "identifier.apply_from"]
+    vrs = {v.name: v.valueReference for v in md.modelVariables}
+    steps = 2000
+    proc = run_host(host, folder, md, steps, *(f"final-real={vrs[n]}" for n in outputs))
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "STATUS" not in proc.stdout, proc.stdout
+    values = _final_values(proc)
+    ours = simulate_system(system, float(steps), 1.0, scheme="jacobi", record=outputs, progress=False)
+    assert ours["identifier.axial_drift"][-1] != 0.0  # identified within the run
+    assert ours["ins.nav_time"][-1] > ours["identifier.apply_from"][-1] > 600.0
+    for name in outputs:
+        assert values[vrs[name]] == ours[name][-1], name
+
+
 def test_the_imu_log_fmu_plays_a_log_in_a_c_host(host, tmp_path):
     """The HIL path's player (IMULog) in a native host, reading a simulated log."""
     import numpy as np
