@@ -871,6 +871,9 @@ double sm_pow(double x, double y)
     double lh, ll, eh, el;
     log_dd(x, &lh, &ll);
     two_prod(y, lh, &eh, &el);
+    /* decided on the rounded product first: for |y| near DBL_MAX the error term el is inf - inf */
+    if (eh > SM_EXP_MAX + 1.0) return sign * INFINITY;
+    if (eh < SM_EXP_MIN - 1.0) return sign * 0.0;
     el += y * ll;
     double e = eh + el;
     if (e > SM_EXP_MAX + 1.0) return sign * INFINITY;
