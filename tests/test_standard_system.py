@@ -10,7 +10,7 @@ from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
 
 from fmu_fixtures.thirdparty import ensure_libtbb, has_module
-from sarins.systems import SYSTEMS, build_system_fmu, standard_static
+from sarins.systems import SYSTEM_FMUS, SYSTEMS, build_system_fmu, standard_static
 from orchestration import simulate_system, write_ssp
 from sarins_fmu.experiments import run_static
 
@@ -87,9 +87,10 @@ def test_system_as_one_container_fmu(fmu_dir, short_ssp, tmp_path):
             assert np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(b))
 
 
-def test_build_fmus_system_option_validates(fmu_dir):
-    path = build_system_fmu(fmu_dir)
-    assert validate_fmu(str(path)) == []
+@pytest.mark.parametrize("name", list(SYSTEM_FMUS))
+def test_build_fmus_system_option_validates(fmu_dir, name):
+    path = build_system_fmu(fmu_dir, name)
+    assert path.name == f"{name}.fmu" and validate_fmu(str(path)) == []
 
 
 @pytest.mark.parametrize("scheme", ["gauss-seidel", "jacobi"])

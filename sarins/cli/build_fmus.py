@@ -1,4 +1,4 @@
-"""``sarins build-fmus``: build the FMUs (and, with --system, the standard system as one FMU)."""
+"""``sarins build-fmus``: build the FMUs (and, with --system, the static systems as one FMU each)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,8 @@ def register(subparsers) -> None:
                    help="FMI version: 2 (every FMU) or 3 (the FMI 3.0 variants of the native FMUs only)")
     p.add_argument("--only", nargs="+", metavar="NAME", help="build only these FMUs")
     p.add_argument("--system", action="store_true",
-                   help="also write the standard static system as one FMU (FMPy container, FMI 2.0)")
+                   help="also write the standard static system and the identified one (seed 000's loop "
+                        "with the RBF identifier) as one FMU each (FMPy container, FMI 2.0)")
     p.add_argument("--compensator", type=Path, metavar="MODEL_FILE",
                    help="ship this trained seed 003 compensator (JSON/npz) in IMUCompensator.fmu (as its binary model "
                         "file, resources/compensator.bin)")
@@ -77,9 +78,10 @@ def run(args) -> int:
         for path in write_systems(args.out):
             print(path)
     if args.system:
-        from sarins.systems import build_system_fmu
+        from sarins.systems import SYSTEM_FMUS, build_system_fmu
 
-        print(build_system_fmu(args.out))
+        for name in SYSTEM_FMUS:
+            print(build_system_fmu(args.out, name))
     if args.compensator is not None:
         from fmus.compensator_export import export_compensator
 

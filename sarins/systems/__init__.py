@@ -194,14 +194,20 @@ def write_shipped_ssds(root: Path = SHIPPED) -> list[Path]:
     return out
 
 
-def build_system_fmu(fmu_dir: Path | str) -> Path:
-    """The standard static system (FMUs in ``fmu_dir``) packed as one FMU
-    (FMPy container, FMI 2.0) ``<fmu_dir>/StandardStaticSystem.fmu``."""
+SYSTEM_FMUS = {"StandardStaticSystem": "standard_static", "IdentifiedStaticSystem": "standard_static_identified"}
+
+
+def build_system_fmu(fmu_dir: Path | str, name: str = "StandardStaticSystem") -> Path:
+    """A shipped static system (FMUs in ``fmu_dir``) packed as one FMU (FMPy container, FMI 2.0)
+    ``<fmu_dir>/<name>.fmu``: ``StandardStaticSystem`` (turntable -> IMU -> INS) or
+    ``IdentifiedStaticSystem`` (seed 000's loop, the RBF identifier feeding the INS)."""
     from fmus.build import fix_fmu_description
     from orchestration.container import build_container_fmu
 
-    system = standard_static(Path(fmu_dir))
-    path = build_container_fmu(system, Path(fmu_dir) / "StandardStaticSystem.fmu", step_size=1.0)
+    if name not in SYSTEM_FMUS:
+        raise ValueError(f"unknown system FMU {name!r}; known: {', '.join(SYSTEM_FMUS)}")
+    system = SYSTEMS[SYSTEM_FMUS[name]](Path(fmu_dir))
+    path = build_container_fmu(system, Path(fmu_dir) / f"{name}.fmu", step_size=1.0)
     fix_fmu_description(path, [(c.name, c.source) for c in system.components])
     return path
 
