@@ -222,7 +222,27 @@ int sg_check_outputs(sarins_glue *g, const char *fn)
 
 size_t sg_length(const sarins_glue *g, const sarins_var *v)
 {
-    return v->dim < 0 ? 1 : (size_t)g->ctx.i[v->dim];
+    return v->dim < 0 ? 1 : g->array_len[v->slot];
+}
+
+/* the structural parameter (an Integer) in Integer slot dim, or NULL */
+static const sarins_var *dimension_var(const sarins_table *t, int dim)
+{
+    for (size_t k = 0; k < t->n_vars; k++)
+        if (t->vars[k].type == SARINS_INTEGER && (int)t->vars[k].slot == dim)
+            return &t->vars[k];
+    return NULL;
+}
+
+int sg_array_usable(sarins_glue *g, const char *fn, const sarins_var *v)
+{
+    if (v->dim < 0 || (g->ctx.i[v->dim] >= 0 && (size_t)g->ctx.i[v->dim] == g->array_len[v->slot]))
+        return 1;
+    const sarins_var *n = dimension_var(g->table, v->dim);
+    sg_fail(g, "%s: %s has %llu elements; the structural parameter %s = %d takes effect only when %s leaves "
+            "Configuration Mode with it accepted (1 .. %d)", fn, v->name, (unsigned long long)g->array_len[v->slot],
+            n ? n->name : "?", g->ctx.i[v->dim], g->prefix, g->table->max_dim);
+    return 0;
 }
 
 /* NULL if every structural parameter sizing an array is in 1 .. max_dim, else the first bad one */
@@ -243,17 +263,14 @@ int sg_size_arrays(sarins_glue *g, const char *fn)
         return SARINS_OK;
     const sarins_var *bad = bad_dimension(t, g->ctx.i);
     if (bad != NULL) {
-        const sarins_var *n = NULL;
-        for (size_t k = 0; k < t->n_vars && n == NULL; k++)
-            if (t->vars[k].type == SARINS_INTEGER && (int)t->vars[k].slot == bad->dim)
-                n = &t->vars[k];
+        const sarins_var *n = dimension_var(t, bad->dim);
         return sg_fail(g, "%s: structural parameter %s = %d (the length of %s) must be in 1 .. %d", fn,
                        n ? n->name : "?", g->ctx.i[bad->dim], bad->name, t->max_dim);
     }
     size_t total = 0;
     for (size_t k = 0; k < t->n_vars; k++)
         if (t->vars[k].dim >= 0)
-            total += sg_length(g, &t->vars[k]);
+            total += (size_t)g->ctx.i[t->vars[k].dim];
     if (total != g->array_doubles || g->array_block == NULL) {
         double *block = calloc(total, sizeof(double));
         if (block == NULL)
@@ -267,7 +284,8 @@ int sg_size_arrays(sarins_glue *g, const char *fn)
         const sarins_var *v = &t->vars[k];
         if (v->dim >= 0) {
             g->ctx.a[v->slot] = g->array_block + at;
-            at += sg_length(g, v);
+            g->array_len[v->slot] = (size_t)g->ctx.i[v->dim];
+            at += g->array_len[v->slot];
         }
     }
     return SARINS_OK;
@@ -330,6 +348,7 @@ void sg_free(sarins_glue *g)
         g->model->release(&g->ctx);
     free(g->ctx.state);
     free(g->ctx.a);
+    free(g->array_len);
     free(g->array_block);
     free(g->values);
     free(g->built);
@@ -405,7 +424,9 @@ int sg_init(sarins_glue *g, const char *instance_name, const char *token, int lo
     g->built = calloc(g->values_size ? g->values_size : 1, 1);
     g->ctx.state = calloc(g->model->state_size ? g->model->state_size : 1, 1);
     g->ctx.a = calloc(t->n_array ? t->n_array : 1, sizeof(double *));
-    if (!g->name || !g->cat_on || !g->by_vr || !g->outputs || !g->values || !g->built || !g->ctx.state || !g->ctx.a) {
+    g->array_len = calloc(t->n_array ? t->n_array : 1, sizeof(size_t));
+    if (!g->name || !g->cat_on || !g->by_vr || !g->outputs || !g->values || !g->built || !g->ctx.state || !g->ctx.a
+        || !g->array_len) {
         if (g->emit)
             g->emit(g, SARINS_ERROR, "logStatusError", "out of memory");
         return 0;
@@ -537,6 +558,8 @@ static const sarins_var *check_vr(sarins_glue *g, const char *fn, unsigned vr, i
         sg_fail(g, "%s: unknown value reference %u", fn, vr);
         return NULL;
     }
+    if (!sg_array_usable(g, fn, v))
+        return NULL;
     if (v->type != type) {
         sg_fail(g, "%s: %s (value reference %u) is a%s %s, not a%s %s", fn, v->name, vr,
                 v->type == SARINS_INTEGER ? "n" : "", TYPE_NAMES[v->type], type == SARINS_INTEGER ? "n" : "",
@@ -573,6 +596,8 @@ int sg_check_count(sarins_glue *g, const char *fn, const unsigned vr[], size_t n
     size_t want = 0;
     for (size_t k = 0; k < n && vr != NULL; k++) {
         const sarins_var *v = (size_t)vr[k] < g->n_vr ? g->by_vr[vr[k]] : NULL;
+        if (v != NULL && v->dim >= 0 && g->arrays_visible && !sg_array_usable(g, fn, v))
+            return 0;
         want += (v != NULL && v->dim >= 0 && g->arrays_visible) ? sg_length(g, v) : 1;
     }
     if (n_values != want) {

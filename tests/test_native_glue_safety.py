@@ -1,0 +1,73 @@
+"""The shared native glue (fmus/c/glue_core.c, fmi2_glue.c, fmi3_glue.c) against what a host can hand it:
+FMI 3.0 arrays after a structural parameter changed, FMU-state pointers that are freed or foreign, state
+blobs whose fields break the model's invariants (checksum recomputed), and recovery by restoring a state
+saved before an error.  Driven through FMPy's low-level FMU2Slave / FMU3Slave, and (pointer safety) through
+a C program built with AddressSanitizer and UBSan against each FMU's sources."""
+
+from __future__ import annotations
+
+import shutil
+
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi3 import FMU3Slave
+
+from fmus.native_fmu import build_native_fmu
+
+pytestmark = pytest.mark.integration
+
+
+@pytest.fixture(scope="module")
+def fmus3(tmp_path_factory):
+    """The FMI 3.0 IMUThermal and StrapdownINS (linux only: quick)."""
+    if shutil.which("gcc") is None and shutil.which("cc") is None:
+        pytest.skip("no C compiler (gcc/cc)")
+    out = tmp_path_factory.mktemp("glue_safety3")
+    for name, slave in (("IMUThermal", "imu_thermal_slave.py"), ("StrapdownINS", "strapdown_ins_slave.py")):
+        build_native_fmu(name, slave, out, fmi=3, win64=False, aarch64=False)
+    return out
+
+
+class Fmu3:
+    """An FMI 3.0 instance with its log kept."""
+
+    def __init__(self, path, name: str = "x"):
+        self.md = read_model_description(str(path))
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.messages: list[str] = []
+
+        def log(env, status, category, message):
+            self.messages.append(message.decode())
+
+        self.s = FMU3Slave(guid=self.md.guid, unzipDirectory=extract(str(path)),
+                           modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.s.instantiate(logMessage=log)
+
+
+@pytest.mark.parametrize("name,array", [("IMUThermal", "dtheta_x_sub"), ("StrapdownINS", "dv_z_sub")])
+@pytest.mark.parametrize("n_sub", [2, 100_000])
+def test_array_access_is_bounded_by_what_was_allocated(fmus3, name, array, n_sub):
+    """n_sub set in Configuration Mode, the arrays read (or written) before it is left: refused with
+    fmi3Error naming n_sub, never another array's memory or a read past the buffer (1 element is allocated);
+    once Configuration Mode is left the arrays have the new length."""
+    f = Fmu3(fmus3 / f"{name}.fmu")
+    try:
+        f.s.enterConfigurationMode()
+        f.s.setUInt64([f.vr["n_sub"]], [n_sub])
+        with pytest.raises(FMICallException):
+            f.s.getFloat64([f.vr[array]], n_sub)
+        assert "n_sub = %d" % n_sub in f.messages[-1] and array in f.messages[-1], f.messages
+        f.s.reset()
+        f.s.enterConfigurationMode()
+        f.s.setUInt64([f.vr["n_sub"]], [n_sub])
+        with pytest.raises(FMICallException):
+            f.s.getFloat64([f.vr[array]], 1)  # the allocated length is not a way round it
+        f.s.reset()
+        f.s.enterConfigurationMode()
+        f.s.setUInt64([f.vr["n_sub"]], [n_sub])
+        f.s.exitConfigurationMode()
+        f.s.enterInitializationMode()
+        assert len(f.s.getFloat64([f.vr[array]], n_sub)) == n_sub
+    finally:
+        f.s.freeInstance()
