@@ -6,7 +6,11 @@ a C program built with AddressSanitizer and UBSan against each FMU's sources."""
 
 from __future__ import annotations
 
+import os
 import shutil
+import subprocess
+import zipfile
+from pathlib import Path
 
 import pytest
 from fmpy import extract, read_model_description
@@ -71,3 +75,46 @@ def test_array_access_is_bounded_by_what_was_allocated(fmus3, name, array, n_sub
         assert len(f.s.getFloat64([f.vr[array]], n_sub)) == n_sub
     finally:
         f.s.freeInstance()
+
+
+HOST_DIR = Path(__file__).resolve().parent / "native_host"
+SAN = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O1"]
+
+
+def _sanitized(fmu: Path, program: str, tmp_path: Path, fmi: int) -> Path:
+    """``program`` (tests/native_host) linked with the FMU's ``sources/``, ASan + UBSan."""
+    cc = shutil.which("gcc") or shutil.which("cc")
+    src = tmp_path / f"src{fmi}"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(src)
+    src = src / "sources"
+    exe = tmp_path / f"{Path(program).stem}{fmi}"
+    subprocess.run([cc, "-std=c11", *SAN, *(["-DFMI3"] if fmi == 3 else []), f"-I{src}", str(HOST_DIR / program),
+                    *sorted(str(p) for p in src.glob("*.c")), "-o", str(exe)], check=True)
+    return exe
+
+
+@pytest.fixture(scope="module")
+def turntables(tmp_path_factory):
+    """The FMI 2.0 and 3.0 Turntable (every native model shares the glue under test)."""
+    if shutil.which("gcc") is None and shutil.which("cc") is None:
+        pytest.skip("no C compiler (gcc/cc)")
+    out = tmp_path_factory.mktemp("glue_safety_tt")
+    return {fmi: build_native_fmu("Turntable", "turntable_slave.py", out / str(fmi), fmi=fmi, win64=False,
+                                  aarch64=False) for fmi in (2, 3)}
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_freed_and_foreign_states_are_refused_without_reading_them(turntables, tmp_path, fmi):
+    """Under ASan: a freed, another instance's or a made-up FMUstate passed to Set / Free / SerializedSize /
+    Serialize (or as *FMUstate of Get) is an error status, with no use-after-free; a live state still works;
+    states the host never freed go with the instance (no leak)."""
+    exe = _sanitized(turntables[fmi], "state_pointers.c", tmp_path, fmi)
+    guid = read_model_description(str(turntables[fmi])).guid
+    proc = subprocess.run([str(exe), guid], capture_output=True, text=True, timeout=120,
+                          env={"PATH": os.environ.get("PATH", ""), "ASAN_OPTIONS": "detect_leaks=1"})
+    assert proc.returncode == 0 and "DONE" in proc.stdout, proc.stderr[-3000:]
+    cases = dict(line.split()[1:] for line in proc.stdout.splitlines() if line.startswith("CASE"))
+    assert cases.pop("set_kept") == "0" and cases.pop("free_kept") == "0"
+    assert cases and set(cases.values()) == {"3"}, cases
+    assert "not a live FMU state of this instance" in proc.stdout

@@ -346,6 +346,7 @@ void sg_free(sarins_glue *g)
         return;
     if (g->ctx.work != NULL)
         g->model->release(&g->ctx);
+    sg_free_states(g); /* the states the host did not free die with the instance */
     free(g->ctx.state);
     free(g->ctx.a);
     free(g->array_len);
@@ -721,22 +722,61 @@ int sg_set_string(sarins_glue *g, const char *fn, const unsigned vr[], size_t n,
  * value block, model state size 8, model state, work-state size 8, work state, array elements 8, arrays */
 #define FIXED_PAYLOAD (4 + 4 + 8 + 8 + 4 * 8)
 
-/* In memory a state points to itself first: a pointer that is not a live state of this glue (freed, or the
- * state passed where the address of the variable holding it is expected) is refused instead of used. */
+/* In memory a state is its size and its bytes.  The instance keeps the address of every state it issued
+ * (sg_get_state, sg_deserialize) and has not freed: a pointer is recognised by comparing addresses only, so
+ * a freed, foreign (another instance's) or made-up pointer is refused without reading through it. */
 typedef struct fmu_state {
-    struct fmu_state *self; /* == the state while it lives; NULL once freed */
-    size_t size;            /* bytes of data */
-    unsigned char data[];   /* header + payload: the serialized bytes */
+    size_t size;          /* bytes of data */
+    unsigned char data[]; /* header + payload: the serialized bytes */
 } fmu_state;
 
-static const char *not_a_state(const void *p)
+/* the index of p among the instance's live states, or -1 */
+static long state_index(const sarins_glue *g, const void *p)
 {
-    const fmu_state *s = (const fmu_state *)p;
-    if (s == NULL)
+    for (size_t k = 0; k < g->n_states; k++)
+        if (g->states[k] == p)
+            return (long)k;
+    return -1;
+}
+
+static const char *not_a_state(const sarins_glue *g, const void *p)
+{
+    if (p == NULL)
         return "FMUState is NULL";
-    if (s->self != s)
-        return "FMUState is not a live FMU state of this FMU (freed, or not one)";
+    if (state_index(g, p) < 0)
+        return "FMUState is not a live FMU state of this instance (freed, another instance's, or not one)";
     return NULL;
+}
+
+/* remember s as issued; 0 (nothing changed) when out of memory */
+static int remember_state(sarins_glue *g, fmu_state *s)
+{
+    if (g->n_states == g->cap_states) {
+        size_t cap = g->cap_states ? 2 * g->cap_states : 8;
+        void **more = realloc(g->states, cap * sizeof *more);
+        if (more == NULL)
+            return 0;
+        g->states = more;
+        g->cap_states = cap;
+    }
+    g->states[g->n_states++] = s;
+    return 1;
+}
+
+static void forget_state(sarins_glue *g, const void *s)
+{
+    long k = state_index(g, s);
+    if (k >= 0)
+        g->states[k] = g->states[--g->n_states];
+}
+
+void sg_free_states(sarins_glue *g)
+{
+    for (size_t k = 0; k < g->n_states; k++)
+        free(g->states[k]);
+    free(g->states);
+    g->states = NULL;
+    g->n_states = g->cap_states = 0;
 }
 
 static uint64_t fnv1a(const unsigned char *p, size_t n)
@@ -778,18 +818,19 @@ int sg_get_state(sarins_glue *g, void **FMUstate, const char *fn)
     size_t total = HEADER_BYTES + (size_t)payload;
     /* an existing state of this model is overwritten in place when it has the size (FMI 2.0 allows reuse) */
     fmu_state *s = (fmu_state *)*FMUstate;
-    if (s != NULL && not_a_state(s) != NULL)
-        return sg_fail(g, "%s: *FMUState is not NULL and %s", fn, not_a_state(s));
+    if (s != NULL && not_a_state(g, s) != NULL)
+        return sg_fail(g, "%s: *FMUState is not NULL and %s", fn, not_a_state(g, s));
     if (s == NULL || s->size != total) {
         fmu_state *fresh = malloc(sizeof(fmu_state) + total);
-        if (fresh == NULL)
+        if (fresh == NULL || !remember_state(g, fresh)) {
+            free(fresh);
             return sg_fail(g, "%s: out of memory (%llu bytes)", fn, (unsigned long long)total);
+        }
         if (s != NULL) {
-            s->self = NULL;
+            forget_state(g, s);
             free(s);
         }
         s = fresh;
-        s->self = s;
         s->size = total;
     }
     unsigned char *p = s->data;
@@ -900,8 +941,8 @@ static const char *refuse_blob(const sarins_glue *g, const unsigned char *b, siz
 int sg_set_state(sarins_glue *g, const void *FMUstate, const char *fn)
 {
     const fmu_state *s = (const fmu_state *)FMUstate;
-    if (not_a_state(s) != NULL)
-        return sg_fail(g, "%s: %s", fn, not_a_state(s));
+    if (not_a_state(g, s) != NULL)
+        return sg_fail(g, "%s: %s", fn, not_a_state(g, s));
     const char *why = refuse_blob(g, s->data, s->size);
     if (why != NULL)
         return sg_fail(g, "%s: the state is refused: %s", fn, why);
@@ -972,15 +1013,15 @@ int sg_free_state(sarins_glue *g, void **FMUstate, const char *fn)
 {
     if (FMUstate == NULL)
         return sg_fail(g, "%s: FMUstate is NULL", fn);
+    if (state_index(g, FMUstate) >= 0) /* the state itself, not the address of the variable holding it */
+        return sg_fail(g, "%s: the argument is the FMU state itself; pass the address of the variable that holds "
+                       "it", fn);
     fmu_state *s = (fmu_state *)*FMUstate;
     if (s == NULL)
         return SARINS_OK;
-    if ((void *)FMUstate == (void *)s) /* the state itself, not the address of the variable holding it */
-        return sg_fail(g, "%s: the argument is the FMU state itself; pass the address of the variable that holds "
-                       "it", fn);
-    if (not_a_state(s) != NULL)
-        return sg_fail(g, "%s: %s", fn, not_a_state(s));
-    s->self = NULL;
+    if (not_a_state(g, s) != NULL)
+        return sg_fail(g, "%s: %s", fn, not_a_state(g, s));
+    forget_state(g, s);
     free(s);
     *FMUstate = NULL;
     return SARINS_OK;
@@ -988,8 +1029,8 @@ int sg_free_state(sarins_glue *g, void **FMUstate, const char *fn)
 
 int sg_state_size(sarins_glue *g, const void *FMUstate, size_t *size, const char *fn)
 {
-    if (size == NULL || not_a_state(FMUstate) != NULL)
-        return sg_fail(g, "%s: %s", fn, size == NULL ? "size is NULL" : not_a_state(FMUstate));
+    if (size == NULL || not_a_state(g, FMUstate) != NULL)
+        return sg_fail(g, "%s: %s", fn, size == NULL ? "size is NULL" : not_a_state(g, FMUstate));
     *size = ((const fmu_state *)FMUstate)->size;
     return SARINS_OK;
 }
@@ -997,8 +1038,8 @@ int sg_state_size(sarins_glue *g, const void *FMUstate, size_t *size, const char
 int sg_serialize(sarins_glue *g, const void *FMUstate, unsigned char *dst, size_t size, const char *fn)
 {
     const fmu_state *s = (const fmu_state *)FMUstate;
-    if (dst == NULL || not_a_state(s) != NULL)
-        return sg_fail(g, "%s: %s", fn, dst == NULL ? "serializedState is NULL" : not_a_state(s));
+    if (dst == NULL || not_a_state(g, s) != NULL)
+        return sg_fail(g, "%s: %s", fn, dst == NULL ? "serializedState is NULL" : not_a_state(g, s));
     if (size < s->size)
         return sg_fail(g, "%s: %llu bytes given, the state needs %llu (%sSerializedFMUstateSize)", fn,
                        (unsigned long long)size, (unsigned long long)s->size, g->prefix);
@@ -1014,9 +1055,10 @@ int sg_deserialize(sarins_glue *g, const unsigned char *src, size_t size, void *
     if (why != NULL)
         return sg_fail(g, "%s: the serialized state is refused: %s", fn, why);
     fmu_state *s = malloc(sizeof(fmu_state) + size);
-    if (s == NULL)
+    if (s == NULL || !remember_state(g, s)) {
+        free(s);
         return sg_fail(g, "%s: out of memory (%llu bytes)", fn, (unsigned long long)size);
-    s->self = s;
+    }
     s->size = size;
     memcpy(s->data, src, size);
     *FMUstate = s;

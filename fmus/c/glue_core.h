@@ -139,6 +139,8 @@ int sg_set_string(sarins_glue *g, const char *fn, const unsigned vr[], size_t n,
 int sg_get_state(sarins_glue *g, void **state, const char *fn);
 int sg_set_state(sarins_glue *g, const void *state, const char *fn);
 int sg_free_state(sarins_glue *g, void **state, const char *fn);
+/* free every state the instance issued and still holds (at sg_free) */
+void sg_free_states(sarins_glue *g);
 int sg_state_size(sarins_glue *g, const void *state, size_t *size, const char *fn);
 int sg_serialize(sarins_glue *g, const void *state, unsigned char *dst, size_t size, const char *fn);
 int sg_deserialize(sarins_glue *g, const unsigned char *src, size_t size, void **state, const char *fn);
