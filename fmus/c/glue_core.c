@@ -121,8 +121,8 @@ static const char *state_name(int s)
 int sg_bad_state(sarins_glue *g, const char *fn)
 {
     if (g->state == S_ERROR) {
-        sg_log(g, SARINS_ERROR, "%s: not allowed after an earlier error (state 'error'); call %sReset or "
-               "%sFreeInstance", fn, g->prefix, g->prefix);
+        sg_log(g, SARINS_ERROR, "%s: not allowed after an earlier error (state 'error'); call %sReset, "
+               "%sFreeInstance, or set an FMU state saved before the error", fn, g->prefix, g->prefix);
         return SARINS_ERROR;
     }
     return sg_fail(g, "%s: not allowed in state '%s' (%s)", fn, state_name(g->state), g->standard);
@@ -962,7 +962,8 @@ int sg_set_state(sarins_glue *g, const void *FMUstate, const char *fn)
     const unsigned char *work = model_state + m->state_size + 8;
     if (post_init(state)) {
         /* c->work must come from the restored parameters: rebuild it unless it already does */
-        int same = g->have_built && g->built_start == start_time;
+        /* after an error the model's work is rebuilt whatever the parameters (recovery starts clean) */
+        int same = g->state != S_ERROR && g->have_built && g->built_start == start_time;
         for (size_t k = 0; same && k < g->table->n_vars; k++) {
             const sarins_var *v = &g->table->vars[k];
             if (v->causality != SARINS_PARAMETER && v->causality != SARINS_STRUCTURAL_PARAMETER)
