@@ -6,8 +6,10 @@ a C program built with AddressSanitizer and UBSan against each FMU's sources."""
 
 from __future__ import annotations
 
+import math
 import os
 import shutil
+import struct
 import subprocess
 import zipfile
 from pathlib import Path
@@ -173,5 +175,61 @@ def test_restoring_a_state_saved_before_an_error_recovers_bit_for_bit(fmus3, tur
                 again.append(get(outs))
             assert again == clean, messages[-3:]
         free_state(saved)
+    finally:
+        s.freeInstance()
+
+
+HEADER, FIXED = 104, 56  # glue_core.c: the blob's header bytes; the payload's fixed part (state .. counts)
+
+
+def _fnv1a(data: bytes) -> int:
+    h = 1469598103934665603
+    for b in data:
+        h = ((h ^ b) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
+    return h
+
+
+def _resealed(blob: bytearray) -> bytes:
+    blob[96:104] = struct.pack("<Q", _fnv1a(bytes(blob[HEADER:])))
+    return bytes(blob)
+
+
+def _model_state_offset(blob: bytes, n_vars: int) -> int:
+    nr, ni, nb, ns = struct.unpack_from("<4Q", blob, HEADER + 24)
+    return HEADER + FIXED + 8 * nr + 4 * ni + 4 * nb + 256 * ns + n_vars + 8
+
+
+def test_states_breaking_the_model_invariants_are_refused(fmus3):
+    """StrapdownINS states with the checksum recomputed: the compensation queue's ring index out of its buffer
+    (comp.first = -51), its length negative or beyond it, phase 99, step NaN, the glue's next communication
+    point NaN: each refused with an error at fmi3DeserializeFMUState, the field named; the unchanged blob
+    is taken."""
+    from sarins_fmu.core.ins import _FMU_OFFSETS, _FMU_SIZE
+
+    f = Fmu3(fmus3 / "StrapdownINS.fmu")
+    s = f.s
+    try:
+        s.enterInitializationMode(startTime=0.0)
+        s.exitInitializationMode()
+        blob = s.serializeFMUState(s.getFMUState())
+        base = next(_model_state_offset(blob, n) for n in range(len(f.md.modelVariables) + 2)
+                    if struct.unpack_from("<Q", blob, _model_state_offset(blob, n) - 8)[0] == _FMU_SIZE)
+        phase, count = base + int(_FMU_OFFSETS[1]), base + int(_FMU_OFFSETS[4])
+        cases = {"comp.first": (count - 8, "<q", -51), "comp.count": (count, "<q", -1),
+                 "comp.count ": (count, "<q", 257), "phase": (phase, "<q", 99), "step": (phase - 16, "<d", math.nan),
+                 "communication point": (HEADER + 8, "<d", math.nan)}
+        for field, (at, fmt, value) in cases.items():
+            bad = bytearray(blob)
+            struct.pack_into(fmt, bad, at, value)
+            f.messages.clear()
+            with pytest.raises(FMICallException):
+                s.deserializeFMUState(_resealed(bad))
+            assert any(field.strip() in m for m in f.messages), (field, f.messages)
+            s.reset()  # leave the error state
+            s.enterInitializationMode(startTime=0.0)
+            s.exitInitializationMode()
+        good = s.deserializeFMUState(_resealed(bytearray(blob)))
+        s.setFMUState(good)
+        s.freeFMUState(good)
     finally:
         s.freeInstance()

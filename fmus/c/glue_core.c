@@ -85,6 +85,32 @@ void sarins_log(const sarins_ctx *c, int status, const char *fmt, ...)
     va_end(ap);
 }
 
+int sarins_state_real(const sarins_ctx *c, const char *field, double x, double lo, double hi)
+{
+    if (isfinite(x) && x >= lo && x <= hi)
+        return 1;
+    sarins_log(c, SARINS_ERROR, "the state's %s = %g is not finite and in %g .. %g", field, x, lo, hi);
+    return 0;
+}
+
+int sarins_state_int(const sarins_ctx *c, const char *field, long long x, long long lo, long long hi)
+{
+    if (x >= lo && x <= hi)
+        return 1;
+    sarins_log(c, SARINS_ERROR, "the state's %s = %lld is not in %lld .. %lld", field, x, lo, hi);
+    return 0;
+}
+
+int sarins_state_finite(const sarins_ctx *c, const char *field, const double *x, size_t n)
+{
+    for (size_t k = 0; k < n; k++)
+        if (!isfinite(x[k])) {
+            sarins_log(c, SARINS_ERROR, "the state's %s[%llu] = %g is not finite", field, (unsigned long long)k, x[k]);
+            return 0;
+        }
+    return 1;
+}
+
 void sg_log(sarins_glue *g, int status, const char *fmt, ...)
 {
     va_list ap;
@@ -874,7 +900,65 @@ int sg_get_state(sarins_glue *g, void **FMUstate, const char *fn)
 }
 
 /* NULL if the blob of n bytes is a state of this model in this format, else the reason. */
-static const char *refuse_blob(const sarins_glue *g, const unsigned char *b, size_t n)
+/* NULL if the glue's fields and the model's state in a structurally valid payload keep their invariants, else
+ * the reason (the model's own reason is logged by its check_state).  Allocates two scratch copies. */
+static const char *refuse_fields(sarins_glue *g, const unsigned char *p)
+{
+    int32_t state, have_time;
+    double t_next, start_time;
+    memcpy(&state, p, 4);
+    memcpy(&have_time, p + 4, 4);
+    memcpy(&t_next, p + 8, 8);
+    memcpy(&start_time, p + 16, 8);
+    if (have_time != 0 && have_time != 1)
+        return "its have_time flag is neither 0 nor 1";
+    if (!isfinite(t_next) || !isfinite(start_time))
+        return "its communication point or start time is not finite";
+    if (have_time && !(t_next > start_time))
+        return "its next communication point is not after its start time";
+    const sarins_table *t = g->table;
+    const sarins_model *m = g->model;
+    unsigned char *values = malloc(g->values_size ? g->values_size : 1);
+    void *mstate = malloc(m->state_size ? m->state_size : 1);
+    const char *why = NULL;
+    if (values == NULL || mstate == NULL) {
+        why = "out of memory while checking it";
+        goto done;
+    }
+    memcpy(values, p + FIXED_PAYLOAD, g->values_size);
+    memcpy(mstate, p + FIXED_PAYLOAD + g->values_size + 8, m->state_size);
+    sarins_ctx c = g->ctx; /* the instance's view, pointed at the copies; no work, no arrays */
+    c.r = (double *)(void *)values;
+    c.i = (int *)(void *)(values + off_int(t));
+    c.b = (int *)(void *)(values + off_bool(t));
+    c.s = (char(*)[SARINS_STRING_MAX])(void *)(values + off_string(t));
+    c.set = values + off_set(t);
+    c.state = mstate;
+    c.work = NULL;
+    c.a = NULL;
+    c.start_time = start_time;
+    c.quiet = 0;
+    for (size_t k = 0; k < t->n_boolean && why == NULL; k++)
+        if (c.b[k] != 0 && c.b[k] != 1)
+            why = "a Boolean in it is neither 0 nor 1";
+    for (size_t k = 0; k < t->n_string && why == NULL; k++)
+        if (memchr(c.s[k], '\0', SARINS_STRING_MAX) == NULL)
+            why = "a String in it is not terminated";
+    for (size_t k = 0; k < t->n_vars && why == NULL; k++)
+        if (c.set[k] > 1)
+            why = "a set flag in it is neither 0 nor 1";
+    for (size_t k = 0; k < g->n_outputs && why == NULL && post_init(state); k++)
+        if (g->outputs[k]->dim < 0 && !isfinite(c.r[g->outputs[k]->slot]))
+            why = "an output in it is not finite";
+    if (why == NULL && m->check_state != NULL && m->check_state(&c, post_init(state)) != SARINS_OK)
+        why = "the model's state in it breaks the model's invariants";
+done:
+    free(values);
+    free(mstate);
+    return why;
+}
+
+static const char *refuse_blob(sarins_glue *g, const unsigned char *b, size_t n)
 {
     if (n < HEADER_BYTES)
         return "shorter than the header (truncated?)";
@@ -900,8 +984,12 @@ static const char *refuse_blob(const sarins_glue *g, const unsigned char *b, siz
     memcpy(&sum, b + OFF_CHECKSUM, 8);
     if (payload != (uint64_t)(n - HEADER_BYTES))
         return "its size does not match its header (truncated?)";
+#ifndef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION /* a fuzzer's mutations reach the fields behind it */
     if (fnv1a(b + HEADER_BYTES, (size_t)payload) != sum)
         return "its checksum does not match (corrupted)";
+#else
+    (void)sum;
+#endif
     uint64_t fixed = FIXED_PAYLOAD + g->values_size + 8 + g->model->state_size + 8 + 8;
     if (payload < fixed)
         return "its payload is too short for this model";
@@ -935,7 +1023,7 @@ static const char *refuse_blob(const sarins_glue *g, const unsigned char *b, siz
         return "it holds an unknown FMI state";
     if (work_n > 0 && (!post_init(state) || g->model->load_work_state == NULL))
         return "it holds a work state this model does not take";
-    return NULL;
+    return refuse_fields(g, p);
 }
 
 int sg_set_state(sarins_glue *g, const void *FMUstate, const char *fn)
