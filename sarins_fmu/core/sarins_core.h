@@ -51,4 +51,7 @@ int sarins_core_abi(void);
 #include "rls.h"
 #include "online.h"
 
+/* seed 002's land vehicle: trajectory, body sway and vibration */
+#include "vehicle.h"
+
 #endif
