@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from sarins_fmu import earth
+from sarins_fmu.core.vehicle import COLUMNS
 from sarins_fmu.imu import IMU, ImuModel
 from sarins_fmu.ins import InsConfig, StrapdownINS
 from sarins_fmu.vehicle import VehicleTrajectory, legs_to_accelerations, random_legs
@@ -87,3 +88,76 @@ def test_body_motion_pitches_and_rolls_while_moving_and_is_still_at_stops():
     assert not np.array_equal(pitch, VehicleTrajectory(legs, LAT, body=BodyMotion(seed=4)).schedule.state(tr.time)[0][:, 1])
     with pytest.raises(ValueError, match="sway_period"):
         BodyMotion(sway_period=0.0)
+
+
+# ------------------------------------------------------------------ the C kernel against closed forms
+
+
+def _meridian_arc(lat0, lat1):
+    """Meridian arc length (m) between two latitudes: the integral of R_M (Gauss-Legendre, 40 nodes)."""
+    x, w = np.polynomial.legendre.leggauss(40)
+    lat = 0.5 * (lat1 - lat0) * x + 0.5 * (lat1 + lat0)
+    return 0.5 * (lat1 - lat0) * np.sum(w * earth.radii(lat)[0])
+
+
+def test_north_drive_covers_the_meridian_arc_and_east_drive_the_parallel():
+    """Straight drives at constant speed: the distance driven (the integral of the speed, exact on the
+    grid) equals the meridian arc of the latitude change (north), and an east drive keeps the latitude
+    and turns the longitude by distance / (R_N cos L)."""
+    settings_legs = [("drive", 3600.0, 20.0), ("stop", 60.0)]
+    north = VehicleTrajectory(settings_legs, LAT, 0.0, 0.0, rotation="none")
+    distance = np.sum(0.5 * (north.speed[:-1] + north.speed[1:])) * north.step  # speed linear in each step
+    n_brake = math.ceil(20.0 / 1.5)  # whole steps of the default 1.5 m/s^2 braking
+    assert distance == pytest.approx(20.0 * 3600.0 - 0.5 * 20.0 * 20.0 + 0.5 * 20.0 * n_brake, rel=1e-13)
+    assert _meridian_arc(LAT, north.lat[-1]) == pytest.approx(distance, abs=1e-6)  # 1 um over 72 km
+    assert np.all(north.lon == 0.0)
+    east = VehicleTrajectory(settings_legs, LAT, 0.1, -math.pi / 2, rotation="none")
+    assert np.max(np.abs(east.lat - LAT)) < 1e-16
+    r_n = earth.radii(LAT)[1]
+    assert (east.lon[-1] - 0.1) * r_n * math.cos(LAT) == pytest.approx(distance, abs=1e-6)
+    # velocity integrates to position on every step (Simpson mean velocity, exact for these profiles)
+    r_m = earth.radii(0.5 * (north.lat[:-1] + north.lat[1:]))[0]
+    step_north = np.diff(north.lat) * r_m
+    mean_speed = 0.5 * (north.speed[:-1] + north.speed[1:])
+    np.testing.assert_allclose(step_north, mean_speed * north.step, rtol=0, atol=1e-9)
+
+
+def test_turns_and_speeds_are_exact_and_the_specific_force_is_the_kinematic_one():
+    legs = [("drive", 100.0, 12.0), ("turn", 90.0), ("turn", -45.0), ("drive", 50.0, 7.0), ("stop", 30.0)]
+    tr = VehicleTrajectory(legs, LAT, 0.0, 0.3, rotation="none", lead_time=10.0)
+    assert tr.heading[-1] == pytest.approx(0.3 + math.radians(45.0), abs=1e-14)
+    assert tr.speed[-1] == 0.0 and tr.speed[10 + 100] == 12.0  # targets reached exactly
+    col = {c: j for j, c in enumerate(COLUMNS)}
+    rows = tr.rows
+    # at rest the specific force is gravity, up, and the frame's rate the Earth's
+    still = rows[:10]
+    np.testing.assert_allclose(still[:, col["f_u"]], earth.gravity(LAT, 0.0), rtol=1e-15)
+    np.testing.assert_allclose(still[:, col["w_n"]], earth.RATE * math.cos(LAT), rtol=1e-15)
+    # accelerating from rest: the along-track force is the acceleration (Coriolis and transport ~1e-3 m/s^2)
+    k = 12
+    psi = rows[k, col["yaw"]]
+    along = -rows[k, col["f_e"]] * math.sin(psi) + rows[k, col["f_n"]] * math.cos(psi)
+    assert along == pytest.approx(1.0, abs=2e-3)  # DriveSettings.accel
+
+
+def test_body_rates_are_the_seeded_sinusoids_of_the_core_rng():
+    """Pitch and roll rates on the grid equal the closed form with phases 2 pi u, u the core RNG's
+    uniforms of stream 61 of the seed; the angles integrate the rates (linear in each step)."""
+    from sarins_fmu.core import rng
+    from sarins_fmu.vehicle import BodyMotion
+
+    body = BodyMotion(seed=11)
+    tr = VehicleTrajectory([("drive", 300.0, 10.0), ("stop", 40.0)], LAT, body=body, rotation="none")
+    phase = 2 * math.pi * rng.uniforms(11, 61, 8).reshape(2, 4)
+    t, s = tr.time, tr.speed
+    angle, rate, acc = tr.schedule.state(t[:-1])
+    w_s = 2 * math.pi / body.sway_period
+    for j, amp in enumerate((body.sway_pitch, body.sway_roll)):
+        q = amp * w_s * np.cos(w_s * t + phase[j, 0])
+        for i, f in enumerate(body.vibration_hz):
+            q = q + body.vibration * 2 * math.pi * f * np.cos(2 * math.pi * f * t + phase[j, i + 1])
+        q = q * s / body.reference_speed
+        np.testing.assert_allclose(rate[:, 1 + j], q[:-1], rtol=0, atol=1e-14)
+        np.testing.assert_allclose(np.diff(tr.schedule.state(t)[0][:, 1 + j]), 0.5 * (q[:-1] + q[1:]) * tr.step,
+                                   rtol=0, atol=1e-15)
+    assert np.all(rate[s[:-1] == 0.0, 1:3] == 0.0)  # still at rest
