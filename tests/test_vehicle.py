@@ -161,3 +161,9 @@ def test_body_rates_are_the_seeded_sinusoids_of_the_core_rng():
         np.testing.assert_allclose(np.diff(tr.schedule.state(t)[0][:, 1 + j]), 0.5 * (q[:-1] + q[1:]) * tr.step,
                                    rtol=0, atol=1e-15)
     assert np.all(rate[s[:-1] == 0.0, 1:3] == 0.0)  # still at rest
+
+
+def test_a_drive_past_the_polar_limit_is_refused_not_computed():
+    """The ENU mechanisation holds to +-89.9 deg: a drive beyond is an error naming where, never NaN rows."""
+    with pytest.raises(ValueError, match=r"beyond \+-89.9 deg latitude"):
+        VehicleTrajectory([("drive", 2e5, 300.0), ("stop", 10.0)], math.radians(80.0))

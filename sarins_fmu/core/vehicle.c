@@ -291,6 +291,23 @@ void sarins_vehicle_step(sarins_vehicle *v, const sarins_vehicle_segment *segs, 
     }
 }
 
+int sarins_vehicle_valid(const sarins_vehicle *v, char *msg, size_t msg_len)
+{
+    report r = sarins_report(msg, msg_len);
+    if (!(isfinite(v->lat) && isfinite(v->lon) && isfinite(v->speed) && isfinite(v->yaw) && isfinite(v->pitch)
+          && isfinite(v->roll) && isfinite(v->yaw_rate))) {
+        sarins_fail(&r, SARINS_VEHICLE_BAD_PARAM, "the drive's state is not finite at t = %.17g s",
+                    (double)v->k * v->step);
+        return 0;
+    }
+    if (sm_fabs(v->lat) > 89.9 * DEG) {
+        sarins_fail(&r, SARINS_VEHICLE_BAD_PARAM, "the legs drive beyond +-89.9 deg latitude (%.9g deg at t = %.17g s)",
+                    v->lat / DEG, (double)v->k * v->step);
+        return 0;
+    }
+    return 1;
+}
+
 static const char *skip_blanks(const char *s)
 {
     while (*s == ' ' || *s == '\t' || *s == '\n' || *s == '\r')
@@ -394,7 +411,10 @@ int sarins_vehicle_run(const sarins_vehicle_params *p, const sarins_leg *legs, i
         return code;
     sarins_vehicle v;
     sarins_vehicle_start(&v, p);
-    for (int64_t k = 0; k < n_rows; k++)
+    for (int64_t k = 0; k < n_rows; k++) {
         sarins_vehicle_step(&v, segs, n_segments, out + (size_t)k * SARINS_VEH_N_OUT);
+        if (!sarins_vehicle_valid(&v, msg, msg_len))
+            return SARINS_VEHICLE_BAD_PARAM;
+    }
     return 0;
 }

@@ -123,13 +123,18 @@ void sarins_vehicle_start(sarins_vehicle *v, const sarins_vehicle_params *p);
  * one.  After the segments the vehicle keeps its speed with no acceleration (parked after a final stop). */
 void sarins_vehicle_step(sarins_vehicle *v, const sarins_vehicle_segment *segs, int64_t n_segments, double *out);
 
+/* 1 while the stream's state is valid: position, speed and angles finite, |lat| <= 89.9 deg (the ENU
+ * mechanisation's range); 0 once a drive has left it (reason in msg). */
+int sarins_vehicle_valid(const sarins_vehicle *v, char *msg, size_t msg_len);
+
 /* Parse "drive 300 10; turn 90; stop 1800" (degrees for turns; ';'-separated, blanks around) into legs
  * (capacity cap; turn angles written in rad).  Returns the number of legs, or -1 with the reason in msg. */
 int64_t sarins_vehicle_parse_legs(const char *text, sarins_leg *legs, int64_t cap, char *msg, size_t msg_len);
 
 /* Binding helper: check, segment and run the whole trajectory: out (n_rows, SARINS_VEH_N_OUT), row k the
  * step from t_k (k = 0 .. n_rows - 1).  segs: caller's scratch of cap segments.  Returns as
- * sarins_vehicle_segments (with out NULL only counts: *n_steps). */
+ * sarins_vehicle_segments (with out NULL only counts: *n_steps), or SARINS_VEHICLE_BAD_PARAM when the drive
+ * leaves the valid range (sarins_vehicle_valid). */
 int sarins_vehicle_run(const sarins_vehicle_params *p, const sarins_leg *legs, int64_t n_legs,
                        sarins_vehicle_segment *segs, int64_t cap, int64_t n_rows, double *out, int64_t *n_steps,
                        char *msg, size_t msg_len);

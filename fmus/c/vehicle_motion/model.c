@@ -157,6 +157,11 @@ static int vm_do_step(sarins_ctx *c, double t, double h)
                    time);
         return SARINS_ERROR;
     }
+    char msg[256];
+    if (!sarins_vehicle_valid(&st->vehicle, msg, sizeof msg)) { /* the next step would start outside */
+        sarins_log(c, SARINS_ERROR, "ValueError: %s", msg);
+        return SARINS_ERROR;
+    }
     publish(c, w, st, time);
     return SARINS_OK;
 }
