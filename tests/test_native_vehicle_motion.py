@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import os
+import struct
 import subprocess
 import zipfile
 from pathlib import Path
@@ -110,6 +111,33 @@ def test_state_round_trip_mid_drive_repeats_the_run(fmu):
     out, again, there = _run(fmu, tr.n_steps + 5, state_at=k)
     assert out[k][OUT.index("vehicle_yaw_rate")] != 0.0
     assert again == out[k + 1:] and there == out[k + 1:]
+
+
+@pytest.mark.parametrize("segment, in_segment", [(-3, 0), (10**6, 0), (0, -1), (0, 10**9)])
+def test_a_crafted_state_is_refused_with_the_reason_not_run(fmu, segment, in_segment):
+    """A serialized state whose segment index or step in it is out of range (the glue's checksum recomputed,
+    so its checks pass): the next doStep is fmi2Error naming the vehicle state, no out-of-bounds read."""
+    from test_native_drift_model_updater import _fnv1a
+
+    slave = Slave(fmu, "crafted")
+    try:
+        slave.set(**PARAMS)
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+        for k in range(30):
+            slave.fmu.doStep(float(k), 1.0)
+        blob = bytearray(slave.fmu.serializeFMUstate(slave.fmu.getFMUstate()))
+        at = blob.index(struct.pack("<dq", 1.0, 31)) + 16  # the stream's step and grid point, then its segment
+        assert blob.count(struct.pack("<dq", 1.0, 31)) == 1
+        struct.pack_into("<qq", blob, at, segment, in_segment)
+        head = next(h for h in range(40, 400) if struct.unpack_from("<Q", blob, h - 16)[0] == len(blob) - h)
+        struct.pack_into("<Q", blob, head - 8, _fnv1a(bytes(blob[head:])))
+        slave.fmu.setFMUstate(slave.fmu.deSerializeFMUstate(bytes(blob)))
+        with pytest.raises(FMICallException, match="status 3"):
+            slave.fmu.doStep(30.0, 1.0)
+        assert any("vehicle state" in m and "out of range" in m for s, _, m in slave.log if s == 3), slave.log[-3:]
+    finally:
+        slave.free()
 
 
 @pytest.mark.parametrize("params, text", [

@@ -308,6 +308,32 @@ int sarins_vehicle_valid(const sarins_vehicle *v, char *msg, size_t msg_len)
     return 1;
 }
 
+int sarins_vehicle_state_ok(const sarins_vehicle *v, const sarins_vehicle_segment *segs, int64_t n_segments,
+                            char *msg, size_t msg_len)
+{
+    report r = sarins_report(msg, msg_len);
+    if (!(v->k >= 0 && v->segment >= 0 && v->segment <= n_segments && v->in_segment >= 0
+          && (v->segment == n_segments ? v->in_segment == 0 : v->in_segment < segs[v->segment].n))) {
+        sarins_fail(&r, SARINS_VEHICLE_BAD_PARAM, "vehicle state: grid point %lld, segment %lld of %lld, step %lld "
+                    "in it: out of range", (long long)v->k, (long long)v->segment, (long long)n_segments,
+                    (long long)v->in_segment);
+        return 0;
+    }
+    double consts[] = {v->step, v->reference_speed, v->w_sway, v->w_vib[0], v->w_vib[1], v->w_vib[2]};
+    for (size_t i = 0; i < sizeof consts / sizeof consts[0]; i++)
+        if (!(isfinite(consts[i]) && consts[i] > 0)) {
+            sarins_fail(&r, SARINS_VEHICLE_BAD_PARAM, "vehicle state: a grid or body constant is not positive");
+            return 0;
+        }
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i <= SARINS_VEHICLE_N_VIBRATION; i++)
+            if (!(isfinite(v->phase[j][i]) && isfinite(v->amplitude[j]) && isfinite(v->vibration))) {
+                sarins_fail(&r, SARINS_VEHICLE_BAD_PARAM, "vehicle state: a body phase or amplitude is not finite");
+                return 0;
+            }
+    return 1;
+}
+
 static const char *skip_blanks(const char *s)
 {
     while (*s == ' ' || *s == '\t' || *s == '\n' || *s == '\r')

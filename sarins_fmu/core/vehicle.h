@@ -127,6 +127,13 @@ void sarins_vehicle_step(sarins_vehicle *v, const sarins_vehicle_segment *segs, 
  * mechanisation's range); 0 once a drive has left it (reason in msg). */
 int sarins_vehicle_valid(const sarins_vehicle *v, char *msg, size_t msg_len);
 
+/* 1 when v can be stepped over these segments (a state from outside, e.g. a deserialized FMU state): the
+ * grid point k >= 0, the segment index in [0, n_segments] and the steps done in it below its length, the
+ * step and the body constants positive and finite; else 0 with the reason in msg.  Then
+ * sarins_vehicle_valid for the motion itself. */
+int sarins_vehicle_state_ok(const sarins_vehicle *v, const sarins_vehicle_segment *segs, int64_t n_segments,
+                            char *msg, size_t msg_len);
+
 /* Parse "drive 300 10; turn 90; stop 1800" (degrees for turns; ';'-separated, blanks around) into legs
  * (capacity cap; turn angles written in rad).  Returns the number of legs, or -1 with the reason in msg. */
 int64_t sarins_vehicle_parse_legs(const char *text, sarins_leg *legs, int64_t cap, char *msg, size_t msg_len);

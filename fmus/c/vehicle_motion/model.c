@@ -135,6 +135,11 @@ static int vm_do_step(sarins_ctx *c, double t, double h)
     vm_work *w = c->work;
     vm_state *st = c->state;
     double grid = w->params.step, time = t + h;
+    char msg[256];
+    if (!sarins_vehicle_state_ok(&st->vehicle, w->segments, w->n_segments, msg, sizeof msg)) { /* a set state */
+        sarins_log(c, SARINS_ERROR, "%s", msg);
+        return SARINS_ERROR;
+    }
     if (st->have_step && sm_fabs(h - st->step) > 1e-9 * st->step) {
         sarins_log(c, SARINS_ERROR, "ValueError: communication step changed from %.17g s to %.17g s; this FMU needs "
                    "a fixed step", st->step, h);
@@ -157,7 +162,6 @@ static int vm_do_step(sarins_ctx *c, double t, double h)
                    time);
         return SARINS_ERROR;
     }
-    char msg[256];
     if (!sarins_vehicle_valid(&st->vehicle, msg, sizeof msg)) { /* the next step would start outside */
         sarins_log(c, SARINS_ERROR, "ValueError: %s", msg);
         return SARINS_ERROR;
