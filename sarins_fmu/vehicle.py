@@ -190,8 +190,15 @@ class VehicleTrajectory:
     ----------
     time : (K+1,) grid times, s.  speed : (K+1,) m/s.  heading : (K+1,) rad.
     lat, lon : (K+1,) rad.  velocity_n : (K+1, 3) m/s.
+    rows : (K+1, len(sarins_fmu.core.vehicle.COLUMNS)): row k describes the step
+        from ``time[k]`` (the C core's stream; the VehicleMotion FMU's outputs
+        at that time, bit for bit).
     schedule : GimbalSchedule with axes (heading, RINS rotation), or
-        (heading, pitch, roll, RINS rotation) with ``body``.
+        (heading, pitch, roll, RINS rotation) with ``body``; its breakpoints
+        are the grid points, its states there the rows'.
+
+    Raises ValueError with the core's reason for a bad parameter or leg, or a
+    drive that leaves +-89.9 deg latitude.
     """
 
     def __init__(self, legs, lat: float, lon: float = 0.0, heading: float = 0.0, *, step: float = 1.0,
@@ -202,7 +209,7 @@ class VehicleTrajectory:
         n = rows.shape[0] - 1
         col = {name: j for j, name in enumerate(core.COLUMNS)}
         self.step, self.n_steps = float(step), n
-        self.rows = rows  # (K+1, len(core.COLUMNS)): row k describes the step from time[k] (the FMU's outputs)
+        self.rows = rows
         self.time = np.arange(n + 1) * step
         self.speed = rows[:, col["speed"]].copy()
         self.heading = rows[:, col["yaw"]].copy()
