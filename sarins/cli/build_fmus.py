@@ -8,7 +8,11 @@ from . import UsageError
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("build-fmus", help="build the FMI 2.0 co-simulation FMUs")
+    from fmus.native_fmu import NATIVE
+
+    p = subparsers.add_parser("build-fmus", help="build the FMI 2.0 co-simulation FMUs",
+                              description="Build the FMUs; native (every FMI call in C, no Python): "
+                                          f"{', '.join(NATIVE)}.")
     p.add_argument("--out", type=Path, default=None,
                    help="output folder (default build/fmus; with --fmi 3 build/fmus3)")
     p.add_argument("--fmi", type=int, choices=(2, 3), default=2,
