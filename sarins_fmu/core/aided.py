@@ -1,0 +1,60 @@
+"""ctypes binding of the aided-navigation kernels: trajectory truth (``traj.h``), the 3-D strapdown
+mechanization (``nav3.h``), the GNSS receiver (``gnss.h``) and the error-state Kalman filter
+(``eskf.h``)."""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+
+from . import _arrays
+from ._lib import function
+
+_I64, _F64, _P = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p
+
+TRAJ_ROW = 15  # truth row of traj.h
+NAV_ROW = 9  # output row of nav3.h
+
+_traj_run = function("sarins_traj_run", ctypes.c_int, _I64, _P, _P, _F64, _I64, _I64, _P, _P, _P)
+_nav3_steps = function("sarins_nav3_steps", ctypes.c_int, _I64, _P, _P, _P, _P, _P, _F64, _P)
+_quat_to_rotvec = function("sarins_quat_to_rotvec", None, _P, _P)
+
+
+def traj_run(segments, start, step: float, substeps: int):
+    """``sarins_traj_run``: truth rows (K+1, 15), dtheta (K, 3) rad, dv (K, 3) m/s for a segment
+    table (n, 4) (steps, accel m/s^2, yaw rate rad/s, pitch rate rad/s) from start (6) (lat, lon rad,
+    height m, speed m/s, yaw, pitch rad).  ValueError when the core refuses the arguments."""
+    seg = _arrays.read(segments, (np.shape(segments)[0], 4), "segment table")
+    start = _arrays.read(start, (6,), "trajectory start")
+    k = int(round(float(np.sum(seg[:, 0]))))
+    if k < 1:
+        raise ValueError("the trajectory has no IMU step")
+    truth, dtheta, dv = np.empty((k + 1, TRAJ_ROW)), np.empty((k, 3)), np.empty((k, 3))
+    if _traj_run(seg.shape[0], seg.ctypes.data, start.ctypes.data, float(step), int(substeps), k,
+                 truth.ctypes.data, dtheta.ctypes.data, dv.ctypes.data) != 0:
+        raise ValueError("the trajectory leaves the valid range (negative speed, |pitch| >= 89 deg, "
+                         "|latitude| >= 89.9 deg) or has a non-finite value")
+    return truth, dtheta, dv
+
+
+def nav3_steps(q, v, pos, dtheta, dv, step: float) -> np.ndarray:
+    """``sarins_nav3_steps``: q (4), v (3), pos (3) float64 arrays advanced in place over K steps;
+    returns the (K, 9) rows (lat, lon, h, v E N U, yaw, pitch, roll)."""
+    dtheta = _arrays.read(dtheta, (np.shape(dtheta)[0], 3), "dtheta")
+    k = dtheta.shape[0]
+    dv = _arrays.read(dv, (k, 3), "dv")
+    q, v, pos = _arrays.written(q, (4,), "q"), _arrays.written(v, (3,), "v"), _arrays.written(pos, (3,), "pos")
+    out = np.empty((k, NAV_ROW))
+    if _nav3_steps(k, q.ctypes.data, v.ctypes.data, pos.ctypes.data, dtheta.ctypes.data, dv.ctypes.data,
+                   float(step), out.ctypes.data) != 0:
+        raise ValueError("increments contain NaN or infinity, or the step is not positive")
+    return out
+
+
+def quat_to_rotvec(q) -> np.ndarray:
+    """Rotation vector (rad) of a unit quaternion [w x y z]."""
+    q = _arrays.read(q, (4,), "q")
+    phi = np.empty(3)
+    _quat_to_rotvec(q.ctypes.data, phi.ctypes.data)
+    return phi
