@@ -58,3 +58,36 @@ def quat_to_rotvec(q) -> np.ndarray:
     phi = np.empty(3)
     _quat_to_rotvec(q.ctypes.data, phi.ctypes.data)
     return phi
+
+
+GNSS_CONFIG = 17  # settings of gnss.h
+GNSS_OUT = 7
+_gnss_size = function("sarins_gnss_size", _I64)
+_gnss_init = function("sarins_gnss_init", ctypes.c_int, _P, _P, ctypes.c_uint64, ctypes.c_char_p, ctypes.c_size_t)
+_gnss_fixes = function("sarins_gnss_fixes", ctypes.c_int, _P, _I64, _P, _P, _P, _I64, _P, _P)
+
+
+class GnssState:
+    """A ``sarins_gnss`` struct (gnss.h) in a numpy buffer; ValueError with the core's reason for bad
+    settings."""
+
+    def __init__(self, config, seed: int):
+        config = _arrays.read(config, (GNSS_CONFIG,), "GNSS settings")
+        self.buffer = np.zeros((int(_gnss_size()) + 7) // 8)
+        msg = ctypes.create_string_buffer(256)
+        if _gnss_init(self.buffer.ctypes.data, config.ctypes.data, int(seed), msg, 256) != 0:
+            raise ValueError(msg.value.decode())
+
+    def fixes(self, time, truth, omega_ib, outages) -> np.ndarray:
+        """(n, 7) fix rows (valid, lat, lon, h, v E N U) at ``time`` (n,) from truth (n, 9) and
+        omega_ib (n, 3); outages (m, 2) [start, end) s."""
+        time = _arrays.read(time, (np.shape(time)[0],), "time")
+        n = time.shape[0]
+        truth = _arrays.read(truth, (n, 9), "truth")
+        omega_ib = _arrays.read(omega_ib, (n, 3), "omega_ib")
+        outages = _arrays.read(np.reshape(outages, (-1, 2)), (np.size(outages) // 2, 2), "outages")
+        out = np.empty((n, GNSS_OUT))
+        if _gnss_fixes(self.buffer.ctypes.data, n, time.ctypes.data, truth.ctypes.data, omega_ib.ctypes.data,
+                       outages.shape[0], outages.ctypes.data, out.ctypes.data) != 0:
+            raise ValueError("GNSS epochs must be finite and increasing, the truth finite")
+        return out
