@@ -9,8 +9,9 @@ Python list of dicts or a JSON file ``{"start": {...}, "segments": [...]}``:
   ``"duration"`` and ``"to_speed"``, or ``"duration"`` and ``"accel"`` (negative brakes);
 * ``{"kind": "cruise", "duration": s}``, optionally ``"speed"``: the current speed, checked;
 * ``{"kind": "turn", "rate_dps": deg/s, "duration" | "angle_deg"}`` or
-  ``{"kind": "turn", "radius": m, "angle_deg": deg}`` (positive angle or rate = left, CCW; a radius
-  turn keeps the speed, yaw rate = speed / radius);
+  ``{"kind": "turn", "radius": m, "angle_deg": deg}`` (positive angle or rate = left, CCW; with
+  ``angle_deg`` the angle's sign gives the direction; a radius turn keeps the speed, yaw rate =
+  speed / radius; the duration is put on the grid and the rate adjusted to turn the angle exactly);
 * ``{"kind": "climb", "to_pitch_deg": deg, "duration": s}``: pitch (flight-path angle) changes at a
   constant rate to ``to_pitch_deg``; the vehicle climbs while its pitch is not 0.
 
@@ -219,8 +220,9 @@ def _turn(i: int, seg: dict, speed: float, step: float) -> list:
             n = _steps(i, seg, _number(i, seg, "duration", positive=True), step)
             return [n, 0.0, rate, 0.0]
         angle = _number(i, seg, "angle_deg") * DEG_TO_RAD
-        if rate == 0 or angle * rate < 0:
-            raise TrajectoryError(f"segment {i} (turn): rate_dps and angle_deg must be non-zero and of one sign")
+        if rate == 0:
+            raise TrajectoryError(f"segment {i} (turn): rate_dps must not be 0 with angle_deg")
+        rate = math.copysign(rate, angle)  # the angle gives the direction
     n = max(1, round(abs(angle / rate) / step))
     return [n, 0.0, angle / (n * step), 0.0]  # the angle exactly; the rate on the grid
 

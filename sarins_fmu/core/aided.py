@@ -91,3 +91,38 @@ class GnssState:
                        outages.shape[0], outages.ctypes.data, out.ctypes.data) != 0:
             raise ValueError("GNSS epochs must be finite and increasing, the truth finite")
         return out
+
+
+ESKF_CONFIG = 17  # settings of eskf.h
+ESKF_ROW = 9 + 6 + 225
+ESKF_GNSS = 11
+_eskf_size = function("sarins_eskf_size", _I64)
+_eskf_init = function("sarins_eskf_init", ctypes.c_int, _P, _P, _P, ctypes.c_char_p, ctypes.c_size_t)
+_eskf_run = function("sarins_eskf_run", ctypes.c_int, _P, _I64, _P, _P, _P, _I64, _P, _P, ctypes.c_int, _I64, _P)
+
+
+class EskfState:
+    """A ``sarins_eskf`` struct (eskf.h) in a numpy buffer; ValueError with the core's reason."""
+
+    def __init__(self, config, nav0):
+        config = _arrays.read(config, (ESKF_CONFIG,), "filter settings")
+        nav0 = _arrays.read(nav0, (9,), "start state")
+        self.buffer = np.zeros((int(_eskf_size()) + 7) // 8)
+        msg = ctypes.create_string_buffer(256)
+        if _eskf_init(self.buffer.ctypes.data, config.ctypes.data, nav0.ctypes.data, msg, 256) != 0:
+            raise ValueError(msg.value.decode())
+
+    def run(self, dtheta, dv, zupt, gnss, vel_std, use_vel: bool, out_every: int) -> np.ndarray:
+        """``sarins_eskf_run`` over K steps (zupt (K, 4): flag, measured velocity at a stop); returns the (K // out_every, 240) rows (nav 9, b_g 3, b_a 3,
+        P 225)."""
+        dtheta = _arrays.read(dtheta, (np.shape(dtheta)[0], 3), "dtheta")
+        k = dtheta.shape[0]
+        dv = _arrays.read(dv, (k, 3), "dv")
+        zupt = _arrays.read(zupt, (k, 4), "zupt")
+        gnss = _arrays.read(np.reshape(gnss, (-1, ESKF_GNSS)), (np.size(gnss) // ESKF_GNSS, ESKF_GNSS), "fixes")
+        vel_std = _arrays.read(vel_std, (3,), "velocity std")
+        out = np.empty((k // out_every, ESKF_ROW))
+        if _eskf_run(self.buffer.ctypes.data, k, dtheta.ctypes.data, dv.ctypes.data, zupt.ctypes.data, gnss.shape[0],
+                     gnss.ctypes.data, vel_std.ctypes.data, int(bool(use_vel)), int(out_every), out.ctypes.data) != 0:
+            raise ValueError("filter inputs not finite, fixes not in step order, or a velocity std not positive")
+        return out

@@ -41,6 +41,7 @@ int sarins_core_abi(void);
 #include "traj.h"
 #include "nav3.h"
 #include "gnss.h"
+#include "eskf.h"
 #include "ins_fmu_step.h"
 
 /* trained networks: model files, inference kernels, identifier and compensators */
