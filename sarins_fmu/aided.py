@@ -255,3 +255,51 @@ def nees_monte_carlo(truth, runs: int, *, first_seed: int = 0, skip: float = 0.0
     keep = r.time >= skip
     inside = {b: float(np.mean((v[keep] >= band[0]) & (v[keep] <= band[1]))) for b, v in mean.items()}
     return NeesReport(runs=runs, time=r.time, mean_nees=mean, band=band, inside=inside)
+
+
+@dataclass(frozen=True)
+class OutageRow:
+    """One GNSS outage: window (s), horizontal error at its end (m), the filter's predicted horizontal
+    sigma there (m) and their ratio."""
+
+    start: float
+    end: float
+    error: float
+    sigma: float
+
+    @property
+    def ratio(self) -> float:
+        return self.error / self.sigma
+
+
+def outage_table(result: AidedResult, outages) -> list:
+    """:class:`OutageRow` per outage window (the last output row before the window's end)."""
+    rows = []
+    for start, end in np.asarray(outages, float).reshape(-1, 2):
+        i = int(np.searchsorted(result.time, end, side="right")) - 1
+        rows.append(OutageRow(float(start), float(end), float(result.horizontal_error()[i]),
+                              float(result.horizontal_sigma()[i])))
+    return rows
+
+
+def summary(result: AidedResult, outages=()) -> dict:
+    """JSON-ready numbers of a run: RMS and max horizontal / vertical errors (m), RMS velocity error
+    (m/s), RMS attitude error (deg; heading separately), the final errors, mean NEES per block and
+    the outage table."""
+    h = result.horizontal_error()
+    deg = 180.0 / math.pi
+    return {
+        "duration_s": float(result.time[-1]),
+        "horizontal_error_rms_m": float(np.sqrt(np.mean(h**2))),
+        "horizontal_error_max_m": float(h.max()),
+        "vertical_error_rms_m": float(np.sqrt(np.mean(result.error[:, 2] ** 2))),
+        "velocity_error_rms_mps": float(np.sqrt(np.mean(np.sum(result.error[:, 3:6] ** 2, axis=1)))),
+        "tilt_error_rms_deg": float(deg * np.sqrt(np.mean(np.sum(result.error[:, 6:8] ** 2, axis=1)))),
+        "heading_error_rms_deg": float(deg * np.sqrt(np.mean(result.error[:, 8] ** 2))),
+        "final_horizontal_error_m": float(h[-1]),
+        "mean_nees": {b: float(np.mean(result.nees(b))) for b in ("position", "velocity", "attitude")},
+        "gnss_fixes_used": result.gnss_used,
+        "zupt_steps": result.zupt_steps,
+        "outages": [{"start_s": r.start, "end_s": r.end, "horizontal_error_m": r.error, "predicted_sigma_m": r.sigma,
+                     "ratio": r.ratio} for r in outage_table(result, outages)],
+    }
