@@ -303,3 +303,33 @@ def summary(result: AidedResult, outages=()) -> dict:
         "outages": [{"start_s": r.start, "end_s": r.end, "horizontal_error_m": r.error, "predicted_sigma_m": r.sigma,
                      "ratio": r.ratio} for r in outage_table(result, outages)],
     }
+
+
+@dataclass(frozen=True)
+class OutageReport:
+    """Monte Carlo outage growth: per window (start, end s), the RMS over the runs of the horizontal
+    error at the window's end (m), the filter's predicted horizontal sigma there (RMS over the runs
+    of sqrt(P_EE + P_NN), m) and their ratio."""
+
+    runs: int
+    windows: list
+    rms_error: list
+    predicted_sigma: list
+
+    @property
+    def ratios(self) -> list:
+        return [e / s for e, s in zip(self.rms_error, self.predicted_sigma)]
+
+
+def outage_monte_carlo(truth, runs: int, outages, *, first_seed: int = 0, **kwargs) -> OutageReport:
+    """Horizontal error at the end of each GNSS outage over ``runs`` seeds vs the filter's sigma."""
+    windows = [tuple(map(float, w)) for w in np.asarray(outages, float).reshape(-1, 2)]
+    err2 = np.zeros(len(windows))
+    var = np.zeros(len(windows))
+    for seed in range(first_seed, first_seed + runs):
+        r = navigate(truth, seed=seed, outages=outages, **kwargs)
+        for j, row in enumerate(outage_table(r, outages)):
+            err2[j] += row.error**2
+            var[j] += row.sigma**2
+    return OutageReport(runs=runs, windows=windows, rms_error=list(np.sqrt(err2 / runs)),
+                        predicted_sigma=list(np.sqrt(var / runs)))
