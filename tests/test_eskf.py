@@ -69,3 +69,44 @@ def test_lever_arm_is_estimated_away(truth):
 def test_bad_settings_are_refused(truth, index, value, words):
     with pytest.raises(ValueError, match=words):
         core.EskfState(config({index: value}), truth.nav_rows()[0])
+
+
+SANITIZED_RUN = """
+import numpy as np
+from sarins_fmu import aided, gnss, trajectory as tr
+from sarins_fmu.core import _lib
+assert str(_lib.library_path()) == {lib!r}
+segs = ({{"kind": "stop", "duration": 5}}, {{"kind": "accelerate", "to_speed": 5, "accel": 1.0}},
+        {{"kind": "turn", "radius": 50, "angle_deg": 90}}, {{"kind": "climb", "to_pitch_deg": 3, "duration": 2}},
+        {{"kind": "accelerate", "to_speed": 0, "accel": 1.0}}, {{"kind": "stop", "duration": 3}})
+truth = tr.generate(tr.Trajectory(tr.Start(lat_deg=30.0), segs), 0.05)
+cfg = gnss.preset("sps", rate_hz=2.0, lever_arm=(0.1, 0.5, 1.0), latency=0.1)
+r = aided.navigate(truth, gnss=cfg, outages=[[8, 12]], seed=1)
+assert np.isfinite(r.error).all()
+print("sanitized run ok")
+"""
+
+
+@pytest.mark.slow
+def test_aided_kernels_under_address_and_undefined_behaviour_sanitizers(tmp_path):
+    """Rebuild the core with ASan + UBSan and run trajectory, GNSS and filter through the binding."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    core_dir = root / "sarins_fmu" / "core"
+    lib = tmp_path / "_sarins_core_asan.so"
+    flags = ["-std=c11", "-O1", "-g", "-fPIC", "-shared", "-Wall", "-Wextra", "-Wpedantic", "-Werror",
+             "-ffp-contract=off", "-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
+    subprocess.run(["gcc", *flags, "-I", str(core_dir), *sorted(map(str, core_dir.glob("*.c"))), "-o", str(lib)],
+                   check=True, capture_output=True, text=True)
+    libasan = subprocess.run(["gcc", "-print-file-name=libasan.so"], check=True, capture_output=True,
+                             text=True).stdout.strip()
+    env = {**os.environ, "SARINS_CORE_LIB": str(lib), "LD_PRELOAD": libasan, "PYTHONPATH": str(root),
+           "ASAN_OPTIONS": "detect_leaks=0:abort_on_error=1", "UBSAN_OPTIONS": "print_stacktrace=1:halt_on_error=1"}
+    run = subprocess.run([sys.executable, "-c", SANITIZED_RUN.format(lib=str(lib))], env=env, capture_output=True,
+                         text=True, timeout=900)
+    assert run.returncode == 0 and "sanitized run ok" in run.stdout, run.stderr[-4000:]
+    assert "runtime error" not in run.stderr and "AddressSanitizer" not in run.stderr, run.stderr[-4000:]
