@@ -7,7 +7,9 @@ Frames and units: navigation ENU, body right-front-up, SI.  Errors are computed 
 
 The IMU errors of an aided run (:class:`ImuNoise`) are white angle and velocity random walks, a
 constant bias per axis drawn from N(0, sigma^2) for each seed, and bias random walks, added to the
-ideal increments of :mod:`sarins_fmu.trajectory` (vectorised numpy).  Stops are known from the
+ideal increments of :mod:`sarins_fmu.trajectory` (vectorised numpy).  An odometer (core ``odo.h``)
+measures the forward speed; the non-holonomic constraint says the body's lateral and vertical
+velocities are zero while moving.  Stops are known from the
 trajectory (a vehicle's brake / odometer signal): a ZUPT is applied at every IMU step where the
 vehicle stands still (``Truth.stationary``), not detected from the IMU's statistics.  A stopped
 vehicle still jitters (engine, wind, people): the zero-velocity pseudo-measurement carries white
@@ -28,7 +30,7 @@ from .core import aided as _core
 from .rotations import euler_to_mat
 from .units import DPH_TO_RPS, DPSH_TO_RPSS, UG_TO_MPS2
 
-AIDING = ("gnss", "zupt")
+AIDING = ("gnss", "zupt", "odometer", "nhc")
 
 
 @dataclass(frozen=True)
@@ -93,11 +95,12 @@ class FilterSettings:
     tilt0_std: float = 1e-3  # rad
     heading0_std: float = 5e-3  # rad
     zupt_std: float = 0.01  # m/s
+    nhc_std: float = 0.05  # m/s, lateral and vertical body velocity (non-holonomic constraint)
     cov_every: int = 10  # IMU steps per covariance propagation
     out_every: int = 10  # IMU steps per output row
 
     def __post_init__(self):
-        for name in ("pos0_std", "vel0_std", "tilt0_std", "heading0_std", "zupt_std"):
+        for name in ("pos0_std", "vel0_std", "tilt0_std", "heading0_std", "zupt_std", "nhc_std"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"filter {name} must be positive, got {value!r}")
@@ -154,12 +157,37 @@ def nav_errors(nav: np.ndarray, truth: np.ndarray) -> np.ndarray:
     return np.column_stack([pos, nav[:, 3:6] - truth[:, 3:6], phi])
 
 
-def _config(noise: ImuNoise, settings: FilterSettings, gnss_cfg, step: float) -> np.ndarray:
+@dataclass(frozen=True)
+class OdometerConfig:
+    """Wheel odometer (core ``odo.h``): forward speed at ``rate_hz`` with a scale-factor error (not
+    estimated by the 15-state filter: keep it 0 for consistent runs), white noise (m/s) and speed
+    resolution (m/s).  Defaults hypothetical (our choice): 10 Hz, 0.02 m/s, 0.01 m/s resolution."""
+
+    rate_hz: float = 10.0
+    scale_factor: float = 0.0
+    noise_std: float = 0.02
+    resolution: float = 0.01
+
+    def __post_init__(self):
+        if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
+            raise ValueError(f"odometer rate must be positive, got {self.rate_hz}")
+        if not (math.isfinite(self.noise_std) and self.noise_std >= 0 and math.isfinite(self.resolution)
+                and self.resolution >= 0):
+            raise ValueError("odometer noise std and resolution must not be negative")
+
+    def std(self) -> float:
+        """Measurement std the filter uses: noise and quantisation (res^2 / 12), m/s."""
+        return max(math.sqrt(self.noise_std**2 + self.resolution**2 / 12.0), 1e-6)
+
+
+def _config(noise: ImuNoise, settings: FilterSettings, gnss_cfg, step: float, odometer=None) -> np.ndarray:
     lever = gnss_cfg.lever_arm if gnss_cfg is not None else (0.0, 0.0, 0.0)
     latency = gnss_cfg.latency if gnss_cfg is not None else 0.0
+    odo_std = odometer.std() if odometer is not None else 1.0
     return np.array([step, noise.arw, noise.vrw, noise.gyro_rw, noise.accel_rw, settings.pos0_std, settings.vel0_std,
                      settings.tilt0_std, settings.heading0_std, max(noise.gyro_bias_std, 1e-12),
-                     max(noise.accel_bias_std, 1e-12), *lever, latency, settings.zupt_std, settings.cov_every])
+                     max(noise.accel_bias_std, 1e-12), *lever, latency, settings.zupt_std, settings.cov_every,
+                     settings.nhc_std, odo_std])
 
 
 def _initial_state(truth, settings: FilterSettings, rng) -> np.ndarray:
@@ -187,12 +215,43 @@ def fix_rows(fixes, config, step: float) -> np.ndarray:
                             std])
 
 
-def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aiding=AIDING, outages=(),
-             settings: FilterSettings = FilterSettings(), seed: int = 0, gnss_velocity: bool = True) -> AidedResult:
+def body_speed(truth) -> np.ndarray:
+    """(K+1,) true forward speed (body y), m/s."""
+    mat = euler_to_mat(truth.attitude[:, 0], truth.attitude[:, 1], truth.attitude[:, 2])
+    return np.einsum("ni,ni->n", mat[:, :, 1], truth.velocity_n)
+
+
+def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed: int) -> np.ndarray:
+    """(K, 9) rows of ``sarins_eskf_run``: ZUPT at stops, odometer speeds at its rate, NHC while moving.
+    The trajectories have no side-slip or bounce, so the zero-velocity and non-holonomic pseudo-
+    measurements carry simulated white jitter of the std the filter assumes (``zupt_std``, ``nhc_std``):
+    a real vehicle's stop and wheels violate them by about that much."""
+    k = truth.n_steps
+    aid = np.zeros((k, 9))
+    still = truth.stationary()
+    if "zupt" in aiding:  # a stop's jitter: white, the std the filter assumes
+        aid[:, 0] = still
+        aid[:, 1:4] = aid[:, :1] * settings.zupt_std * rng.standard_normal((k, 3))
+    if "odometer" in aiding:
+        every = max(1, round(1.0 / (odometer.rate_hz * truth.step)))
+        idx = np.arange(every - 1, k, every)  # after the step ending at (idx + 1) h
+        cfg = np.array([odometer.scale_factor, odometer.noise_std, odometer.resolution])
+        aid[idx, 4] = 1.0
+        aid[idx, 5] = _core.OdoState(cfg, seed).speeds(body_speed(truth)[idx + 1])
+    if "nhc" in aiding:
+        aid[:, 6] = ~still
+        aid[:, 7:9] = aid[:, 6:7] * settings.nhc_std * rng.standard_normal((k, 2))
+    return aid
+
+
+def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aiding=("gnss", "zupt"), outages=(),
+             settings: FilterSettings = FilterSettings(), seed: int = 0, gnss_velocity: bool = True,
+             odometer: OdometerConfig | None = None) -> AidedResult:
     """Aided navigation along ``truth`` (:class:`sarins_fmu.trajectory.Truth`).
 
     gnss : GNSSConfig or None (preset ``sps`` when 'gnss' is aided and None is given).
-    aiding : subset of ('gnss', 'zupt').  outages : (m, 2) GNSS outage windows [start, end) s.
+    aiding : subset of ('gnss', 'zupt', 'odometer', 'nhc').  outages : (m, 2) GNSS outage windows [start, end) s.
+    odometer : OdometerConfig (default ``OdometerConfig()`` when 'odometer' is aided).
     seed : IMU errors, initial errors (stream of ``seed``) and GNSS errors (``seed``).
     """
     unknown = set(aiding) - set(AIDING)
@@ -200,14 +259,13 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         raise ValueError(f"unknown aiding {', '.join(sorted(unknown))}; choose from {', '.join(AIDING)}")
     if "gnss" in aiding and gnss is None:
         gnss = gnss_mod.PRESETS["sps"]
+    if "odometer" in aiding and odometer is None:
+        odometer = OdometerConfig()
     step = truth.step
     dtheta, dv, bg_true, ba_true = corrupt(truth, noise, seed)
     rng = np.random.default_rng([seed, 3018])
-    state = _core.EskfState(_config(noise, settings, gnss, step), _initial_state(truth, settings, rng))
-    zupt = np.zeros((truth.n_steps, 4))
-    if "zupt" in aiding:  # a stop's jitter: white, the std the filter assumes
-        zupt[:, 0] = truth.stationary()
-        zupt[:, 1:] = zupt[:, :1] * settings.zupt_std * rng.standard_normal((truth.n_steps, 3))
+    state = _core.EskfState(_config(noise, settings, gnss, step, odometer), _initial_state(truth, settings, rng))
+    aid = per_step_aiding(truth, aiding, settings, odometer, rng, seed)
     if "gnss" in aiding:
         fixes = gnss_mod.simulate(truth, gnss, seed, outages)
         rows = fix_rows(fixes, gnss, step)
@@ -216,14 +274,14 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         if len(outages):
             gnss_mod.check_outages(outages, truth.time[-1])
         rows, vel_std = np.zeros((0, 11)), np.ones(3)
-    out = state.run(dtheta, dv, zupt, rows, vel_std, gnss_velocity, settings.out_every)
+    out = state.run(dtheta, dv, aid, rows, vel_std, gnss_velocity, settings.out_every)
     idx = np.arange(1, out.shape[0] + 1) * settings.out_every
     true_rows = truth.nav_rows()[idx]
     nav = out[:, :9]
     return AidedResult(time=truth.time[idx], nav=nav, truth=true_rows, error=nav_errors(nav, true_rows),
                        cov=out[:, 15:].reshape(-1, 15, 15), bias_g=out[:, 9:12], bias_a=out[:, 12:15],
                        bias_g_true=bg_true[idx - 1], bias_a_true=ba_true[idx - 1],
-                       gnss_used=int(np.sum(rows[:, 1] > 0)) if len(rows) else 0, zupt_steps=int(zupt[:, 0].sum()),
+                       gnss_used=int(np.sum(rows[:, 1] > 0)) if len(rows) else 0, zupt_steps=int(aid[:, 0].sum()),
                        info={"seed": seed, "aiding": list(aiding)})
 
 

@@ -50,7 +50,7 @@ def test_aided_run_prints_json_with_the_outage_row(tmp_path, capsys):
     (SEGMENTS, ["--zupt-std", "-0.1"], "--zupt-std must be positive"),
     (SEGMENTS, ["--gnss-outage", "100:200"], "--gnss-outage 100:200 is outside the run"),
     (SEGMENTS, ["--gnss-outage", "abc"], "--gnss-outage abc"),
-    (SEGMENTS, ["--aiding", "gnss,odometer"], "--aiding"),
+    (SEGMENTS, ["--aiding", "gnss,magnetometer"], "--aiding gnss,magnetometer: choose from gnss, zupt, odometer, nhc"),
     (SEGMENTS, ["--nav-hours", "3"], "--nav-hours does not apply to an aided run"),
 ])
 def test_bad_input_exits_2_naming_it(tmp_path, capsys, segments, extra, words):
@@ -64,3 +64,11 @@ def test_missing_file_and_aided_options_without_a_trajectory(tmp_path, capsys):
     assert "cannot read" in capsys.readouterr().err
     assert run(["navigate", "--gnss-outage", "1:2"]) == 2
     assert "--gnss-outage applies to an aided run only" in capsys.readouterr().err
+
+
+def test_gnss_free_run_with_odometer_and_nhc(tmp_path, capsys):
+    assert run(["navigate", "--trajectory", write(tmp_path), "--aiding", "zupt,odometer,nhc", "--imu-rate-hz", "50",
+                "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["gnss_fixes_used"] == 0 and out["aiding"] == ["zupt", "odometer", "nhc"]
+    assert out["horizontal_error_max_m"] < 50

@@ -33,7 +33,7 @@ def config(changes=None):
 def test_without_updates_the_filter_is_the_mechanization(truth):
     state = core.EskfState(config(), truth.nav_rows()[0])
     k = truth.n_steps
-    out = state.run(truth.dtheta, truth.dv, np.zeros((k, 4)), np.zeros((0, 11)), np.ones(3), True, 1)
+    out = state.run(truth.dtheta, truth.dv, np.zeros((k, 9)), np.zeros((0, 11)), np.ones(3), True, 1)
     q = aided.euler_to_mat(*truth.attitude[0])
     from sarins_fmu.rotations import mat_to_quat
     q = mat_to_quat(q).copy()

@@ -74,7 +74,7 @@ def register(sub) -> None:
     g.add_argument("--trajectory", metavar="FILE", default=None,
                    help="trajectory file (JSON: start and segments); runs the aided INS instead of the static run")
     g.add_argument("--aiding", default="gnss,zupt", metavar="LIST",
-                   help="comma-separated aiding: gnss, zupt, or none (default gnss,zupt)")
+                   help="comma-separated aiding: gnss, zupt, odometer, nhc, or none (default gnss,zupt)")
     g.add_argument("--gnss-outage", action="append", default=[], metavar="START:END",
                    help="GNSS outage window, s from the start of the trajectory (repeatable)")
     g.add_argument("--gnss", default="sps", metavar="PRESET", help="GNSS receiver preset: sps, sbas, rtk (default sps)")
@@ -117,7 +117,7 @@ def run_aided(args) -> int:
     aiding = [] if args.aiding.strip() == "none" else [a.strip() for a in args.aiding.split(",")]
     bad = [a for a in aiding if a not in aided.AIDING]
     if bad or not args.aiding.strip():
-        raise UsageError(f"--aiding {args.aiding}: choose from gnss, zupt (comma-separated) or none")
+        raise UsageError(f"--aiding {args.aiding}: choose from {', '.join(aided.AIDING)} (comma-separated) or none")
     if args.imu_noise not in aided.IMU_NOISE:
         raise UsageError(f"--imu-noise {args.imu_noise}: choose one of {', '.join(aided.IMU_NOISE)}")
     if args.gnss not in gnss.PRESETS:

@@ -93,7 +93,7 @@ class GnssState:
         return out
 
 
-ESKF_CONFIG = 17  # settings of eskf.h
+ESKF_CONFIG = 19  # settings of eskf.h
 ESKF_ROW = 9 + 6 + 225
 ESKF_GNSS = 11
 _eskf_size = function("sarins_eskf_size", _I64)
@@ -112,17 +112,43 @@ class EskfState:
         if _eskf_init(self.buffer.ctypes.data, config.ctypes.data, nav0.ctypes.data, msg, 256) != 0:
             raise ValueError(msg.value.decode())
 
-    def run(self, dtheta, dv, zupt, gnss, vel_std, use_vel: bool, out_every: int) -> np.ndarray:
-        """``sarins_eskf_run`` over K steps (zupt (K, 4): flag, measured velocity at a stop); returns the (K // out_every, 240) rows (nav 9, b_g 3, b_a 3,
+    def run(self, dtheta, dv, aid, gnss, vel_std, use_vel: bool, out_every: int) -> np.ndarray:
+        """``sarins_eskf_run`` over K steps (aid (K, 9): ZUPT flag, measured velocity at a stop (3), odometer
+        flag, odometer speed, NHC flag, measured lateral and vertical body velocity); returns the (K // out_every, 240) rows (nav 9, b_g 3, b_a 3,
         P 225)."""
         dtheta = _arrays.read(dtheta, (np.shape(dtheta)[0], 3), "dtheta")
         k = dtheta.shape[0]
         dv = _arrays.read(dv, (k, 3), "dv")
-        zupt = _arrays.read(zupt, (k, 4), "zupt")
+        aid = _arrays.read(aid, (k, 9), "per-step aiding")
         gnss = _arrays.read(np.reshape(gnss, (-1, ESKF_GNSS)), (np.size(gnss) // ESKF_GNSS, ESKF_GNSS), "fixes")
         vel_std = _arrays.read(vel_std, (3,), "velocity std")
         out = np.empty((k // out_every, ESKF_ROW))
-        if _eskf_run(self.buffer.ctypes.data, k, dtheta.ctypes.data, dv.ctypes.data, zupt.ctypes.data, gnss.shape[0],
+        if _eskf_run(self.buffer.ctypes.data, k, dtheta.ctypes.data, dv.ctypes.data, aid.ctypes.data, gnss.shape[0],
                      gnss.ctypes.data, vel_std.ctypes.data, int(bool(use_vel)), int(out_every), out.ctypes.data) != 0:
             raise ValueError("filter inputs not finite, fixes not in step order, or a velocity std not positive")
+        return out
+
+
+ODO_CONFIG = 3
+_odo_size = function("sarins_odo_size", _I64)
+_odo_init = function("sarins_odo_init", ctypes.c_int, _P, _P, ctypes.c_uint64, ctypes.c_char_p, ctypes.c_size_t)
+_odo_speeds = function("sarins_odo_speeds", ctypes.c_int, _P, _I64, _P, _P)
+
+
+class OdoState:
+    """A ``sarins_odo`` struct (odo.h): settings (scale factor, noise std m/s, resolution m/s), seed."""
+
+    def __init__(self, config, seed: int):
+        config = _arrays.read(config, (ODO_CONFIG,), "odometer settings")
+        self.buffer = np.zeros((int(_odo_size()) + 7) // 8)
+        msg = ctypes.create_string_buffer(256)
+        if _odo_init(self.buffer.ctypes.data, config.ctypes.data, int(seed), msg, 256) != 0:
+            raise ValueError(msg.value.decode())
+
+    def speeds(self, speed) -> np.ndarray:
+        """Measured speeds (n,) m/s of the true forward speeds (n,)."""
+        speed = _arrays.read(speed, (np.shape(speed)[0],), "speed")
+        out = np.empty(speed.shape[0])
+        if _odo_speeds(self.buffer.ctypes.data, speed.shape[0], speed.ctypes.data, out.ctypes.data) != 0:
+            raise ValueError("odometer speeds must be finite")
         return out

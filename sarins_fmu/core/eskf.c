@@ -45,8 +45,9 @@ int sarins_eskf_init(sarins_eskf *s, const double *config, const double *nav0, c
             say(msg, size, "a filter standard deviation is negative");
             return 1;
         }
-    if (!(config[SARINS_ESKF_ZUPT_STD] > 0.0) || config[SARINS_ESKF_LATENCY] < 0.0) {
-        say(msg, size, "the ZUPT std must be positive and the latency not negative");
+    if (!(config[SARINS_ESKF_ZUPT_STD] > 0.0) || !(config[SARINS_ESKF_NHC_STD] > 0.0) ||
+        !(config[SARINS_ESKF_ODO_STD] > 0.0) || config[SARINS_ESKF_LATENCY] < 0.0) {
+        say(msg, size, "the ZUPT, NHC and odometer stds must be positive and the latency not negative");
         return 1;
     }
     if (!(config[SARINS_ESKF_COV_EVERY] >= 1.0 && config[SARINS_ESKF_COV_EVERY] <= 1000.0 &&
@@ -179,16 +180,11 @@ static double scalar_update(sarins_eskf *s, const double *hrow, double z, double
         k[i] = ph[i] / sv;
     for (int i = 0; i < N; i++)
         s->x[i] += k[i] * innov;
-    /* Joseph: P = (I - k h) P (I - k h)' + k r k' */
-    double *a = s->tmp, *ikh = s->phi_acc;
+    /* Joseph: P = (I - k h) P (I - k h)' + k r k', expanded with a = P h' (= ph):
+     *     P = P - k a' - a k' + (h a + r) k k'     (valid for any gain k; O(n^2)) */
     for (int i = 0; i < N; i++)
         for (int j = 0; j < N; j++)
-            ikh[IDX(i, j)] = (i == j ? 1.0 : 0.0) - k[i] * hrow[j];
-    sarins_matmul(N, ikh, s->p, a);
-    sarins_matmul_bt(N, a, ikh, s->p);
-    for (int i = 0; i < N; i++)
-        for (int j = 0; j < N; j++)
-            s->p[IDX(i, j)] += k[i] * r * k[j];
+            s->p[IDX(i, j)] += (sv * k[i] * k[j] - k[i] * ph[j]) - ph[i] * k[j];
     sarins_symmetrize(N, s->p);
     return innov * innov / sv;
 }
@@ -286,6 +282,28 @@ void sarins_eskf_zupt(sarins_eskf *s, const double *v_meas)
     feedback(s);
 }
 
+void sarins_eskf_body_velocity(sarins_eskf *s, const double *meas, const int *use, const double *std)
+{
+    double m[9], hrow[N];
+    sarins_quat_to_mat(s->q, m);
+    const double *v = s->v;
+    double vx[9] = {0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0};
+    for (int i = 0; i < 3; i++) {
+        if (!use[i])
+            continue;
+        for (int j = 0; j < N; j++)
+            hrow[j] = 0.0;
+        double vb = 0.0;
+        for (int j = 0; j < 3; j++) { /* row i of mat_bn = column i of mat_nb */
+            vb += m[3 * j + i] * v[j];
+            hrow[3 + j] = m[3 * j + i];
+            hrow[6 + j] = -(m[i] * vx[j] + m[3 + i] * vx[3 + j] + m[6 + i] * vx[6 + j]);
+        }
+        scalar_update(s, hrow, vb - meas[i], std[i] * std[i]);
+    }
+    feedback(s);
+}
+
 static void write_row(const sarins_eskf *s, double *row)
 {
     sarins_nav3_row(s->q, s->v, s->pos, row);
@@ -297,7 +315,7 @@ static void write_row(const sarins_eskf *s, double *row)
         row[15 + i] = s->p[i];
 }
 
-int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const double *dv, const double *zupt, int64_t m,
+int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const double *dv, const double *aid, int64_t m,
                     const double *gnss, const double *vel_std, int use_vel, int64_t out_every, double *out)
 {
     if (out_every < 1 || k < 0 || m < 0)
@@ -305,8 +323,8 @@ int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const doubl
     for (int64_t i = 0; i < 3 * k; i++)
         if (!finite(dtheta[i]) || !finite(dv[i]))
             return 1;
-    for (int64_t i = 0; i < 4 * k; i++)
-        if (!finite(zupt[i]))
+    for (int64_t i = 0; i < 9 * k; i++)
+        if (!finite(aid[i]))
             return 1;
     for (int64_t j = 0; j < m * SARINS_ESKF_GNSS; j++)
         if (!finite(gnss[j]))
@@ -322,8 +340,16 @@ int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const doubl
         g++;
     for (int64_t i = 0; i < k; i++) {
         sarins_eskf_predict(s, dtheta + 3 * i, dv + 3 * i);
-        if (zupt[4 * i] != 0.0)
-            sarins_eskf_zupt(s, zupt + 4 * i + 1);
+        const double *a = aid + 9 * i;
+        if (a[0] != 0.0)
+            sarins_eskf_zupt(s, a + 1);
+        if (a[4] != 0.0 || a[6] != 0.0) {
+            double meas[3] = {a[7], a[5], a[8]};
+            int use[3] = {a[6] != 0.0, a[4] != 0.0, a[6] != 0.0};
+            double nhc = s->config[SARINS_ESKF_NHC_STD];
+            double std[3] = {nhc, s->config[SARINS_ESKF_ODO_STD], nhc};
+            sarins_eskf_body_velocity(s, meas, use, std);
+        }
         for (; g < m && gnss[g * SARINS_ESKF_GNSS] <= (double)i; g++) {
             const double *r = gnss + g * SARINS_ESKF_GNSS;
             if (r[0] < (double)i || r[1] == 0.0)

@@ -18,7 +18,8 @@
  *     Phi = I + F T + (F T)^2 / 2,   P = Phi P Phi' + Q,   Q = diag(0, vrw^2, arw^2, rw_g^2, rw_a^2) T
  * (F at the current state).  Updates are scalar and sequential (diagonal R), in Joseph form,
  *     k = P h' / (h P h' + r),   P = (I - k h) P (I - k h)' + k r k',
- * then P is symmetrized (the numerical safeguard: symmetry and, by Joseph's form, positive
+ * the Joseph form evaluated expanded, P - k a' - a k' + (h a + r) k k' with a = P h' (the same
+ * expression for any gain, O(n^2) instead of two n^3 products), then P is symmetrized (the numerical safeguard: symmetry and, by Joseph's form, positive
  * semi-definiteness are kept to rounding).  After a set of updates the state feeds back: position
  * (metres to lat, lon, h), velocity, attitude q_nb <- q(phi) q_nb, biases b += db; x is reset to 0.
  *
@@ -28,6 +29,10 @@
  * GNSS velocity:  z = v_ins + mat_nb (omega_nb^b x l) - v_gnss,
  *     H = [0, I, [(mat_nb (omega_nb^b x l)) x], -mat_nb [l x], 0]
  * ZUPT:  z = v_ins - v_meas (v_meas: zero plus the stop's jitter),  H = [0, I, 0, 0, 0].
+ * Body-frame velocity (odometer: forward axis y, measured speed; non-holonomic constraint: axes x
+ * and z, measured 0 plus the vehicle's jitter), v^b = mat_bn v^n, for each axis i used:
+ *     z_i = (mat_bn v^n)_i - meas_i,   H_i = [0, (mat_bn)_i, -(mat_bn [v^n x])_i, 0, 0]
+ * (the odometer at the IMU, no scale-factor state: a scale-factor error is not estimated).
  * The struct holds no pointer and allocates nothing: copying it copies the filter.
  */
 #ifndef SARINS_ESKF_H
@@ -42,7 +47,8 @@ enum {
     SARINS_ESKF_STEP, SARINS_ESKF_ARW, SARINS_ESKF_VRW, SARINS_ESKF_GYRO_RW, SARINS_ESKF_ACCEL_RW,
     SARINS_ESKF_POS0_STD, SARINS_ESKF_VEL0_STD, SARINS_ESKF_TILT0_STD, SARINS_ESKF_HEADING0_STD,
     SARINS_ESKF_GYRO_BIAS0_STD, SARINS_ESKF_ACCEL_BIAS0_STD, SARINS_ESKF_LEVER_X, SARINS_ESKF_LEVER_Y,
-    SARINS_ESKF_LEVER_Z, SARINS_ESKF_LATENCY, SARINS_ESKF_ZUPT_STD, SARINS_ESKF_COV_EVERY, SARINS_ESKF_CONFIG
+    SARINS_ESKF_LEVER_Z, SARINS_ESKF_LATENCY, SARINS_ESKF_ZUPT_STD, SARINS_ESKF_COV_EVERY, SARINS_ESKF_NHC_STD,
+    SARINS_ESKF_ODO_STD, SARINS_ESKF_CONFIG
 };
 /* output row: nav row (9: lat, lon, h, v E N U, yaw, pitch, roll), b_g (3), b_a (3), P (15 x 15) */
 #define SARINS_ESKF_ROW (9 + 6 + SARINS_ESKF_N * SARINS_ESKF_N)
@@ -77,14 +83,19 @@ double sarins_eskf_gnss(sarins_eskf *s, const double *pos, const double *vel, co
  * jitter; three scalar updates with std config ZUPT_STD) and feedback. */
 void sarins_eskf_zupt(sarins_eskf *s, const double *v_meas);
 
-/* K steps: predict with dtheta, dv (K, 3); after step k, if zupt[k, 0] != 0 a ZUPT with the measured
- * velocity zupt[k, 1:4] (zupt (K, 4)); then the fixes
+/* Body-frame velocity update on the axes with use[i] != 0 (meas (3) m/s, std (3) m/s), then feedback. */
+void sarins_eskf_body_velocity(sarins_eskf *s, const double *meas, const int *use, const double *std);
+
+/* K steps: predict with dtheta, dv (K, 3); after step k, by the row aid[k] of aid (K, 9) = [zupt flag,
+ * zupt measured v E N U, odometer flag, odometer speed (m/s), NHC flag, NHC measured body v_x, v_z
+ * (m/s: zero plus the vehicle's jitter)]: a ZUPT, then an odometer and / or NHC update (std config
+ * ODO_STD, NHC_STD); then the fixes
  * whose step index (gnss row column 0, the step after which the fix is applied) equals k, in order:
  * rows (m, 11) = step index, valid, lat, lon, h, v E N U, std E N U (position m), and vel_std (3)
  * shared by all fixes.  Writes out rows (SARINS_ESKF_ROW) after every out_every-th step (n_out =
  * K / out_every rows).  Returns 0, or 1 (nothing changed) for a non-finite input or fix rows not in
  * step order. */
-int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const double *dv, const double *zupt, int64_t m,
+int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const double *dv, const double *aid, int64_t m,
                     const double *gnss, const double *vel_std, int use_vel, int64_t out_every, double *out);
 
 int64_t sarins_eskf_size(void);

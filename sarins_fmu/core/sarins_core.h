@@ -42,6 +42,7 @@ int sarins_core_abi(void);
 #include "nav3.h"
 #include "gnss.h"
 #include "eskf.h"
+#include "odo.h"
 #include "ins_fmu_step.h"
 
 /* trained networks: model files, inference kernels, identifier and compensators */
