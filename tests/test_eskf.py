@@ -38,7 +38,8 @@ def test_without_updates_the_filter_is_the_mechanization(truth):
     from sarins_fmu.rotations import mat_to_quat
     q = mat_to_quat(q).copy()
     rows = core.nav3_steps(q, truth.velocity_n[0].copy(), truth.nav_rows()[0, :3].copy(), truth.dtheta, truth.dv, 0.02)
-    assert np.array_equal(out[:, :9], rows)
+    # the same mechanization; the batch call Kahan-sums the position, the filter steps one by one
+    assert np.abs(out[:, :9] - rows).max() < 1e-12
     p = out[-1, 15:].reshape(15, 15)
     assert np.array_equal(p, p.T)
     # free inertial: the position variance grows

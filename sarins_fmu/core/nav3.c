@@ -24,7 +24,8 @@ void sarins_nav3_row(const double *q, const double *v, const double *pos, double
 
 /* the new state from the start (q, v, pos) with the rates taken at (v_mid, pos_mid) */
 static void advance(const double *q, const double *v, const double *pos, const double *v_mid, const double *pos_mid,
-                    const double *dtheta, const double *dv, double h, double *q1, double *v1, double *pos1)
+                    const double *dtheta, const double *dv, double h, double *q1, double *v1, double *pos1,
+                    double *dpos)
 {
     double rm, rn, sl, cl;
     sarins_earth_radii(pos_mid[0], &rm, &rn);
@@ -49,9 +50,11 @@ static void advance(const double *q, const double *v, const double *pos, const d
     for (int i = 0; i < 3; i++)
         v1[i] = v[i] + (dvn0[i] - 0.5 * cz[i]) - cor[i] * h;
     v1[2] -= g * h;
-    pos1[2] = pos[2] + 0.5 * (v[2] + v1[2]) * h;
-    pos1[0] = pos[0] + 0.5 * (v[1] + v1[1]) * h / rmh;
-    pos1[1] = pos[1] + 0.5 * (v[0] + v1[0]) * h / (rnh * cl);
+    dpos[2] = 0.5 * (v[2] + v1[2]) * h;
+    dpos[0] = 0.5 * (v[1] + v1[1]) * h / rmh;
+    dpos[1] = 0.5 * (v[0] + v1[0]) * h / (rnh * cl);
+    for (int i = 0; i < 3; i++)
+        pos1[i] = pos[i] + dpos[i];
     /* q_nb,k = q(-zeta) * q_nb,k-1 * q(dtheta) */
     double mz[3] = {-zeta[0], -zeta[1], -zeta[2]}, qz[4], qt[4], tmp[4];
     sarins_rotvec_to_quat(mz, qz);
@@ -63,21 +66,29 @@ static void advance(const double *q, const double *v, const double *pos, const d
         q1[i] /= n;
 }
 
-void sarins_nav3_step(double *q, double *v, double *pos, const double *dtheta, const double *dv, double h)
+/* one step: q and v in place, the position change in dpos (pos untouched) */
+static void step_delta(double *q, double *v, const double *pos, const double *dtheta, const double *dv, double h,
+                       double *dpos)
 {
     double q1[4], v1[3], p1[3], vm[3], pm[3];
-    advance(q, v, pos, v, pos, dtheta, dv, h, q1, v1, p1); /* pass 1: rates at the start */
+    advance(q, v, pos, v, pos, dtheta, dv, h, q1, v1, p1, dpos); /* pass 1: rates at the start */
     for (int i = 0; i < 3; i++) {
         vm[i] = 0.5 * (v[i] + v1[i]);
         pm[i] = 0.5 * (pos[i] + p1[i]);
     }
-    advance(q, v, pos, vm, pm, dtheta, dv, h, q1, v1, p1); /* pass 2: rates at the middle */
+    advance(q, v, pos, vm, pm, dtheta, dv, h, q1, v1, p1, dpos); /* pass 2: rates at the middle */
     for (int i = 0; i < 4; i++)
         q[i] = q1[i];
-    for (int i = 0; i < 3; i++) {
+    for (int i = 0; i < 3; i++)
         v[i] = v1[i];
-        pos[i] = p1[i];
-    }
+}
+
+void sarins_nav3_step(double *q, double *v, double *pos, const double *dtheta, const double *dv, double h)
+{
+    double dpos[3];
+    step_delta(q, v, pos, dtheta, dv, h, dpos);
+    for (int i = 0; i < 3; i++)
+        pos[i] += dpos[i];
 }
 
 int sarins_nav3_steps(int64_t k, double *q, double *v, double *pos, const double *dtheta, const double *dv,
@@ -88,8 +99,15 @@ int sarins_nav3_steps(int64_t k, double *q, double *v, double *pos, const double
     for (int64_t i = 0; i < 3 * k; i++)
         if (dtheta[i] - dtheta[i] != 0.0 || dv[i] - dv[i] != 0.0)
             return 1;
+    double lo[3] = {0.0, 0.0, 0.0}; /* Kahan compensation of the position sums within this call */
     for (int64_t i = 0; i < k; i++) {
-        sarins_nav3_step(q, v, pos, dtheta + 3 * i, dv + 3 * i, h);
+        double dpos[3];
+        step_delta(q, v, pos, dtheta + 3 * i, dv + 3 * i, h, dpos);
+        for (int c = 0; c < 3; c++) {
+            double add = dpos[c] - lo[c], sum = pos[c] + add;
+            lo[c] = (sum - pos[c]) - add;
+            pos[c] = sum;
+        }
         sarins_nav3_row(q, v, pos, out + SARINS_NAV3_ROW * i);
     }
     return 0;

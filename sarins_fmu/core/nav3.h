@@ -26,7 +26,8 @@
 /* One step in place. */
 void sarins_nav3_step(double *q, double *v, double *pos, const double *dtheta, const double *dv, double h);
 
-/* K steps in place; writes out (K, 9) after each step.  Returns 0, or 1 (nothing changed) when an
+/* K steps in place; writes out (K, 9) after each step.  Within the call the position sums are
+ * compensated (Kahan), so rounding does not accumulate over the K steps.  Returns 0, or 1 (nothing changed) when an
  * increment is not finite or h is not positive. */
 int sarins_nav3_steps(int64_t k, double *q, double *v, double *pos, const double *dtheta, const double *dv,
                       double h, double *out);
