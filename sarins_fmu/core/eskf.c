@@ -241,10 +241,21 @@ double sarins_eskf_gnss(sarins_eskf *s, const double *pos, const double *vel, co
     wl[2] = w_nb[0] * lever[1] - w_nb[1] * lever[0];
     for (int i = 0; i < 3; i++)
         vl[i] = m[3 * i] * wl[0] + m[3 * i + 1] * wl[1] + m[3 * i + 2] * wl[2];
-    /* position innovation, ENU m: r_ins + mat_nb l - v latency - r_gnss */
-    double z[3] = {(s->pos[1] - pos[1]) * rnh * cl + ln[0] - s->v[0] * lat,
-                   (s->pos[0] - pos[0]) * rmh + ln[1] - s->v[1] * lat,
-                   (s->pos[2] - pos[2]) + ln[2] - s->v[2] * lat};
+    /* the INS taken back to the fix's time: acceleration a = f^n + g^n - (2 w_ie + w_en) x v (from the last
+     * step's specific force), r(t - L) = r - v L + a L^2 / 2, v(t - L) = v - a L */
+    double w2[3] = {w_in[0], w_in[1] + SARINS_EARTH_RATE * cl, w_in[2] + SARINS_EARTH_RATE * sl};
+    const double *v = s->v;
+    double acc[3] = {s->f_n[0] - (w2[1] * v[2] - w2[2] * v[1]), s->f_n[1] - (w2[2] * v[0] - w2[0] * v[2]),
+                     s->f_n[2] - (w2[0] * v[1] - w2[1] * v[0]) - sarins_earth_gravity(s->pos[0], s->pos[2])};
+    double back[3], vback[3];
+    for (int i = 0; i < 3; i++) {
+        back[i] = -v[i] * lat + 0.5 * acc[i] * lat * lat;
+        vback[i] = -acc[i] * lat;
+    }
+    /* position innovation, ENU m: r_ins(t - L) + mat_nb l - r_gnss */
+    double z[3] = {(s->pos[1] - pos[1]) * rnh * cl + ln[0] + back[0],
+                   (s->pos[0] - pos[0]) * rmh + ln[1] + back[1],
+                   (s->pos[2] - pos[2]) + ln[2] + back[2]};
     double nis = 0.0, hrow[N];
     for (int i = 0; i < 3; i++) {
         for (int j = 0; j < N; j++)
@@ -262,7 +273,7 @@ double sarins_eskf_gnss(sarins_eskf *s, const double *pos, const double *vel, co
             cross_matrix_row(vl, i, hrow + 6);
             for (int j = 0; j < 3; j++) /* -mat_nb [l x], row i */
                 hrow[9 + j] = -(m[3 * i] * lx[j] + m[3 * i + 1] * lx[3 + j] + m[3 * i + 2] * lx[6 + j]);
-            double zi = s->v[i] + vl[i] - vel[i];
+            double zi = s->v[i] + vback[i] + vl[i] - vel[i];
             nis += scalar_update(s, hrow, zi, std[3 + i] * std[3 + i]);
         }
     }

@@ -23,10 +23,11 @@
  * semi-definiteness are kept to rounding).  After a set of updates the state feeds back: position
  * (metres to lat, lon, h), velocity, attitude q_nb <- q(phi) q_nb, biases b += db; x is reset to 0.
  *
- * GNSS position (antenna at lever arm l, body m; fix valid `latency` s before it is applied, the
- * INS position taken back by v latency):
- *     z = r_ins + mat_nb l - v latency - r_gnss (ENU m),  H = [I, 0, [(mat_nb l) x], 0, 0]
- * GNSS velocity:  z = v_ins + mat_nb (omega_nb^b x l) - v_gnss,
+ * GNSS position (antenna at lever arm l, body m; fix valid L = `latency` s before it is applied, the
+ * INS taken back to the fix's time with a = f^n + g^n - (2 omega_ie^n + omega_en^n) x v from the last
+ * step: r(t - L) = r - v L + a L^2 / 2, v(t - L) = v - a L):
+ *     z = r_ins(t - L) + mat_nb l - r_gnss (ENU m),  H = [I, 0, [(mat_nb l) x], 0, 0]
+ * GNSS velocity:  z = v_ins(t - L) + mat_nb (omega_nb^b x l) - v_gnss,
  *     H = [0, I, [(mat_nb (omega_nb^b x l)) x], -mat_nb [l x], 0]
  * ZUPT:  z = v_ins - v_meas (v_meas: zero plus the stop's jitter),  H = [0, I, 0, 0, 0].
  * Body-frame velocity (odometer: forward axis y, measured speed; non-holonomic constraint: axes x
