@@ -25,6 +25,8 @@ import pytest
 
 from file_faults import fifo, good_log, npz_bomb, sparse_file, ssd_text, system_folder
 from fmu_fixtures.fixtures import fixture_fmus, ramp_gain  # noqa: F401 (fixtures)
+from hooks import command as hook_command
+from hooks import signal_after_steps
 from orchestration import Master, SystemFileError, read_system, write_ssp
 from orchestration.errors import IncompatibleConnectionError
 from sarins.cli import main
@@ -40,9 +42,11 @@ def _limit_memory() -> None:
     resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
 
 
-def cli(*args, env: dict | None = None, limit_memory: bool = False) -> subprocess.CompletedProcess:
-    """``python -m sarins ARGS`` with this checkout first on the path."""
-    return subprocess.run([sys.executable, "-m", "sarins", *map(str, args)], capture_output=True, text=True,
+def cli(*args, env: dict | None = None, limit_memory: bool = False, hooks: tuple = ()) -> subprocess.CompletedProcess:
+    """``python -m sarins ARGS`` with this checkout first on the path (through ``tests/hooks.py``
+    when ``hooks`` names test hooks to install)."""
+    start = [*hook_command(*hooks), "-m"] if hooks else [sys.executable, "-m"]
+    return subprocess.run([*start, "sarins", *map(str, args)], capture_output=True, text=True,
                           timeout=TIMEOUT, env={**os.environ, "PYTHONPATH": str(ROOT), **(env or {})},
                           preexec_fn=_limit_memory if limit_memory else None)
 
@@ -312,7 +316,7 @@ def test_an_interrupted_cosim_writes_the_rows_so_far_and_says_so(signame, code, 
     archive = write_ssp(ramp_gain, tmp_path / "rg.ssp")
     out = tmp_path / "out.csv"
     done = cli("cosim", archive, "--stop-time", "100", "--step", "0.5", "--output", out, "--no-progress",
-               env={"ORCHESTRATION_TEST_SIGNAL_AFTER": f"5:{signame}"})
+               hooks=("--signal-after", f"5:{signame}"))
     assert done.returncode == code, done.stderr
     line = one_clean_line(done.stderr)
     # the signal is sent after step 5 and acted on after step 6 (recorded): t = 3 s
@@ -377,7 +381,7 @@ def test_an_interrupted_cosim_on_a_full_disk_keeps_its_status_and_says_what_was_
     archive = write_ssp(ramp_gain, tmp_path / "rg.ssp")
     out = tmp_path / "out.csv"
     monkeypatch.setattr(pathlib.Path, "open", _full_disk_open(".csv"))
-    monkeypatch.setenv("ORCHESTRATION_TEST_SIGNAL_AFTER", "5:SIGTERM")
+    signal_after_steps(5, "SIGTERM", setattr_=monkeypatch.setattr)
     assert main(["cosim", str(archive), "--stop-time", "100", "--step", "0.5", "--output", str(out),
                  "--no-progress"]) == 143
     line = one_clean_line(capsys.readouterr().err)

@@ -314,7 +314,7 @@ def _host_table(stdout: str, tag: str = "OUT") -> np.ndarray:
 
 
 @pytest.mark.slow
-def test_fmi3_win64_dlls_under_wine_match_linux(tmp_path):
+def test_fmi3_win64_dlls_under_wine_match_linux(tmp_path, wine_env):
     """The FMI 3.0 IMUThermal (n_sub = 200, two presets) and StrapdownINS (sub_inputs = 1, fed the linux IMU's
     arrays) from their win64 DLLs under wine through the FMI 3.0 C host (tests/native_host/native_fmu3_host.c)
     against x86_64-linux, bit for bit (the C calls no libm: smath.h)."""
@@ -328,8 +328,7 @@ def test_fmi3_win64_dlls_under_wine_match_linux(tmp_path):
     flags = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}"]
     subprocess.run([cc, *flags, src, "-ldl", "-o", str(tmp_path / "host")], check=True)
     subprocess.run([MINGW, *flags, src, "-static", "-o", str(tmp_path / "host.exe")], check=True)
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all")
-    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
+    env = wine_env
     fmus = {}
     for name, slave in (("IMUThermal", "imu_thermal_slave.py"), ("StrapdownINS", "strapdown_ins_slave.py")):
         fmu = build_native_fmu(name, slave, tmp_path, fmi=3, win64=True)

@@ -353,11 +353,10 @@ def test_sanitized_build_runs_clean_through_the_c_host(compensator_fmu, tmp_path
 
 
 @pytest.mark.slow
-def test_win64_dll_under_wine_agrees_with_linux64(compensator_fmu, portable_host, tmp_path):
+def test_win64_dll_under_wine_agrees_with_linux64(compensator_fmu, portable_host, tmp_path, wine_env):
     """The win64 DLL (mingw-w64) under wine runs every network kind with its FMU state round trip bit for bit.
     Against linux64 it agrees to 1e-12 relative but not bit for bit: exp and tanh come from mingw's C
     runtime there, glibc's here (measured: 7 ulp, 1.3e-15 relative, GRU, 60 steps)."""
-    import os
     import struct
 
     from fmus.native_fmu import MINGW, fmi_headers_dir
@@ -373,8 +372,7 @@ def test_win64_dll_under_wine_agrees_with_linux64(compensator_fmu, portable_host
     exe = tmp_path / "host.exe"
     subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
                    check=True)
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all")
-    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
+    env = wine_env
 
     def value(bits):
         return struct.unpack("<d", struct.pack("<Q", bits))[0]
