@@ -378,8 +378,11 @@ def build_fmus(out_dir: Path | str = DEFAULT_OUT, names=None) -> list[Path]:
     for name in names:
         if name in NEEDS_MODEL:
             raise ValueError(f"{name} needs a trained model to run; build it with {NEEDS_MODEL[name]}")
+    from sarins_fmu.files import refuse_links
+
     from .native_fmu import NATIVE, build_native_fmu
 
+    refuse_links([Path(out_dir) / f"{n}.fmu" for n in names], "FMU")
     return [build_native_fmu(n, SLAVES[n], Path(out_dir)) if n in NATIVE else build_fmu(SLAVES[n], Path(out_dir))
             for n in names]
 

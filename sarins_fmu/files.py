@@ -129,11 +129,14 @@ def check_output_path(path, option: str) -> Path:
     Raises
     ------
     OutputPathError
-        A FIFO, socket, device or folder at ``path`` (writing there would
-        block, or write somewhere else than a file), or a parent that is not
-        an existing folder.
+        A FIFO, socket, device, folder or symbolic link at ``path`` (writing
+        there would block, or write somewhere else than the named file), or a
+        parent that is not an existing folder.
     """
     path = Path(path)
+    if path.is_symlink():  # the write would land wherever the link points, perhaps outside the folder
+        raise OutputPathError(f"{option} {path}: is a symbolic link (to {os.readlink(path)}); give a regular file "
+                              "or a new path")
     try:
         mode = os.stat(path).st_mode
     except FileNotFoundError:
@@ -149,6 +152,16 @@ def check_output_path(path, option: str) -> Path:
                 if stat.S_ISSOCK(mode) else "not a regular file")
         raise OutputPathError(f"{option} {path}: is {kind}; give a regular file or a new path")
     return path
+
+
+def refuse_links(paths, what: str) -> None:
+    """OutputPathError when one of ``paths`` (files about to be written) is a symbolic link: writing
+    it would write wherever the link points, perhaps outside the output folder.  Checked before
+    anything is written."""
+    for path in map(Path, paths):
+        if path.is_symlink():
+            raise OutputPathError(f"{what} {path}: is a symbolic link (to {os.readlink(path)}); the file would be "
+                                  "written where it points. Remove the link or choose another folder")
 
 
 @contextlib.contextmanager

@@ -238,6 +238,37 @@ def test_other_outputs_refuse_a_fifo(command, tmp_path):
     assert command.split()[-1] in line and "FIFO" in line
 
 
+@pytest.mark.parametrize("command", ["allan --plot", "cosim --output"])
+def test_an_output_that_is_a_symlink_is_refused_and_the_file_it_points_to_kept(command, ramp_gain, tmp_path, capsys):
+    outside = tmp_path / "elsewhere" / "precious.txt"
+    outside.parent.mkdir()
+    outside.write_text("keep me\n")
+    link = tmp_path / "out" / ("allan.png" if command.startswith("allan") else "run.csv")
+    link.parent.mkdir()
+    link.symlink_to(outside)
+    argv = (["allan", "--hours", "0.05", "--plot", link] if command.startswith("allan") else
+            ["cosim", write_ssp(ramp_gain, tmp_path / "rg.ssp"), "--stop-time", "1", "--step", "0.5", "--output",
+             link, "--no-progress"])
+    assert run_main(argv) == 2
+    line = one_clean_line(capsys.readouterr().err)
+    assert command.split()[-1] in line and "symbolic link" in line and str(link) in line
+    assert outside.read_text() == "keep me\n" and link.is_symlink()
+
+
+@pytest.mark.parametrize("fmi", ["2", "3"])
+def test_build_fmus_refuses_to_write_through_a_symlinked_fmu(fmi, tmp_path, capsys):
+    """Refused before anything is built: the link's target outside the folder is untouched."""
+    outside = tmp_path / "elsewhere.fmu"
+    outside.write_bytes(b"not yours")
+    out = tmp_path / "d"
+    out.mkdir()
+    (out / "Turntable.fmu").symlink_to(outside)
+    assert run_main(["build-fmus", "--out", out, "--fmi", fmi, "--only", "Turntable"]) == 2
+    line = one_clean_line(capsys.readouterr().err)
+    assert "symbolic link" in line and str(out / "Turntable.fmu") in line
+    assert outside.read_bytes() == b"not yours" and sorted(p.name for p in out.iterdir()) == ["Turntable.fmu"]
+
+
 # ------------------------------------------------------------------ 4. corrupted NPZ logs
 @pytest.mark.parametrize("damage", ["truncated", "corrupted", "not a zip", "empty"])
 def test_a_truncated_or_corrupted_npz_log_exits_2_naming_the_file(damage, tmp_path, capsys):
