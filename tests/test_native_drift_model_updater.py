@@ -401,7 +401,7 @@ def test_fmi3_variant_equals_fmi2_bit_for_bit(unzipped, host, tmp_path):
     from test_native_fmus import _cc, run_host, table
 
     fmu3 = build_native_fmu("DriftModelUpdater", "drift_model_updater_slave.py", tmp_path / "fmu3", fmi=3,
-                            win64=False)
+                            win64=False, aarch64=False)
     assert validate_fmu(str(fmu3)) == []
     folder3 = tmp_path / "f3"
     zipfile.ZipFile(fmu3).extractall(folder3)

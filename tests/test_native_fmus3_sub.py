@@ -46,7 +46,7 @@ def fmus3(tmp_path_factory):
     out = tmp_path_factory.mktemp("native3_sub")
     for name, slave in (("Turntable", "turntable_slave.py"), ("IMUThermal", "imu_thermal_slave.py"),
                         ("StrapdownINS", "strapdown_ins_slave.py")):
-        build_native_fmu(name, slave, out, fmi=3, win64=False)
+        build_native_fmu(name, slave, out, fmi=3, win64=False, aarch64=False)
     return out
 
 

@@ -19,9 +19,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from fmu_driver import Slave
-from fmus import SLAVES
 from fmus.compensator_export import export_compensator
-from fmus.native_fmu import build_native_fmu
 from sarins_fmu.identify import compensators
 from sarins_fmu.identify.axial import DEFAULT_MODELS, DriftIdentifier
 from test_nets import _toy, fitted
@@ -34,9 +32,8 @@ TEMPS = [f"temp_{s}" for s in ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y
 
 
 @pytest.fixture(scope="module")
-def identifier_fmu(tmp_path_factory):
-    return build_native_fmu("RBFIdentifier", SLAVES["RBFIdentifier"], tmp_path_factory.mktemp("ident"),
-                            win64=False)  # linux64 only: fast (the session's FMUs carry win64, test_native_fmus)
+def identifier_fmu(fmu_dir):
+    return fmu_dir / "RBFIdentifier.fmu"  # the session's build (tests/conftest.py)
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +42,7 @@ def compensator_fmu(tmp_path_factory):
     binary model file)} for every kind, given to the same FMU as model_file."""
     out = tmp_path_factory.mktemp("comp")
     models = {kind: fitted(kind) for kind in compensators.KINDS}
-    fmu = export_compensator(models["gru"].save(out / "gru.npz"), out, win64=False)
+    fmu = export_compensator(models["gru"].save(out / "gru.npz"), out, win64=False, aarch64=False)
     return fmu, {kind: (m, m.export_binary(out / f"{kind}.bin")) for kind, m in models.items()}
 
 
@@ -190,7 +187,7 @@ def test_fmi3_compensator_equals_the_library(compensator_fmu, tmp_path):
     from fmpy.fmi3 import FMU3Slave
 
     model = compensator_fmu[1]["lstm"][0]
-    fmu3 = export_compensator(model.save(tmp_path / "m.npz"), tmp_path, fmi=3, win64=False)
+    fmu3 = export_compensator(model.save(tmp_path / "m.npz"), tmp_path, fmi=3, win64=False, aarch64=False)
     assert validate_fmu(str(fmu3)) == []
     md = read_model_description(str(fmu3))
     vr = {v.name: v.valueReference for v in md.modelVariables}
