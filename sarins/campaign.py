@@ -113,6 +113,10 @@ def run_campaign(tasks, out_dir, *, workers: int | None = None, scheduler: str |
         todo = []
         for task in tasks:
             path = result_path(out_dir, task.id)
+            if path.is_symlink() or (path.exists() and not path.is_file()):
+                kind = "a symbolic link" if path.is_symlink() else "a folder" if path.is_dir() else "not a regular file"
+                raise StoredResultError(f"{path}: the stored result of task {task.id} is {kind}, which the campaign "
+                                        "neither reads nor replaces; remove it or choose another output folder")
             try:
                 results[task.id] = load_valid(path, records[task.id], task.finite, task.schema)
             except FileNotFoundError:

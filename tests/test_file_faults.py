@@ -23,7 +23,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from file_faults import fifo, good_log, npz_bomb, sparse_file, ssd_text, system_folder
+from file_faults import (fifo, good_log, many_variables, npy_header, npz_bomb, rewrite_fmu, same_value_reference,
+                         sparse_file, ssd_text, system_folder)
 from fmu_fixtures.fixtures import fixture_fmus, ramp_gain  # noqa: F401 (fixtures)
 from hooks import command as hook_command
 from hooks import signal_after_steps
@@ -417,3 +418,81 @@ def test_an_interrupted_cosim_on_a_full_disk_keeps_its_status_and_says_what_was_
                  "--no-progress"]) == 143
     line = one_clean_line(capsys.readouterr().err)
     assert "interrupted at t = 3 s; the 7 rows recorded so far could not be written" in line and str(out) in line
+
+
+# ------------------------------------------------------------------ 9. FMU files that do not fit together
+def _system_with_ramp(fixture_fmus, tmp_path, **rewrite) -> Path:
+    folder = tmp_path / "system"
+    system_folder(folder, fixture_fmus)
+    rewrite_fmu(Path(fixture_fmus["Ramp"]), folder / "Ramp.fmu", **rewrite)
+    return folder
+
+
+def test_a_truncated_shared_library_is_refused_before_it_is_loaded(fixture_fmus, tmp_path):
+    """dlopen maps a truncated ELF file's segments all the same; the first access past the end is SIGBUS."""
+    folder = _system_with_ramp(fixture_fmus, tmp_path, library=lambda data: data[:len(data) // 2])
+    done = cli("cosim", folder, "--stop-time", "1", "--step", "0.5", "--no-progress")
+    assert done.returncode == 2, (done.returncode, done.stderr)
+    line = one_clean_line(done.stderr)
+    assert "component 'ramp'" in line and "binaries/linux64/Ramp.so cannot be loaded: truncated" in line
+
+
+def test_a_description_with_a_million_variables_is_refused_by_its_budget(fixture_fmus, tmp_path, capsys):
+    folder = _system_with_ramp(fixture_fmus, tmp_path, description=many_variables(10**6))
+    assert run_main(["cosim", folder, "--stop-time", "1", "--step", "0.5", "--no-progress"]) == 2
+    line = one_clean_line(capsys.readouterr().err)
+    assert "component 'ramp'" in line and "modelDescription.xml" in line and "limit" in line
+
+
+def test_two_parameters_sharing_a_value_reference_are_refused(fixture_fmus, tmp_path, capsys):
+    folder = _system_with_ramp(fixture_fmus, tmp_path, description=same_value_reference("slope", "offset"))
+    assert run_main(["cosim", folder, "--stop-time", "1", "--step", "0.5", "--no-progress"]) == 2
+    line = one_clean_line(capsys.readouterr().err)
+    assert "valueReference 0 is shared by 2 Real parameters or inputs ('slope', 'offset')" in line
+
+
+def test_a_description_of_another_build_exits_2_with_the_fmus_reason(fmu_dir, tmp_path):
+    """A changed GUID: the native FMU refuses fmi2Instantiate; a bad file (2), not a failed run (1)."""
+    import re
+
+    from orchestration import Component, System
+
+    def other_guid(text: str) -> str:  # one hex digit of the GUID changed
+        return re.sub(r'(guid="\{?)([0-9a-f])', lambda m: m.group(1) + ("1" if m.group(2) == "0" else "0"), text,
+                      count=1)
+
+    fmu = rewrite_fmu(fmu_dir / "Turntable.fmu", tmp_path / "Turntable.fmu", description=other_guid)
+    archive = write_ssp(System("t", [Component("table", fmu_dir / "Turntable.fmu", {})], []), tmp_path / "t.ssp")
+    swapped = tmp_path / "swapped.ssp"
+    import zipfile
+    with zipfile.ZipFile(archive) as zin, zipfile.ZipFile(swapped, "w") as zout:
+        for item in zin.infolist():
+            zout.writestr(item, fmu.read_bytes() if item.filename.endswith(".fmu") else zin.read(item.filename))
+    done = cli("cosim", swapped, "--stop-time", "2", "--step", "0.01", "--no-progress")
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("sarins cosim: error: ") and "fmi2Instantiate" in done.stderr
+    assert "GUID" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_an_npy_header_claiming_7e9_values_is_refused_not_allocated(tmp_path):
+    path = tmp_path / "liar.npz"
+    import zipfile
+    with zipfile.ZipFile(path, "w") as archive:
+        for name in ("time_s.npy", "dtheta_x.npy"):
+            archive.writestr(name, npy_header(7_000_000_000 * 8) + bytes(80))
+    done = cli("allan", "--json", "--log", path, limit_memory=True)
+    assert done.returncode == 2, done.stderr
+    line = one_clean_line(done.stderr)
+    assert str(path) in line and "header claims shape (7000000000,)" in line and "refused" in line
+
+
+def test_a_stored_campaign_result_that_is_a_folder_is_named(tmp_path):
+    from campaign_tasks import square
+    from sarins.campaign import StoredResultError, Task, run_campaign
+
+    (tmp_path / "out" / "sq1.npz").mkdir(parents=True)
+    tasks = [Task(f"sq{x}", square, {"x": x, "marker_dir": str(tmp_path), "delay": 0.0},
+                  volatile=("marker_dir", "delay")) for x in range(3)]
+    with pytest.raises(StoredResultError, match=r"sq1.npz: the stored result of task sq1 is a folder"):
+        run_campaign(tasks, tmp_path / "out", workers=1, progress=False)
+    assert (tmp_path / "out" / "sq1.npz").is_dir()
