@@ -69,6 +69,22 @@ def fmu_dir(tmp_path_factory, pytestconfig):
 
 
 @pytest.fixture(scope="session")
+def fmu3_dir(tmp_path_factory, pytestconfig):
+    """The FMI 3.0 Turntable, IMUThermal and StrapdownINS (linux x86-64 only: quick), built once per
+    session; a skip without a C compiler.  Tests write only new files here."""
+    from fmus import SLAVES
+    from fmus.native_fmu import build_native_fmu
+
+    if shutil.which("gcc") is None and shutil.which("cc") is None:
+        pytest.skip("no C compiler (gcc/cc)")
+    out = tmp_path_factory.mktemp("fmus3")
+    progress_line(pytestconfig, f"building the session's FMI 3.0 FMUs in {out} ...")
+    for name in ("Turntable", "IMUThermal", "StrapdownINS"):
+        build_native_fmu(name, SLAVES[name], out, fmi=3, win64=False, aarch64=False)
+    return out
+
+
+@pytest.fixture(scope="session")
 def wine_env(tmp_path_factory):
     """Environment for running win64 programs under wine: one prefix per session (its first start
     costs about 20 s), in the session's temporary folder; a skip when mingw-w64 or wine is missing."""

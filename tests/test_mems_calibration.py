@@ -694,23 +694,29 @@ def test_recurrent_compensator_fmu_reset_and_two_instances(short_training, tmp_p
         b.free()
 
 
+def _build_compensator_cli(tmp_path, model, out):
+    env = {**__import__("os").environ, "PYTHONPATH": str(ROOT)}
+    cmd = [sys.executable, "-m", "sarins", "build-fmus", "--only", "IMUCompensator", "--out", str(out),
+           "--compensator", str(model)]
+    return subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300, env=env)
+
+
+@pytest.mark.slow  # builds every platform's binary (the library path is in the default run: export_compensator)
 @pytest.mark.integration
 def test_build_fmus_cli_ships_a_compensator(tmp_path):
     import zipfile
 
     X, Y = _toy_series(300)
     model = compensators.make("grnn", max_patterns=50).fit(X, Y).save(tmp_path / "g.json")
-    env = {**__import__("os").environ, "PYTHONPATH": str(ROOT)}
-    cmd = [sys.executable, "-m", "sarins", "build-fmus", "--only", "IMUCompensator", "--out",
-           str(tmp_path / "out"), "--compensator"]
-    done = subprocess.run(cmd + [str(model)], cwd=ROOT, capture_output=True, text=True, timeout=300, env=env)
+    done = _build_compensator_cli(tmp_path, model, tmp_path / "out")
     assert done.returncode == 0, done.stderr
     with zipfile.ZipFile(tmp_path / "out" / "IMUCompensator.fmu") as z:  # the binary model the C model reads
         assert z.read("resources/compensator.bin") == compensators.load(model).binary()
-    cmd[cmd.index("--out") + 1] = str(tmp_path / "out_bad")
-    bad = subprocess.run(cmd + [str(tmp_path / "missing.json")], cwd=ROOT, capture_output=True, text=True,
-                         timeout=300, env=env)
-    assert bad.returncode != 0 and "missing.json" in bad.stderr
+
+
+def test_build_fmus_cli_refuses_a_missing_compensator_before_building(tmp_path):
+    bad = _build_compensator_cli(tmp_path, tmp_path / "missing.json", tmp_path / "out_bad")
+    assert bad.returncode == 2 and "missing.json" in bad.stderr
     assert not (tmp_path / "out_bad").exists()  # nothing built
 
 

@@ -39,15 +39,9 @@ INS_OUT = ["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll", 
 
 
 @pytest.fixture(scope="module")
-def fmus3(tmp_path_factory):
-    """The FMI 3.0 Turntable, IMUThermal and StrapdownINS (linux only: quick) in one folder."""
-    if shutil.which("gcc") is None and shutil.which("cc") is None:
-        pytest.skip("no C compiler (gcc/cc)")
-    out = tmp_path_factory.mktemp("native3_sub")
-    for name, slave in (("Turntable", "turntable_slave.py"), ("IMUThermal", "imu_thermal_slave.py"),
-                        ("StrapdownINS", "strapdown_ins_slave.py")):
-        build_native_fmu(name, slave, out, fmi=3, win64=False, aarch64=False)
-    return out
+def fmus3(fmu3_dir):
+    """The FMI 3.0 Turntable, IMUThermal and StrapdownINS (the session's, tests/conftest.py)."""
+    return fmu3_dir
 
 
 class Fmu3:
