@@ -3,9 +3,9 @@
 
 import numpy as np
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus.slave_support import (OUTPUT, PARAMETER, ParameterError, check_finite, check_integer, check_latitude,
+                                default_experiment,
                                 check_step, declare,
                                 discard_on_error, guarded, same_time)
 from sarins_fmu import vehicle
@@ -50,7 +50,7 @@ class VehicleMotion(Fmi2Slave):
         "Simpson mean velocity); position, velocity and speed at base_motion_time and stopped (1 at rest). After "
         "the last leg the vehicle stays parked. All outputs are state outputs (no direct feedthrough). Nothing "
         "but the trajectory is held.")
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=7200.0, step_size=1.0)
+    default_experiment = default_experiment(1.0)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
