@@ -272,7 +272,7 @@ def test_fmpy_validates_and_simulates_the_fmi3_imu_and_ins(fmus3):
 def test_fmusim_runs_the_fmi3_imu_with_n_sub(fmus3, tmp_path):
     fmusim = os.environ.get("FMUSIM") or shutil.which("fmusim")
     if fmusim is None:
-        pytest.skip("fmusim not found (set FMUSIM to its path; FACTS.md says how to build it)")
+        pytest.skip("fmusim not found (set FMUSIM to its path; docs/quick-start.md says how to build it)")
     out = tmp_path / "imu.csv"
     cmd = [fmusim, "--interface-type", "cs", "--stop-time", "5", "--output-interval", "1", "--start-value", "n_sub",
            str(K), "--start-value", "angle_1", "0.3", "--output-variable", "dtheta_z", "--output-variable",
