@@ -84,6 +84,7 @@ NATIVE = {
     "RBFIdentifier": NativeModel("rbf_identifier", resources=identifier_resources),
     "IMUCompensator": NativeModel("imu_compensator"),  # its model: fmus.compensator_export
     "DriftModelUpdater": NativeModel("drift_model_updater"),
+    "VehicleMotion": NativeModel("vehicle_motion"),
 }
 
 # setup.py's flags (sarins_fmu core) plus hidden visibility: only the fmi2* functions are exported.  No
