@@ -38,6 +38,11 @@ int sarins_core_abi(void);
 #include "turntable.h"
 #include "schedule.h"
 #include "ambient.h"
+#include "traj.h"
+#include "nav3.h"
+#include "gnss.h"
+#include "eskf.h"
+#include "odo.h"
 #include "ins_fmu_step.h"
 
 /* trained networks: model files, inference kernels, identifier and compensators */
@@ -50,5 +55,8 @@ int sarins_core_abi(void);
 #include "stop_filter.h"
 #include "rls.h"
 #include "online.h"
+
+/* seed 002's land vehicle: trajectory, body sway and vibration */
+#include "vehicle.h"
 
 #endif
