@@ -20,6 +20,7 @@ from fmus.native_fmu import build_native_fmu
 pytestmark = pytest.mark.integration
 
 HARNESS = Path(__file__).resolve().parent / "fuzz" / "fuzz_fmu_state.c"
+REGRESSIONS = HARNESS.parent / "regressions"
 MODELS = ["Turntable", "StrapdownINS", "IMUThermal", "DriftModelUpdater"]
 FLAGS = ["-std=c11", "-g", "-O1", "-fno-sanitize-recover=all", "-DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION"]
 ENV = {"PATH": os.environ.get("PATH", ""), "ASAN_OPTIONS": "detect_leaks=1"}
@@ -67,6 +68,12 @@ def test_state_reader_under_sanitizers(tmp_path, name, fmi):
         bad[i] ^= 0xFF
         (variants / f"{i:07d}").write_bytes(bytes(bad))
     (variants / "truncated").write_bytes(blob[:-1])
+    # findings of earlier fuzzing runs (tests/fuzz/regressions/<model>_fmi<n>_*.bin), their GUID made this build's
+    guid = blob[24:88]
+    for k, found in enumerate(sorted(REGRESSIONS.glob(f"{name}_fmi{fmi}_*.bin"))):
+        data = bytearray(found.read_bytes())
+        data[24:88] = guid
+        (variants / f"regression{k}").write_bytes(bytes(data))
     inputs = [str(p) for p in files] + sorted(str(p) for p in variants.iterdir())
     proc = subprocess.run([str(exe), *inputs], capture_output=True, text=True, env=ENV, timeout=600)
     assert proc.returncode == 0 and "runtime error" not in proc.stderr, proc.stderr[-3000:]

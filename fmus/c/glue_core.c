@@ -1003,7 +1003,7 @@ static const char *refuse_blob(sarins_glue *g, const unsigned char *b, size_t n)
     if (counts[0] != g->table->n_real || counts[1] != g->table->n_integer || counts[2] != g->table->n_boolean
         || counts[3] != g->table->n_string || state_n != g->model->state_size)
         return "its variables or model state do not fit this model";
-    if (payload < fixed + work_n)
+    if (work_n > payload - fixed) /* payload >= fixed: no wrap-around (fixed + work_n could wrap) */
         return "its work-state size does not match its payload";
     uint64_t array_n, want = 0;
     memcpy(&array_n, p + fixed - 8 + work_n, 8);
@@ -1017,7 +1017,7 @@ static const char *refuse_blob(sarins_glue *g, const unsigned char *b, size_t n)
             return "a structural parameter in it is out of range";
         want += (uint64_t)d;
     }
-    if (array_n != want || payload != fixed + work_n + 8 * array_n)
+    if (array_n != want || array_n > (payload - fixed - work_n) / 8 || payload != fixed + work_n + 8 * array_n)
         return "its arrays do not match its structural parameters or its payload";
     if (!(state == S_INSTANTIATED || state == S_INIT || post_init(state)))
         return "it holds an unknown FMI state";
