@@ -180,7 +180,7 @@ def evaluate(models: dict, test, floor, *, log=None, stream_samples: int = 300):
         if log:
             log(f"mems-calibration: evaluating {name} on {len(test)} samples")
         t0 = time.perf_counter()
-        residuals[name] = model.predict(test.X) - test.Y
+        residuals[name] = model.predict_batch(test.X) - test.Y
         predict_s = time.perf_counter() - t0
         info[name] = dict(n_parameters=int(model.n_parameters), fit_s=float(model.fit_seconds or 0.0),
                           predict_s=predict_s, stream_us=_stream_us(model, test.X[:stream_samples]))

@@ -509,8 +509,9 @@ def markdown(summary: dict, fit_tables: str, figures: list[str]) -> str:
     lines += [f"![{f}]({f})" for f in figures]
     o = s["options"]
     lines += ["", "## Notes", "",
-              f"GRNN pattern layer: at most {o['grnn_patterns']} evenly spaced training samples (the evaluation "
-              f"costs one exp per test-pattern pair). RBF trained on at most {o['rbf_samples']} evenly spaced "
+              f"GRNN pattern layer: at most {o['grnn_patterns']} evenly spaced training samples; evaluated "
+              "truncated (patterns whose weight is below 1e-9 / n of the largest left out, found by a k-d tree: each "
+              "output within 1e-9 of its training range of the dense GRNN, sarins_fmu/identify/grnn.py). RBF trained on at most {o['rbf_samples']} evenly spaced "
               f"samples (2000 centre candidates). Recurrent models: {o['rnn_steps']} NAdam steps on windows of "
               f"{s['rnn_window']} samples read by {s['rnn_streams']} parallel streams, state carried; prediction "
               "runs the test series statefully from a zero state. All networks learn the correction y - x "

@@ -82,6 +82,52 @@ void sarins_grnn_eval(const sarins_grnn *net, int64_t n, const double *x, double
     }
 }
 
+int64_t sarins_grnn_eval_subset(const sarins_grnn *net, const double *x, int64_t n_cand, const int64_t *cand,
+                                double log_cut, double *y, double *scratch)
+{
+    const int64_t d = net->d, m = net->m;
+    const double inv_two_var = 1.0 / (2.0 * (net->sigma * net->sigma));
+    double z[SARINS_NET_MAX_INPUTS];
+    sarins_standardize(1, d, x, net->mean, net->scale, z);
+    double d2_min = INFINITY;
+    for (int64_t k = 0; k < n_cand; k++) {
+        scratch[k] = sq_dist(d, z, net->zt + cand[k] * d);
+        if (scratch[k] < d2_min)
+            d2_min = scratch[k];
+    }
+    /* the dense sum's terms (sarins_grnn_eval), in the same pattern order, those below the cut left out */
+    double s_d = 0.0;
+    int64_t kept = 0;
+    for (int64_t o = 0; o < m; o++)
+        y[o] = 0.0;
+    for (int64_t k = 0; k < n_cand; k++) {
+        double e = (d2_min - scratch[k]) * inv_two_var; /* ln(P_j / max P) */
+        if (e < log_cut)
+            continue;
+        double p = net_exp(e);
+        s_d += p;
+        kept++;
+        for (int64_t o = 0; o < m; o++)
+            y[o] += net->y[cand[k] * m + o] * p;
+    }
+    for (int64_t o = 0; o < m; o++)
+        y[o] = y[o] / s_d; /* no candidate: 0 / 0, NaN */
+    return kept;
+}
+
+void sarins_grnn_eval_blocks(const sarins_grnn *net, int64_t n_blocks, const int64_t *row_ptr,
+                             const int64_t *cand_ptr, const int64_t *cand, double log_cut, const double *x, double *y,
+                             double *scratch, int64_t *kept)
+{
+    for (int64_t b = 0; b < n_blocks; b++)
+        for (int64_t r = row_ptr[b]; r < row_ptr[b + 1]; r++) {
+            int64_t k = sarins_grnn_eval_subset(net, x + r * net->d, cand_ptr[b + 1] - cand_ptr[b],
+                                                cand + cand_ptr[b], log_cut, y + r * net->m, scratch);
+            if (kept != NULL)
+                kept[r] = k;
+        }
+}
+
 int64_t sarins_rnn_state_size(const sarins_rnn *net) { return 2 * (int64_t)net->layers * net->hidden; }
 
 /* g[rows] = w[rows][cols] v[cols] + b, each row summed in order j = 0 .. cols-1 (four rows at a time: four
@@ -214,4 +260,13 @@ void sarins_grnn_predict(int64_t d, int64_t n_patterns, int64_t m, const double 
 {
     const sarins_grnn net = {d, n_patterns, m, mean, scale, zt, yt, sigma};
     sarins_grnn_eval(&net, n, x, y, scratch);
+}
+
+void sarins_grnn_predict_blocks(int64_t d, int64_t n_patterns, int64_t m, const double *mean, const double *scale,
+                                const double *zt, const double *yt, double sigma, int64_t n_blocks,
+                                const int64_t *row_ptr, const int64_t *cand_ptr, const int64_t *cand, double log_cut,
+                                const double *x, double *y, double *scratch, int64_t *kept)
+{
+    const sarins_grnn net = {d, n_patterns, m, mean, scale, zt, yt, sigma};
+    sarins_grnn_eval_blocks(&net, n_blocks, row_ptr, cand_ptr, cand, log_cut, x, y, scratch, kept);
 }
