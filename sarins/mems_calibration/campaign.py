@@ -168,24 +168,68 @@ def record_all(profile_name: str, out: Path, *, workers=None, scheduler=None, pr
 def evaluate(models: dict, test, floor, *, log=None, stream_samples: int = 300):
     """Residuals on ``test`` and the cost of each model.
 
-    Returns (residuals {name: (n, 6)} with 'raw' first, stats {name: dict},
-    info {name: n_parameters, fit_s, predict_s (whole test set, batch),
-    stream_us (per sample, one at a time as in the compensator FMU)}).
+    Returns (residuals {name: (n', 6)} with 'raw' first, every :func:`thinning`-th row (what the figures
+    plot), stats {name: dict} (of every row),
+    info {name: n_parameters, fit_s, predict_s (whole test set, batch; wall time, the evaluations of
+    :func:`evaluate_sets` running side by side), stream_us (per sample, one at a time as in the compensator
+    FMU)}).
     """
+    return evaluate_sets(models, {"test": test}, floor, log=log, stream_samples={"test": stream_samples})["test"]
+
+
+def evaluate_sets(models: dict, sets: dict, floor, *, log=None, stream_samples=None, threads=None) -> dict:
+    """:func:`evaluate` of every model on every dataset of ``sets`` ({name: Dataset}), the (model, dataset)
+    evaluations on ``threads`` threads (default ``SARINS_THREADS`` or every core; the C core releases the
+    GIL), longest first; ``stream_samples`` {set name: rows of the one-at-a-time timing} (default 0).
+    Returns {set name: (residuals, stats, info)} as :func:`evaluate`; the numbers do not depend on threads."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from sarins_fmu.core.imu import thread_count
+
     from . import analysis
 
-    residuals = {"raw": test.X[:, :6] - test.Y}
-    info = {}
-    for name, model in models.items():
+    stream_samples = stream_samples or {}
+    jobs = sorted(((name, key) for key in sets for name in models),
+                  key=lambda job: -EVAL_US_PER_SAMPLE.get(job[0].replace("-memoryless", ""), 1.0) * len(sets[job[1]]))
+
+    def one(job):
+        name, key = job
+        data = sets[key]
         if log:
-            log(f"mems-calibration: evaluating {name} on {len(test)} samples")
+            log(f"mems-calibration: evaluating {name} on {len(data)} samples ({key})")
         t0 = time.perf_counter()
-        residuals[name] = model.predict_batch(test.X) - test.Y
-        predict_s = time.perf_counter() - t0
-        info[name] = dict(n_parameters=int(model.n_parameters), fit_s=float(model.fit_seconds or 0.0),
-                          predict_s=predict_s, stream_us=_stream_us(model, test.X[:stream_samples]))
-    stats = {name: analysis.residual_stats(r, floor) for name, r in residuals.items()}
-    return residuals, stats, info
+        residual = models[name].predict_batch(data.X) - data.Y
+        seconds = time.perf_counter() - t0
+        return residual[::thinning(len(data))], analysis.residual_stats(residual, floor), seconds
+
+    workers = max(1, min(len(jobs), thread_count() if threads is None else int(threads)))
+    with ThreadPoolExecutor(workers) as pool:
+        done = dict(zip(jobs, pool.map(one, jobs)))
+    out = {}
+    for key, data in sets.items():
+        raw = data.X[:, :6] - data.Y
+        residuals, stats = {"raw": raw[::thinning(len(data))]}, {"raw": analysis.residual_stats(raw, floor)}
+        info = {}
+        for name, model in models.items():
+            residuals[name], stats[name], predict_s = done[(name, key)]
+            info[name] = dict(n_parameters=int(model.n_parameters), fit_s=float(model.fit_seconds or 0.0),
+                              predict_s=predict_s,
+                              stream_us=_stream_us(model, data.X[:stream_samples.get(key, 0)]))
+        out[key] = (residuals, stats, info)
+    return out
+
+
+FIGURE_POINTS = 4000  # points per panel of the residual figures (report.residual_figure's max_points)
+
+
+def thinning(n: int) -> int:
+    """Row step of the residuals kept for the figures: every row the figures plot, no other."""
+    return max(1, n // FIGURE_POINTS)
+
+
+# C core's batch evaluation cost per sample (us, this machine, one core): orders the evaluations, longest first
+EVAL_US_PER_SAMPLE = {"traditional": 0.6, "rbf": 0.6, "grnn": 3.5, "lstm": 11.0, "gru": 7.8, "lstm3": 43.0,
+                      "gru3": 33.0}
 
 
 def _stream_us(model, rows) -> float | None:
@@ -271,9 +315,11 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
                                          log=log)
     wall["model fitting (this call)"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    residuals, stats, info = evaluate(models, test, floor, log=log)
-    _, stats_repowered, _ = evaluate(models, repowered, floor, stream_samples=0)
-    _, stats_in_sample, _ = evaluate(models, train.tail(len(test)), floor, stream_samples=0)
+    sets = evaluate_sets(models, {"held-out": test, "repowered": repowered, "in-sample": train.tail(len(test))},
+                         floor, log=log, stream_samples={"held-out": 300})
+    residuals, stats, info = sets["held-out"]
+    stats_repowered, stats_in_sample = sets["repowered"][1], sets["in-sample"][1]
+    del sets
     wall["model evaluation"] = time.perf_counter() - t0
     red = _reductions(stats)
     t0 = time.perf_counter()
@@ -282,7 +328,9 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
 
     report_dir = Path(report_dir) if report_dir else out
     report_dir.mkdir(parents=True, exist_ok=True)
-    figures = rep.figures(report_dir, recs, prof, test, residuals)
+    step = thinning(len(test))
+    figures = rep.figures(report_dir, recs, prof, mc.Dataset(test.X[::step], test.Y[::step], test.time[::step]),
+                          residuals)
     summary = dict(
         profile=profile_name, engine=engine, step=prof.step, cal_step=prof.cal_step, tumble_dwell=prof.tumble_dwell,
         warmup=prof.warmup, programmes={"training": asdict(prof.train), "held-out": asdict(prof.test)},

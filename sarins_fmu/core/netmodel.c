@@ -277,7 +277,9 @@ static int build_rnn(sarins_comp *c, const sarins_netfile *f, char *msg, size_t 
     if (status != SARINS_NETFILE_OK)
         return status;
     total += (size_t)(wout->count + bout->count);
-    double *b = malloc(total * sizeof(double));
+    /* + one scratch matrix for the transposition of the largest weight (G h x max(n_in, h)) */
+    const int64_t widest = r->n_in > h ? r->n_in : h;
+    double *b = malloc((total + (size_t)(g * h * widest)) * sizeof(double));
     if (b == NULL)
         return fail(msg, msg_len, SARINS_NETFILE_MEMORY, "out of memory for a recurrent network of %lld units",
                     (long long)h);
@@ -291,7 +293,14 @@ static int build_rnn(sarins_comp *c, const sarins_netfile *f, char *msg, size_t 
         }
     }
     copy(f, wout, p), r->w_out = p, p += wout->count;
-    copy(f, bout, p), r->b_out = p;
+    copy(f, bout, p), r->b_out = p, p += bout->count;
+    for (int l = 0; l < r->layers; l++) /* the kernel's layout: w_ih, w_hh transposed (nets.h) */
+        for (int q = 0; q < 2; q++) {
+            double *w = (double *)(q == 0 ? r->w_ih[l] : r->w_hh[l]);
+            int64_t cols = q == 0 ? (l == 0 ? r->n_in : h) : h;
+            memcpy(p, w, (size_t)(g * h * cols) * sizeof(double));
+            sarins_rnn_transpose(g * h, cols, p, w);
+        }
     c->block = b;
     return SARINS_NETFILE_OK;
 }

@@ -42,7 +42,9 @@ typedef struct {
 } sarins_grnn;
 
 /* Stacked LSTM or GRU (PyTorch layout and gate order: LSTM i f g o, GRU r z n) with a linear output.
- * Layer l: w_ih [G h][n_in or h], w_hh [G h][h], b_ih, b_hh [G h]; w_out [n_out][h], b_out [n_out]. */
+ * Layer l: w_ih [G h][n_in or h], w_hh [G h][h], b_ih, b_hh [G h]; w_out [n_out][h], b_out [n_out].  The kernel
+ * reads w_ih and w_hh transposed: w_ih [n_in or h][G h], w_hh [h][G h] (sarins_rnn_transpose; the sums are those
+ * of PyTorch's layout, in the same order, bit for bit). */
 typedef struct {
     int cell; /* SARINS_RNN_LSTM or SARINS_RNN_GRU */
     int layers;
@@ -80,6 +82,9 @@ void sarins_grnn_eval_blocks(const sarins_grnn *net, int64_t n_blocks, const int
 
 /* Doubles of a network's state: h then c, each [layers][hidden] (c unused by the GRU). */
 int64_t sarins_rnn_state_size(const sarins_rnn *net);
+
+/* dst[cols][rows] = src[rows][cols] (the layout of sarins_rnn's w_ih, w_hh; dst and src must not overlap). */
+void sarins_rnn_transpose(int64_t rows, int64_t cols, const double *src, double *dst);
 
 /* One time step: input x[n_in], state advanced in place, output y[n_out]. */
 void sarins_rnn_step(const sarins_rnn *net, double *state, const double *x, double *y);
