@@ -37,7 +37,7 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
     progress text.
     """
     import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures import ProcessPoolExecutor, as_completed
 
     from sarins_fmu.core.imu import thread_count
 
@@ -51,9 +51,10 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
     if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
         _TRAIN = train
         pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"))
+        if log:
+            log(f"mems-calibration: fitting {', '.join(recurrent_kinds)} on {len(train)} samples ({workers} "
+                "processes, longest first)")
         for kind in recurrent_kinds:
-            if log:
-                log(f"mems-calibration: fitting {kind} on {len(train)} samples (process pool, {workers} workers)")
             pending[kind] = pool.submit(_fit_recurrent, kind, rnn)
     try:
         for kind in kinds:
@@ -70,8 +71,11 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
             else:
                 model = compensators_module().make(kind, **options[kind]).fit(train.X, train.Y)
             models[kind] = model
-        for kind, future in pending.items():
-            models[kind] = future.result()
+        names = {future: kind for kind, future in pending.items()}
+        for future in as_completed(names):
+            models[names[future]] = future.result()
+            if log:
+                log(f"mems-calibration: fitted {names[future]} ({models[names[future]].fit_seconds:.0f} s)")
     finally:
         if pool is not None:
             pool.shutdown(cancel_futures=True)
@@ -128,9 +132,10 @@ def _stored_models(model_dir: Path, kinds, key: str) -> dict:
     return stored
 
 
-def model_set(model_dir: Path, kinds, train, fit, recs: dict, options: dict, *, refit=False, log=None):
+def model_set(model_dir: Path, kinds, train, fit, recs, options: dict, *, refit=False, log=None):
     """The fitted models of one training set: reused from ``model_dir`` when made from the same
-    recordings ``recs``, options and code, else fitted and saved there.
+    recordings ``recs`` (or their :func:`models_key` with these options, a str), options and code, else
+    fitted and saved there.
 
     Returns (models, reused names, load): ``load`` is the machine's 1-min
     load average before and after the fits that made the models' fit times
@@ -139,7 +144,7 @@ def model_set(model_dir: Path, kinds, train, fit, recs: dict, options: dict, *, 
     from sarins.campaign import atomic_output, write_text
 
     model_dir.mkdir(parents=True, exist_ok=True)
-    key = models_key(recs, options)
+    key = recs if isinstance(recs, str) else models_key(recs, options)
     stored = {} if refit else _stored_models(model_dir, kinds, key)
     todo = [k for k in kinds if k not in stored]
     load_before = os.getloadavg()[0]
