@@ -258,6 +258,12 @@ def _stream_us(model, rows) -> float | None:
     return (time.perf_counter() - t0) / len(rows) * 1e6
 
 
+def _take(recs, kind: str) -> dict:
+    """``recs[kind]``, its slot emptied (the caller holds the only reference)."""
+    rec, recs[kind] = recs[kind], None
+    return rec
+
+
 def _reductions(stats: dict) -> dict:
     from . import analysis
 
@@ -326,19 +332,21 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     report_dir = Path(report_dir) if report_dir else out
     report_dir.mkdir(parents=True, exist_ok=True)
     figures = [rep.programme_figure(report_dir / "fig_programmes.png", recs, prof).name]
-    train, test = mc.dynamic_dataset(recs["dynamic"], recs["heldout"], prof)
-    repowered = mc.dataset(recs["repowered"], prof)
+    options = dict(rnn_steps=rnn_steps, grnn_patterns=grnn_patterns, rbf_samples=rbf_samples)
+    key = models_key({k: recs[k] for k in ("dynamic", "tumble", "rates")}, options)
     fit = mc.traditional_calibration(recs["tumble"], recs["rates"], prof)
+    # memory: each of the protocol's recordings is dropped once it is a dataset (the ablation's stay)
+    train = mc.dataset(_take(recs, "dynamic"), prof)
+    test = mc.dataset(_take(recs, "heldout"), prof)
+    repowered = mc.dataset(_take(recs, "repowered"), prof)
+    for kind in mc.KINDS:
+        recs[kind] = None
     floor = analysis.noise_floor(imu.preset("mems"), prof.step)
     n_check = len(test) if check_samples is None else min(int(check_samples), len(test))
     repowered = mc.Dataset(repowered.X[:n_check], repowered.Y[:n_check], repowered.time[:n_check])
 
     def log(text):
         progress_lines.note(text.removeprefix("mems-calibration: "))
-    options = dict(rnn_steps=rnn_steps, grnn_patterns=grnn_patterns, rbf_samples=rbf_samples)
-    key = models_key({k: recs[k] for k in ("dynamic", "tumble", "rates")}, options)
-    for kind in mc.KINDS:  # memory: the protocol's recordings are datasets now (the ablation's stay)
-        recs[kind] = None
     progress_lines.start("fitting", f"{len(kinds)} models")
     t0 = time.perf_counter()
     models, reused, fit_load = model_set(out / "models", kinds, train, fit, key, options, refit=refit, log=log)

@@ -24,6 +24,11 @@ def cpu_seconds() -> float:
     return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
+def peak_rss_mb() -> float:
+    """Largest resident set of this process so far, MB (Linux reports kB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
 def _clock(seconds: float) -> str:
     seconds = max(0, int(round(seconds)))
     return f"{seconds // 60}:{seconds % 60:02d}"
@@ -42,7 +47,9 @@ class Progress:
         self.current = None
         self.phase_t0 = self.t0
         self.phase_cpu0 = cpu_seconds()
-        self.measured = {}  # {phase: {"wall_s": s, "cpu_s": s, "estimate_s": s}} of the finished phases
+        # {phase: {"wall_s", "cpu_s", "estimate_s", "peak_rss_mb" (this process's peak so far)}} of the finished
+        # phases
+        self.measured = {}
 
     def _scale(self) -> float:
         elapsed = self.phase_t0 - self.t0
@@ -71,7 +78,8 @@ class Progress:
         if self.current is not None:
             self.done_estimate += self.estimates[self.current]
             self.measured[self.current] = {"wall_s": now - self.phase_t0, "cpu_s": cpu - self.phase_cpu0,
-                                           "estimate_s": self.estimates[self.current]}
+                                           "estimate_s": self.estimates[self.current],
+                                           "peak_rss_mb": peak_rss_mb()}
         self.current, self.phase_t0, self.phase_cpu0 = name, now, cpu
         self.note(detail)
 
