@@ -38,8 +38,9 @@ MODEL_DEFAULTS = {  # per profile: recurrent training steps, GRNN patterns, RBF 
     "quick": dict(rnn_steps=400, grnn_patterns=5000, rbf_samples=10000),
     "paper": dict(rnn_steps=4000, grnn_patterns=20000, rbf_samples=50000),
 }
-# per profile: samples of the two check sets (the third power-up from its start, the training run's tail);
-# None: as many as the held-out run.  The quick profile (a smoke run) checks a quarter of its held-out length.
+# per profile: samples of the third power-up evaluated, from its start; None: as many as the held-out run.
+# The quick profile (a smoke run) checks a quarter of its held-out length there; the training run's tail is
+# always as long as the held-out run (the report compares the two).
 CHECK_SAMPLES = {"quick": 288_000, "paper": None}
 DEFAULT_ABLATION_MODELS = "rbf,grnn,lstm,lstm-memoryless"
 
@@ -301,7 +302,7 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     from an earlier run with the same recordings, options and code
     (``<out>/models/index.json``) is loaded instead of fitted again, unless
     ``refit``; likewise ``<out>/models/no-<term>/`` for each ablation.  ``check_samples``: samples of the
-    third power-up (from its start) and of the training run's tail evaluated (None: the held-out length).
+    third power-up evaluated, from its start (None: the held-out length).
     """
     from dataclasses import asdict
 
@@ -351,9 +352,9 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     t0 = time.perf_counter()
     models, reused, fit_load = model_set(out / "models", kinds, train, fit, key, options, refit=refit, log=log)
     wall["model fitting (this call)"] = time.perf_counter() - t0
-    progress_lines.start("evaluation", f"{len(models)} models on 3 sets ({len(test)} + 2 x {n_check} samples)")
+    progress_lines.start("evaluation", f"{len(models)} models on 3 sets (2 x {len(test)} + {n_check} samples)")
     t0 = time.perf_counter()
-    sets = evaluate_sets(models, {"held-out": test, "repowered": repowered, "in-sample": train.tail(n_check)},
+    sets = evaluate_sets(models, {"held-out": test, "repowered": repowered, "in-sample": train.tail(len(test))},
                          floor, log=log, stream_samples={"held-out": 300})
     residuals, stats, info = sets["held-out"]
     stats_repowered, stats_in_sample = sets["repowered"][1], sets["in-sample"][1]
@@ -426,6 +427,6 @@ def estimates(prof, kinds, engine, workers, check_samples, ablations, ablation_k
     record = RECORD_S_PER_SAMPLE[engine] * (sum(n.values()) + 2 * len(ablations) * (n["dynamic"] + n["heldout"]))
     record_parallel = recording_workers(engine, workers, None) or cores
     return {"recording": record / max(1, min(cores, record_parallel)) + 3.0, "datasets": DATASET_S_PER_SAMPLE * n_dyn + 2.0,
-            "fitting": fits(kinds), "evaluation": evaluations(kinds, n["heldout"] + 2 * n_check),
+            "fitting": fits(kinds), "evaluation": evaluations(kinds, 2 * n["heldout"] + n_check),
             "ablation": len(ablations) * (fits(ablation_kinds) + evaluations(ablation_kinds, n["heldout"])),
             "report": 5.0 + (3.0 if any(k in RECURRENT for k in kinds) else 0.0), "done": 0.0}

@@ -527,6 +527,6 @@ def markdown(summary: dict, fit_tables: str, figures: list[str]) -> str:
               f"{s['rnn_window']} samples read by {s['rnn_streams']} parallel streams, state carried; prediction "
               "runs the test series statefully from a zero state. All networks learn the correction y - x "
               "(standardised), see docs/mems-calibration.md."
-              + (f" The third power-up and the training run's tail are evaluated on {s['n_check']} samples each."
+              + (f" The third power-up is evaluated on its first {s['n_check']} samples."
                  if s.get("n_check") not in (None, s["n_test"]) else "")]
     return "\n".join(lines) + "\n"

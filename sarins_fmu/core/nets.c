@@ -207,6 +207,16 @@ static void affine_t(int64_t rows, int64_t cols, const double *wt, const double 
     }
 }
 
+/* 1 if every v[k] == 0 (either sign): then every product v[k] w (w finite) is +-0 and a sum of them from
+ * 0.0 is +0 exactly (round to nearest: +0 + -0 = +0) */
+static int all_zero(int64_t n, const double *v)
+{
+    for (int64_t k = 0; k < n; k++)
+        if (v[k] != 0.0)
+            return 0;
+    return 1;
+}
+
 /* One layer: input in[n_in], hidden h[hid] and cell c[hid] advanced in place. */
 static void rnn_layer(const sarins_rnn *net, int l, const double *in, int64_t n_in, double *h, double *c)
 {
@@ -214,7 +224,11 @@ static void rnn_layer(const sarins_rnn *net, int l, const double *in, int64_t n_
     double gi[4 * SARINS_RNN_MAX_HIDDEN], gh[4 * SARINS_RNN_MAX_HIDDEN];
     const int64_t g = net->cell == SARINS_RNN_LSTM ? 4 : 3;
     affine_t(g * hid, n_in, net->w_ih[l], in, net->b_ih[l], gi);
-    affine_t(g * hid, hid, net->w_hh[l], h, net->b_hh[l], gh);
+    if (all_zero(hid, h)) /* a zero state (a series' start, a memoryless control): the sums are exactly +0 */
+        for (int64_t k = 0; k < g * hid; k++)
+            gh[k] = 0.0 + net->b_hh[l][k]; /* what affine_t gives: 0.0 + (+-0) ... = +0, then + b */
+    else
+        affine_t(g * hid, hid, net->w_hh[l], h, net->b_hh[l], gh);
     if (net->cell == SARINS_RNN_LSTM) {
         for (int64_t k = 0; k < hid; k++) {
             double i = net_sigmoid(gi[k] + gh[k]);
