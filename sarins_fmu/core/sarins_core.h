@@ -51,4 +51,7 @@ int sarins_core_abi(void);
 #include "rls.h"
 #include "online.h"
 
+/* text IMU logs: sample lines parsed into doubles (sarins_fmu.imu_log) */
+#include "log_parse.h"
+
 #endif
