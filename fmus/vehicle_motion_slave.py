@@ -1,35 +1,17 @@
-"""VehicleMotion FMU: a land vehicle's drives, turns and stops (seed 002) as moving-base motion."""
+"""VehicleMotion FMU: a land vehicle's drives, turns and stops (seed 002) as moving-base motion.
 
+The declaration of the native VehicleMotion FMU: its variables, descriptions, start values and the timing
+contract.  ``fmus/native_fmu.py`` writes the model description and the C variable table from it;
+``fmus/c/vehicle_motion/model.c`` computes it (the C core's vehicle, ``sarins_fmu/core/vehicle.h``, which
+:mod:`sarins_fmu.vehicle` runs in process).
+"""
 
-import numpy as np
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import (OUTPUT, PARAMETER, ParameterError, check_finite, check_integer, check_latitude,
-                                check_step, declare,
-                                discard_on_error, guarded, same_time)
+from fmus.slave_support import OUTPUT, PARAMETER, declare, default_experiment
 from sarins_fmu import vehicle
 from sarins_fmu.site import SITE_LAT_DEG
 from sarins_fmu.units import DEG_TO_RAD
-
-
-
-def parse_legs(text: str):
-    """'drive 300 10; turn 90; stop 1800' -> [('drive', 300.0, 10.0), ('turn', 90.0), ('stop', 1800.0)]."""
-    legs = []
-    for part in filter(None, (p.strip() for p in text.split(";"))):
-        kind, *numbers = part.split()
-        try:
-            legs.append((kind, *(float(x) for x in numbers)))
-        except ValueError:
-            raise ParameterError(f"parameter legs: leg {part!r}: numbers expected after {kind!r}") from None
-        want = {"drive": 2, "turn": 1, "stop": 1}.get(kind)
-        if want is None or len(numbers) != want:
-            raise ParameterError(f"parameter legs: leg {part!r}: use 'drive SECONDS SPEED', 'turn DEGREES' or "
-                                 "'stop SECONDS'")
-    if not legs:
-        raise ParameterError("parameter legs is empty")
-    return legs
 
 
 class VehicleMotion(Fmi2Slave):
@@ -49,8 +31,8 @@ class VehicleMotion(Fmi2Slave):
         "over the step (exact for the IMU: f = dv/h + (2 omega_ie + omega_en) x v_mean - g, v_mean the step's "
         "Simpson mean velocity); position, velocity and speed at base_motion_time and stopped (1 at rest). After "
         "the last leg the vehicle stays parked. All outputs are state outputs (no direct feedthrough). Nothing "
-        "but the trajectory is held.")
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=7200.0, step_size=1.0)
+        "but the trajectory's state is held (FMU state: get, set and serialize).")
+    default_experiment = default_experiment(1.0)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -87,75 +69,7 @@ class VehicleMotion(Fmi2Slave):
                                  ("speed", "m/s", "speed"), ("base_motion_time", "s", "time tag of the outputs")):
             declare(self, "real", name, OUTPUT, f"{text} at base_motion_time [{unit}]", 0.0)
         declare(self, "integer", "stopped", OUTPUT, "1 while the vehicle is at rest [1]", 1)
-        self._trajectory = None
-        self._step = None
-        self._start_time = 0.0
 
-    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
-        self._start_time = float(start_time)
-
-    def enter_initialization_mode(self):
-        try:  # outputs during initialisation (a host may read them then); a bad parameter is reported at exit
-            self._build()
-        except ParameterError:
-            self._trajectory = None
-
-    @guarded
-    def exit_initialization_mode(self):
-        self._build()
-
-    def _build(self):
-        check_finite(self, ["lat0", "lon0", "heading0", "lead_time", "grid", "sway_pitch", "sway_roll", "sway_period",
-                            "vibration", "reference_speed"], positive=["grid", "sway_period", "reference_speed"],
-                     non_negative=["lead_time", "sway_pitch", "sway_roll", "vibration"])
-        check_latitude(self, "lat0")
-        seed = check_integer(self, "body_seed", 0)
-        legs = parse_legs(self.legs)
-        try:
-            body = vehicle.BodyMotion(self.sway_pitch, self.sway_roll, self.sway_period, self.vibration,
-                                      reference_speed=self.reference_speed, seed=seed)
-        except ValueError as exc:
-            raise ParameterError(f"parameters sway_pitch, sway_roll, sway_period, vibration, reference_speed: "
-                                 f"{exc}") from None
-        try:
-            self._trajectory = vehicle.VehicleTrajectory(legs, self.lat0, self.lon0, self.heading0, step=self.grid,
-                                                         rotation="none", lead_time=self.lead_time, body=body)
-        except ValueError as exc:
-            raise ParameterError(f"parameter legs = {self.legs!r}: {exc}") from None
-        self._publish(self._start_time)
-
-    def _publish(self, time):
-        tr = self._trajectory
-        k = int(round((time - self._start_time) / tr.step))
-        if not same_time(k * tr.step + self._start_time, time, tr.step):
-            raise ValueError(f"time {time:.9g} s is not on the vehicle's grid of {tr.step} s")
-        if k > tr.n_steps and tr.speed[-1] != 0.0:  # (the state at the drive's end is published, not a step after)
-            raise ValueError(f"time {time:.9g} s is beyond the drive and the legs do not end with a stop")
-        k_motion = min(k, tr.n_steps - 1)  # after the last leg: parked (the last step is at rest)
-        angle, rate, accel = (x[0] for x in tr.schedule.state(min(k, tr.n_steps) * tr.step))
-        parked = k >= tr.n_steps
-        for j, name in enumerate(("yaw", "pitch", "roll")):
-            setattr(self, f"vehicle_{name}", float(angle[j]))
-            setattr(self, f"vehicle_{name}_rate", 0.0 if parked else float(rate[j]))
-            setattr(self, f"vehicle_{name}_accel", 0.0 if parked else float(accel[j]))
-        w_t, f_t = tr.base_motion(np.array([k_motion * tr.step]), tr.step)
-        for i, ax in enumerate("enu"):
-            setattr(self, f"base_rate_{ax}", float(w_t[0, i]))
-            setattr(self, f"base_force_{ax}", float(f_t[0, i]))
-        j = min(k, tr.n_steps)
-        self.lat, self.lon = float(tr.lat[j]), float(tr.lon[j])
-        self.v_e, self.v_n = float(tr.velocity_n[j, 0]), float(tr.velocity_n[j, 1])
-        self.speed = float(tr.speed[j])
-        self.stopped = int(not tr.moving()[j])
-        self.base_motion_time = float(time)
-
-    @guarded
     def do_step(self, current_time, step_size):
-        try:
-            self._step = check_step(self, step_size, self._step)
-            if not same_time(step_size, self._trajectory.step, step_size):
-                raise ValueError(f"communication step {step_size} s differs from the vehicle grid {self.grid} s")
-            self._publish(current_time + step_size)
-        except ValueError as exc:
-            return discard_on_error(self, exc)
-        return True
+        raise NotImplementedError("the VehicleMotion FMU is native: fmus/c/vehicle_motion/model.c computes it (this "
+                                  "class only declares its variables)")

@@ -22,6 +22,11 @@ the local-level ENU frame at the vehicle's position, whose inertial rate
 with Δv^n the exact velocity change over the step and v̄^n the step's mean
 velocity.  The body frame is right-front-up, the navigation frame ENU; SI
 units inside (rad, m, m/s, s).
+
+The trajectory, the body's sway and vibration and their seeded phases are
+computed by the C core (``sarins_fmu/core/vehicle.h``, which states the
+equations), step by step; the VehicleMotion FMU runs the same C, so its
+outputs equal :class:`VehicleTrajectory`'s rows bit for bit.
 """
 
 from __future__ import annotations
@@ -31,7 +36,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import earth, turntable
+from . import turntable
+from .core import vehicle as core
 from .turntable import AXIS_X, AXIS_Y, AXIS_Z
 from .units import DEG_TO_RAD
 
@@ -51,14 +57,6 @@ class DriveSettings:
     yaw_accel: float = 3.0 * DEG_TO_RAD  # rad/s^2
 
 
-def _ramp_steps(v0: float, v1: float, rate: float, step: float) -> tuple[int, float]:
-    """Whole steps and acceleration taking the speed from v0 to v1 exactly."""
-    if v1 == v0:
-        return 0, 0.0
-    n = max(1, math.ceil(abs(v1 - v0) / (rate * step) - 1e-9))
-    return n, (v1 - v0) / (n * step)
-
-
 @dataclass(frozen=True)
 class BodyMotion:
     """Pitch and roll of the vehicle body while it moves (suspension sway and vibration).
@@ -70,7 +68,8 @@ class BodyMotion:
     period ``sway_period`` (s), and vibration of amplitude ``vibration`` (rad)
     per component at the frequencies ``vibration_hz`` (our choice: 0.13, 0.29,
     0.41 Hz, below the 0.5 Hz Nyquist limit of a 1 s grid; faster vibration
-    needs a finer grid).  Phases come from ``seed``.  Defaults (our choice):
+    needs a finer grid).  Phases are 2π u, u the uniforms of the core's random
+    stream ``SARINS_VEHICLE_STREAM`` of ``seed`` (``sarins_fmu/core/vehicle.h``).  Defaults (our choice):
     0.5 deg pitch and 0.3 deg roll sway over 20 s, 0.05 deg vibration at 10 m/s.
     The translational motion is unchanged (a level road): these are attitude
     oscillations of the body, starting level (so their mean can be offset by
@@ -86,28 +85,30 @@ class BodyMotion:
     seed: int = 0
 
     def __post_init__(self):
-        for name in ("sway_pitch", "sway_roll", "sway_period", "vibration", "reference_speed"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"body motion {name} must be a non-negative number, got {value}")
-        if not (self.sway_period > 0 and self.reference_speed > 0):
-            raise ValueError("sway_period and reference_speed must be positive")
-        if not all(math.isfinite(f) and f > 0 for f in self.vibration_hz):
-            raise ValueError("vibration frequencies must be positive")
+        if len(self.vibration_hz) != core.N_VIBRATION:
+            raise ValueError(f"body motion needs {core.N_VIBRATION} vibration frequencies, got {self.vibration_hz!r}")
+        if not 0 <= int(self.seed) < 2**64:
+            raise ValueError(f"body motion seed must be in [0, 2^64), got {self.seed}")
+        core.segments(_params(0.0, 0.0, 0.0, 1.0, 0.0, DriveSettings(), self), [])  # the core's checks
 
-    def rates(self, time: np.ndarray, speed: np.ndarray) -> np.ndarray:
-        """Pitch and roll rates (K, 2), rad/s, at the grid ``time`` (K,) s for ``speed`` (K,) m/s."""
-        rng = np.random.default_rng([self.seed, 61])
-        phase = rng.uniform(0.0, 2 * math.pi, size=(2, 1 + len(self.vibration_hz)))
-        w_sway = 2 * math.pi / self.sway_period
-        out = np.empty((time.size, 2))
-        for j, sway in enumerate((self.sway_pitch, self.sway_roll)):
-            rate = sway * w_sway * np.cos(w_sway * time + phase[j, 0])
-            for i, f in enumerate(self.vibration_hz):
-                w = 2 * math.pi * f
-                rate += self.vibration * w * np.cos(w * time + phase[j, i + 1])
-            out[:, j] = rate * (speed / self.reference_speed)
-        return out
+
+def _params(lat, lon, heading, step, lead_time, settings: DriveSettings, body: BodyMotion) -> core.Params:
+    """The core's parameter struct (SI)."""
+    p = core.default_params()
+    for name, value in (("lat0", lat), ("lon0", lon), ("heading0", heading), ("step", step),
+                        ("lead_time", lead_time), ("accel", settings.accel), ("brake", settings.brake),
+                        ("yaw_rate", settings.yaw_rate), ("yaw_accel", settings.yaw_accel),
+                        ("sway_pitch", body.sway_pitch), ("sway_roll", body.sway_roll),
+                        ("sway_period", body.sway_period), ("vibration", body.vibration),
+                        ("reference_speed", body.reference_speed)):
+        setattr(p, name, float(value))
+    for i, f in enumerate(body.vibration_hz):
+        p.vibration_hz[i] = float(f)
+    p.seed = int(body.seed)
+    return p
+
+
+RIGID_BODY = BodyMotion(0.0, 0.0, vibration=0.0)  # no sway or vibration
 
 
 def legs_to_accelerations(legs, step: float = 1.0, settings: DriveSettings = DriveSettings()):
@@ -118,35 +119,17 @@ def legs_to_accelerations(legs, step: float = 1.0, settings: DriveSettings = Dri
     accel, yaw_accel : ndarray (K,)
         Held on [k h, (k+1) h).
     """
-    acc, yaw = [], []
-    speed = 0.0
-    for leg in legs:
-        kind = leg[0]
-        if kind not in LEG_KINDS:
-            raise ValueError(f"unknown leg {kind!r}; choose one of {', '.join(LEG_KINDS)}")
-        if kind == "turn":
-            angle = float(leg[1]) * DEG_TO_RAD
-            if not math.isfinite(angle):
-                raise ValueError("turn angle must be finite")
-            if speed <= 0 and angle != 0:
-                raise ValueError("a turn needs a moving vehicle (drive first)")
-            for dur, a in turntable.move_segments(angle, settings.yaw_rate, settings.yaw_accel, step):
-                n = int(round(dur / step))
-                acc += [0.0] * n
-                yaw += [a] * n
-            continue
-        seconds = float(leg[1])
-        if not (math.isfinite(seconds) and seconds > 0):
-            raise ValueError(f"leg duration must be positive, got {leg[1]!r}")
-        target = 0.0 if kind == "stop" else float(leg[2])
-        if not (math.isfinite(target) and target >= 0):
-            raise ValueError(f"drive speed must be >= 0 m/s, got {target!r}")
-        n_ramp, a = _ramp_steps(speed, target, settings.brake if target < speed else settings.accel, step)
-        n_total = max(n_ramp, int(round(seconds / step)))
-        acc += [a] * n_ramp + [0.0] * (n_total - n_ramp)
-        yaw += [0.0] * n_total
-        speed = target
-    return np.asarray(acc, float), np.asarray(yaw, float)
+    segs, _ = core.segments(_params(0.0, 0.0, 0.0, step, 0.0, settings, RIGID_BODY), legs)
+    segs = segs[:-1]  # the core's last step at rest belongs to the trajectory, not to the legs
+    return (np.repeat([a for _, a, _ in segs], [n for n, _, _ in segs]),
+            np.repeat([y for _, _, y in segs], [n for n, _, _ in segs]))
+
+
+def parse_legs(text: str) -> list:
+    """Legs from the VehicleMotion FMU's text form: ``'drive 300 10; turn 90; stop 1800'`` ->
+    ``[('drive', 300.0, 10.0), ('turn', 90.0), ('stop', 1800.0)]`` (turns in degrees).  The FMU's own parser
+    (the C core's); ValueError with its reason for a text it refuses."""
+    return core.parse_legs(text)
 
 
 def random_legs(duration: float, seed: int, *, n_stops: int = 3, stop_range=(600.0, 3000.0),
@@ -179,14 +162,6 @@ def random_legs(duration: float, seed: int, *, n_stops: int = 3, stop_range=(600
     return legs
 
 
-def _compress(accel: np.ndarray, step: float):
-    """Segments [(duration, accel row)] of consecutive equal rows."""
-    change = np.flatnonzero(np.any(np.diff(accel, axis=0) != 0.0, axis=1)) + 1
-    starts = np.concatenate([[0], change])
-    ends = np.concatenate([change, [accel.shape[0]]])
-    return [((e - s) * step, accel[s]) for s, e in zip(starts, ends)]
-
-
 class VehicleTrajectory:
     """Truth motion of a vehicle carrying a single-axis RINS.
 
@@ -215,79 +190,41 @@ class VehicleTrajectory:
     ----------
     time : (K+1,) grid times, s.  speed : (K+1,) m/s.  heading : (K+1,) rad.
     lat, lon : (K+1,) rad.  velocity_n : (K+1, 3) m/s.
+    rows : (K+1, len(sarins_fmu.core.vehicle.COLUMNS)): row k describes the step
+        from ``time[k]`` (the C core's stream; the VehicleMotion FMU's outputs
+        at that time, bit for bit).
     schedule : GimbalSchedule with axes (heading, RINS rotation), or
-        (heading, pitch, roll, RINS rotation) with ``body``.
+        (heading, pitch, roll, RINS rotation) with ``body``; its breakpoints
+        are the grid points, its states there the rows'.
+
+    Raises ValueError with the core's reason for a bad parameter or leg, or a
+    drive that leaves +-89.9 deg latitude.
     """
 
     def __init__(self, legs, lat: float, lon: float = 0.0, heading: float = 0.0, *, step: float = 1.0,
                  rotation: str = "forward-reverse", rate_dps: float = 6.0, accel_dps2: float = 6.0,
                  settings: DriveSettings = DriveSettings(), lead_time: float = 0.0, body: BodyMotion | None = None):
-        for name, value in (("lat", lat), ("lon", lon), ("heading", heading), ("step", step),
-                            ("lead_time", lead_time)):
-            if not math.isfinite(value):
-                raise ValueError(f"{name} must be finite")
-        if abs(lat) > 89.9 * DEG_TO_RAD:
-            raise ValueError("latitude outside +-89.9 deg")
-        if step <= 0 or lead_time < 0:
-            raise ValueError("step must be positive and lead_time >= 0")
-        acc, yaw_acc = legs_to_accelerations(legs, step, settings)
-        n_lead = int(round(lead_time / step))
-        acc = np.concatenate([np.zeros(n_lead), acc, [0.0]])
-        yaw_acc = np.concatenate([np.zeros(n_lead), yaw_acc, [0.0]])
-        n = acc.size
+        rows = core.run(_params(lat, lon, heading, step, lead_time, settings, RIGID_BODY if body is None else body),
+                        legs)
+        n = rows.shape[0] - 1
+        col = {name: j for j, name in enumerate(core.COLUMNS)}
         self.step, self.n_steps = float(step), n
+        self.rows = rows
         self.time = np.arange(n + 1) * step
-        self.speed = np.concatenate([[0.0], np.cumsum(acc * step)])
-        self.speed[np.abs(self.speed) < 1e-12] = 0.0
-        if np.any(self.speed < -1e-9):
-            raise ValueError("legs give a negative speed")
-        yaw_rate = np.concatenate([[0.0], np.cumsum(yaw_acc * step)])
-        self.heading = heading + np.concatenate([[0.0], np.cumsum(yaw_rate[:-1] * step + 0.5 * yaw_acc * step**2)])
+        self.speed = rows[:, col["speed"]].copy()
+        self.heading = rows[:, col["yaw"]].copy()
+        self.lat, self.lon = rows[:, col["lat"]].copy(), rows[:, col["lon"]].copy()
+        self.velocity_n = np.column_stack([rows[:, col["v_e"]], rows[:, col["v_n"]], np.zeros(n + 1)])
+        self._w_it = np.ascontiguousarray(rows[:-1, col["w_e"]:col["w_u"] + 1])
+        self._f = np.ascontiguousarray(rows[:-1, col["f_e"]:col["f_u"] + 1])
         rot = turntable.single_axis(rotation, (n + 1) * step, rate_dps=rate_dps, accel_dps2=accel_dps2, grid=step)
-        rot_acc = rot.state(self.time[:-1])[2][:, 0]
-        if body is None:
-            self.axes = VEHICLE_AXES
-            columns, angle0 = [yaw_acc, rot_acc], np.array([heading, 0.0])
-        else:  # pitch and roll rates linear between grid points: accel = rate difference / step
-            body_rate = body.rates(self.time, self.speed)
-            body_acc = np.diff(body_rate, axis=0) / step
-            self.axes = VEHICLE_BODY_AXES
-            columns, angle0 = [yaw_acc, body_acc[:, 0], body_acc[:, 1], rot_acc], np.array([heading, 0.0, 0.0, 0.0])
-        self.schedule = turntable.schedule_from_segments(
-            self.axes, _compress(np.column_stack(columns), step), angle0=angle0,
-            rate0=np.zeros(len(angle0)) if body is None else np.array([0.0, *body_rate[0], 0.0]))
-        self._build_motion(lat, lon, acc, yaw_acc, yaw_rate)
-
-    def _velocity_n(self, speed, heading):
-        return np.column_stack([-speed * np.sin(heading), speed * np.cos(heading), np.zeros_like(speed)])
-
-    def _build_motion(self, lat0, lon0, acc, yaw_acc, yaw_rate):
-        h = self.step
-        v_grid = self._velocity_n(self.speed, self.heading)
-        # mid-step speed and heading (exact: linear / quadratic in the step)
-        speed_mid = self.speed[:-1] + 0.5 * acc * h
-        heading_mid = self.heading[:-1] + 0.5 * yaw_rate[:-1] * h + 0.125 * yaw_acc * h**2
-        v_mid = self._velocity_n(speed_mid, heading_mid)
-        # Simpson mean velocity over each step
-        v_mean = (v_grid[:-1] + 4.0 * v_mid + v_grid[1:]) / 6.0
-        # latitude/longitude by two vectorised passes (radii at the first-pass latitudes)
-        lat = np.full(self.n_steps + 1, float(lat0))
-        for _ in range(2):
-            r_m, r_n = earth.radii(lat[:-1])
-            lat = lat0 + np.concatenate([[0.0], np.cumsum(v_mean[:, 1] * h / r_m)])
-        lat_mid = 0.5 * (lat[:-1] + lat[1:])
-        r_m, r_n = earth.radii(lat_mid)
-        lon = lon0 + np.concatenate([[0.0], np.cumsum(v_mean[:, 0] * h / (r_n * np.cos(lat_mid)))])
-        zeros = np.zeros_like(lat_mid)
-        w_ie = earth.RATE * np.column_stack([zeros, np.cos(lat_mid), np.sin(lat_mid)])
-        w_en = np.column_stack([-v_mean[:, 1] / r_m, v_mean[:, 0] / r_n, v_mean[:, 0] * np.tan(lat_mid) / r_n])
-        g = earth.gravity(lat_mid, 0.0)
-        w_it = w_ie + w_en
-        # f = dv/dt + (2 w_ie + w_en) x v - g^n,  g^n = (0, 0, -g)
-        f_n = (v_grid[1:] - v_grid[:-1]) / h + np.cross(2.0 * w_ie + w_en, v_mean)
-        f_n[:, 2] += g
-        self.lat, self.lon, self.velocity_n = lat, lon, v_grid
-        self._w_it, self._f = w_it, f_n
+        rot_state = rot.state(self.time)
+        names = ("yaw",) if body is None else ("yaw", "pitch", "roll")
+        self.axes = VEHICLE_AXES if body is None else VEHICLE_BODY_AXES
+        tables = [np.column_stack([rows[:, [col[a + q] for a in names]], r[:, 0]])
+                  for q, r in zip(("", "_rate", "_accel"), rot_state)]
+        self.schedule = turntable.GimbalSchedule.from_breakpoints(self.axes, self.time, tables[0], tables[1],
+                                                                  tables[2][:-1])
 
     @property
     def duration(self) -> float:

@@ -172,6 +172,7 @@ def test_two_instances_do_not_share_state(fmu_dir):
 def test_fmu_runs_in_a_host_without_this_project(fmu_dir, tmp_path):
     """numpy, scipy and fmpy importable, sarins_fmu not: the FMU brings it, its C core included."""
     import fmpy
+    from test_fmi_contract import _tiny_log
 
     import shutil
 
@@ -196,10 +197,11 @@ def test_fmu_runs_in_a_host_without_this_project(fmu_dir, tmp_path):
                          record=("lat", "nav_time"))
         assert rows[-1][1] > 0 and abs(rows[-1][0] - 0.4925668) < 1e-3, rows[-1]
         from fmu_driver import Slave  # the chain is native (no Python); a Python-hosted FMU brings its library
-        vehicle = Slave(Path({str(fmu_dir)!r}) / "VehicleMotion.fmu", "vehicle")
-        vehicle.fmu.enterInitializationMode()
-        vehicle.fmu.exitInitializationMode()
-        vehicle.free()
+        player = Slave(Path({str(fmu_dir)!r}) / "IMULog.fmu", "player")
+        player.set(log_file={str(_tiny_log(tmp_path))!r})
+        player.fmu.enterInitializationMode()
+        player.fmu.exitInitializationMode()
+        player.free()
         assert "sarins_fmu" not in sys.modules  # the FMUs run their own copy, under its own name
         shipped = [m for name, m in sys.modules.items() if name.endswith(".sarins_fmu")]
         assert shipped and "sarins-fmu" in shipped[0].__file__, shipped
@@ -230,7 +232,7 @@ simulate_fmu(str(fixtures['Gain']), stop_time=1.0, step_size=0.5)
 import pythonfmu
 assert 'resources' in pythonfmu.__file__, pythonfmu.__file__  # the FMU's copy was imported
 from fmus.build import build_fmus
-fmu = build_fmus({str(tmp_path / 'out')!r}, names=['VehicleMotion'])[0]
+fmu = build_fmus({str(tmp_path / 'out')!r}, names=['IMULog'])[0]
 names = zipfile.ZipFile(fmu).namelist()
 assert any(n.startswith('binaries/') for n in names)
 assert any(n.endswith('/pythonfmu/fmi2slave.py') for n in names), names
@@ -255,10 +257,10 @@ def test_model_description_states_the_requirements(fmu_dir):
 
     from fmpy import read_model_description
 
-    md = read_model_description(str(fmu_dir / "VehicleMotion.fmu"))  # a Python-hosted FMU
+    md = read_model_description(str(fmu_dir / "IMULog.fmu"))  # the Python-hosted FMU
     assert md.coSimulation.needsExecutionTool is True
     assert "sarins-fmi" in md.generationTool and "PythonFMU" in md.generationTool
-    with zipfile.ZipFile(fmu_dir / "VehicleMotion.fmu") as z:
+    with zipfile.ZipFile(fmu_dir / "IMULog.fmu") as z:
         doc = z.read("documentation/index.html").decode()
         assert not any(n.startswith("binaries/win64") for n in z.namelist())
     assert "CPython 3." in doc and "SARINS_FMU_PYTHON" in doc and "Linux x86-64" in doc

@@ -541,6 +541,7 @@ def test_systematic_residual_and_ordering_by_hand():
 
 
 # ----------------------------------------------------------- compensator FMU
+LINUX_ONLY = dict(win64=False, aarch64=False)  # the chain runs here; other platforms: tests/test_portable_fmus.py
 @pytest.fixture(scope="module")
 def chain_fmus(fmu_dir):
     return fmu_dir
@@ -576,7 +577,8 @@ def test_compensated_chain_gives_the_same_solution_under_both_schemes(chain_fmus
     from fmus.compensator_export import export_compensator
 
     X, Y = _toy_series(300)
-    fmu = export_compensator(compensators.make("traditional").fit(X, Y).save(tmp_path / "t.json"), tmp_path / "out")
+    fmu = export_compensator(compensators.make("traditional").fit(X, Y).save(tmp_path / "t.json"), tmp_path / "out",
+                             **LINUX_ONLY)
     names = ["ins.nav_time", "ins.lat", "ins.lon", "ins.yaw", "ins.v_e", "ins.v_n"]
     runs = [_compensator_run(chain_fmus, fmu, stop=20.0, scheme=s, record=names) for s in ("gauss-seidel", "jacobi")]
     rows = []
@@ -606,7 +608,7 @@ def test_compensator_fmu_between_imu_and_ins(chain_fmus, short_training, tmp_pat
     rnn = dict(hidden=8, steps=5, seq_len=20, streams=4)
     opts = {"grnn": dict(max_patterns=300), "gru": rnn, "lstm3": rnn}.get(kind, {})
     model = compensators.make(kind, **opts).fit(train.X, train.Y)
-    fmu = export_compensator(model.save(tmp_path / "model.json"), tmp_path / "out")
+    fmu = export_compensator(model.save(tmp_path / "model.json"), tmp_path / "out", **LINUX_ONLY)
     assert validate_fmu(str(fmu)) == []
     res = _compensator_run(chain_fmus, fmu)
     h = SHORT.step
@@ -629,7 +631,8 @@ def test_compensator_fmu_with_a_bad_model_file_reports_an_error(chain_fmus, tmp_
     from fmus.compensator_export import export_compensator
 
     X, Y = _toy_series(200)
-    fmu = export_compensator(compensators.make("traditional").fit(X, Y).save(tmp_path / "t.json"), tmp_path)
+    fmu = export_compensator(compensators.make("traditional").fit(X, Y).save(tmp_path / "t.json"), tmp_path,
+                             **LINUX_ONLY)
     bad = tmp_path / "broken.npz"
     bad.write_bytes(b"not a model")
     log = []
@@ -659,7 +662,7 @@ def test_recurrent_compensator_fmu_reset_and_two_instances(short_training, tmp_p
 
     train = short_training
     model = compensators.make("lstm", hidden=8, steps=5, seq_len=20, streams=4).fit(train.X, train.Y)
-    fmu = export_compensator(model.save(tmp_path / "lstm.npz"), tmp_path)
+    fmu = export_compensator(model.save(tmp_path / "lstm.npz"), tmp_path, **LINUX_ONLY)
     h = SHORT.step
     x = train.X[:15]
 
@@ -691,23 +694,29 @@ def test_recurrent_compensator_fmu_reset_and_two_instances(short_training, tmp_p
         b.free()
 
 
+def _build_compensator_cli(tmp_path, model, out):
+    env = {**__import__("os").environ, "PYTHONPATH": str(ROOT)}
+    cmd = [sys.executable, "-m", "sarins", "build-fmus", "--only", "IMUCompensator", "--out", str(out),
+           "--compensator", str(model)]
+    return subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300, env=env)
+
+
+@pytest.mark.slow  # builds every platform's binary (the library path is in the default run: export_compensator)
 @pytest.mark.integration
 def test_build_fmus_cli_ships_a_compensator(tmp_path):
     import zipfile
 
     X, Y = _toy_series(300)
     model = compensators.make("grnn", max_patterns=50).fit(X, Y).save(tmp_path / "g.json")
-    env = {**__import__("os").environ, "PYTHONPATH": str(ROOT)}
-    cmd = [sys.executable, "-m", "sarins", "build-fmus", "--only", "IMUCompensator", "--out",
-           str(tmp_path / "out"), "--compensator"]
-    done = subprocess.run(cmd + [str(model)], cwd=ROOT, capture_output=True, text=True, timeout=300, env=env)
+    done = _build_compensator_cli(tmp_path, model, tmp_path / "out")
     assert done.returncode == 0, done.stderr
     with zipfile.ZipFile(tmp_path / "out" / "IMUCompensator.fmu") as z:  # the binary model the C model reads
         assert z.read("resources/compensator.bin") == compensators.load(model).binary()
-    cmd[cmd.index("--out") + 1] = str(tmp_path / "out_bad")
-    bad = subprocess.run(cmd + [str(tmp_path / "missing.json")], cwd=ROOT, capture_output=True, text=True,
-                         timeout=300, env=env)
-    assert bad.returncode != 0 and "missing.json" in bad.stderr
+
+
+def test_build_fmus_cli_refuses_a_missing_compensator_before_building(tmp_path):
+    bad = _build_compensator_cli(tmp_path, tmp_path / "missing.json", tmp_path / "out_bad")
+    assert bad.returncode == 2 and "missing.json" in bad.stderr
     assert not (tmp_path / "out_bad").exists()  # nothing built
 
 

@@ -47,6 +47,7 @@ for mode in ("duplicate", "not-int", "not-tuple", "none"):
     del log[:]
     try:
         f.instantiate(loggingOn=False, callbacks=fmilog.callbacks())
+        f.setString([next(v.valueReference for v in md.modelVariables if v.name == "log_file")], [{log!r}])
         f.setupExperiment(startTime=0.0)
         f.enterInitializationMode()
         f.exitInitializationMode()
@@ -58,10 +59,12 @@ for mode in ("duplicate", "not-int", "not-tuple", "none"):
 """
 
 
-def test_malformed_variable_tables_are_refused(fmu_dir):
+def test_malformed_variable_tables_are_refused(fmu_dir, tmp_path):
+    from test_fmi_contract import _tiny_log
+
     tests = os.path.dirname(__file__)
     script = textwrap.dedent(SCRIPT).format(tests=tests, root=os.path.dirname(tests), patch=PATCH,
-                                            fmu=str(fmu_dir / "VehicleMotion.fmu"))
+                                            fmu=str(fmu_dir / "IMULog.fmu"), log=str(_tiny_log(tmp_path)))
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr[-2000:]
     rows = {line.split(" | ")[0]: line.split(" | ")[1:] for line in proc.stdout.splitlines() if " | " in line}

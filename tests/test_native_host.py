@@ -101,10 +101,10 @@ def test_invalid_value_reference_is_an_error_not_fatal_in_a_c_host(host, unzippe
     assert proc.returncode == 0
 
 
-def test_no_python_found_gives_null_with_a_reason(host, unzipped, tmp_path):
+def test_no_python_found_gives_null_with_a_reason(host, fmu_dir, tmp_path):
     """With the recorded interpreter gone and nothing on PATH, fmi2Instantiate returns NULL and says why."""
-    folder, md = unzipped["VehicleMotion"]  # a Python-hosted FMU (the Turntable is native)
-    copy = tmp_path / "VehicleMotion"
+    folder, md = _unzip(fmu_dir / "IMULog.fmu", tmp_path / "unzipped")  # the Python-hosted FMU
+    copy = tmp_path / "IMULog"
     shutil.copytree(folder, copy)
     record = copy / "resources" / "sarins_fmi_runtime.txt"
     record.write_text("version=3.99\nexecutable=/nonexistent/python3.99\nlibpython=/nonexistent/libpython3.99.so\n")

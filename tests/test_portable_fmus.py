@@ -12,7 +12,6 @@ emulated platforms are slow tests, one compile line per FMU runs by default.
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
 import subprocess
@@ -48,7 +47,12 @@ IMU_OUTPUTS = [f"dtheta_{a}" for a in "xyz"] + [f"dv_{a}" for a in "xyz"] + [
 # the IMU turning on two gimbals (inputs held), mems preset: every error term, sin/cos/exp in the minor loop
 IMU_CASE = {"preset": "mems", "gimbals": "x,z", "seed": 2, "angle_1": 0.3, "rate_1": 0.2, "rate_2": -0.05,
             "angle_2": 1e6}
-STEPS = {"Turntable": 300, "IMUThermal": 120, "StrapdownINS": None}  # StrapdownINS: its queued run's N
+# the vehicle driving, turning and stopping with sway and vibration (sin/cos, the RNG, the Earth model)
+VEHICLE_CASE = {"lead_time": 10.0, "legs": "drive 60 10; turn 90; drive 60 12; turn -45; stop 30", "body_seed": 5}
+VEHICLE_OUTPUTS = [f"vehicle_{a}{q}" for q in ("", "_rate", "_accel") for a in ("yaw", "pitch", "roll")] + [
+    f"base_{q}_{a}" for q in ("rate", "force") for a in "enu"] + ["lat", "lon", "v_e", "v_n", "speed"]
+STEPS = {"Turntable": 300, "IMUThermal": 120, "StrapdownINS": None,  # StrapdownINS: its queued run's N
+         "VehicleMotion": 250}
 
 
 def _need(*tools):
@@ -92,7 +96,7 @@ def run_fmu(name, native, host, binary, tmp_path, prefix=(), env=None) -> dict[i
     """The workload of FMU ``name`` run from ``binary`` by ``host`` (under ``prefix``, e.g. wine or qemu):
     {steps done: output bit patterns}.  Turntable: a dual-axis run in a chamber; IMUThermal: the mems preset
     on two turning gimbals (one of them a million radians on); StrapdownINS: its queued temperature-model
-    run, inputs before every step."""
+    run, inputs before every step; VehicleMotion: drives, turns and a stop with sway and vibration."""
     env = {} if env is None else env
     folder, md, _ = native[name]
     if name == "StrapdownINS":
@@ -100,8 +104,8 @@ def run_fmu(name, native, host, binary, tmp_path, prefix=(), env=None) -> dict[i
 
         proc = _host_run(host, native[name][2], tmp_path, binary=binary, env=env, prefix=list(prefix), timeout=900)
     else:
-        values = CASES["dual-axis chamber"] if name == "Turntable" else IMU_CASE
-        outputs = {"IMUThermal": IMU_OUTPUTS}.get(name)
+        values = {"Turntable": CASES["dual-axis chamber"], "VehicleMotion": VEHICLE_CASE}.get(name, IMU_CASE)
+        outputs = {"IMUThermal": IMU_OUTPUTS, "VehicleMotion": VEHICLE_OUTPUTS}.get(name)
         args = ops(md, values) if outputs is None else ops(md, values, outputs=outputs)
         proc = run_host(host, binary, md, STEPS[name], *args, env=env, prefix=list(prefix), timeout=900)
     assert "STATUS" not in proc.stdout, proc.stdout[-2000:]
@@ -206,7 +210,7 @@ def _compile(sources: Path, identifier: str, cc: str, flags: list[str], out: Pat
 
 
 # the FMUs with a workload here (run_fmu); the network FMUs' platforms: tests/test_native_nets.py
-WORKLOADS = ("Turntable", "IMUThermal", "StrapdownINS")
+WORKLOADS = ("Turntable", "IMUThermal", "StrapdownINS", "VehicleMotion")
 LINES = [(cc, opt, arch, std) for cc in ("gcc", "clang") for opt in ("-O0", "-O2", "-O3")
          for arch in ("", "-march=native") for std in ("-std=c11", "-std=gnu11")]
 QUICK_LINE = ("clang", "-O3", "-march=native", "-std=gnu11")
@@ -264,14 +268,6 @@ def test_fmpy_builds_the_sources_and_the_result_runs_with_an_empty_environment(n
 # ----------------------------------------------------------------- other platforms
 
 
-@pytest.fixture(scope="module")
-def wine_env(tmp_path_factory):
-    _need(MINGW, "wine")
-    env = dict(os.environ, WINEPREFIX=str(tmp_path_factory.mktemp("wineprefix")), WINEDEBUG="-all")
-    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
-    return env
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("name", WORKLOADS)
 def test_win64_dll_under_wine_gives_the_linux64_numbers(name, native, shipped, wine_env, tmp_path):
@@ -320,7 +316,7 @@ def test_aarch64_turntable_under_qemu_quick(native, shipped, tmp_path):
 
 
 @pytest.mark.slow
-def test_fmi3_binaries_of_every_platform_give_the_x86_64_linux_numbers(tmp_path):
+def test_fmi3_binaries_of_every_platform_give_the_x86_64_linux_numbers(tmp_path, wine_env):
     """The FMI 3.0 IMUThermal (n_sub = 200: every minor interval in arrays) and Turntable from
     binaries/x86_64-windows under wine and binaries/aarch64-linux under qemu, through the FMI 3.0 C host:
     the x86_64-linux bits."""
@@ -330,8 +326,7 @@ def test_fmi3_binaries_of_every_platform_give_the_x86_64_linux_numbers(tmp_path)
     subprocess.run([cc, *flags, str(HOST3_SRC), "-ldl", "-o", str(tmp_path / "host")], check=True)
     subprocess.run([MINGW, *flags, str(HOST3_SRC), "-static", "-o", str(tmp_path / "host.exe")], check=True)
     arm = _arm_host(tmp_path, HOST3_SRC, fmi=3)
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all")
-    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
+    env = wine_env
     for name, slave in (("IMUThermal", "imu_thermal_slave.py"), ("Turntable", "turntable_slave.py")):
         fmu = build_native_fmu(name, slave, tmp_path, fmi=3, win64=True, aarch64=True)
         folder = tmp_path / name

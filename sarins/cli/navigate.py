@@ -1,8 +1,10 @@
-"""``sarins navigate``: one static turntable -> IMU -> INS run, in process."""
+"""``sarins navigate``: one static turntable -> IMU -> INS run, or (``--trajectory``) an aided run along a
+trajectory, in process."""
 
 from __future__ import annotations
 
 import json
+import math
 import time
 
 import numpy as np
@@ -68,12 +70,116 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object (full precision)")
     p.add_argument("--write-log", metavar="PATH", default=None,
                    help="also write the IMU output as a log (.csv or .npz, docs/imu-log.md) for sarins replay")
+    g = p.add_argument_group("aided navigation along a trajectory (docs/aided-navigation.md)")
+    g.add_argument("--trajectory", metavar="FILE", default=None,
+                   help="trajectory file (JSON: start and segments); runs the aided INS instead of the static run")
+    g.add_argument("--aiding", default="gnss,zupt", metavar="LIST",
+                   help="comma-separated aiding: gnss, zupt, odometer, nhc, or none (default gnss,zupt)")
+    g.add_argument("--gnss-outage", action="append", default=[], metavar="START:END",
+                   help="GNSS outage window, s from the start of the trajectory (repeatable)")
+    g.add_argument("--gnss", default="sps", metavar="PRESET", help="GNSS receiver preset: sps, sbas, rtk (default sps)")
+    g.add_argument("--gnss-rate-hz", type=finite, default=1.0, help="GNSS fix rate, 1 .. 20 Hz (default 1)")
+    g.add_argument("--gnss-pos-std", type=finite, default=None,
+                   help="replace the preset's horizontal position std (white part, m; vertical twice it)")
+    g.add_argument("--imu-rate-hz", type=finite, default=100.0, help="IMU output rate, Hz (default 100)")
+    g.add_argument("--imu-noise", default="tactical", metavar="GRADE",
+                   help="IMU noise grade of the aided run: ideal, tactical, mems (default tactical)")
+    g.add_argument("--zupt-std", type=finite, default=0.01, help="zero-velocity update std, m/s (default 0.01)")
     p.set_defaults(func=run)
+
+
+_STATIC_ONLY = {"lat_deg": "--lat-deg", "align_hours": "--align-hours", "nav_hours": "--nav-hours",
+                "axial_drift_dph": "--axial-drift-dph", "imu": "--imu", "rotation": "--rotation", "start": "--start",
+                "correction_dph": "--correction-dph", "correction_from_hours": "--correction-from-hours",
+                "write_log": "--write-log"}
+_AIDED_ONLY = {"aiding": "--aiding", "gnss_outage": "--gnss-outage", "gnss": "--gnss", "gnss_rate_hz": "--gnss-rate-hz",
+               "gnss_pos_std": "--gnss-pos-std", "imu_rate_hz": "--imu-rate-hz", "imu_noise": "--imu-noise",
+               "zupt_std": "--zupt-std"}
+
+
+def _outage(text: str) -> tuple:
+    parts = text.split(":")
+    try:
+        start, end = (float(x) for x in parts)
+    except ValueError:
+        raise UsageError(f"--gnss-outage {text}: give START:END in seconds") from None
+    if not (math.isfinite(start) and math.isfinite(end) and start < end):
+        raise UsageError(f"--gnss-outage {text}: START must be below END")
+    return start, end
+
+
+def run_aided(args) -> int:
+    """The aided run of ``--trajectory``: parse, call sarins_fmu.aided, print."""
+    from sarins_fmu import aided, gnss
+    from sarins_fmu import trajectory as tr
+
+    refuse_unless(args, _STATIC_ONLY, False, "does not apply to an aided run (--trajectory)")
+    aiding = [] if args.aiding.strip() == "none" else [a.strip() for a in args.aiding.split(",")]
+    bad = [a for a in aiding if a not in aided.AIDING]
+    if bad or not args.aiding.strip():
+        raise UsageError(f"--aiding {args.aiding}: choose from {', '.join(aided.AIDING)} (comma-separated) or none")
+    if args.imu_noise not in aided.IMU_NOISE:
+        raise UsageError(f"--imu-noise {args.imu_noise}: choose one of {', '.join(aided.IMU_NOISE)}")
+    if args.gnss not in gnss.PRESETS:
+        raise UsageError(f"--gnss {args.gnss}: choose one of {', '.join(gnss.PRESETS)}")
+    if not 1.0 <= args.imu_rate_hz <= 2000.0:
+        raise UsageError(f"--imu-rate-hz {args.imu_rate_hz:g} is outside 1 .. 2000 Hz")
+    if args.gnss_rate_hz > args.imu_rate_hz:
+        raise UsageError(f"--gnss-rate-hz {args.gnss_rate_hz:g} is above the IMU rate (--imu-rate-hz {args.imu_rate_hz:g})")
+    if not 1.0 <= args.gnss_rate_hz <= 20.0:
+        raise UsageError(f"--gnss-rate-hz {args.gnss_rate_hz:g} is outside 1 .. 20 Hz")
+    if args.gnss_pos_std is not None and args.gnss_pos_std < 0:
+        raise UsageError(f"--gnss-pos-std must not be negative, got {args.gnss_pos_std:g}")
+    if not args.zupt_std > 0:
+        raise UsageError(f"--zupt-std must be positive, got {args.zupt_std:g}")
+    outages = [_outage(t) for t in args.gnss_outage]
+    if outages and "gnss" not in aiding:
+        raise UsageError("--gnss-outage needs --aiding gnss")
+    step = 1.0 / args.imu_rate_hz
+    try:
+        trajectory = tr.load_trajectory(args.trajectory)
+        duration = trajectory.duration(step)
+    except tr.TrajectoryError as exc:
+        raise UsageError(f"--trajectory {exc}") from None
+    check_size(duration / step, BYTES_PER_AIDED_STEP, f"--trajectory {args.trajectory} ({duration:g} s)")
+    for start, end in outages:
+        if not (0 <= start and end <= duration):
+            raise UsageError(f"--gnss-outage {start:g}:{end:g} is outside the run (0 .. {duration:g} s)")
+    changes = {"rate_hz": args.gnss_rate_hz}
+    if args.gnss_pos_std is not None:
+        s = args.gnss_pos_std
+        changes["pos_white_std"] = (s, s, 2 * s)
+    try:
+        receiver = gnss.preset(args.gnss, **changes)
+        gnss.epochs_on_grid(receiver.rate_hz, step, duration)
+        truth = tr.generate(trajectory, step)
+    except ValueError as exc:
+        raise UsageError(f"--trajectory {args.trajectory}: {exc}") from None
+    t0 = time.perf_counter()
+    result = aided.navigate(truth, noise=aided.IMU_NOISE[args.imu_noise], gnss=receiver if "gnss" in aiding else None,
+                            aiding=aiding, outages=outages, settings=aided.FilterSettings(zupt_std=args.zupt_std),
+                            seed=args.seed)
+    out = aided.summary(result, outages)
+    out.update({"wall_seconds": time.perf_counter() - t0, "seed": args.seed, "aiding": aiding, "gnss": args.gnss,
+                "imu_noise": args.imu_noise, "imu_rate_hz": args.imu_rate_hz, "gnss_rate_hz": args.gnss_rate_hz})
+    if args.json:
+        print(json.dumps(out, allow_nan=False))
+    else:
+        for key, value in out.items():
+            shown = f"{value:.6g}" if isinstance(value, float) else value
+            print(f"{key:>26}: {shown}")
+    return 0
+
+
+BYTES_PER_AIDED_STEP = 400  # per IMU step: truth rows, increments, filter output rows
 
 
 def run(args) -> int:
     from sarins_fmu.experiments import run_static
 
+    if args.trajectory is not None:
+        return run_aided(args)
+    refuse_unless(args, _AIDED_ONLY, False, "applies to an aided run only (give --trajectory)")
     check_run_args(args)
     refuse_unless(args, {"correction_from_hours": "--correction-from-hours"}, bool(given(args, "correction_dph")),
                   "needs --correction-dph (the drift the INS subtracts from that time on)")

@@ -1,9 +1,8 @@
 /* log_parse.c: see log_parse.h. */
+#include "smath.h" /* first: the floating-point contract, each operation rounded as written; no -ffast-math */
 #include "log_parse.h"
 
 #include <stddef.h>
-
-#include "smath.h" /* the floating-point contract: each operation rounded as written; no -ffast-math */
 
 /* 10^0 .. 10^22: every one exact in binary64 */
 static const double POW10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,

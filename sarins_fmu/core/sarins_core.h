@@ -38,6 +38,11 @@ int sarins_core_abi(void);
 #include "turntable.h"
 #include "schedule.h"
 #include "ambient.h"
+#include "traj.h"
+#include "nav3.h"
+#include "gnss.h"
+#include "eskf.h"
+#include "odo.h"
 #include "ins_fmu_step.h"
 
 /* trained networks: model files, inference kernels, identifier and compensators */
@@ -53,5 +58,8 @@ int sarins_core_abi(void);
 
 /* text IMU logs: sample lines parsed into doubles (sarins_fmu.imu_log) */
 #include "log_parse.h"
+
+/* seed 002's land vehicle: trajectory, body sway and vibration */
+#include "vehicle.h"
 
 #endif

@@ -66,6 +66,21 @@ class GimbalSchedule:
         object.__setattr__(self, "_rate_bp", rate_bp)
         object.__setattr__(self, "_angle_bp", angle_bp)
 
+    @classmethod
+    def from_breakpoints(cls, axes, times, angle_bp, rate_bp, accel) -> "GimbalSchedule":
+        """A schedule whose breakpoint states are given (M+1, A) rather than integrated from ``accel`` (M, A):
+        a motion generated step by step elsewhere (the C vehicle), so that :meth:`state` at a breakpoint
+        returns exactly the generator's values.  ``angle_bp``/``rate_bp`` must be that motion's states."""
+        angle_bp, rate_bp = (np.array(a, dtype=float, order="C", ndmin=2) for a in (angle_bp, rate_bp))
+        schedule = cls(axes, times, accel, angle_bp[0], rate_bp[0])
+        if angle_bp.shape != schedule._angle_bp.shape or rate_bp.shape != schedule._rate_bp.shape:
+            raise ValueError(f"breakpoint states must have shape {schedule._angle_bp.shape}")
+        if not (np.isfinite(angle_bp).all() and np.isfinite(rate_bp).all()):
+            raise ValueError("breakpoint states contain NaN or infinity")
+        object.__setattr__(schedule, "_angle_bp", angle_bp)
+        object.__setattr__(schedule, "_rate_bp", rate_bp)
+        return schedule
+
     @property
     def n_axes(self) -> int:
         return self.axes.shape[0]

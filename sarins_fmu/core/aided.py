@@ -1,0 +1,154 @@
+"""ctypes binding of the aided-navigation kernels: trajectory truth (``traj.h``), the 3-D strapdown
+mechanization (``nav3.h``), the GNSS receiver (``gnss.h``) and the error-state Kalman filter
+(``eskf.h``)."""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+
+from . import _arrays
+from ._lib import function
+
+_I64, _F64, _P = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p
+
+TRAJ_ROW = 15  # truth row of traj.h
+NAV_ROW = 9  # output row of nav3.h
+
+_traj_run = function("sarins_traj_run", ctypes.c_int, _I64, _P, _P, _F64, _I64, _I64, _P, _P, _P)
+_nav3_steps = function("sarins_nav3_steps", ctypes.c_int, _I64, _P, _P, _P, _P, _P, _F64, _P)
+_quat_to_rotvec = function("sarins_quat_to_rotvec", None, _P, _P)
+
+
+def traj_run(segments, start, step: float, substeps: int):
+    """``sarins_traj_run``: truth rows (K+1, 15), dtheta (K, 3) rad, dv (K, 3) m/s for a segment
+    table (n, 4) (steps, accel m/s^2, yaw rate rad/s, pitch rate rad/s) from start (6) (lat, lon rad,
+    height m, speed m/s, yaw, pitch rad).  ValueError when the core refuses the arguments."""
+    seg = _arrays.read(segments, (np.shape(segments)[0], 4), "segment table")
+    start = _arrays.read(start, (6,), "trajectory start")
+    k = int(round(float(np.sum(seg[:, 0]))))
+    if k < 1:
+        raise ValueError("the trajectory has no IMU step")
+    truth, dtheta, dv = np.empty((k + 1, TRAJ_ROW)), np.empty((k, 3)), np.empty((k, 3))
+    if _traj_run(seg.shape[0], seg.ctypes.data, start.ctypes.data, float(step), int(substeps), k,
+                 truth.ctypes.data, dtheta.ctypes.data, dv.ctypes.data) != 0:
+        raise ValueError("the trajectory leaves the valid range (negative speed, |pitch| >= 89 deg, "
+                         "|latitude| >= 89.9 deg) or has a non-finite value")
+    return truth, dtheta, dv
+
+
+def nav3_steps(q, v, pos, dtheta, dv, step: float) -> np.ndarray:
+    """``sarins_nav3_steps``: q (4), v (3), pos (3) float64 arrays advanced in place over K steps;
+    returns the (K, 9) rows (lat, lon, h, v E N U, yaw, pitch, roll)."""
+    dtheta = _arrays.read(dtheta, (np.shape(dtheta)[0], 3), "dtheta")
+    k = dtheta.shape[0]
+    dv = _arrays.read(dv, (k, 3), "dv")
+    q, v, pos = _arrays.written(q, (4,), "q"), _arrays.written(v, (3,), "v"), _arrays.written(pos, (3,), "pos")
+    out = np.empty((k, NAV_ROW))
+    if _nav3_steps(k, q.ctypes.data, v.ctypes.data, pos.ctypes.data, dtheta.ctypes.data, dv.ctypes.data,
+                   float(step), out.ctypes.data) != 0:
+        raise ValueError("increments contain NaN or infinity, or the step is not positive")
+    return out
+
+
+def quat_to_rotvec(q) -> np.ndarray:
+    """Rotation vector (rad) of a unit quaternion [w x y z]."""
+    q = _arrays.read(q, (4,), "q")
+    phi = np.empty(3)
+    _quat_to_rotvec(q.ctypes.data, phi.ctypes.data)
+    return phi
+
+
+GNSS_CONFIG = 17  # settings of gnss.h
+GNSS_OUT = 7
+_gnss_size = function("sarins_gnss_size", _I64)
+_gnss_init = function("sarins_gnss_init", ctypes.c_int, _P, _P, ctypes.c_uint64, ctypes.c_char_p, ctypes.c_size_t)
+_gnss_fixes = function("sarins_gnss_fixes", ctypes.c_int, _P, _I64, _P, _P, _P, _I64, _P, _P)
+
+
+class GnssState:
+    """A ``sarins_gnss`` struct (gnss.h) in a numpy buffer; ValueError with the core's reason for bad
+    settings."""
+
+    def __init__(self, config, seed: int):
+        config = _arrays.read(config, (GNSS_CONFIG,), "GNSS settings")
+        self.buffer = np.zeros((int(_gnss_size()) + 7) // 8)
+        msg = ctypes.create_string_buffer(256)
+        if _gnss_init(self.buffer.ctypes.data, config.ctypes.data, int(seed), msg, 256) != 0:
+            raise ValueError(msg.value.decode())
+
+    def fixes(self, time, truth, omega_ib, outages) -> np.ndarray:
+        """(n, 7) fix rows (valid, lat, lon, h, v E N U) at ``time`` (n,) from truth (n, 9) and
+        omega_ib (n, 3); outages (m, 2) [start, end) s."""
+        time = _arrays.read(time, (np.shape(time)[0],), "time")
+        n = time.shape[0]
+        truth = _arrays.read(truth, (n, 9), "truth")
+        omega_ib = _arrays.read(omega_ib, (n, 3), "omega_ib")
+        outages = _arrays.read(np.reshape(outages, (-1, 2)), (np.size(outages) // 2, 2), "outages")
+        out = np.empty((n, GNSS_OUT))
+        if _gnss_fixes(self.buffer.ctypes.data, n, time.ctypes.data, truth.ctypes.data, omega_ib.ctypes.data,
+                       outages.shape[0], outages.ctypes.data, out.ctypes.data) != 0:
+            raise ValueError("GNSS epochs must be finite and increasing, the truth finite")
+        return out
+
+
+ESKF_CONFIG = 19  # settings of eskf.h
+ESKF_ROW = 9 + 6 + 225
+ESKF_GNSS = 11
+_eskf_size = function("sarins_eskf_size", _I64)
+_eskf_init = function("sarins_eskf_init", ctypes.c_int, _P, _P, _P, ctypes.c_char_p, ctypes.c_size_t)
+_eskf_run = function("sarins_eskf_run", ctypes.c_int, _P, _I64, _P, _P, _P, _I64, _P, _P, ctypes.c_int, _I64, _P)
+
+
+class EskfState:
+    """A ``sarins_eskf`` struct (eskf.h) in a numpy buffer; ValueError with the core's reason."""
+
+    def __init__(self, config, nav0):
+        config = _arrays.read(config, (ESKF_CONFIG,), "filter settings")
+        nav0 = _arrays.read(nav0, (9,), "start state")
+        self.buffer = np.zeros((int(_eskf_size()) + 7) // 8)
+        msg = ctypes.create_string_buffer(256)
+        if _eskf_init(self.buffer.ctypes.data, config.ctypes.data, nav0.ctypes.data, msg, 256) != 0:
+            raise ValueError(msg.value.decode())
+
+    def run(self, dtheta, dv, aid, gnss, vel_std, use_vel: bool, out_every: int) -> np.ndarray:
+        """``sarins_eskf_run`` over K steps (aid (K, 9): ZUPT flag, measured velocity at a stop (3), odometer
+        flag, odometer speed, NHC flag, measured lateral and vertical body velocity); returns the
+        (K // out_every, 240) rows (nav 9, b_g 3, b_a 3, P 225)."""
+        dtheta = _arrays.read(dtheta, (np.shape(dtheta)[0], 3), "dtheta")
+        k = dtheta.shape[0]
+        dv = _arrays.read(dv, (k, 3), "dv")
+        aid = _arrays.read(aid, (k, 9), "per-step aiding")
+        gnss = _arrays.read(np.reshape(gnss, (-1, ESKF_GNSS)), (np.size(gnss) // ESKF_GNSS, ESKF_GNSS), "fixes")
+        vel_std = _arrays.read(vel_std, (3,), "velocity std")
+        out = np.empty((k // out_every, ESKF_ROW))
+        if _eskf_run(self.buffer.ctypes.data, k, dtheta.ctypes.data, dv.ctypes.data, aid.ctypes.data, gnss.shape[0],
+                     gnss.ctypes.data, vel_std.ctypes.data, int(bool(use_vel)), int(out_every), out.ctypes.data) != 0:
+            raise ValueError("filter inputs not finite, fixes not in step order, or a velocity std not positive")
+        return out
+
+
+ODO_CONFIG = 3
+_odo_size = function("sarins_odo_size", _I64)
+_odo_init = function("sarins_odo_init", ctypes.c_int, _P, _P, ctypes.c_uint64, ctypes.c_char_p, ctypes.c_size_t)
+_odo_speeds = function("sarins_odo_speeds", ctypes.c_int, _P, _I64, _P, _P)
+
+
+class OdoState:
+    """A ``sarins_odo`` struct (odo.h): settings (scale factor, noise std m/s, resolution m/s), seed."""
+
+    def __init__(self, config, seed: int):
+        config = _arrays.read(config, (ODO_CONFIG,), "odometer settings")
+        self.buffer = np.zeros((int(_odo_size()) + 7) // 8)
+        msg = ctypes.create_string_buffer(256)
+        if _odo_init(self.buffer.ctypes.data, config.ctypes.data, int(seed), msg, 256) != 0:
+            raise ValueError(msg.value.decode())
+
+    def speeds(self, speed) -> np.ndarray:
+        """Measured speeds (n,) m/s of the true forward speeds (n,)."""
+        speed = _arrays.read(speed, (np.shape(speed)[0],), "speed")
+        out = np.empty(speed.shape[0])
+        if _odo_speeds(self.buffer.ctypes.data, speed.shape[0], speed.ctypes.data, out.ctypes.data) != 0:
+            raise ValueError("odometer speeds must be finite")
+        return out

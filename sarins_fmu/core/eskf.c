@@ -1,0 +1,375 @@
+#include "smath.h"
+#include "eskf.h"
+
+#include "earth.h"
+#include "ins.h"
+#include "matrix.h"
+#include "nav3.h"
+#include "rotations.h"
+
+#define N SARINS_ESKF_N
+#define IDX(i, j) ((i) * N + (j))
+
+static int finite(double x) { return x - x == 0.0; }
+
+static void say(char *msg, size_t size, const char *text)
+{
+    if (msg == NULL || size == 0)
+        return;
+    size_t i = 0;
+    for (; text[i] != '\0' && i + 1 < size; i++)
+        msg[i] = text[i];
+    msg[i] = '\0';
+}
+
+int64_t sarins_eskf_size(void) { return (int64_t)sizeof(sarins_eskf); }
+
+int sarins_eskf_init(sarins_eskf *s, const double *config, const double *nav0, char *msg, size_t size)
+{
+    for (int i = 0; i < SARINS_ESKF_CONFIG; i++)
+        if (!finite(config[i])) {
+            say(msg, size, "a filter setting is not finite");
+            return 1;
+        }
+    for (int i = 0; i < 9; i++)
+        if (!finite(nav0[i])) {
+            say(msg, size, "the start state is not finite");
+            return 1;
+        }
+    if (!(config[SARINS_ESKF_STEP] > 0.0)) {
+        say(msg, size, "the IMU step must be positive");
+        return 1;
+    }
+    for (int i = SARINS_ESKF_ARW; i <= SARINS_ESKF_ACCEL_BIAS0_STD; i++)
+        if (config[i] < 0.0) {
+            say(msg, size, "a filter standard deviation is negative");
+            return 1;
+        }
+    if (!(config[SARINS_ESKF_ZUPT_STD] > 0.0) || !(config[SARINS_ESKF_NHC_STD] > 0.0) ||
+        !(config[SARINS_ESKF_ODO_STD] > 0.0) || config[SARINS_ESKF_LATENCY] < 0.0) {
+        say(msg, size, "the ZUPT, NHC and odometer stds must be positive and the latency not negative");
+        return 1;
+    }
+    if (!(config[SARINS_ESKF_COV_EVERY] >= 1.0 && config[SARINS_ESKF_COV_EVERY] <= 1000.0 &&
+          sm_floor(config[SARINS_ESKF_COV_EVERY]) == config[SARINS_ESKF_COV_EVERY])) {
+        say(msg, size, "cov_every must be a whole number 1 .. 1000");
+        return 1;
+    }
+    if (sm_fabs(nav0[0]) > 89.9 * (3.141592653589793 / 180.0)) {
+        say(msg, size, "the start latitude is outside +-89.9 deg");
+        return 1;
+    }
+    for (size_t i = 0; i < sizeof *s; i++)
+        ((unsigned char *)s)[i] = 0;
+    for (int i = 0; i < SARINS_ESKF_CONFIG; i++)
+        s->config[i] = config[i];
+    double mat[9];
+    sarins_euler_to_mat(nav0[6], nav0[7], nav0[8], mat);
+    sarins_mat_to_quat(mat, s->q);
+    for (int i = 0; i < 3; i++) {
+        s->pos[i] = nav0[i];
+        s->v[i] = nav0[3 + i];
+    }
+    const double *c = config;
+    double d[N] = {c[SARINS_ESKF_POS0_STD], c[SARINS_ESKF_POS0_STD], c[SARINS_ESKF_POS0_STD],
+                   c[SARINS_ESKF_VEL0_STD], c[SARINS_ESKF_VEL0_STD], c[SARINS_ESKF_VEL0_STD],
+                   c[SARINS_ESKF_TILT0_STD], c[SARINS_ESKF_TILT0_STD], c[SARINS_ESKF_HEADING0_STD],
+                   c[SARINS_ESKF_GYRO_BIAS0_STD], c[SARINS_ESKF_GYRO_BIAS0_STD], c[SARINS_ESKF_GYRO_BIAS0_STD],
+                   c[SARINS_ESKF_ACCEL_BIAS0_STD], c[SARINS_ESKF_ACCEL_BIAS0_STD], c[SARINS_ESKF_ACCEL_BIAS0_STD]};
+    for (int i = 0; i < N; i++)
+        s->p[IDX(i, i)] = d[i] * d[i];
+    return 0;
+}
+
+/* error-state dynamics matrix F (N x N) at the current state */
+static void dynamics(const sarins_eskf *s, double *f)
+{
+    for (int i = 0; i < N * N; i++)
+        f[i] = 0.0;
+    double rm, rn, sl, cl, m[9];
+    sarins_earth_radii(s->pos[0], &rm, &rn);
+    sm_sincos(s->pos[0], &sl, &cl);
+    double rmh = rm + s->pos[2], rnh = rn + s->pos[2];
+    double w_ie[3] = {0.0, SARINS_EARTH_RATE * cl, SARINS_EARTH_RATE * sl};
+    double w_en[3] = {-s->v[1] / rmh, s->v[0] / rnh, s->v[0] * sl / (cl * rnh)};
+    sarins_quat_to_mat(s->q, m);
+    const double *fn = s->f_n;
+    double w2[3], wi[3];
+    for (int i = 0; i < 3; i++) {
+        w2[i] = 2.0 * w_ie[i] + w_en[i];
+        wi[i] = w_ie[i] + w_en[i];
+        f[IDX(i, 3 + i)] = 1.0; /* dr' = dv */
+    }
+    /* dv' = [f x] phi - [(2 w_ie + w_en) x] dv + mat_nb db_a + (0, 0, 2 g / R dr_U) */
+    double fx[9] = {0.0, -fn[2], fn[1], fn[2], 0.0, -fn[0], -fn[1], fn[0], 0.0};
+    double wx2[9] = {0.0, -w2[2], w2[1], w2[2], 0.0, -w2[0], -w2[1], w2[0], 0.0};
+    double wxi[9] = {0.0, -wi[2], wi[1], wi[2], 0.0, -wi[0], -wi[1], wi[0], 0.0};
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            f[IDX(3 + i, 6 + j)] = fx[3 * i + j];
+            f[IDX(3 + i, 3 + j)] = -wx2[3 * i + j];
+            f[IDX(3 + i, 12 + j)] = m[3 * i + j];
+            f[IDX(6 + i, 6 + j)] = -wxi[3 * i + j]; /* phi' = -[w_in x] phi ... */
+            f[IDX(6 + i, 9 + j)] = -m[3 * i + j];   /* ... - mat_nb db_g */
+        }
+    double r = sm_sqrt(rm * rn) + s->pos[2];
+    f[IDX(5, 2)] = 2.0 * sarins_earth_gravity(s->pos[0], s->pos[2]) / r;
+    /* d omega_en (dv) */
+    f[IDX(6, 4)] = -1.0 / rmh;
+    f[IDX(7, 3)] = 1.0 / rnh;
+    f[IDX(8, 3)] = sl / (cl * rnh);
+}
+
+static void propagate_cov(sarins_eskf *s, double t)
+{
+    double *a = s->phi_acc, *b = s->tmp;
+    double f[N * N], phi[N * N];
+    dynamics(s, f);
+    for (int i = 0; i < N * N; i++)
+        a[i] = f[i] * t;
+    sarins_matmul(N, a, a, b); /* (F T)^2 */
+    for (int i = 0; i < N; i++)
+        for (int j = 0; j < N; j++)
+            phi[IDX(i, j)] = (i == j ? 1.0 : 0.0) + a[IDX(i, j)] + 0.5 * b[IDX(i, j)];
+    /* P = Phi P Phi' + Q */
+    sarins_matmul(N, phi, s->p, a);
+    sarins_matmul_bt(N, a, phi, s->p);
+    const double *c = s->config;
+    double q[5] = {0.0, c[SARINS_ESKF_VRW], c[SARINS_ESKF_ARW], c[SARINS_ESKF_GYRO_RW], c[SARINS_ESKF_ACCEL_RW]};
+    for (int i = 0; i < N; i++)
+        s->p[IDX(i, i)] += q[i / 3] * q[i / 3] * t;
+    sarins_symmetrize(N, s->p);
+}
+
+void sarins_eskf_predict(sarins_eskf *s, const double *dtheta, const double *dv)
+{
+    double h = s->config[SARINS_ESKF_STEP], dt[3], dvc[3], m[9];
+    for (int i = 0; i < 3; i++) {
+        dt[i] = dtheta[i] - s->bg[i] * h;
+        dvc[i] = dv[i] - s->ba[i] * h;
+        s->w_ib[i] = dt[i] / h;
+    }
+    sarins_quat_to_mat(s->q, m);
+    for (int i = 0; i < 3; i++) /* specific force in n at the start of the step */
+        s->f_n[i] = (m[3 * i] * dvc[0] + m[3 * i + 1] * dvc[1] + m[3 * i + 2] * dvc[2]) / h;
+    sarins_nav3_step(s->q, s->v, s->pos, dt, dvc, h);
+    s->steps += 1;
+    s->since_cov += 1;
+    if ((double)s->since_cov >= s->config[SARINS_ESKF_COV_EVERY]) {
+        propagate_cov(s, (double)s->since_cov * h);
+        s->since_cov = 0;
+    }
+}
+
+/* scalar Joseph update with row hrow (N), innovation z (computed - measured), variance r; returns z^2 / s */
+static double scalar_update(sarins_eskf *s, const double *hrow, double z, double r)
+{
+    double ph[N], k[N], sv = r;
+    for (int i = 0; i < N; i++) {
+        double acc = 0.0;
+        for (int j = 0; j < N; j++)
+            acc += s->p[IDX(i, j)] * hrow[j];
+        ph[i] = acc;
+    }
+    for (int i = 0; i < N; i++)
+        sv += hrow[i] * ph[i];
+    double innov = z;
+    for (int i = 0; i < N; i++)
+        innov -= hrow[i] * s->x[i];
+    for (int i = 0; i < N; i++)
+        k[i] = ph[i] / sv;
+    for (int i = 0; i < N; i++)
+        s->x[i] += k[i] * innov;
+    /* Joseph: P = (I - k h) P (I - k h)' + k r k', expanded with a = P h' (= ph):
+     *     P = P - k a' - a k' + (h a + r) k k'     (valid for any gain k; O(n^2)) */
+    for (int i = 0; i < N; i++)
+        for (int j = 0; j < N; j++)
+            s->p[IDX(i, j)] += (sv * k[i] * k[j] - k[i] * ph[j]) - ph[i] * k[j];
+    sarins_symmetrize(N, s->p);
+    return innov * innov / sv;
+}
+
+static void feedback(sarins_eskf *s)
+{
+    double rm, rn;
+    sarins_earth_radii(s->pos[0], &rm, &rn);
+    double *x = s->x;
+    s->pos[0] -= x[1] / (rm + s->pos[2]);
+    s->pos[1] -= x[0] / ((rn + s->pos[2]) * sm_cos(s->pos[0]));
+    s->pos[2] -= x[2];
+    for (int i = 0; i < 3; i++) {
+        s->v[i] -= x[3 + i];
+        s->bg[i] += x[9 + i];
+        s->ba[i] += x[12 + i];
+    }
+    /* mat_true = (I + [phi x]) mat_computed: q_nb <- q(phi) q_nb */
+    double qp[4], qn[4];
+    sarins_rotvec_to_quat(x + 6, qp);
+    sarins_quat_mult(qp, s->q, qn);
+    double n = sm_sqrt(qn[0] * qn[0] + qn[1] * qn[1] + qn[2] * qn[2] + qn[3] * qn[3]);
+    for (int i = 0; i < 4; i++)
+        s->q[i] = qn[i] / n;
+    for (int i = 0; i < N; i++)
+        x[i] = 0.0;
+}
+
+static void cross_matrix_row(const double *a, int row, double *out3)
+{ /* row `row` of [a x] */
+    double k[9] = {0.0, -a[2], a[1], a[2], 0.0, -a[0], -a[1], a[0], 0.0};
+    for (int j = 0; j < 3; j++)
+        out3[j] = k[3 * row + j];
+}
+
+double sarins_eskf_gnss(sarins_eskf *s, const double *pos, const double *vel, const double *std, int use_vel)
+{
+    const double *lever = s->config + SARINS_ESKF_LEVER_X;
+    double lat = s->config[SARINS_ESKF_LATENCY];
+    double m[9], rm, rn, sl, cl;
+    sarins_quat_to_mat(s->q, m);
+    sarins_earth_radii(s->pos[0], &rm, &rn);
+    sm_sincos(s->pos[0], &sl, &cl);
+    double rmh = rm + s->pos[2], rnh = rn + s->pos[2];
+    double ln[3], w_nb[3], wl[3], vl[3];
+    double w_in[3] = {-s->v[1] / rmh, SARINS_EARTH_RATE * cl + s->v[0] / rnh,
+                      SARINS_EARTH_RATE * sl + s->v[0] * sl / (cl * rnh)};
+    for (int i = 0; i < 3; i++) {
+        ln[i] = m[3 * i] * lever[0] + m[3 * i + 1] * lever[1] + m[3 * i + 2] * lever[2];
+        w_nb[i] = s->w_ib[i] - (m[i] * w_in[0] + m[3 + i] * w_in[1] + m[6 + i] * w_in[2]);
+    }
+    wl[0] = w_nb[1] * lever[2] - w_nb[2] * lever[1];
+    wl[1] = w_nb[2] * lever[0] - w_nb[0] * lever[2];
+    wl[2] = w_nb[0] * lever[1] - w_nb[1] * lever[0];
+    for (int i = 0; i < 3; i++)
+        vl[i] = m[3 * i] * wl[0] + m[3 * i + 1] * wl[1] + m[3 * i + 2] * wl[2];
+    /* the INS taken back to the fix's time: acceleration a = f^n + g^n - (2 w_ie + w_en) x v (from the last
+     * step's specific force), r(t - L) = r - v L + a L^2 / 2, v(t - L) = v - a L */
+    double w2[3] = {w_in[0], w_in[1] + SARINS_EARTH_RATE * cl, w_in[2] + SARINS_EARTH_RATE * sl};
+    const double *v = s->v;
+    double acc[3] = {s->f_n[0] - (w2[1] * v[2] - w2[2] * v[1]), s->f_n[1] - (w2[2] * v[0] - w2[0] * v[2]),
+                     s->f_n[2] - (w2[0] * v[1] - w2[1] * v[0]) - sarins_earth_gravity(s->pos[0], s->pos[2])};
+    double back[3], vback[3];
+    for (int i = 0; i < 3; i++) {
+        back[i] = -v[i] * lat + 0.5 * acc[i] * lat * lat;
+        vback[i] = -acc[i] * lat;
+    }
+    /* position innovation, ENU m: r_ins(t - L) + mat_nb l - r_gnss */
+    double z[3] = {(s->pos[1] - pos[1]) * rnh * cl + ln[0] + back[0],
+                   (s->pos[0] - pos[0]) * rmh + ln[1] + back[1],
+                   (s->pos[2] - pos[2]) + ln[2] + back[2]};
+    double nis = 0.0, hrow[N];
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < N; j++)
+            hrow[j] = 0.0;
+        hrow[i] = 1.0;
+        cross_matrix_row(ln, i, hrow + 6); /* [(mat_nb l) x] */
+        nis += scalar_update(s, hrow, z[i], std[i] * std[i]);
+    }
+    if (use_vel) {
+        double lx[9] = {0.0, -lever[2], lever[1], lever[2], 0.0, -lever[0], -lever[1], lever[0], 0.0};
+        for (int i = 0; i < 3; i++) {
+            for (int j = 0; j < N; j++)
+                hrow[j] = 0.0;
+            hrow[3 + i] = 1.0;
+            cross_matrix_row(vl, i, hrow + 6);
+            for (int j = 0; j < 3; j++) /* -mat_nb [l x], row i */
+                hrow[9 + j] = -(m[3 * i] * lx[j] + m[3 * i + 1] * lx[3 + j] + m[3 * i + 2] * lx[6 + j]);
+            double zi = s->v[i] + vback[i] + vl[i] - vel[i];
+            nis += scalar_update(s, hrow, zi, std[3 + i] * std[3 + i]);
+        }
+    }
+    feedback(s);
+    return nis;
+}
+
+void sarins_eskf_zupt(sarins_eskf *s, const double *v_meas)
+{
+    double hrow[N], r = s->config[SARINS_ESKF_ZUPT_STD] * s->config[SARINS_ESKF_ZUPT_STD];
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < N; j++)
+            hrow[j] = 0.0;
+        hrow[3 + i] = 1.0;
+        scalar_update(s, hrow, s->v[i] - v_meas[i], r);
+    }
+    feedback(s);
+}
+
+void sarins_eskf_body_velocity(sarins_eskf *s, const double *meas, const int *use, const double *std)
+{
+    double m[9], hrow[N];
+    sarins_quat_to_mat(s->q, m);
+    const double *v = s->v;
+    double vx[9] = {0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0};
+    for (int i = 0; i < 3; i++) {
+        if (!use[i])
+            continue;
+        for (int j = 0; j < N; j++)
+            hrow[j] = 0.0;
+        double vb = 0.0;
+        for (int j = 0; j < 3; j++) { /* row i of mat_bn = column i of mat_nb */
+            vb += m[3 * j + i] * v[j];
+            hrow[3 + j] = m[3 * j + i];
+            hrow[6 + j] = -(m[i] * vx[j] + m[3 + i] * vx[3 + j] + m[6 + i] * vx[6 + j]);
+        }
+        scalar_update(s, hrow, vb - meas[i], std[i] * std[i]);
+    }
+    feedback(s);
+}
+
+static void write_row(const sarins_eskf *s, double *row)
+{
+    sarins_nav3_row(s->q, s->v, s->pos, row);
+    for (int i = 0; i < 3; i++) {
+        row[9 + i] = s->bg[i];
+        row[12 + i] = s->ba[i];
+    }
+    for (int i = 0; i < N * N; i++)
+        row[15 + i] = s->p[i];
+}
+
+int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const double *dv, const double *aid, int64_t m,
+                    const double *gnss, const double *vel_std, int use_vel, int64_t out_every, double *out)
+{
+    if (out_every < 1 || k < 0 || m < 0)
+        return 1;
+    for (int64_t i = 0; i < 3 * k; i++)
+        if (!finite(dtheta[i]) || !finite(dv[i]))
+            return 1;
+    for (int64_t i = 0; i < 9 * k; i++)
+        if (!finite(aid[i]))
+            return 1;
+    for (int64_t j = 0; j < m * SARINS_ESKF_GNSS; j++)
+        if (!finite(gnss[j]))
+            return 1;
+    for (int64_t j = 1; j < m; j++)
+        if (gnss[j * SARINS_ESKF_GNSS] < gnss[(j - 1) * SARINS_ESKF_GNSS])
+            return 1;
+    for (int i = 0; i < 3; i++)
+        if (!finite(vel_std[i]) || !(vel_std[i] > 0.0))
+            return 1;
+    int64_t g = 0;
+    while (g < m && gnss[g * SARINS_ESKF_GNSS] < 0.0) /* fixes before this run: skipped */
+        g++;
+    for (int64_t i = 0; i < k; i++) {
+        sarins_eskf_predict(s, dtheta + 3 * i, dv + 3 * i);
+        const double *a = aid + 9 * i;
+        if (a[0] != 0.0)
+            sarins_eskf_zupt(s, a + 1);
+        if (a[4] != 0.0 || a[6] != 0.0) {
+            double meas[3] = {a[7], a[5], a[8]};
+            int use[3] = {a[6] != 0.0, a[4] != 0.0, a[6] != 0.0};
+            double nhc = s->config[SARINS_ESKF_NHC_STD];
+            double std[3] = {nhc, s->config[SARINS_ESKF_ODO_STD], nhc};
+            sarins_eskf_body_velocity(s, meas, use, std);
+        }
+        for (; g < m && gnss[g * SARINS_ESKF_GNSS] <= (double)i; g++) {
+            const double *r = gnss + g * SARINS_ESKF_GNSS;
+            if (r[0] < (double)i || r[1] == 0.0)
+                continue;
+            double std[6] = {r[8], r[9], r[10], vel_std[0], vel_std[1], vel_std[2]};
+            sarins_eskf_gnss(s, r + 2, r + 5, std, use_vel);
+        }
+        if ((i + 1) % out_every == 0)
+            write_row(s, out + SARINS_ESKF_ROW * ((i + 1) / out_every - 1));
+    }
+    return 0;
+}

@@ -1,0 +1,104 @@
+/* 15-state error-state Kalman filter for loosely coupled GNSS / INS with zero-velocity updates,
+ * closed loop (the estimated errors are fed back into the INS after every update).
+ *
+ * The INS is nav3.h's mechanization on the increments compensated with the estimated biases,
+ *     dtheta_c = dtheta - b_g h,   dv_c = dv - b_a h.
+ * Error state (ENU, metres and radians), true = computed - error:
+ *     x = [dr (E N U, m), dv (E N U, m/s), phi (E N U, rad), db_g (body, rad/s), db_a (body, m/s^2)]
+ * with mat_nb,computed = (I - [phi x]) mat_nb,true.  Continuous error model (Titterton & Weston 2004,
+ * ch. 12; Groves 2013, ch. 14, local-navigation-frame form; R = sqrt(R_M R_N) + h for the gravity
+ * gradient):
+ *     dr'  = dv
+ *     dv'  = f^n x phi - (2 omega_ie^n + omega_en^n) x dv + mat_nb db_a + (0, 0, 2 g / R dr_U)
+ *     phi' = -omega_in^n x phi + d omega_en^n(dv) - mat_nb db_g
+ *     d omega_en^n(dv) = (-dv_N / (R_M + h), dv_E / (R_N + h), dv_E tan L / (R_N + h))
+ *     db_g' = w_bg,  db_a' = w_ba  (random walks)
+ * and white noises: angle random walk arw (rad/sqrt(s)) on phi, velocity random walk vrw
+ * (m/s/sqrt(s)) on dv, bias random walks.  Every cov_every IMU steps (T = cov_every h):
+ *     Phi = I + F T + (F T)^2 / 2,   P = Phi P Phi' + Q,   Q = diag(0, vrw^2, arw^2, rw_g^2, rw_a^2) T
+ * (F at the current state).  Updates are scalar and sequential (diagonal R), in Joseph form,
+ *     k = P h' / (h P h' + r),   P = (I - k h) P (I - k h)' + k r k',
+ * the Joseph form evaluated expanded, P - k a' - a k' + (h a + r) k k' with a = P h' (the same
+ * expression for any gain, O(n^2) instead of two n^3 products), then P is symmetrized (the numerical safeguard: symmetry and, by Joseph's form, positive
+ * semi-definiteness are kept to rounding).  After a set of updates the state feeds back: position
+ * (metres to lat, lon, h), velocity, attitude q_nb <- q(phi) q_nb, biases b += db; x is reset to 0.
+ *
+ * GNSS position (antenna at lever arm l, body m; fix valid L = `latency` s before it is applied, the
+ * INS taken back to the fix's time with a = f^n + g^n - (2 omega_ie^n + omega_en^n) x v from the last
+ * step: r(t - L) = r - v L + a L^2 / 2, v(t - L) = v - a L):
+ *     z = r_ins(t - L) + mat_nb l - r_gnss (ENU m),  H = [I, 0, [(mat_nb l) x], 0, 0]
+ * GNSS velocity:  z = v_ins(t - L) + mat_nb (omega_nb^b x l) - v_gnss,
+ *     H = [0, I, [(mat_nb (omega_nb^b x l)) x], -mat_nb [l x], 0]
+ * ZUPT:  z = v_ins - v_meas (v_meas: zero plus the stop's jitter),  H = [0, I, 0, 0, 0].
+ * Body-frame velocity (odometer: forward axis y, measured speed; non-holonomic constraint: axes x
+ * and z, measured 0 plus the vehicle's jitter), v^b = mat_bn v^n, for each axis i used:
+ *     z_i = (mat_bn v^n)_i - meas_i,   H_i = [0, (mat_bn)_i, -(mat_bn [v^n x])_i, 0, 0]
+ * (the odometer at the IMU, no scale-factor state: a scale-factor error is not estimated).
+ * The struct holds no pointer and allocates nothing: copying it copies the filter.
+ */
+#ifndef SARINS_ESKF_H
+#define SARINS_ESKF_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define SARINS_ESKF_N 15
+/* settings (SI) */
+enum {
+    SARINS_ESKF_STEP, SARINS_ESKF_ARW, SARINS_ESKF_VRW, SARINS_ESKF_GYRO_RW, SARINS_ESKF_ACCEL_RW,
+    SARINS_ESKF_POS0_STD, SARINS_ESKF_VEL0_STD, SARINS_ESKF_TILT0_STD, SARINS_ESKF_HEADING0_STD,
+    SARINS_ESKF_GYRO_BIAS0_STD, SARINS_ESKF_ACCEL_BIAS0_STD, SARINS_ESKF_LEVER_X, SARINS_ESKF_LEVER_Y,
+    SARINS_ESKF_LEVER_Z, SARINS_ESKF_LATENCY, SARINS_ESKF_ZUPT_STD, SARINS_ESKF_COV_EVERY, SARINS_ESKF_NHC_STD,
+    SARINS_ESKF_ODO_STD, SARINS_ESKF_CONFIG
+};
+/* output row: nav row (9: lat, lon, h, v E N U, yaw, pitch, roll), b_g (3), b_a (3), P (15 x 15) */
+#define SARINS_ESKF_ROW (9 + 6 + SARINS_ESKF_N * SARINS_ESKF_N)
+#define SARINS_ESKF_GNSS 11 /* fix row of sarins_eskf_run: step index, valid, lat, lon (rad), h (m),
+                               v E N U (m/s), position std E N U (m) */
+
+typedef struct {
+    double config[SARINS_ESKF_CONFIG];
+    double q[4], v[3], pos[3]; /* INS state: q_nb [w x y z], ENU m/s, lat lon rad h m */
+    double bg[3], ba[3];       /* estimated biases, body rad/s, m/s^2 */
+    double p[SARINS_ESKF_N * SARINS_ESKF_N];
+    double x[SARINS_ESKF_N];   /* error state between an update and its feedback (0 otherwise) */
+    double w_ib[3];            /* last compensated angular rate, body rad/s */
+    double f_n[3];             /* last specific force, nav m/s^2 (for F) */
+    int64_t steps, since_cov;
+    double phi_acc[SARINS_ESKF_N * SARINS_ESKF_N]; /* scratch (no allocation) */
+    double tmp[SARINS_ESKF_N * SARINS_ESKF_N];
+} sarins_eskf;
+
+/* Initialise from config and the start nav row (9); 0, or 1 with a reason in msg. */
+int sarins_eskf_init(sarins_eskf *s, const double *config, const double *nav0, char *msg, size_t size);
+
+/* One IMU step (dtheta, dv body rad, m/s): mechanization + covariance propagation. */
+void sarins_eskf_predict(sarins_eskf *s, const double *dtheta, const double *dv);
+
+/* GNSS update from a fix pos (lat, lon rad, h m), vel (E N U m/s) with std (6: position E N U m,
+ * velocity E N U m/s); use_vel 0 skips velocity.  Feeds back.  Returns the normalized innovation
+ * squared summed over the scalar updates (for consistency checks). */
+double sarins_eskf_gnss(sarins_eskf *s, const double *pos, const double *vel, const double *std, int use_vel);
+
+/* Zero-velocity update from the velocity measured at a stop v_meas (3, ENU m/s: zero plus the stop's
+ * jitter; three scalar updates with std config ZUPT_STD) and feedback. */
+void sarins_eskf_zupt(sarins_eskf *s, const double *v_meas);
+
+/* Body-frame velocity update on the axes with use[i] != 0 (meas (3) m/s, std (3) m/s), then feedback. */
+void sarins_eskf_body_velocity(sarins_eskf *s, const double *meas, const int *use, const double *std);
+
+/* K steps: predict with dtheta, dv (K, 3); after step k, by the row aid[k] of aid (K, 9) = [zupt flag,
+ * zupt measured v E N U, odometer flag, odometer speed (m/s), NHC flag, NHC measured body v_x, v_z
+ * (m/s: zero plus the vehicle's jitter)]: a ZUPT, then an odometer and / or NHC update (std config
+ * ODO_STD, NHC_STD); then the fixes
+ * whose step index (gnss row column 0, the step after which the fix is applied) equals k, in order:
+ * rows (m, 11) = step index, valid, lat, lon, h, v E N U, std E N U (position m), and vel_std (3)
+ * shared by all fixes.  Writes out rows (SARINS_ESKF_ROW) after every out_every-th step (n_out =
+ * K / out_every rows).  Returns 0, or 1 (nothing changed) for a non-finite input or fix rows not in
+ * step order. */
+int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const double *dv, const double *aid, int64_t m,
+                    const double *gnss, const double *vel_std, int use_vel, int64_t out_every, double *out);
+
+int64_t sarins_eskf_size(void);
+
+#endif

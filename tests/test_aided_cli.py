@@ -1,0 +1,74 @@
+"""``sarins navigate --trajectory``: the aided run from the command line, and its bad inputs (exit 2
+naming the option or the segment)."""
+
+import json
+
+import pytest
+
+from sarins.cli import main
+
+SEGMENTS = [{"kind": "stop", "duration": 20}, {"kind": "accelerate", "to_speed": 10, "accel": 1.0},
+            {"kind": "turn", "rate_dps": 3, "angle_deg": 90}, {"kind": "cruise", "duration": 40},
+            {"kind": "accelerate", "to_speed": 0, "accel": 1.0}, {"kind": "stop", "duration": 10}]
+
+
+def write(tmp_path, segments=SEGMENTS, name="t.json"):
+    path = tmp_path / name
+    path.write_text(json.dumps({"start": {"lat_deg": 32.0, "lon_deg": 118.0}, "segments": segments}))
+    return str(path)
+
+
+def run(argv):
+    try:
+        return main(argv)
+    except SystemExit as exc:
+        return exc.code
+
+
+def test_aided_run_prints_json_with_the_outage_row(tmp_path, capsys):
+    path = write(tmp_path)
+    argv = ["navigate", "--trajectory", path, "--aiding", "gnss,zupt", "--gnss-outage", "50:80", "--json",
+            "--imu-rate-hz", "50", "--seed", "3"]
+    assert run(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["duration_s"] == pytest.approx(120.0)
+    assert out["zupt_steps"] == 30 * 50
+    assert out["gnss_fixes_used"] == 120 - 30
+    (row,) = out["outages"]
+    assert row["start_s"] == 50 and row["end_s"] == 80 and row["predicted_sigma_m"] > 0
+    assert out["horizontal_error_max_m"] < 20
+    assert run(argv) == 0  # the same seed, the same numbers
+    again = json.loads(capsys.readouterr().out)
+    assert {k: v for k, v in again.items() if k != "wall_seconds"} == {k: v for k, v in out.items() if k != "wall_seconds"}
+
+
+@pytest.mark.parametrize("segments, extra, words", [
+    ([{"kind": "accelerate", "to_speed": 5, "accel": 1}, {"kind": "stop", "duration": 5}], [],
+     "segment 1 (stop): trajectory discontinuity"),
+    (SEGMENTS, ["--gnss-rate-hz", "20", "--imu-rate-hz", "10"], "--gnss-rate-hz 20 is above the IMU rate"),
+    (SEGMENTS, ["--gnss-pos-std", "-1"], "--gnss-pos-std must not be negative"),
+    (SEGMENTS, ["--zupt-std", "-0.1"], "--zupt-std must be positive"),
+    (SEGMENTS, ["--gnss-outage", "100:200"], "--gnss-outage 100:200 is outside the run"),
+    (SEGMENTS, ["--gnss-outage", "abc"], "--gnss-outage abc"),
+    (SEGMENTS, ["--aiding", "gnss,magnetometer"], "--aiding gnss,magnetometer: choose from gnss, zupt, odometer, nhc"),
+    (SEGMENTS, ["--nav-hours", "3"], "--nav-hours does not apply to an aided run"),
+])
+def test_bad_input_exits_2_naming_it(tmp_path, capsys, segments, extra, words):
+    assert run(["navigate", "--trajectory", write(tmp_path, segments), *extra]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0]
+
+
+def test_missing_file_and_aided_options_without_a_trajectory(tmp_path, capsys):
+    assert run(["navigate", "--trajectory", str(tmp_path / "none.json")]) == 2
+    assert "cannot read" in capsys.readouterr().err
+    assert run(["navigate", "--gnss-outage", "1:2"]) == 2
+    assert "--gnss-outage applies to an aided run only" in capsys.readouterr().err
+
+
+def test_gnss_free_run_with_odometer_and_nhc(tmp_path, capsys):
+    assert run(["navigate", "--trajectory", write(tmp_path), "--aiding", "zupt,odometer,nhc", "--imu-rate-hz", "50",
+                "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["gnss_fixes_used"] == 0 and out["aiding"] == ["zupt", "odometer", "nhc"]
+    assert out["horizontal_error_max_m"] < 50
