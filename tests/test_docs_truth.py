@@ -122,3 +122,11 @@ def test_every_repository_path_the_docs_name_exists():
                     missing.append((doc.name, target))
     assert checked > 100
     assert missing == []
+
+
+def test_the_docs_speak_of_the_product_not_of_issue_numbers():
+    """"issue 20 item 5" says when something changed, which is CHANGELOG.md's business; an outside
+    project's issue ("Fusion issue #191") is a citation and stays."""
+    cited = [(doc.name, number) for doc in DOCS
+             for number in re.findall(r"\b[Ii]ssues? (\d+)", doc.read_text(encoding="utf-8"))]
+    assert cited == []
