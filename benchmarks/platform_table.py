@@ -108,7 +108,7 @@ def host_args(md, case: Case) -> list[str]:
 
 def _short(text: str) -> str:
     lines = [ln.strip() for ln in text.strip().splitlines() if ln.strip()]
-    return (lines[-1] if lines else "no output")[:90].replace("|", "/")
+    return (lines[-1] if lines else "no output")[:140].replace("|", "/")
 
 
 def run_host(cmd: list[str], env=None, timeout=600) -> dict[int, np.ndarray]:
@@ -118,8 +118,9 @@ def run_host(cmd: list[str], env=None, timeout=600) -> dict[int, np.ndarray]:
     except subprocess.TimeoutExpired:
         raise RunFailed(f"timeout {timeout} s") from None
     status = [ln for ln in proc.stdout.splitlines() if ln.startswith("STATUS")]
+    logs = [ln.split(None, 3)[-1] for ln in proc.stdout.splitlines() if ln.startswith("LOG ")]
     if proc.returncode != 0 or status:
-        raise RunFailed(_short("\n".join(status[:1]) or proc.stderr or proc.stdout)
+        raise RunFailed(_short(" ".join(status[:1] + logs[-1:]) or proc.stderr or proc.stdout)
                         + ("" if proc.returncode == 0 else f" (exit {proc.returncode})"))
     rows = table(proc)
     if not rows:
@@ -194,11 +195,23 @@ class Hosts:
         return self.wine_env
 
 
-def run_binary(hosts: Hosts, md, case: Case, binary: Path, platform: str) -> dict:
+def resource_arg(md, resources: Path | None, platform: str) -> list[str]:
+    """The hosts' ``res=`` op: FMI 2.0 a file URI, FMI 3.0 a path ending in a separator; under wine the
+    folder is seen on drive Z:."""
+    if resources is None:
+        return []
+    path = resources.resolve().as_posix()
+    if md.fmiVersion.startswith("3"):
+        return [f"res=Z:{path.replace('/', chr(92))}{chr(92)}" if platform == "win64" else f"res={path}/"]
+    return [f"res=file:///Z:{path}" if platform == "win64" else f"res=file://{path}"]
+
+
+def run_binary(hosts: Hosts, md, case: Case, binary: Path, platform: str, resources: Path | None = None) -> dict:
     if not binary.is_file():
         raise RunFailed(f"no {binary.parent.name}/{binary.name}")
     prefix, exe = hosts.get(md.fmiVersion, platform)
-    cmd = [*prefix, str(exe), str(binary), md.guid, str(case.steps), "1.0", *host_args(md, case)]
+    cmd = [*prefix, str(exe), str(binary), md.guid, str(case.steps), "1.0", *host_args(md, case),
+           *resource_arg(md, resources, platform)]
     return run_host(cmd, env=hosts.env(platform))
 
 
@@ -255,9 +268,10 @@ def platform_row(fmu: Path, work: Path, hosts: Hosts, fmusim: str | None = None,
     with zipfile.ZipFile(fmu) as z:
         z.extractall(folder)
     case = case_of(fmu.stem, md)
+    res = folder / "resources" if (folder / "resources").is_dir() else None
     binary = {p: folder / "binaries" / d / f"{identifier}{ext}" for p, (d, ext) in PLATFORMS[fmi].items()}
     try:
-        ref = run_binary(hosts, md, case, binary["linux64"], "linux64")
+        ref = run_binary(hosts, md, case, binary["linux64"], "linux64", res)
         row.cells["linux64"] = f"{len(ref) - 1} steps x {len(case.outputs)}"
     except RunFailed as err:
         row.cells = {c: "-" for c in COLUMNS} | {"linux64": str(err)}
@@ -274,11 +288,11 @@ def platform_row(fmu: Path, work: Path, hosts: Hosts, fmusim: str | None = None,
     if "fmusim" in others:
         row.cells["fmusim"] = cell(lambda: run_fmusim(fmusim, fmu, case, folder))
     for p in [p for p in ("win64", "aarch64") if p in others]:
-        row.cells[p] = cell(lambda p=p: run_binary(hosts, md, case, binary[p], p))
+        row.cells[p] = cell(lambda p=p: run_binary(hosts, md, case, binary[p], p, res))
 
     def source_cell(line) -> str:
         return cell(lambda: run_binary(hosts, md, case, compile_sources(folder, identifier, line, folder),
-                                       "linux64"))
+                                       "linux64", res))
 
     with ThreadPoolExecutor(max(1, jobs)) as pool:
         for line, text in zip(lines, pool.map(source_cell, lines)):
