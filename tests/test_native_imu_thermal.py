@@ -317,6 +317,7 @@ def test_no_heap_allocation_after_initialisation(unzipped, tmp_path):
     ({"lat": 1.6}, "parameter lat"),
     ({"seed": -1}, "parameter seed = -1"),
     ({"internal_rate": 0.0}, "parameter internal_rate"),
+    ({"flicker_tau_min": 5e-324}, "parameter flicker_tau_min = 4.9406564584124654e-324"),
 ])
 def test_bad_parameters_are_refused_at_initialisation_with_the_reason(imu_fmu, params, text):
     check_parameter_error(imu_fmu, params, text)

@@ -102,6 +102,24 @@ int64_t sarins_imu_check_params(const double *par, const char **reason) {
         *reason = "must exceed flicker_tau_min";
         return SARINS_IMU_P_FLICKER_TAU_MAX;
     }
+    /* The flicker band [tau_min, tau_max] is synthesised by Gauss-Markov terms whose decay factors
+     * exp(-h/tau) act on one double-precision state: a band wider than 1/DBL_EPSILON = 2^52 (15.7 decades)
+     * holds terms whose contributions differ by less than an ulp of the largest, and its term count
+     * (SARINS_IMU_FLICKER_PER_DECADE per decade) would grow without bound (tau_min = 5e-324 makes the ratio
+     * infinite).  So tau_max / tau_min <= 2^52, which also keeps the count <= 3 x 16 + 1 = 49 terms. */
+    if (!(par[SARINS_IMU_P_FLICKER_TAU_MAX] / par[SARINS_IMU_P_FLICKER_TAU_MIN] <= SARINS_IMU_FLICKER_MAX_RATIO)) {
+        *reason = "must be at least flicker_tau_max / 2^52 (a flicker band of at most 15.7 decades)";
+        return SARINS_IMU_P_FLICKER_TAU_MIN;
+    }
+    /* a sensor's self-heating rise above the ambient (degC), within the limit the IMUThermal FMU already
+     * applied (now checked here once, for the library too: a rise of 1e308 degC made the first step NaN) */
+    for (int j = 0; j < 6; j++) {
+        int k = SP(SARINS_IMU_P_SELF_HEATING_GYRO_X, j);
+        if (!(sm_fabs(par[k]) <= SARINS_IMU_SELF_HEATING_LIMIT)) {
+            *reason = "must lie within +-500 degC";
+            return k;
+        }
+    }
     return -1;
 }
 

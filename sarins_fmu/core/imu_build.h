@@ -12,6 +12,8 @@
 #include "imu_params.h"
 
 #define SARINS_IMU_FLICKER_PER_DECADE 3 /* Gauss-Markov terms per decade of the flicker synthesis */
+#define SARINS_IMU_FLICKER_MAX_RATIO 4503599627370496.0 /* 2^52 = 1/DBL_EPSILON: widest flicker band tau_max/tau_min */
+#define SARINS_IMU_SELF_HEATING_LIMIT 500.0 /* degC: a sensor's self-heating rise above the ambient, in magnitude */
 #define SARINS_IMU_DAY 86400.0         /* s */
 
 /* Number of flicker terms F for the band [tau_min, tau_max] (s): max(2, ceil(3 log10(tau_max /

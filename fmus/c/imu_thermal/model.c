@@ -35,7 +35,7 @@
 
 #define PI 3.14159265358979323846
 #define LAT_LIMIT (89.9 * PI / 180.0) /* rad: fmus.slave_support.LAT_LIMIT */
-#define SELF_HEATING_LIMIT 500.0      /* degC: a sensor's rise above the ambient */
+#define SELF_HEATING_LIMIT SARINS_IMU_SELF_HEATING_LIMIT /* degC: the core's bound (imu_build.h) */
 #define ABSOLUTE_ZERO (-273.15)       /* degC */
 #define INT32_LIMIT 2147483647
 #define MAX_GIMBALS 3
