@@ -1,7 +1,7 @@
 """IMU parameters at the extremes of a double: the core's parameter check (sarins_imu_check_params, the
 one the IMUThermal FMU and the library both run) either refuses a value, naming the parameter, or the
 IMU built from it gives finite increments and temperatures for its first steps.  Swept over the
-parameters whose bounds the core derives (the flicker band, the self-heating rise)."""
+parameters whose bounds the core derives (the flicker band, the self-heating rise, the gyro biases)."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from sarins_fmu.site import SITE_LAT
 
 EXTREMES = (1e308, -1e308, 5e-324, -5e-324, 1e300)
 NAMES = [name for name, _, _ in imu_params.PARAMETERS]
-BOUNDED = ["flicker_tau_min", "flicker_tau_max"] + [f"self_heating_{s}_{a}" for s in ("gyro", "accel") for a in "xyz"]
+BOUNDED = [f"gyro_bias_{a}" for a in "xyz"] + ["flicker_tau_min", "flicker_tau_max"] + [f"self_heating_{s}_{a}" for s in ("gyro", "accel") for a in "xyz"]
 
 
 def _first_steps_finite(name: str, value: float, steps: int = 3) -> bool:
@@ -39,7 +39,7 @@ def test_an_extreme_value_is_refused_by_name_or_steps_finite(name):
     for value in EXTREMES:
         par = core_imu.preset_params("nav-rlg")
         par[NAMES.index(name)] = value
-        problem = core_imu.check_params(par)
+        problem = core_imu.check_params(par) or core_imu.check_rate_params(par, 200.0)
         if problem is not None:
             assert name in problem, (value, problem)
         else:
@@ -57,3 +57,19 @@ def test_the_flicker_band_is_bounded_by_double_precision():
     assert core_imu.check_params(par).startswith("flicker_tau_min must be at least")
     par[NAMES.index("flicker_tau_min")] = 5e-324
     assert core_imu.check_params(par).startswith("flicker_tau_min ")
+
+
+def test_a_gyro_bias_is_bounded_by_a_quarter_turn_per_minor_step():
+    """|gyro_bias| <= (pi/2) x internal_rate: at 200 Hz, 314.159 rad/s is built and steps finite, the next
+    double up is refused by name, as is the same bias at 100 Hz."""
+    limit = 0.5 * np.pi * 200.0
+    par = core_imu.preset_params("nav-rlg")
+    par[NAMES.index("gyro_bias_y")] = -limit
+    assert core_imu.check_params(par) is None and core_imu.check_rate_params(par, 200.0) is None
+    assert _first_steps_finite("gyro_bias_y", -limit, steps=5)
+    par[NAMES.index("gyro_bias_y")] = np.nextafter(-limit, -np.inf)
+    assert core_imu.check_rate_params(par, 200.0).startswith("gyro_bias_y must be at most pi/2 rad")
+    par[NAMES.index("gyro_bias_y")] = -limit
+    assert core_imu.check_rate_params(par, 100.0).startswith("gyro_bias_y ")
+    with pytest.raises(ValueError, match="IMU parameter gyro_bias_z must be at most"):
+        _first_steps_finite("gyro_bias_z", 1e3)

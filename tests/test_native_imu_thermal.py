@@ -318,6 +318,8 @@ def test_no_heap_allocation_after_initialisation(unzipped, tmp_path):
     ({"seed": -1}, "parameter seed = -1"),
     ({"internal_rate": 0.0}, "parameter internal_rate"),
     ({"flicker_tau_min": 5e-324}, "parameter flicker_tau_min = 4.9406564584124654e-324"),
+    ({"gyro_bias_x": 1e308}, "parameter gyro_bias_x = 1e+308"),
+    ({"gyro_bias_x": 400.0}, "IMU parameter gyro_bias_x must be at most pi/2 rad per minor step"),
 ])
 def test_bad_parameters_are_refused_at_initialisation_with_the_reason(imu_fmu, params, text):
     check_parameter_error(imu_fmu, params, text)

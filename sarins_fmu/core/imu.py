@@ -254,6 +254,7 @@ _start = function("sarins_imu_start", _INT, _P, _I64, _F64, _INT, _U64)
 _flicker_count = function("sarins_imu_flicker_count", _I64, _F64, _F64)
 _flicker_taus = function("sarins_imu_flicker_taus", None, _F64, _F64, _I64, _P)
 _check_params = function("sarins_imu_check_params", _I64, _P, ctypes.POINTER(ctypes.c_char_p))
+_check_rate_params = function("sarins_imu_check_rate_params", _I64, _P, _F64, ctypes.POINTER(ctypes.c_char_p))
 _param_name = function("sarins_imu_param_name", ctypes.c_char_p, _I64)
 _preset_name = function("sarins_imu_preset_name", ctypes.c_char_p, _I64)
 _preset_params = function("sarins_imu_preset_params", _INT, ctypes.c_char_p, _P)
@@ -296,6 +297,14 @@ def check_params(par) -> str | None:
     return None if bad < 0 else f"{_param_name(bad).decode()} {reason.value.decode()}"
 
 
+def check_rate_params(par, internal_rate: float) -> str | None:
+    """None when the parameters bounded by the minor-loop rate internal_rate (Hz) hold, else "<name> <rule>"."""
+    par = _arrays.read(par, (N_PARAMS,), "par")
+    reason = ctypes.c_char_p()
+    bad = _check_rate_params(par.ctypes.data, float(internal_rate), ctypes.byref(reason))
+    return None if bad < 0 else f"{_param_name(bad).decode()} {reason.value.decode()}"
+
+
 def flicker_count(tau_min: float, tau_max: float) -> int:
     """Number of Gauss-Markov terms of the flicker synthesis for the band [tau_min, tau_max] (s)."""
     n = _flicker_count(float(tau_min), float(tau_max))
@@ -317,9 +326,11 @@ def build(table, par, t0: float, h: float, n_sub: int, age: float, value: int) -
     table = _arrays.table(table)
     par = _arrays.read(par, (N_PARAMS,), "par")
     problem = check_params(par)
+    n_sub = _arrays.count(n_sub, "n_sub (minor steps per interval)")
+    if problem is None and float(h) > 0.0:
+        problem = check_rate_params(par, n_sub / float(h))
     if problem is not None:
         raise ValueError(f"IMU parameter {problem}")
-    n_sub = _arrays.count(n_sub, "n_sub (minor steps per interval)")
     _check(_build(table.ctypes.data, table.shape[0], par.ctypes.data, float(t0), float(h), n_sub, float(age),
                   check_seed(value)))
 

@@ -123,6 +123,18 @@ int64_t sarins_imu_check_params(const double *par, const char **reason) {
     return -1;
 }
 
+int64_t sarins_imu_check_rate_params(const double *par, double internal_rate, const char **reason) {
+    double limit = 0.5 * PI * internal_rate; /* rad/s: a quarter turn per minor step (imu_build.h) */
+    for (int i = 0; i < 3; i++) {
+        int k = SARINS_IMU_P_GYRO_BIAS_X + i;
+        if (!(sm_fabs(par[k]) <= limit)) {
+            *reason = "must be at most pi/2 rad per minor step in magnitude (|bias| <= pi/2 x internal_rate)";
+            return k;
+        }
+    }
+    return -1;
+}
+
 /* the float64 array of table row i if its shape is (rows, cols), else NULL */
 static double *row_array(const int64_t *table, int64_t i, int64_t rows, int64_t cols) {
     if (table[3 * i + 1] != rows || table[3 * i + 2] != cols) return NULL;

@@ -29,6 +29,13 @@ void sarins_imu_flicker_taus(double tau_min, double tau_max, int64_t n, double *
  * ...; static text). */
 int64_t sarins_imu_check_params(const double *par, const char **reason);
 
+/* Check the parameters bounded by the minor-loop rate internal_rate (Hz, > 0): -1 when they hold, else the
+ * index of the first at fault with *reason (static text).  A gyro bias b (rad/s) turns the body by
+ * b / internal_rate rad per minor step; the minor step's rotation vector is unique only below pi rad, and
+ * half of that is left to the table's and the other error terms' rates: |b| <= (pi / 2) internal_rate
+ * (measured: 1e3 rad/s at 200 Hz, 5 rad per step, turns the increments NaN within three steps). */
+int64_t sarins_imu_check_rate_params(const double *par, double internal_rate, const char **reason);
+
 /* Fill the constant arrays of the IMU table (imu.h rows CONSTS, SENSOR_PAR, COEF, TRIAD, MATS, CORR_PAR
  * rows 0-5 and 7, PHI, Q, DYN_PAR; the PHI/Q/X_FLICKER rows must have sarins_imu_flicker_count rows) from par,
  * checked first: t0 the start time (s), h the output interval (s, > 0), n_sub minor steps per interval;

@@ -149,6 +149,8 @@ static int model_params(const sarins_ctx *c, double *par)
     }
     const char *reason = NULL;
     int64_t bad = sarins_imu_check_params(par, &reason);
+    if (bad < 0)
+        bad = sarins_imu_check_rate_params(par, c->r[SARINS_R_internal_rate], &reason);
     if (bad >= 0) {
         sarins_log(c, SARINS_ERROR, "parameter %s = %.17g%s: IMU parameter %s %s", sarins_imu_param_name(bad),
                    par[bad], set[bad] ? "" : " (of the preset, with the coefficients that were set)",
