@@ -53,6 +53,10 @@ RANGES = {
         "lat0": [2.0], "align_time": [-1.0], "coarse_time": [-1.0], "kf_arw": [-1.0],
         "kf_velocity_meas_std": [0.0], "kf_tilt0_std": [-1.0], "pitch0": [2.0],
     },
+    "GNSSReceiver": {
+        "rate_hz": [0.5, 25.0], "seed": [-1], "pos_gm_tau": [0.0], "vel_white_e": [-1.0], "lever_x": [1e400],
+        "outages": ["5:3", "a:b", "1:2;"*17],
+    },
     "VehicleMotion": {
         "legs": ["", "fly 3", "drive -5 10"], "lat0": [2.0], "lead_time": [-1.0], "grid": [0.0],
         "sway_period": [0.0], "reference_speed": [0.0], "body_seed": [-1],
