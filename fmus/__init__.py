@@ -18,4 +18,5 @@ SLAVES = {
     "VehicleMotion": "vehicle_motion_slave.py",
     "IMULog": "imu_log_slave.py",
     "GNSSReceiver": "gnss_receiver_slave.py",
+    "AidedINS": "aided_ins_slave.py",
 }

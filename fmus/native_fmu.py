@@ -86,6 +86,7 @@ NATIVE = {
     "DriftModelUpdater": NativeModel("drift_model_updater"),
     "VehicleMotion": NativeModel("vehicle_motion"),
     "GNSSReceiver": NativeModel("gnss_receiver"),
+    "AidedINS": NativeModel("aided_ins"),
 }
 
 # setup.py's flags (sarins_fmu core) plus hidden visibility: only the fmi2* functions are exported.  No
