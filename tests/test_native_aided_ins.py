@@ -202,3 +202,52 @@ def test_fmi3_variant_equals_navigate(case, tmp_path):
         fmu.terminate()
     finally:
         fmu.freeInstance()
+
+
+def test_receiver_into_aided_ins_equals_navigate_with_two_steps_latency(fmu, tmp_path):
+    """GNSSReceiver -> AidedINS exchanged at every communication point (Jacobi): a fix valid at t_k leaves
+    the receiver after doStep(t_k, h) and is applied in AidedINS's doStep(t_k + h, h), at t_k + 2h.  With
+    latency = 2h in both, the chain equals navigate(aiding=('gnss',)) at every step bit for bit."""
+    truth = tr.generate(tr.Trajectory(tr.Start(lat_deg=35.0, heading_deg=-30.0), SEGMENTS), STEP)
+    result = aided.navigate(truth, noise=NOISE, gnss=GNSS, aiding=("gnss",), outages=OUTAGES, settings=SETTINGS,
+                            seed=SEED)
+    assert GNSS.latency == 2 * STEP
+    dtheta, dv, _, _ = aided.corrupt(truth, NOISE, SEED)
+    nav0 = aided._initial_state(truth, SETTINGS, np.random.default_rng([SEED, 3018]))
+    params = dict(zip(SETTING_NAMES, aided._config(NOISE, SETTINGS, GNSS, STEP).tolist()))
+    params.update({f"{n}0": float(v) for n, v in zip(NAV, nav0)})
+    params.update({f"gnss_{k}_std_{a}": float(v) for k, std in (("pos", GNSS.pos_std()), ("vel", GNSS.vel_std()))
+                   for a, v in zip("enu", std)})
+    receiver_fmu = build_native_fmu("GNSSReceiver", "gnss_receiver_slave.py", tmp_path, win64=False)
+    receiver = Slave(receiver_fmu, "rx")
+    ins = Slave(fmu, "ins")
+    truth_in = np.column_stack([truth.nav_rows(), truth.omega_ib_b])
+    rx_in = ["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll", "omega_ib_x", "omega_ib_y",
+             "omega_ib_z"]
+    fix = [f"fix_{n}" for n in NAV[:6]]
+    try:
+        receiver.set(rate_hz=GNSS.rate_hz, seed=SEED, outages="3:4", **dict(zip(
+            ["lever_x", "lever_y", "lever_z", "pos_white_e", "pos_white_n", "pos_white_u", "pos_gm_e", "pos_gm_n",
+             "pos_gm_u", "pos_gm_tau", "vel_white_e", "vel_white_n", "vel_white_u", "vel_gm_e", "vel_gm_n",
+             "vel_gm_u", "vel_gm_tau"], GNSS.array().tolist())))
+        ins.set(**params)
+        for s in (receiver, ins):
+            s.fmu.enterInitializationMode()
+            s.fmu.exitInitializationMode()
+        got = []
+        for k in range(truth.n_steps):
+            fix_values = receiver.get(*fix)
+            fix_ints = receiver.fmu.getInteger([receiver.vr["fix_valid"], receiver.vr["fix_count"]])
+            receiver.fmu.setReal([receiver.vr[n] for n in rx_in], list(truth_in[k]))
+            ins.fmu.setReal([ins.vr[n] for n in INPUTS], [*dtheta[k], *dv[k], *fix_values])
+            ins.fmu.setInteger([ins.vr["fix_valid"], ins.vr["fix_count"]], list(fix_ints))
+            receiver.fmu.doStep(k * STEP, STEP)
+            ins.fmu.doStep(k * STEP, STEP)
+            got.append(ins.get(*NAV))
+        assert np.array_equal(np.array(got), result.nav)
+        rows = aided.fix_rows(gnss.simulate(truth, GNSS, SEED, OUTAGES), GNSS, STEP)
+        applied = int(np.sum((rows[:, 1] > 0) & (rows[:, 0] < truth.n_steps)))  # the last fix falls after the run
+        assert ins.fmu.getInteger([ins.vr["fixes_used"]])[0] == applied > 10
+    finally:
+        receiver.free()
+        ins.free()
