@@ -9,6 +9,12 @@ speed benchmark: the numbers of the issue-11 table (docs/online-rls.md,
 README).  Ecos and libcosim are skipped if not installed.
 
     python benchmarks/engine_table.py [--fmu-dir DIR] [--only NAME ...]
+    python benchmarks/engine_table.py --write-readme [--fmu-dir DIR]
+
+``--write-readme`` runs the master's Gauss-Seidel only and writes each system's
+value into the README's engine table (its "value at that nav_time" column);
+tests/test_docs_truth.py checks the README's ``standard_static`` value against
+a fresh run.
 """
 
 from __future__ import annotations
@@ -83,8 +89,7 @@ def _engines(system, stop, tmp: Path):
 
 def compare(name: str, fmu_dir: Path, tmp: Path) -> list[str]:
     kwargs, nav_time, shown = CASES[name]
-    probe = SYSTEMS[name](fmu_dir, **kwargs)
-    stop = _align_time(probe) + nav_time + 3.0  # Jacobi engines lag two steps at most
+    stop = _stop(name, fmu_dir)
     system = SYSTEMS[name](fmu_dir, hours=stop / 3600.0, **kwargs)
     lines = []
     reference = None
@@ -99,10 +104,55 @@ def compare(name: str, fmu_dir: Path, tmp: Path) -> list[str]:
     return lines
 
 
+def _stop(name: str, fmu_dir: Path) -> float:
+    kwargs, nav_time, _ = CASES[name]
+    return _align_time(SYSTEMS[name](fmu_dir, **kwargs)) + nav_time + 3.0  # Jacobi engines lag two steps at most
+
+
+def reference_values(name: str, fmu_dir: Path) -> list[float]:
+    """The ``shown`` values of system ``name`` at its compared nav_time under the master's Gauss-Seidel."""
+    kwargs, nav_time, shown = CASES[name]
+    stop = _stop(name, fmu_dir)
+    system = SYSTEMS[name](fmu_dir, hours=stop / 3600.0, **kwargs)
+    record = ["ins." + n for n in NAV] + ["ins.nav_time"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rows = _rows(simulate_system(system, stop, 1.0, scheme="gauss-seidel", record=record, progress=False))
+    return [float(rows[nav_time][NAV.index(n)]) for n in shown]
+
+
+README_ROW = {  # README engine-table row start -> (system, unit)
+    "| `standard_static` (7000 s)": ("standard_static", "m"),
+    "| `standard_static_identified`": ("standard_static_identified", "m"),
+    "| `vehicle_rins` (2900 s)": ("vehicle_rins", "rad"),
+    "| `vehicle_rins_online`": ("vehicle_rins_online", "rad"),
+}
+
+
+def readme_value(values: list[float], unit: str) -> str:
+    """A README cell: the values' repr joined by ' / ', minus signs typeset, then the unit."""
+    return " / ".join(repr(v).replace("-", "\u2212") for v in values) + f" {unit}"
+
+
+def write_readme(fmu_dir: Path, readme: Path = ROOT / "README.md") -> None:
+    """Write each system's Gauss-Seidel value into the README's engine table (second column)."""
+    lines = readme.read_text(encoding="utf-8").split("\n")
+    for i, line in enumerate(lines):
+        for start, (name, unit) in README_ROW.items():
+            if line.startswith(start):
+                cells = line.split(" | ")
+                cells[1] = readme_value(reference_values(name, fmu_dir), unit)
+                lines[i] = " | ".join(cells)
+                print(lines[i], flush=True)
+    readme.write_text("\n".join(lines), encoding="utf-8")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--fmu-dir", type=Path, default=None, help="built FMUs (default: build into a scratch folder)")
     parser.add_argument("--only", nargs="*", choices=list(CASES), default=list(CASES))
+    parser.add_argument("--write-readme", action="store_true",
+                        help="write the Gauss-Seidel values into README.md's engine table")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="engine_table_") as scratch:
         tmp = Path(scratch)
@@ -112,6 +162,9 @@ def main(argv=None) -> int:
                                  "DriftModelUpdater"])
         else:
             shutil.copytree(args.fmu_dir, fmu_dir)
+        if args.write_readme:
+            write_readme(fmu_dir)
+            return 0
         print("| system | engine | value at the common nav_time | rows bit-identical to GS | max relative "
               "difference |")
         print("|---|---|---|---|---|")

@@ -368,9 +368,10 @@ NEEDS_MODEL = {"IMUCompensator": "sarins build-fmus --compensator MODEL_FILE (or
 DEFAULT_NAMES = [n for n in SLAVES if n not in NEEDS_MODEL]
 
 
-def build_fmus(out_dir: Path | str = DEFAULT_OUT, names=None) -> list[Path]:
+def build_fmus(out_dir: Path | str = DEFAULT_OUT, names=None, cross: bool | None = None) -> list[Path]:
     """Build the named FMUs (default: every FMU that runs without a trained model) into
-    ``out_dir``; returns their paths."""
+    ``out_dir``; returns their paths.  ``cross``: also the native FMUs' win64 and aarch64-linux
+    binaries (default: for each, when its cross compiler is on PATH); ``False``: linux64 only."""
     names = list(DEFAULT_NAMES) if names is None else list(names)
     unknown = [n for n in names if n not in SLAVES]
     if unknown:
@@ -378,9 +379,14 @@ def build_fmus(out_dir: Path | str = DEFAULT_OUT, names=None) -> list[Path]:
     for name in names:
         if name in NEEDS_MODEL:
             raise ValueError(f"{name} needs a trained model to run; build it with {NEEDS_MODEL[name]}")
+    from sarins_fmu.files import refuse_links
+
     from .native_fmu import NATIVE, build_native_fmu
 
-    return [build_native_fmu(n, SLAVES[n], Path(out_dir)) if n in NATIVE else build_fmu(SLAVES[n], Path(out_dir))
+    refuse_links([Path(out_dir) / f"{n}.fmu" for n in names], "FMU")
+    platforms = {} if cross is None else {"win64": cross, "aarch64": cross}
+    return [build_native_fmu(n, SLAVES[n], Path(out_dir), **platforms) if n in NATIVE
+            else build_fmu(SLAVES[n], Path(out_dir))
             for n in names]
 
 

@@ -25,7 +25,7 @@ from .native_fmu import build_native_fmu
 
 
 def export_compensator(model_file: str | Path, out_dir: str | Path, name: str | None = None, fmi: int = 2,
-                       win64: bool | None = None) -> Path:
+                       win64: bool | None = None, aarch64: bool | None = None) -> Path:
     """Build an IMUCompensator FMU carrying ``model_file``.
 
     Parameters
@@ -45,7 +45,7 @@ def export_compensator(model_file: str | Path, out_dir: str | Path, name: str | 
     out_dir = Path(out_dir)
     with tempfile.TemporaryDirectory(prefix="sarins_compensator_") as tmp:
         fmu = build_native_fmu("IMUCompensator", SLAVES["IMUCompensator"], Path(tmp) / "out", fmi=fmi,
-                               win64=win64, resources={MODEL_IN_RESOURCES: model.binary()})
+                               win64=win64, aarch64=aarch64, resources={MODEL_IN_RESOURCES: model.binary()})
         target = out_dir / (name or fmu.name)
         out_dir.mkdir(parents=True, exist_ok=True)
         shutil.move(str(fmu), target)

@@ -8,9 +8,8 @@ Fig. 2 row logic (``sarins_fmu/core/online.h``), which the library's
 """
 
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import INPUT, NO_TAG, OUTPUT, PARAMETER, declare
+from fmus.slave_support import declare, default_experiment, INPUT, NO_TAG, OUTPUT, PARAMETER
 from sarins_fmu.identify.axial import APPLY_LATENCY
 from sarins_fmu.kalman import StopFilterSettings
 from sarins_fmu.units import DAY, DEG_TO_RAD, DPH_TO_RPS
@@ -55,7 +54,7 @@ class DriftModelUpdater(Fmi2Slave):
         "updated the model). Held between steps: the model and its RLS information, the filter, the stop "
         "timer, the last speeds (all in the FMU state). The first doStep fixes the step: the filter's interval "
         "is the communication step (a step other than 1 s rebuilds the filter and the initial model then).")
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=6 * 3600.0, step_size=1.0)
+    default_experiment = default_experiment(1.0)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)

@@ -8,9 +8,8 @@ library's compensators call in process).  The trained model travels in resources
 """
 
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import INPUT, NO_TAG, OUTPUT, PARAMETER, declare
+from fmus.slave_support import declare, default_experiment, INPUT, NO_TAG, OUTPUT, PARAMETER
 from sarins_fmu.identify import compensators
 from sarins_fmu.thermal import SENSORS
 
@@ -36,7 +35,7 @@ class IMUCompensator(Fmi2Slave):
         "The model is read at the end of initialisation from model_file or resources/compensator.bin; a "
         "missing or bad file is an error there naming the file and the reason. Held between steps (and in "
         "the FMU state): the recurrent state and the last time tag.")
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=3600.0, step_size=0.05)
+    default_experiment = default_experiment(0.05)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)

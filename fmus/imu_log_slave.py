@@ -3,9 +3,8 @@
 import math
 
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import OUTPUT, PARAMETER, ParameterError, check_step, declare, discard_on_error, guarded
+from fmus.slave_support import check_step, declare, default_experiment, discard_on_error, guarded, OUTPUT, PARAMETER, ParameterError
 from sarins_fmu.imu_log import LogError, read_log
 from sarins_fmu.thermal import SENSORS
 
@@ -23,7 +22,7 @@ class IMULog(Fmi2Slave):
         "lat_deg, lon_deg and height_m of the log are outputs, to set the INS start from. A missing or bad "
         "log fails fmi2ExitInitializationMode naming the line; stepping past the end of the log fails "
         "the step. Held between steps: the sample index.")
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=3600.0, step_size=1.0)
+    default_experiment = default_experiment(1.0)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)

@@ -9,10 +9,9 @@ motion set tagged with the start time, the first step at the start time.
 """
 
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus.native_fmu import ArrayVariable
-from fmus.slave_support import INPUT, NO_TAG, OUTPUT, PARAMETER, declare
+from fmus.slave_support import declare, default_experiment, INPUT, NO_TAG, OUTPUT, PARAMETER
 from sarins_fmu import imu, imu_params
 from sarins_fmu.thermal import SENSORS
 from sarins_fmu.site import SITE_LAT
@@ -50,7 +49,7 @@ class IMUThermal(Fmi2Slave):
         "gimbal chain z, x, y, then the turntable's), and the inertial angular rate of the local-level ENU frame "
         "at the vehicle (omega_ie + omega_en) and the specific force resolved in it, both held over the step. "
         "IMU parameters: 'preset' chooses the model; any coefficient parameter that is set overrides it.")
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
+    default_experiment = default_experiment(1.0)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
     # FMI 3.0 only (fmus/native_fmu.py): every sub-interval of the last step, n_sub elements each
     fmi3_arrays = tuple(
         ArrayVariable(f"{q}_{a}_sub", "n_sub", "output", f"{what} {a} of each of the n_sub sub-intervals of the "

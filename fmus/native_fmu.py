@@ -554,4 +554,7 @@ def build_native_fmus3(out_dir: Path | str = DEFAULT_OUT3, names=None) -> list[P
     unknown = [n for n in names if n not in NATIVE]
     if unknown:
         raise ValueError(f"no native FMI 3.0 variant of {unknown}; native FMUs: {', '.join(NATIVE)}")
+    from sarins_fmu.files import refuse_links
+
+    refuse_links([Path(out_dir) / f"{n}.fmu" for n in names], "FMU")
     return [build_native_fmu(n, SLAVES[n], Path(out_dir), fmi=3) for n in names]

@@ -7,9 +7,8 @@ the hot and cold models as binary model files in resources; ``fmus/c/rbf_identif
 """
 
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import INPUT, OUTPUT, PARAMETER, declare
+from fmus.slave_support import declare, default_experiment, INPUT, OUTPUT, PARAMETER
 from sarins_fmu.identify.axial import APPLY_LATENCY
 
 
@@ -30,7 +29,7 @@ class RBFIdentifier(Fmi2Slave):
         "written by 'sarins identify train --out model.bin' (or DriftIdentifier.export_binary). The model is "
         "read at the end of initialisation; a missing or bad file is an error there naming the file and the "
         "reason. Held between steps: the identified drift.")
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=88 * 3600.0, step_size=1.0)
+    default_experiment = default_experiment(1.0)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)

@@ -242,3 +242,16 @@ class TaggedHistory:
         raise ValueError(f"no {self.what} tagged {self.tag_name}={tag:.9g} s to pair with (kept: {kept}; the "
                          f"{self.what} must arrive no later than, and at most {self.size - 1} steps before, the "
                          "input it is paired with)")
+
+
+#: communication steps of an FMU's DefaultExperiment: a host that runs it with its defaults takes the
+#: declared stepSize (FMPy doubles the step while the run would need more than 1,000 of them, and a
+#: doubled step is one the FMUs may refuse), so stopTime = HOST_DEFAULT_STEPS * stepSize
+HOST_DEFAULT_STEPS = 1000
+
+
+def default_experiment(step_size: float):
+    """pythonfmu's DefaultExperiment from 0 s over :data:`HOST_DEFAULT_STEPS` steps of ``step_size`` (s)."""
+    from pythonfmu.default_experiment import DefaultExperiment
+
+    return DefaultExperiment(start_time=0.0, stop_time=HOST_DEFAULT_STEPS * step_size, step_size=step_size)

@@ -12,10 +12,10 @@ import math
 
 import numpy as np
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 
 from fmus.native_fmu import ArrayVariable
 from fmus.slave_support import (INPUT, OUTPUT, PARAMETER, ParameterError, check_finite, check_latitude, check_range,
+                                default_experiment,
                                 declare, discard_on_error, guarded, real_slots)
 from sarins_fmu import ins
 from sarins_fmu.core import ins as core_ins
@@ -50,7 +50,7 @@ class StrapdownINS(Fmi2Slave):
         "set that arrives after its apply_from was passed is an error. "
         "The step must stay constant. All outputs are state outputs (no direct feedthrough). Held between "
         "steps: attitude, velocity, position, filter state, estimates, the compensation in force.")
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
+    default_experiment = default_experiment(1.0)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
     # FMI 3.0 only (fmus/native_fmu.py): the IMU's sub-interval arrays, read when sub_inputs = 1
     fmi3_arrays = tuple(
         ArrayVariable(f"{q}_{a}_sub", "n_sub", "input", f"{what} {a} of each of the n_sub sub-intervals of the "

@@ -6,9 +6,8 @@ contract.  ``fmus/native_fmu.py`` writes the model description and the C variabl
 """
 
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import OUTPUT, PARAMETER, declare
+from fmus.slave_support import declare, default_experiment, OUTPUT, PARAMETER
 from sarins_fmu import turntable
 from sarins_fmu.units import DEG_TO_RAD
 
@@ -31,7 +30,7 @@ class Turntable(Fmi2Slave):
         "exactly from the set tagged t: under Jacobi it receives that set, under Gauss-Seidel (turntable "
         "stepped first) it receives the set tagged t + h and uses the one it kept from its previous step. "
         "Angles are not wrapped. Nothing but the schedule and the time is held between steps.")
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=16 * 3600.0, step_size=1.0)
+    default_experiment = default_experiment(1.0)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)

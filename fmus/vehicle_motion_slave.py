@@ -7,9 +7,8 @@ contract.  ``fmus/native_fmu.py`` writes the model description and the C variabl
 """
 
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import OUTPUT, PARAMETER, declare
+from fmus.slave_support import OUTPUT, PARAMETER, declare, default_experiment
 from sarins_fmu import vehicle
 from sarins_fmu.site import SITE_LAT_DEG
 from sarins_fmu.units import DEG_TO_RAD
@@ -33,7 +32,7 @@ class VehicleMotion(Fmi2Slave):
         "Simpson mean velocity); position, velocity and speed at base_motion_time and stopped (1 at rest). After "
         "the last leg the vehicle stays parked. All outputs are state outputs (no direct feedthrough). Nothing "
         "but the trajectory's state is held (FMU state: get, set and serialize).")
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=7200.0, step_size=1.0)
+    default_experiment = default_experiment(1.0)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)

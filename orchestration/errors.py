@@ -151,6 +151,12 @@ class FMUCallError(OrchestrationError, RuntimeError):
         super().__init__(text)
 
 
+
+class FMUInstantiateError(FMUCallError, ValueError):
+    """The FMU refused to be instantiated (``fmi2Instantiate`` / ``fmi3InstantiateCoSimulation``
+    returned NULL): its files do not fit together (e.g. a model description whose GUID is not the
+    binary's) or its resources are missing; a fault of the FMU file, not of the run."""
+
 class FMUFatalError(FMUCallError):
     """An FMU returned ``fmi2Fatal``: its instance must not be called again."""
 

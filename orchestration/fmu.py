@@ -23,7 +23,8 @@ from pathlib import Path
 
 from . import fmilog
 from .archive import extract_archive
-from .errors import FMUCallError, FMUFatalError, SystemFileError, status_label
+from .binaries import BinaryError, check_shared_library
+from .errors import FMUCallError, FMUFatalError, FMUInstantiateError, SystemFileError, status_label
 from .fmitypes import is_fmi3, normalize_fmi3
 
 __all__ = ["read_description", "FMUInstance", "UnpackedFMU", "FMI_FATAL"]
@@ -31,6 +32,8 @@ __all__ = ["read_description", "FMUInstance", "UnpackedFMU", "FMI_FATAL"]
 FMI_ERROR = 3
 FMI_FATAL = 4
 LOG_MESSAGES_KEPT = 50
+MAX_DESCRIPTION_BYTES = 64 * 2**20  # modelDescription.xml read at most (the largest of ours: < 1 MiB)
+MAX_VARIABLES = 100_000  # variables in one model description (ours: < 1,000); parsing 10**6 takes minutes
 
 
 def read_description(path: Path, component: str | None = None, shown: Path | None = None, *,
@@ -68,6 +71,10 @@ def read_description(path: Path, component: str | None = None, shown: Path | Non
     if not path.exists():
         raise SystemFileError("FMU file not found", file=name, component=component)
     try:
+        _check_description_budget(path, name, component)
+    except (zipfile.BadZipFile, OSError) as error:
+        raise SystemFileError(f"not a readable FMU: {error}", file=name, component=component) from None
+    try:
         description = read_model_description(str(path), validate=False)
     except (zipfile.BadZipFile, KeyError, OSError) as error:
         raise SystemFileError(f"not a readable FMU: {error}", file=name,
@@ -91,7 +98,64 @@ def read_description(path: Path, component: str | None = None, shown: Path | Non
                                   f"which the master does not drive): {', '.join(clocks[:5])}",
                                   file=name, component=component)
         normalize_fmi3(description)
+    _check_value_references(description, name, component)
     return description
+
+
+def _check_description_budget(path: Path, name: str, component: str | None) -> None:
+    """Refuse a model description over :data:`MAX_DESCRIPTION_BYTES` or with more than
+    :data:`MAX_VARIABLES` variables before it is parsed (counted as ``valueReference`` attributes)."""
+    if path.is_dir():
+        file = path / "modelDescription.xml"
+        if not file.is_file():
+            return  # FMPy's own message
+        size = file.stat().st_size
+        read = file.read_bytes
+    else:
+        with zipfile.ZipFile(path) as archive:
+            try:
+                info = archive.getinfo("modelDescription.xml")
+            except KeyError:
+                return
+        size = info.file_size
+
+        def read():
+            with zipfile.ZipFile(path) as archive, archive.open("modelDescription.xml") as fh:
+                return fh.read(MAX_DESCRIPTION_BYTES + 1)
+    if size > MAX_DESCRIPTION_BYTES:
+        raise SystemFileError(f"modelDescription.xml has {size} bytes, more than the limit of "
+                              f"{MAX_DESCRIPTION_BYTES} (MAX_DESCRIPTION_BYTES); refused", file=name, component=component)
+    count = read().count(b"valueReference")
+    if count > MAX_VARIABLES:
+        raise SystemFileError(f"modelDescription.xml declares {count} variables, more than the limit of "
+                              f"{MAX_VARIABLES} (MAX_VARIABLES); refused", file=name, component=component)
+
+
+def _check_value_references(description, name: str, component: str | None) -> None:
+    """Refuse value references the standard does not allow: FMI 3.0, any shared one; FMI 2.0, an alias
+    set (same type, same value reference) with more than one parameter or input (FMI 2.0.x 2.2.7)."""
+    fmi3 = is_fmi3(description)
+    groups: dict = {}
+    for v in description.modelVariables:
+        key = v.valueReference if fmi3 else (_base_type(v.type), v.valueReference)
+        groups.setdefault(key, []).append(v)
+    for key, members in groups.items():
+        if len(members) < 2:
+            continue
+        names = ", ".join(f"'{v.name}'" for v in members[:4])
+        vr = key if fmi3 else key[1]
+        if fmi3:
+            raise SystemFileError(f"valueReference {vr} is used by {len(members)} variables ({names}); FMI 3.0 "
+                                  "needs one per variable", file=name, component=component)
+        settable = [v for v in members if v.causality in ("parameter", "input") and v.variability != "constant"]
+        if len(settable) > 1:
+            raise SystemFileError(f"valueReference {vr} is shared by {len(settable)} {key[0]} parameters or inputs "
+                                  f"({names}); an FMI 2.0 alias set may hold one", file=name, component=component)
+
+
+def _base_type(kind: str) -> str:
+    """FMI 2.0 base type of a variable (an Enumeration is an Integer)."""
+    return "Integer" if kind == "Enumeration" else kind
 
 
 class UnpackedFMU:
@@ -125,6 +189,29 @@ class UnpackedFMU:
             raise
         self.variables = {v.name: v for v in self.description.modelVariables}
         self.fmi3 = is_fmi3(self.description)
+        try:
+            self._check_binary(component)
+        except BaseException:
+            self.remove()
+            raise
+
+    def _check_binary(self, component: str) -> None:
+        """Refuse this platform's shared library when loading it would crash the process
+        (:func:`orchestration.binaries.check_shared_library`); a missing one is left to FMPy's message."""
+        from fmpy import platform, platform_tuple, sharedLibraryExtension
+
+        identifier = self.description.coSimulation.modelIdentifier if self.description.coSimulation else None
+        if not identifier:
+            return
+        folder = platform_tuple if self.fmi3 else platform
+        library = Path(self.unzipdir) / "binaries" / folder / f"{identifier}{sharedLibraryExtension}"
+        if not library.is_file():
+            return
+        try:
+            check_shared_library(library)
+        except BinaryError as exc:
+            raise SystemFileError(f"binaries/{folder}/{library.name} cannot be loaded: {exc}",
+                                  file=str(self.path), component=component) from None
 
     def remove(self) -> None:
         """Delete the extracted folder (also done when the object is garbage collected)."""
@@ -190,7 +277,10 @@ class FMUInstance:
             else:
                 self.slave.instantiate(callbacks=fmilog.callbacks(), loggingOn=self._logging_on)
         except Exception:  # fmpy raises bare Exception when fmi2Instantiate returns NULL
-            self._raise("fmi3InstantiateCoSimulation" if self.fmi3 else "fmi2Instantiate", FMI_ERROR)
+            self._state = "error"
+            raise FMUInstantiateError(self.name, "fmi3InstantiateCoSimulation" if self.fmi3 else "fmi2Instantiate",
+                                      FMI_ERROR, self.time, list(self.messages),
+                                      fmu_file=str(self.unpacked.path)) from None
         self._state = "instantiated"
         if self._logging_on:
             self._restrict_logging()

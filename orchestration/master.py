@@ -46,7 +46,6 @@ lag is reported in ``result.meta['realtime']``.
 from __future__ import annotations
 
 import math
-import os
 import signal
 import time
 from collections.abc import Callable, Sequence
@@ -84,27 +83,6 @@ _SETTABLE_CAUSALITIES = ("parameter", "structuralParameter", "input")
 MAX_RECORD_BYTES = 2**31  # recorder storage preallocated for one run (rows x values x 8 bytes)
 C_BLOCK_STEPS = 512  # steps per call into the compiled loop (a signal is acted on between calls)
 LOOPS = ("auto", "c", "python")
-TEST_SIGNAL_ENV = "ORCHESTRATION_TEST_SIGNAL_AFTER"  # tests only: "N:SIGTERM" raises it after step N
-
-
-def _test_signal_hook(callback: StepCallback | None) -> StepCallback | None:
-    """Tests only: with ``ORCHESTRATION_TEST_SIGNAL_AFTER=N:SIGNAME`` the process sends
-    itself that signal after the Nth communication step (a deterministic Ctrl-C)."""
-    spec = os.environ.get(TEST_SIGNAL_ENV)
-    if not spec:
-        return callback
-    count, _, name = spec.partition(":")
-    after, signum, done = int(count), signal.Signals[name or "SIGINT"], [0]
-
-    def hook(time: float, master: Master):
-        done[0] += 1
-        if done[0] == after:
-            os.kill(os.getpid(), signum)
-        return None if callback is None else callback(time, master)
-
-    return hook
-
-
 def _check_scheme(scheme: str) -> str:
     normalized = scheme.lower().replace("_", "-")
     if normalized not in SCHEMES:
@@ -414,7 +392,6 @@ class Master:
                                 f"more than the limit of {MAX_RECORD_BYTES} bytes (MAX_RECORD_BYTES); "
                                 "record fewer rows or variables",
                                 names=("stop_time", "step_size", "output_every"))
-        callback = _test_signal_hook(callback)
         meta = self._meta(start, segments, total, output_every, realtime)
         meta["step_source"] = step_source
         pacer = None if realtime is None else RealTimePacer(realtime, start, capacity=total)

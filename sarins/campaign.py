@@ -22,9 +22,7 @@ Nothing here knows what the tasks compute.
 from __future__ import annotations
 
 import concurrent.futures as cf
-import os
 import re
-import signal
 import sys
 import time
 from dataclasses import dataclass, field
@@ -37,9 +35,6 @@ from .results import (Field, OutputBusyError, StoredResultError, atomic_output, 
 from .workers import DependencyError, SchedulerError, make_pool  # noqa: F401
 
 _ID = re.compile(r"^[A-Za-z0-9_.-]+$")
-# test hook: once a result is stored and the folder holds at least this many results, the campaign process
-# SIGKILLs itself (its local workers die with it): a kill at a known point, not at a time that depends on load
-KILL_AFTER_ENV = "SARINS_TEST_KILL_AFTER"
 
 
 @dataclass(frozen=True)
@@ -118,6 +113,10 @@ def run_campaign(tasks, out_dir, *, workers: int | None = None, scheduler: str |
         todo = []
         for task in tasks:
             path = result_path(out_dir, task.id)
+            if path.is_symlink() or (path.exists() and not path.is_file()):
+                kind = "a symbolic link" if path.is_symlink() else "a folder" if path.is_dir() else "not a regular file"
+                raise StoredResultError(f"{path}: the stored result of task {task.id} is {kind}, which the campaign "
+                                        "neither reads nor replaces; remove it or choose another output folder")
             try:
                 results[task.id] = load_valid(path, records[task.id], task.finite, task.schema)
             except FileNotFoundError:
@@ -135,6 +134,7 @@ def run_campaign(tasks, out_dir, *, workers: int | None = None, scheduler: str |
                     except Exception as exc:
                         raise TaskFailed(f"task {task.id} failed: {type(exc).__name__}: {exc}") from exc
                     results[task.id] = _store(out_dir, task, result, records[task.id])
+                    del result  # the stored copy stands for it: not two of a large result while the next runs
                     bar.update(1)
             elif todo:
                 _run_parallel(todo, out_dir, workers, scheduler, bar, records, results)
@@ -160,21 +160,7 @@ def _store(out_dir, task, result, record) -> dict:
     path = result_path(out_dir, task.id)
     save_result(path, result, record)
     stored = load_result(path)  # what a resume would see
-    _kill_hook(out_dir)
     return stored
-
-
-def _kill_hook(out_dir) -> None:
-    """SIGKILL this process if ``SARINS_TEST_KILL_AFTER`` = N is set and ``out_dir`` holds >= N results."""
-    text = os.environ.get(KILL_AFTER_ENV)
-    if not text:
-        return
-    try:
-        limit = int(text)
-    except ValueError:
-        raise ValueError(f"{KILL_AFTER_ENV} must be a whole number of results, got {text!r}") from None
-    if len(list(Path(out_dir).glob("*.npz"))) >= limit:
-        os.kill(os.getpid(), signal.SIGKILL)
 
 
 def _run_parallel(todo, out_dir, workers, scheduler, bar, records, results):

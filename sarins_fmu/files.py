@@ -110,6 +110,35 @@ def check_zip_budget(path, limit: int, what: str, max_members: int = 1000) -> No
     if declared > limit:
         raise BudgetError(path, f"its members expand to {format_bytes(declared)}, more than the limit of "
                           f"{format_bytes(limit)} ({limit} bytes) for {what}; refused")
+    for member in members:
+        if member.filename.endswith(".npy"):
+            _check_npy_header(path, member)
+
+
+def _check_npy_header(path, member: zipfile.ZipInfo) -> None:
+    """Refuse an ``.npy`` member whose header claims more data than the member holds: numpy would
+    allocate what the header says (7e9 float64 = 56 GB) before it finds the data missing.  Only the
+    header is decompressed."""
+    import numpy as np
+
+    with zipfile.ZipFile(path) as archive, archive.open(member) as fh:
+        try:
+            version = np.lib.format.read_magic(fh)
+            reader = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
+            if version not in reader:
+                raise ValueError(f"unknown .npy format version {version}")
+            shape, _, dtype = reader[version](fh, max_header_size=10000)
+            header = fh.tell()
+        except (ValueError, EOFError, SyntaxError) as exc:
+            raise BudgetError(path, f"member {member.filename}: not a readable .npy header ({exc})") from None
+    count = 1
+    for n in shape:
+        count *= int(n)
+    claimed = count * dtype.itemsize
+    if dtype.hasobject or claimed > member.file_size - header:
+        raise BudgetError(path, f"member {member.filename}: its header claims shape {tuple(shape)} of {dtype} "
+                          f"({format_bytes(claimed)}) but the member holds {format_bytes(member.file_size - header)}; "
+                          "refused")
 
 
 def check_output_path(path, option: str) -> Path:
@@ -129,11 +158,14 @@ def check_output_path(path, option: str) -> Path:
     Raises
     ------
     OutputPathError
-        A FIFO, socket, device or folder at ``path`` (writing there would
-        block, or write somewhere else than a file), or a parent that is not
-        an existing folder.
+        A FIFO, socket, device, folder or symbolic link at ``path`` (writing
+        there would block, or write somewhere else than the named file), or a
+        parent that is not an existing folder.
     """
     path = Path(path)
+    if path.is_symlink():  # the write would land wherever the link points, perhaps outside the folder
+        raise OutputPathError(f"{option} {path}: is a symbolic link (to {os.readlink(path)}); give a regular file "
+                              "or a new path")
     try:
         mode = os.stat(path).st_mode
     except FileNotFoundError:
@@ -149,6 +181,16 @@ def check_output_path(path, option: str) -> Path:
                 if stat.S_ISSOCK(mode) else "not a regular file")
         raise OutputPathError(f"{option} {path}: is {kind}; give a regular file or a new path")
     return path
+
+
+def refuse_links(paths, what: str) -> None:
+    """OutputPathError when one of ``paths`` (files about to be written) is a symbolic link: writing
+    it would write wherever the link points, perhaps outside the output folder.  Checked before
+    anything is written."""
+    for path in map(Path, paths):
+        if path.is_symlink():
+            raise OutputPathError(f"{what} {path}: is a symbolic link (to {os.readlink(path)}); the file would be "
+                                  "written where it points. Remove the link or choose another folder")
 
 
 @contextlib.contextmanager

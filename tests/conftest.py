@@ -1,8 +1,46 @@
 import math
+import os
+import shutil
+import tempfile
+from pathlib import Path
 
 import pytest
 
-from sarins_fmu.site import SITE_LAT_DEG
+# Hermetic: the tests (and every process they start, which inherits this environment) write nothing
+# outside temporary folders.  HOME, the XDG folders and the FMUs' library cache point into one folder
+# made for this session and removed at its end, before anything below can look them up.
+HERMETIC_ROOT = Path(tempfile.mkdtemp(prefix="sarins-tests-"))
+HERMETIC_ENV = {
+    "HOME": HERMETIC_ROOT / "home",
+    "XDG_CACHE_HOME": HERMETIC_ROOT / "cache",
+    "XDG_CONFIG_HOME": HERMETIC_ROOT / "config",
+    "XDG_DATA_HOME": HERMETIC_ROOT / "data",
+    "SARINS_FMU_CACHE": HERMETIC_ROOT / "cache" / "sarins-fmu",
+    "MPLCONFIGDIR": HERMETIC_ROOT / "config" / "matplotlib",
+}
+for _name, _folder in HERMETIC_ENV.items():
+    _folder.mkdir(parents=True, exist_ok=True)
+    os.environ[_name] = str(_folder)
+
+from sarins_fmu.site import SITE_LAT_DEG  # noqa: E402 (after the environment is set)
+
+
+def pytest_unconfigure(config):
+    shutil.rmtree(HERMETIC_ROOT, ignore_errors=True)
+
+
+def progress_line(config, text: str) -> None:
+    """One line on the terminal now, even while pytest captures output (e.g. 'building the FMUs')."""
+    capman = config.pluginmanager.getplugin("capturemanager")
+    reporter = config.pluginmanager.getplugin("terminalreporter")
+    if reporter is None:
+        return
+    if capman is None:
+        reporter.write_line(text)
+        return
+    with capman.global_and_fixture_disabled():
+        reporter.ensure_newline()
+        reporter.write_line(text)
 
 LAT_DEG = SITE_LAT_DEG  # seed 000's site
 
@@ -13,16 +51,53 @@ def lat():
 
 
 @pytest.fixture(scope="session")
-def fmu_dir(tmp_path_factory):
+def fmu_dir(tmp_path_factory, pytestconfig):
     """Every FMU built once per test session, with the project's systems
-    (``<name>.ssp``) beside them.  Tests write only new files here."""
-    from fmus.build import build_fmus
+    (``<name>.ssp``) beside them.  Tests write only new files here.  Linux x86-64 binaries only,
+    but for the Turntable (every platform the build ships, when the cross compilers are there):
+    the other platforms' binaries of every FMU are checked by the slow tests, which build their own."""
+    from fmus.build import DEFAULT_NAMES, build_fmus
     from sarins.systems import write_systems
 
     out = tmp_path_factory.mktemp("fmus")
-    build_fmus(out)
+    progress_line(pytestconfig, f"building the session's FMUs in {out} ...")
+    build_fmus(out, ["Turntable"])
+    build_fmus(out, [n for n in DEFAULT_NAMES if n != "Turntable"], cross=False)
     write_systems(out)
+    progress_line(pytestconfig, "built: " + ", ".join(sorted(p.stem for p in out.glob("*.fmu"))))
     return out
+
+
+@pytest.fixture(scope="session")
+def fmu3_dir(tmp_path_factory, pytestconfig):
+    """The FMI 3.0 Turntable, IMUThermal and StrapdownINS (linux x86-64 only: quick), built once per
+    session; a skip without a C compiler.  Tests write only new files here."""
+    from fmus import SLAVES
+    from fmus.native_fmu import build_native_fmu
+
+    if shutil.which("gcc") is None and shutil.which("cc") is None:
+        pytest.skip("no C compiler (gcc/cc)")
+    out = tmp_path_factory.mktemp("fmus3")
+    progress_line(pytestconfig, f"building the session's FMI 3.0 FMUs in {out} ...")
+    for name in ("Turntable", "IMUThermal", "StrapdownINS"):
+        build_native_fmu(name, SLAVES[name], out, fmi=3, win64=False, aarch64=False)
+    return out
+
+
+@pytest.fixture(scope="session")
+def wine_env(tmp_path_factory):
+    """Environment for running win64 programs under wine: one prefix per session (its first start
+    costs about 20 s), in the session's temporary folder; a skip when mingw-w64 or wine is missing."""
+    import subprocess
+
+    from fmus.native_fmu import MINGW
+
+    missing = [t for t in (MINGW, "wine") if shutil.which(t) is None]
+    if missing:
+        pytest.skip(f"{', '.join(missing)} not installed (Debian: apt-get install gcc-mingw-w64-x86-64 wine64)")
+    env = dict(os.environ, WINEPREFIX=str(tmp_path_factory.mktemp("wineprefix")), WINEDEBUG="-all")
+    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
+    return env
 
 
 # The two real ADIS16405 static records (shared/data/adis16405, outside the repo: their licence keeps them

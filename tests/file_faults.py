@@ -112,3 +112,39 @@ def good_log(path: Path, samples: int = 7200, step: float = 1.0) -> Path:
     dv = np.zeros((samples, 3))
     dv[:, 2] = 9.79 * step
     return write_log(path, time, dtheta, dv, lat_deg=28.2)
+
+
+def rewrite_fmu(source: Path, target: Path, description=None, library=None) -> Path:
+    """A copy of the FMU ``source`` at ``target`` with its modelDescription.xml text passed through
+    ``description`` and its binaries/linux64 library bytes through ``library`` (either may be None)."""
+    import zipfile
+
+    with zipfile.ZipFile(source) as zin, zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as zout:
+        for item in zin.infolist():
+            data = zin.read(item.filename)
+            if item.filename == "modelDescription.xml" and description is not None:
+                data = description(data.decode()).encode()
+            elif item.filename.startswith("binaries/linux64/") and library is not None:
+                data = library(data)
+            zout.writestr(item, data)
+    return target
+
+
+def many_variables(count: int):
+    """A ``description`` rewrite adding ``count`` compact local Real variables (a description bomb)."""
+    def rewrite(text: str) -> str:
+        at = text.index("<ModelVariables>") + len("<ModelVariables>")
+        extra = "".join(f'<ScalarVariable name="b{k}" valueReference="{10**7 + k}"><Real/></ScalarVariable>'
+                        for k in range(count))
+        return text[:at] + extra + text[at:]
+    return rewrite
+
+
+def same_value_reference(first: str, second: str):
+    """A ``description`` rewrite giving variable ``second`` the value reference of ``first``."""
+    import re
+
+    def rewrite(text: str) -> str:
+        vr = re.search(rf'name="{first}"[^>]*valueReference="(\d+)"', text).group(1)
+        return re.sub(rf'(name="{second}"[^>]*valueReference=")\d+(")', rf"\g<1>{vr}\g<2>", text, count=1)
+    return rewrite

@@ -4,7 +4,6 @@ GNSS-outage error growth against the filter's own covariance.
 The GNSS errors here are white (the 15-state filter does not model Gauss-Markov receiver errors;
 with the correlated presets its position NEES is far above 3, docs/aided-navigation.md)."""
 
-import numpy as np
 import pytest
 
 from sarins_fmu import aided, gnss

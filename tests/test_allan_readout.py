@@ -39,7 +39,7 @@ def test_real_units_random_walk_within_5_percent_of_the_1_s_reading(real):
         n = r["random_walk"]
         assert n.tau == 1.0 and n.value == pytest.approx(theirs[0], rel=0.05), (unit, j)
         assert n.low <= theirs[0] <= n.high
-        assert 2.0 < n.value / DPSH_TO_RPSS < 2.8  # deg/sqrt(h): the units' 2.2 .. 2.6 (FACTS.md)
+        assert 2.0 < n.value / DPSH_TO_RPSS < 2.8  # deg/sqrt(h): the units' 2.2 .. 2.6 (data/adis16405 README)
 
 
 def test_real_units_bias_instability_has_a_floor_inside_its_interval(real):

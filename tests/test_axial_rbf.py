@@ -15,7 +15,7 @@ import pytest
 from fmpy.validation import validate_fmu
 
 from fmu_driver import Slave
-from sarins.campaign import KILL_AFTER_ENV, load_result
+from sarins.campaign import load_result
 from sarins_fmu.earth import RATE
 from sarins_fmu.experiments import run_static
 from sarins_fmu.experiments import axial_rbf as s0
@@ -221,16 +221,17 @@ def test_killed_campaign_resumes_without_redoing_finished_experiments(tmp_path):
                   thermal_scales=())
     script = textwrap.dedent(f"""
         import sys
-        sys.path[:0] = [{str(ROOT)!r}]
+        sys.path[:0] = [{str(ROOT)!r}, {str(ROOT / "tests")!r}]
         from sarins.axial_rbf.campaign import execute
         if __name__ == "__main__":
+            from hooks import kill_after_results
+            kill_after_results(2)
             execute(out={str(out)!r}, workers=2, progress=False, **{kwargs!r})
     """)
     script_path = tmp_path / "campaign.py"
     script_path.write_text(script)
-    # the runner's test hook SIGKILLs the campaign (its pool dies with it) right after the 2nd stored result
-    proc = subprocess.Popen([sys.executable, str(script_path)], start_new_session=True,
-                            env={**os.environ, KILL_AFTER_ENV: "2"})
+    # a test hook SIGKILLs the campaign (its pool dies with it) right after the 2nd stored result
+    proc = subprocess.Popen([sys.executable, str(script_path)], start_new_session=True)
     runs = out / "runs"
     try:
         assert proc.wait(timeout=1800) == -signal.SIGKILL  # the timeout only guards a hang

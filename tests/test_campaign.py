@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from campaign_tasks import fail, square
-from sarins.campaign import KILL_AFTER_ENV, Task, load_result, run_campaign, save_result
+from sarins.campaign import Task, load_result, run_campaign, save_result
 
 HERE = Path(__file__).resolve().parent
 
@@ -48,21 +48,22 @@ def test_killed_campaign_resumes_without_losing_or_redoing_work(tmp_path):
     """Kill the process running a campaign (and its worker pool) half-way,
     rerun the same command: finished runs are kept and not redone, the rest
     complete, and the results equal an uninterrupted campaign's.  The kill
-    comes from the runner's test hook right after the third stored result
-    (``SARINS_TEST_KILL_AFTER``), so where it lands does not depend on load."""
+    comes from a test hook (``tests/hooks.py``) right after the third stored
+    result, so where it lands does not depend on load."""
     markers, out = tmp_path / "markers", tmp_path / "out"
     markers.mkdir()
     script = textwrap.dedent(f"""
         import sys
         sys.path[:0] = [{str(HERE)!r}, {str(HERE.parent)!r}]
         from campaign_tasks import square
+        from hooks import kill_after_results
         from sarins.campaign import Task, run_campaign
+        kill_after_results(3)
         tasks = [Task(f"sq{{x}}", square, {{"x": x, "marker_dir": {str(markers)!r}, "delay": 0.0}},
                       volatile=("marker_dir", "delay")) for x in range(12)]
         run_campaign(tasks, {str(out)!r}, workers=2, progress=False)
     """)
-    proc = subprocess.Popen([sys.executable, "-c", script], start_new_session=True,
-                            env={**os.environ, KILL_AFTER_ENV: "3"})
+    proc = subprocess.Popen([sys.executable, "-c", script], start_new_session=True)
     try:
         assert proc.wait(timeout=600) == -signal.SIGKILL  # the hook fired (the timeout only guards a hang)
     finally:

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sarins.campaign import KILL_AFTER_ENV
+from hooks import command as hooked
 
 pytest.importorskip("distributed", reason="Dask distributed is not installed (pip install 'sarins-fmu[distributed]')")
 
@@ -64,10 +64,10 @@ def cluster():
             _stop(proc)
 
 
-def _campaign(args, out, scheduler=None, workers=None, env=None):
-    cmd = [sys.executable, "-m", "sarins", "campaign", *args, "--out", str(out), "--no-progress"]
+def _campaign(args, out, scheduler=None, workers=None, hooks=()):
+    cmd = [*hooked(*hooks), "-m", "sarins", "campaign", *args, "--out", str(out), "--no-progress"]
     cmd += ["--scheduler", scheduler] if scheduler else ["--workers", str(workers or 1)]
-    return subprocess.Popen(cmd, env={**ENV, **(env or {})}, cwd=str(ROOT), start_new_session=True, stdout=subprocess.PIPE,
+    return subprocess.Popen(cmd, env=ENV, cwd=str(ROOT), start_new_session=True, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
 
 
@@ -97,8 +97,8 @@ def test_online_rls_through_dask_killed_and_resumed_equals_a_local_run(cluster, 
     first stored results, resumed; same results (bit for bit) and report
     tables as a local run; the Dask executor shuts down cleanly."""
     out, ref = tmp_path / "dask", tmp_path / "local"
-    # the runner's test hook SIGKILLs the campaign right after its 3rd stored result
-    proc = _campaign(["online-rls", "--profile", "quick"], out, scheduler=cluster, env={KILL_AFTER_ENV: "3"})
+    # a test hook (tests/hooks.py) SIGKILLs the campaign right after its 3rd stored result
+    proc = _campaign(["online-rls", "--profile", "quick"], out, scheduler=cluster, hooks=("--kill-after", "3"))
     try:
         _, stderr = proc.communicate(timeout=1800)  # the timeout only guards a hang
         assert proc.returncode == -signal.SIGKILL, stderr

@@ -18,7 +18,6 @@ bit-identical, the largest relative difference and the largest ulp distance.
 
 import ast
 import math
-import os
 import re
 import shutil
 import struct
@@ -67,12 +66,10 @@ def _run(cmd, **kw):
 
 
 @pytest.fixture(scope="session")
-def wine_env(tmp_path_factory):
-    """Environment with a fresh wine prefix, created once per session (~10-20 s)."""
+def win64_tools(wine_env):
+    """The session's wine environment (tests/conftest.py), once gcc is known to be there too."""
     _need("gcc", MINGW, "wine")
-    env = dict(os.environ, WINEPREFIX=str(tmp_path_factory.mktemp("wineprefix")), WINEDEBUG="-all")
-    _run(["wine", "wineboot", "--init"], env=env)
-    return env
+    return wine_env
 
 
 def _parse(stdout):
@@ -111,7 +108,7 @@ def _compare(lin, win):
 
 
 @pytest.mark.slow  # 20 s with the wine prefix
-def test_win64_core_matches_linux64(tmp_path, wine_env):
+def test_win64_core_matches_linux64(tmp_path, win64_tools):
     _need("gcc", MINGW, "wine")
     lin_exe, win_exe = tmp_path / "core_driver", tmp_path / "core_driver.exe"
     common = [*FLAGS, f"-I{CORE}", str(DRIVER), *SOURCES]
@@ -119,7 +116,7 @@ def test_win64_core_matches_linux64(tmp_path, wine_env):
     _run([MINGW, *common, "-static", "-o", str(win_exe)])
 
     lin = _parse(_run([str(lin_exe)]).stdout)
-    win = _parse(_run(["wine", str(win_exe)], env=wine_env).stdout)
+    win = _parse(_run(["wine", str(win_exe)], env=win64_tools).stdout)
     assert list(lin) == GROUPS
     assert list(win) == GROUPS
     assert {g: len(v) for g, v in win.items()} == {g: len(v) for g, v in lin.items()}

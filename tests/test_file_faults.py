@@ -23,8 +23,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from file_faults import fifo, good_log, npz_bomb, sparse_file, ssd_text, system_folder
+from file_faults import (fifo, good_log, many_variables, npy_header, npz_bomb, rewrite_fmu, same_value_reference,
+                         sparse_file, ssd_text, system_folder)
 from fmu_fixtures.fixtures import fixture_fmus, ramp_gain  # noqa: F401 (fixtures)
+from hooks import command as hook_command
+from hooks import signal_after_steps
 from orchestration import Master, SystemFileError, read_system, write_ssp
 from orchestration.errors import IncompatibleConnectionError
 from sarins.cli import main
@@ -40,9 +43,11 @@ def _limit_memory() -> None:
     resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
 
 
-def cli(*args, env: dict | None = None, limit_memory: bool = False) -> subprocess.CompletedProcess:
-    """``python -m sarins ARGS`` with this checkout first on the path."""
-    return subprocess.run([sys.executable, "-m", "sarins", *map(str, args)], capture_output=True, text=True,
+def cli(*args, env: dict | None = None, limit_memory: bool = False, hooks: tuple = ()) -> subprocess.CompletedProcess:
+    """``python -m sarins ARGS`` with this checkout first on the path (through ``tests/hooks.py``
+    when ``hooks`` names test hooks to install)."""
+    start = [*hook_command(*hooks), "-m"] if hooks else [sys.executable, "-m"]
+    return subprocess.run([*start, "sarins", *map(str, args)], capture_output=True, text=True,
                           timeout=TIMEOUT, env={**os.environ, "PYTHONPATH": str(ROOT), **(env or {})},
                           preexec_fn=_limit_memory if limit_memory else None)
 
@@ -234,6 +239,37 @@ def test_other_outputs_refuse_a_fifo(command, tmp_path):
     assert command.split()[-1] in line and "FIFO" in line
 
 
+@pytest.mark.parametrize("command", ["allan --plot", "cosim --output"])
+def test_an_output_that_is_a_symlink_is_refused_and_the_file_it_points_to_kept(command, ramp_gain, tmp_path, capsys):
+    outside = tmp_path / "elsewhere" / "precious.txt"
+    outside.parent.mkdir()
+    outside.write_text("keep me\n")
+    link = tmp_path / "out" / ("allan.png" if command.startswith("allan") else "run.csv")
+    link.parent.mkdir()
+    link.symlink_to(outside)
+    argv = (["allan", "--hours", "0.05", "--plot", link] if command.startswith("allan") else
+            ["cosim", write_ssp(ramp_gain, tmp_path / "rg.ssp"), "--stop-time", "1", "--step", "0.5", "--output",
+             link, "--no-progress"])
+    assert run_main(argv) == 2
+    line = one_clean_line(capsys.readouterr().err)
+    assert command.split()[-1] in line and "symbolic link" in line and str(link) in line
+    assert outside.read_text() == "keep me\n" and link.is_symlink()
+
+
+@pytest.mark.parametrize("fmi", ["2", "3"])
+def test_build_fmus_refuses_to_write_through_a_symlinked_fmu(fmi, tmp_path, capsys):
+    """Refused before anything is built: the link's target outside the folder is untouched."""
+    outside = tmp_path / "elsewhere.fmu"
+    outside.write_bytes(b"not yours")
+    out = tmp_path / "d"
+    out.mkdir()
+    (out / "Turntable.fmu").symlink_to(outside)
+    assert run_main(["build-fmus", "--out", out, "--fmi", fmi, "--only", "Turntable"]) == 2
+    line = one_clean_line(capsys.readouterr().err)
+    assert "symbolic link" in line and str(out / "Turntable.fmu") in line
+    assert outside.read_bytes() == b"not yours" and sorted(p.name for p in out.iterdir()) == ["Turntable.fmu"]
+
+
 # ------------------------------------------------------------------ 4. corrupted NPZ logs
 @pytest.mark.parametrize("damage", ["truncated", "corrupted", "not a zip", "empty"])
 def test_a_truncated_or_corrupted_npz_log_exits_2_naming_the_file(damage, tmp_path, capsys):
@@ -312,7 +348,7 @@ def test_an_interrupted_cosim_writes_the_rows_so_far_and_says_so(signame, code, 
     archive = write_ssp(ramp_gain, tmp_path / "rg.ssp")
     out = tmp_path / "out.csv"
     done = cli("cosim", archive, "--stop-time", "100", "--step", "0.5", "--output", out, "--no-progress",
-               env={"ORCHESTRATION_TEST_SIGNAL_AFTER": f"5:{signame}"})
+               hooks=("--signal-after", f"5:{signame}"))
     assert done.returncode == code, done.stderr
     line = one_clean_line(done.stderr)
     # the signal is sent after step 5 and acted on after step 6 (recorded): t = 3 s
@@ -377,8 +413,86 @@ def test_an_interrupted_cosim_on_a_full_disk_keeps_its_status_and_says_what_was_
     archive = write_ssp(ramp_gain, tmp_path / "rg.ssp")
     out = tmp_path / "out.csv"
     monkeypatch.setattr(pathlib.Path, "open", _full_disk_open(".csv"))
-    monkeypatch.setenv("ORCHESTRATION_TEST_SIGNAL_AFTER", "5:SIGTERM")
+    signal_after_steps(5, "SIGTERM", setattr_=monkeypatch.setattr)
     assert main(["cosim", str(archive), "--stop-time", "100", "--step", "0.5", "--output", str(out),
                  "--no-progress"]) == 143
     line = one_clean_line(capsys.readouterr().err)
     assert "interrupted at t = 3 s; the 7 rows recorded so far could not be written" in line and str(out) in line
+
+
+# ------------------------------------------------------------------ 9. FMU files that do not fit together
+def _system_with_ramp(fixture_fmus, tmp_path, **rewrite) -> Path:
+    folder = tmp_path / "system"
+    system_folder(folder, fixture_fmus)
+    rewrite_fmu(Path(fixture_fmus["Ramp"]), folder / "Ramp.fmu", **rewrite)
+    return folder
+
+
+def test_a_truncated_shared_library_is_refused_before_it_is_loaded(fixture_fmus, tmp_path):
+    """dlopen maps a truncated ELF file's segments all the same; the first access past the end is SIGBUS."""
+    folder = _system_with_ramp(fixture_fmus, tmp_path, library=lambda data: data[:len(data) // 2])
+    done = cli("cosim", folder, "--stop-time", "1", "--step", "0.5", "--no-progress")
+    assert done.returncode == 2, (done.returncode, done.stderr)
+    line = one_clean_line(done.stderr)
+    assert "component 'ramp'" in line and "binaries/linux64/Ramp.so cannot be loaded: truncated" in line
+
+
+def test_a_description_with_a_million_variables_is_refused_by_its_budget(fixture_fmus, tmp_path, capsys):
+    folder = _system_with_ramp(fixture_fmus, tmp_path, description=many_variables(10**6))
+    assert run_main(["cosim", folder, "--stop-time", "1", "--step", "0.5", "--no-progress"]) == 2
+    line = one_clean_line(capsys.readouterr().err)
+    assert "component 'ramp'" in line and "modelDescription.xml" in line and "limit" in line
+
+
+def test_two_parameters_sharing_a_value_reference_are_refused(fixture_fmus, tmp_path, capsys):
+    folder = _system_with_ramp(fixture_fmus, tmp_path, description=same_value_reference("slope", "offset"))
+    assert run_main(["cosim", folder, "--stop-time", "1", "--step", "0.5", "--no-progress"]) == 2
+    line = one_clean_line(capsys.readouterr().err)
+    assert "valueReference 0 is shared by 2 Real parameters or inputs ('slope', 'offset')" in line
+
+
+def test_a_description_of_another_build_exits_2_with_the_fmus_reason(fmu_dir, tmp_path):
+    """A changed GUID: the native FMU refuses fmi2Instantiate; a bad file (2), not a failed run (1)."""
+    import re
+
+    from orchestration import Component, System
+
+    def other_guid(text: str) -> str:  # one hex digit of the GUID changed
+        return re.sub(r'(guid="\{?)([0-9a-f])', lambda m: m.group(1) + ("1" if m.group(2) == "0" else "0"), text,
+                      count=1)
+
+    fmu = rewrite_fmu(fmu_dir / "Turntable.fmu", tmp_path / "Turntable.fmu", description=other_guid)
+    archive = write_ssp(System("t", [Component("table", fmu_dir / "Turntable.fmu", {})], []), tmp_path / "t.ssp")
+    swapped = tmp_path / "swapped.ssp"
+    import zipfile
+    with zipfile.ZipFile(archive) as zin, zipfile.ZipFile(swapped, "w") as zout:
+        for item in zin.infolist():
+            zout.writestr(item, fmu.read_bytes() if item.filename.endswith(".fmu") else zin.read(item.filename))
+    done = cli("cosim", swapped, "--stop-time", "2", "--step", "0.01", "--no-progress")
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("sarins cosim: error: ") and "fmi2Instantiate" in done.stderr
+    assert "GUID" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_an_npy_header_claiming_7e9_values_is_refused_not_allocated(tmp_path):
+    path = tmp_path / "liar.npz"
+    import zipfile
+    with zipfile.ZipFile(path, "w") as archive:
+        for name in ("time_s.npy", "dtheta_x.npy"):
+            archive.writestr(name, npy_header(7_000_000_000 * 8) + bytes(80))
+    done = cli("allan", "--json", "--log", path, limit_memory=True)
+    assert done.returncode == 2, done.stderr
+    line = one_clean_line(done.stderr)
+    assert str(path) in line and "header claims shape (7000000000,)" in line and "refused" in line
+
+
+def test_a_stored_campaign_result_that_is_a_folder_is_named(tmp_path):
+    from campaign_tasks import square
+    from sarins.campaign import StoredResultError, Task, run_campaign
+
+    (tmp_path / "out" / "sq1.npz").mkdir(parents=True)
+    tasks = [Task(f"sq{x}", square, {"x": x, "marker_dir": str(tmp_path), "delay": 0.0},
+                  volatile=("marker_dir", "delay")) for x in range(3)]
+    with pytest.raises(StoredResultError, match=r"sq1.npz: the stored result of task sq1 is a folder"):
+        run_campaign(tasks, tmp_path / "out", workers=1, progress=False)
+    assert (tmp_path / "out" / "sq1.npz").is_dir()

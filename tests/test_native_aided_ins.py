@@ -67,8 +67,8 @@ def case():
 
 
 @pytest.fixture(scope="module")
-def fmu(tmp_path_factory):
-    return build_native_fmu("AidedINS", "aided_ins_slave.py", tmp_path_factory.mktemp("ai"), win64=False)
+def fmu(fmu_dir):
+    return fmu_dir / "AidedINS.fmu"  # the session build (tests/conftest.py)
 
 
 def _run(fmu, case, state_at=None):
@@ -218,7 +218,7 @@ def test_receiver_into_aided_ins_equals_navigate_with_two_steps_latency(fmu, tmp
     params.update({f"{n}0": float(v) for n, v in zip(NAV, nav0)})
     params.update({f"gnss_{k}_std_{a}": float(v) for k, std in (("pos", GNSS.pos_std()), ("vel", GNSS.vel_std()))
                    for a, v in zip("enu", std)})
-    receiver_fmu = build_native_fmu("GNSSReceiver", "gnss_receiver_slave.py", tmp_path, win64=False)
+    receiver_fmu = fmu.parent / "GNSSReceiver.fmu"
     receiver = Slave(receiver_fmu, "rx")
     ins = Slave(fmu, "ins")
     truth_in = np.column_stack([truth.nav_rows(), truth.omega_ib_b])

@@ -32,7 +32,7 @@ def bursts(tmp_path_factory):
     model = NativeModel(str(HERE / "native_models" / "burst"))
     out = {}
     for fmi in (2, 3):
-        fmu = build_native_fmu("Burst", None, base / f"fmi{fmi}", fmi=fmi, win64=False, model=model,
+        fmu = build_native_fmu("Burst", None, base / f"fmi{fmi}", fmi=fmi, win64=False, aarch64=False, model=model,
                                slave=Burst(instance_name="build", resources="."))
         out[fmi] = fmu
         with zipfile.ZipFile(fmu) as z:

@@ -401,7 +401,7 @@ def test_fmi3_variant_equals_fmi2_bit_for_bit(unzipped, host, tmp_path):
     from test_native_fmus import _cc, run_host, table
 
     fmu3 = build_native_fmu("DriftModelUpdater", "drift_model_updater_slave.py", tmp_path / "fmu3", fmi=3,
-                            win64=False)
+                            win64=False, aarch64=False)
     assert validate_fmu(str(fmu3)) == []
     folder3 = tmp_path / "f3"
     zipfile.ZipFile(fmu3).extractall(folder3)
@@ -480,7 +480,7 @@ def test_sanitized_build_runs_clean_through_the_c_host(unzipped, tmp_path):
 
 
 @pytest.mark.slow
-def test_win64_dll_under_wine_runs_and_agrees_with_linux64(unzipped, host, tmp_path):
+def test_win64_dll_under_wine_runs_and_agrees_with_linux64(unzipped, host, tmp_path, wine_env):
     """The shipped win64 DLL under wine: the run with its state round trip repeats itself bit for bit, and
     agrees with linux64 to 1e-12 relative (the filter's sin, cos, tan and the RLS's pow come from mingw's
     C runtime there, glibc's here; on this run they agreed bit for bit, the test prints the comparison)."""
@@ -496,8 +496,7 @@ def test_win64_dll_under_wine_runs_and_agrees_with_linux64(unzipped, host, tmp_p
     exe = tmp_path / "host.exe"
     subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
                    check=True)
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all")
-    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
+    env = wine_env
     rows = _rows()
     args, _ = _host_args(md, tmp_path, rows)
     k = _mid_stop(rows)

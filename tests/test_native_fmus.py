@@ -429,7 +429,7 @@ def test_sanitized_build_runs_clean_through_the_c_host(turntable, tmp_path):
 
 
 @pytest.mark.slow
-def test_win64_dll_under_wine_matches_linux64(fmu_dir, turntable, host, tmp_path):
+def test_win64_dll_under_wine_matches_linux64(fmu_dir, turntable, host, tmp_path, wine_env):
     """The shipped win64 DLL, loaded by a mingw-built host under wine: the same outputs as linux64. The
     Turntable's outputs use + - * / and sin (the sinusoidal ambient; 0 amplitude here): bit-identical."""
     missing = [t for t in (MINGW, "wine") if shutil.which(t) is None]
@@ -441,8 +441,7 @@ def test_win64_dll_under_wine_matches_linux64(fmu_dir, turntable, host, tmp_path
     exe = tmp_path / "host.exe"
     subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
                    check=True)
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all")
-    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
+    env = wine_env
     for values in CASES.values():
         win = run_host(exe, dll, md, 1000, "roundtrip=500", *ops(md, values), env=env, prefix=["wine"],
                        timeout=600)

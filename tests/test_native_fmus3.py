@@ -24,7 +24,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave, fmi3Float64, fmi3ValueReference
 from fmpy.validation import validate_fmu
 
-from fmus.native_fmu import build_native_fmu, compile_sources
+from fmus.native_fmu import compile_sources
 
 CASES = {
     "forward-reverse": {"align_time": 600.0},
@@ -37,13 +37,10 @@ OUTPUTS = [f"{q}_{j}" for j in (1, 2, 3) for q in ("angle", "rate", "accel")] + 
 
 
 @pytest.fixture(scope="module")
-def turntables(fmu_dir, tmp_path_factory):
-    """{2: the session's FMI 2.0 Turntable.fmu, 3: the FMI 3.0 one (linux only: quick), from the same
+def turntables(fmu_dir, fmu3_dir):
+    """{2: the session's FMI 2.0 Turntable.fmu, 3: its FMI 3.0 one (linux only: quick), from the same
     declaration and model.c."""
-    if shutil.which("gcc") is None and shutil.which("cc") is None:
-        pytest.skip("no C compiler (gcc/cc)")
-    fmi3 = build_native_fmu("Turntable", "turntable_slave.py", tmp_path_factory.mktemp("native3"), fmi=3, win64=False)
-    return {2: fmu_dir / "Turntable.fmu", 3: fmi3}
+    return {2: fmu_dir / "Turntable.fmu", 3: fmu3_dir / "Turntable.fmu"}
 
 
 @pytest.fixture(scope="module")

@@ -39,15 +39,9 @@ INS_OUT = ["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll", 
 
 
 @pytest.fixture(scope="module")
-def fmus3(tmp_path_factory):
-    """The FMI 3.0 Turntable, IMUThermal and StrapdownINS (linux only: quick) in one folder."""
-    if shutil.which("gcc") is None and shutil.which("cc") is None:
-        pytest.skip("no C compiler (gcc/cc)")
-    out = tmp_path_factory.mktemp("native3_sub")
-    for name, slave in (("Turntable", "turntable_slave.py"), ("IMUThermal", "imu_thermal_slave.py"),
-                        ("StrapdownINS", "strapdown_ins_slave.py")):
-        build_native_fmu(name, slave, out, fmi=3, win64=False)
-    return out
+def fmus3(fmu3_dir):
+    """The FMI 3.0 Turntable, IMUThermal and StrapdownINS (the session's, tests/conftest.py)."""
+    return fmu3_dir
 
 
 class Fmu3:
@@ -278,7 +272,7 @@ def test_fmpy_validates_and_simulates_the_fmi3_imu_and_ins(fmus3):
 def test_fmusim_runs_the_fmi3_imu_with_n_sub(fmus3, tmp_path):
     fmusim = os.environ.get("FMUSIM") or shutil.which("fmusim")
     if fmusim is None:
-        pytest.skip("fmusim not found (set FMUSIM to its path; FACTS.md says how to build it)")
+        pytest.skip("fmusim not found (set FMUSIM to its path; docs/quick-start.md says how to build it)")
     out = tmp_path / "imu.csv"
     cmd = [fmusim, "--interface-type", "cs", "--stop-time", "5", "--output-interval", "1", "--start-value", "n_sub",
            str(K), "--start-value", "angle_1", "0.3", "--output-variable", "dtheta_z", "--output-variable",
@@ -314,7 +308,7 @@ def _host_table(stdout: str, tag: str = "OUT") -> np.ndarray:
 
 
 @pytest.mark.slow
-def test_fmi3_win64_dlls_under_wine_match_linux(tmp_path):
+def test_fmi3_win64_dlls_under_wine_match_linux(tmp_path, wine_env):
     """The FMI 3.0 IMUThermal (n_sub = 200, two presets) and StrapdownINS (sub_inputs = 1, fed the linux IMU's
     arrays) from their win64 DLLs under wine through the FMI 3.0 C host (tests/native_host/native_fmu3_host.c)
     against x86_64-linux, bit for bit (the C calls no libm: smath.h)."""
@@ -328,8 +322,7 @@ def test_fmi3_win64_dlls_under_wine_match_linux(tmp_path):
     flags = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}"]
     subprocess.run([cc, *flags, src, "-ldl", "-o", str(tmp_path / "host")], check=True)
     subprocess.run([MINGW, *flags, src, "-static", "-o", str(tmp_path / "host.exe")], check=True)
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all")
-    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
+    env = wine_env
     fmus = {}
     for name, slave in (("IMUThermal", "imu_thermal_slave.py"), ("StrapdownINS", "strapdown_ins_slave.py")):
         fmu = build_native_fmu(name, slave, tmp_path, fmi=3, win64=True)

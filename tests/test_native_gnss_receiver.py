@@ -59,8 +59,8 @@ def _inputs(truth) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def fmu(tmp_path_factory):
-    return build_native_fmu("GNSSReceiver", "gnss_receiver_slave.py", tmp_path_factory.mktemp("gr"), win64=False)
+def fmu(fmu_dir):
+    return fmu_dir / "GNSSReceiver.fmu"  # the session build (tests/conftest.py)
 
 
 def _fixes(rows: list) -> np.ndarray:

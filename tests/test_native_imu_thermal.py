@@ -373,7 +373,7 @@ def test_sanitized_build_runs_clean_through_the_c_host(unzipped, tmp_path):
 
 
 @pytest.mark.slow
-def test_win64_dll_under_wine_matches_linux64(unzipped, host, tmp_path):
+def test_win64_dll_under_wine_matches_linux64(unzipped, host, tmp_path, wine_env):
     """The shipped win64 DLL under wine against linux64: the increments and temperatures, and the FMU
     state round trip, bit for bit (the C calls no libm: smath.h)."""
     missing = [t for t in (MINGW, "wine") if shutil.which(t) is None]
@@ -385,8 +385,7 @@ def test_win64_dll_under_wine_matches_linux64(unzipped, host, tmp_path):
     exe = tmp_path / "host.exe"
     subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
                    check=True)
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all")
-    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
+    env = wine_env
     for values in HOST_CASES.values():
         args = ("roundtrip=200", *ops(md, values, outputs=OUTPUTS))
         win = run_host(exe, dll, md, 500, *args, env=env, prefix=["wine"], timeout=600)

@@ -19,9 +19,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from fmu_driver import Slave
-from fmus import SLAVES
 from fmus.compensator_export import export_compensator
-from fmus.native_fmu import build_native_fmu
 from sarins_fmu.identify import compensators
 from sarins_fmu.identify.axial import DEFAULT_MODELS, DriftIdentifier
 from test_nets import _toy, fitted
@@ -34,9 +32,8 @@ TEMPS = [f"temp_{s}" for s in ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y
 
 
 @pytest.fixture(scope="module")
-def identifier_fmu(tmp_path_factory):
-    return build_native_fmu("RBFIdentifier", SLAVES["RBFIdentifier"], tmp_path_factory.mktemp("ident"),
-                            win64=False)  # linux64 only: fast (the session's FMUs carry win64, test_native_fmus)
+def identifier_fmu(fmu_dir):
+    return fmu_dir / "RBFIdentifier.fmu"  # the session's build (tests/conftest.py)
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +42,7 @@ def compensator_fmu(tmp_path_factory):
     binary model file)} for every kind, given to the same FMU as model_file."""
     out = tmp_path_factory.mktemp("comp")
     models = {kind: fitted(kind) for kind in compensators.KINDS}
-    fmu = export_compensator(models["gru"].save(out / "gru.npz"), out, win64=False)
+    fmu = export_compensator(models["gru"].save(out / "gru.npz"), out, win64=False, aarch64=False)
     return fmu, {kind: (m, m.export_binary(out / f"{kind}.bin")) for kind, m in models.items()}
 
 
@@ -190,7 +187,7 @@ def test_fmi3_compensator_equals_the_library(compensator_fmu, tmp_path):
     from fmpy.fmi3 import FMU3Slave
 
     model = compensator_fmu[1]["lstm"][0]
-    fmu3 = export_compensator(model.save(tmp_path / "m.npz"), tmp_path, fmi=3, win64=False)
+    fmu3 = export_compensator(model.save(tmp_path / "m.npz"), tmp_path, fmi=3, win64=False, aarch64=False)
     assert validate_fmu(str(fmu3)) == []
     md = read_model_description(str(fmu3))
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -353,11 +350,10 @@ def test_sanitized_build_runs_clean_through_the_c_host(compensator_fmu, tmp_path
 
 
 @pytest.mark.slow
-def test_win64_dll_under_wine_agrees_with_linux64(compensator_fmu, portable_host, tmp_path):
+def test_win64_dll_under_wine_agrees_with_linux64(compensator_fmu, portable_host, tmp_path, wine_env):
     """The win64 DLL (mingw-w64) under wine runs every network kind with its FMU state round trip bit for bit.
     Against linux64 it agrees to 1e-12 relative but not bit for bit: exp and tanh come from mingw's C
     runtime there, glibc's here (measured: 7 ulp, 1.3e-15 relative, GRU, 60 steps)."""
-    import os
     import struct
 
     from fmus.native_fmu import MINGW, fmi_headers_dir
@@ -373,8 +369,7 @@ def test_win64_dll_under_wine_agrees_with_linux64(compensator_fmu, portable_host
     exe = tmp_path / "host.exe"
     subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
                    check=True)
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all")
-    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
+    env = wine_env
 
     def value(bits):
         return struct.unpack("<d", struct.pack("<Q", bits))[0]

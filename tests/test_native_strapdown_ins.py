@@ -334,10 +334,9 @@ def test_sanitized_build_runs_clean_through_the_c_host(fmu_dir, tmp_path):
 
 
 @pytest.mark.slow
-def test_win64_dll_under_wine_runs_and_repeats_after_set_state(fmu_dir, host, tmp_path):
+def test_win64_dll_under_wine_runs_and_repeats_after_set_state(fmu_dir, host, tmp_path, wine_env):
     """The shipped win64 DLL, loaded by a mingw-built host under wine, runs the queued run with its FMU state
     round trip bit for bit, and gives the linux64 outputs bit for bit (the C calls no libm: smath.h)."""
-    import os
     import shutil
     import struct
 
@@ -351,8 +350,7 @@ def test_win64_dll_under_wine_runs_and_repeats_after_set_state(fmu_dir, host, tm
     exe = tmp_path / "host.exe"
     subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
                    check=True)
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all")
-    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
+    env = wine_env
     lin = _host_run(host, fmu, tmp_path, "roundtrip=700")
     dll = tmp_path / "ins" / "binaries" / "win64" / "StrapdownINS.dll"
     assert dll.is_file(), "the build had mingw but shipped no win64 DLL"

@@ -12,7 +12,6 @@ emulated platforms are slow tests, one compile line per FMU runs by default.
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
 import subprocess
@@ -269,14 +268,6 @@ def test_fmpy_builds_the_sources_and_the_result_runs_with_an_empty_environment(n
 # ----------------------------------------------------------------- other platforms
 
 
-@pytest.fixture(scope="module")
-def wine_env(tmp_path_factory):
-    _need(MINGW, "wine")
-    env = dict(os.environ, WINEPREFIX=str(tmp_path_factory.mktemp("wineprefix")), WINEDEBUG="-all")
-    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
-    return env
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("name", WORKLOADS)
 def test_win64_dll_under_wine_gives_the_linux64_numbers(name, native, shipped, wine_env, tmp_path):
@@ -325,7 +316,7 @@ def test_aarch64_turntable_under_qemu_quick(native, shipped, tmp_path):
 
 
 @pytest.mark.slow
-def test_fmi3_binaries_of_every_platform_give_the_x86_64_linux_numbers(tmp_path):
+def test_fmi3_binaries_of_every_platform_give_the_x86_64_linux_numbers(tmp_path, wine_env):
     """The FMI 3.0 IMUThermal (n_sub = 200: every minor interval in arrays) and Turntable from
     binaries/x86_64-windows under wine and binaries/aarch64-linux under qemu, through the FMI 3.0 C host:
     the x86_64-linux bits."""
@@ -335,8 +326,7 @@ def test_fmi3_binaries_of_every_platform_give_the_x86_64_linux_numbers(tmp_path)
     subprocess.run([cc, *flags, str(HOST3_SRC), "-ldl", "-o", str(tmp_path / "host")], check=True)
     subprocess.run([MINGW, *flags, str(HOST3_SRC), "-static", "-o", str(tmp_path / "host.exe")], check=True)
     arm = _arm_host(tmp_path, HOST3_SRC, fmi=3)
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "wineprefix"), WINEDEBUG="-all")
-    subprocess.run(["wine", "wineboot", "--init"], env=env, capture_output=True, timeout=600, check=True)
+    env = wine_env
     for name, slave in (("IMUThermal", "imu_thermal_slave.py"), ("Turntable", "turntable_slave.py")):
         fmu = build_native_fmu(name, slave, tmp_path, fmi=3, win64=True, aarch64=True)
         folder = tmp_path / name

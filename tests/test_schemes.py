@@ -17,20 +17,13 @@ import pytest
 
 import sarins_fmu.identify.axial  # noqa: F401 - the FMUs' shared library copy must outlive each run's unpacking
 from fmu_fixtures.thirdparty import ensure_libtbb, has_module
-from fmus.build import build_fmus, fix_fmu_description
+from fmus.build import fix_fmu_description
 from sarins.systems import standard_static, standard_static_identified, vehicle_rins, vehicle_rins_online
 from orchestration import simulate_system, write_ssp
 
 SHORT_TT = dict(align_time=600.0)
 SHORT_INS = dict(align_time=600.0, coarse_time=120.0)
 NAV = ["ins.lat_error", "ins.lon_error", "ins.position_error", "ins.yaw", "ins.v_e", "ins.v_n"]
-
-
-@pytest.fixture(scope="module")
-def fmu_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("schemes")
-    build_fmus(out, ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "VehicleMotion", "DriftModelUpdater"])
-    return out
 
 
 def _standard(fmu_dir, hours):

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 import sarins_fmu.identify.axial  # noqa: F401 - the FMUs' shared library copy must outlive each run's unpacking
-from fmus.build import build_fmus
 from orchestration import simulate_system
 from sarins.systems import vehicle_rins
 from sarins_fmu import imu as imu_mod
@@ -20,13 +19,6 @@ from sarins_fmu.vehicle import BodyMotion, VehicleTrajectory, parse_legs
 LEGS = "drive 120 10; turn 90; drive 120 12; stop 200; drive 60 8; turn -45; drive 60 8; stop 30"
 LEAD = 600.0
 NAMES = ["ins.nav_time", "ins.lat", "ins.lon", "ins.v_e", "ins.v_n", "ins.yaw", "ins.pitch", "ins.roll"]
-
-
-@pytest.fixture(scope="module")
-def fmu_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("vehicle")
-    build_fmus(out, ["VehicleMotion", "Turntable", "IMUThermal", "StrapdownINS"])
-    return out
 
 
 def _trajectory(rotation="forward-reverse"):

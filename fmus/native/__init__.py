@@ -44,8 +44,8 @@ HOST_REQUIREMENTS = (
     "(resources/sarins_fmi_runtime.txt), (3) python3.X, then python3, on PATH with the build's version, "
     "(4) libpython3.X.so.1.0 on the system library path; if none fits, fmi2Instantiate logs the reason and "
     "returns NULL. The FMU's Python library is imported from a per-user cache (SARINS_FMU_CACHE, else "
-    "XDG_CACHE_HOME/sarins-fmu, else ~/.cache/sarins-fmu) so compiled kernels persist between runs. "
-    "Only binaries/linux64 is shipped.")
+    "XDG_CACHE_HOME/sarins-fmu, else ~/.cache/sarins-fmu), so a second start finds it unpacked. "
+    "A Python-hosted FMU ships binaries/linux64 only.")
 
 _ALIASED = ("sarins_fmu", "fmus", "pythonfmu")
 SOURCES = ("shim.c", "core.c", "sarins_fmi.h", "sarins_uri.h")

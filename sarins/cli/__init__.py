@@ -186,7 +186,13 @@ def _raise_terminated(signum, frame):
 
 
 def main(argv=None) -> int:
-    parser = build_parser()
+    try:
+        parser = build_parser()
+    except ImportError as exc:  # e.g. SARINS_CORE_LIB naming something that is not the C core
+        if os.environ.get("SARINS_DEBUG"):
+            raise
+        print(f"sarins: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
     args = parser.parse_args(argv)
     name = f"sarins {args.command}"
     if getattr(args, "campaign", None):

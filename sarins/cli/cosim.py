@@ -143,8 +143,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"sarins cosim: error: {_schedule_message(error, args)}", file=sys.stderr)
         return 2
     except OrchestrationError as error:
-        print(f"sarins cosim: {'failed' if isinstance(error, RuntimeError) else 'error'}: {error}", file=sys.stderr)
-        return 1 if isinstance(error, RuntimeError) else 2
+        # a run that failed (an FMU error while running) is 1; a bad file (incl. an FMU that refuses to be
+        # instantiated: FMUInstantiateError is a ValueError) is 2
+        failed = isinstance(error, RuntimeError) and not isinstance(error, ValueError)
+        print(f"sarins cosim: {'failed' if failed else 'error'}: {error}", file=sys.stderr)
+        return 1 if failed else 2
     print(summary(result))
     realtime = result.meta.get("realtime")
     if realtime is not None:

@@ -171,7 +171,10 @@ SYSTEMS = {"standard_static": standard_static, "standard_static_identified": sta
 
 def write_systems(fmu_dir: Path | str) -> list[Path]:
     """Write ``<fmu_dir>/<name>.ssp`` for every system; returns the paths."""
+    from sarins_fmu.files import refuse_links
+
     fmu_dir = Path(fmu_dir)
+    refuse_links([fmu_dir / f"{name}.ssp" for name in SYSTEMS], "system file")
     return [write_ssp(make(fmu_dir), fmu_dir / f"{name}.ssp") for name, make in SYSTEMS.items()]
 
 
@@ -207,6 +210,9 @@ def build_system_fmu(fmu_dir: Path | str, name: str = "StandardStaticSystem") ->
     if name not in SYSTEM_FMUS:
         raise ValueError(f"unknown system FMU {name!r}; known: {', '.join(SYSTEM_FMUS)}")
     system = SYSTEMS[SYSTEM_FMUS[name]](Path(fmu_dir))
+    from sarins_fmu.files import refuse_links
+
+    refuse_links([Path(fmu_dir) / f"{name}.fmu"], "system FMU")
     path = build_container_fmu(system, Path(fmu_dir) / f"{name}.fmu", step_size=1.0)
     fix_fmu_description(path, [(c.name, c.source) for c in system.components])
     return path

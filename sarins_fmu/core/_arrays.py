@@ -2,7 +2,37 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+INT64_MAX = 2**63 - 1  # largest count a C int64_t argument carries (ctypes would wrap a larger one)
+
+
+def count(value, name: str, low: int = 1, high: int = INT64_MAX) -> int:
+    """A whole number in [low, high] for a C ``int64_t`` argument, or ValueError naming ``name``
+    (ctypes converts 2**64 + 2 to 2 without a word: the range is checked here)."""
+    try:
+        number = int(value)
+        whole = number == value
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name} must be a whole number, got {value!r}") from None
+    if not whole or isinstance(value, bool):
+        raise ValueError(f"{name} must be a whole number, got {value!r}")
+    if not low <= number <= high:
+        raise ValueError(f"{name} must be in {low} .. {high}, got {number}")
+    return number
+
+
+def positive_finite(value, name: str) -> float:
+    """A finite float > 0, or ValueError naming ``name``."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    if not (math.isfinite(number) and number > 0.0):
+        raise ValueError(f"{name} must be finite and > 0, got {value!r}")
+    return number
 
 
 def read(a, shape, name: str) -> np.ndarray:

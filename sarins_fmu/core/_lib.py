@@ -45,13 +45,30 @@ def library_path() -> Path:
                        "'python3 -m pip install -e .' in the project folder (it needs a C compiler)")
 
 
+def _origin(path: Path) -> str:
+    """How to name ``path`` in a message: the environment variable when it chose the file."""
+    if os.environ.get("SARINS_CORE_LIB", ""):
+        return f"SARINS_CORE_LIB names {path}, which"
+    return f"the C physics core at {path}"
+
+
 def _load() -> ctypes.CDLL:
-    lib = ctypes.CDLL(str(library_path()))
-    lib.sarins_core_abi.restype = ctypes.c_int
-    lib.sarins_core_abi.argtypes = []
-    abi = lib.sarins_core_abi()
+    path = library_path()
+    try:
+        lib = ctypes.CDLL(str(path))
+    except OSError as exc:  # not a shared library (a text file, a truncated or foreign binary)
+        raise CoreNotBuilt(f"{_origin(path)} cannot be loaded as a shared library "
+                           f"({' '.join(str(exc).split())})") from None
+    try:
+        abi_fn = lib.sarins_core_abi
+    except AttributeError:  # another library (e.g. libm)
+        raise CoreNotBuilt(f"{_origin(path)} is not the sarins C physics core (no function sarins_core_abi)") \
+            from None
+    abi_fn.restype = ctypes.c_int
+    abi_fn.argtypes = []
+    abi = abi_fn()
     if abi != ABI:
-        raise CoreNotBuilt(f"the C physics core at {library_path()} has ABI {abi}, this package expects {ABI}: "
+        raise CoreNotBuilt(f"{_origin(path)} has ABI {abi}, this package expects {ABI}: "
                            "rebuild it with 'python3 -m pip install -e .'")
     return lib
 

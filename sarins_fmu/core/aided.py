@@ -114,8 +114,8 @@ class EskfState:
 
     def run(self, dtheta, dv, aid, gnss, vel_std, use_vel: bool, out_every: int) -> np.ndarray:
         """``sarins_eskf_run`` over K steps (aid (K, 9): ZUPT flag, measured velocity at a stop (3), odometer
-        flag, odometer speed, NHC flag, measured lateral and vertical body velocity); returns the (K // out_every, 240) rows (nav 9, b_g 3, b_a 3,
-        P 225)."""
+        flag, odometer speed, NHC flag, measured lateral and vertical body velocity); returns the
+        (K // out_every, 240) rows (nav 9, b_g 3, b_a 3, P 225)."""
         dtheta = _arrays.read(dtheta, (np.shape(dtheta)[0], 3), "dtheta")
         k = dtheta.shape[0]
         dv = _arrays.read(dv, (k, 3), "dv")

@@ -1,3 +1,4 @@
+#include "smath.h"
 #include "eskf.h"
 
 #include "earth.h"
@@ -5,7 +6,6 @@
 #include "matrix.h"
 #include "nav3.h"
 #include "rotations.h"
-#include "smath.h"
 
 #define N SARINS_ESKF_N
 #define IDX(i, j) ((i) * N + (j))

@@ -1,8 +1,8 @@
+#include "smath.h"
 #include "gnss.h"
 
 #include "earth.h"
 #include "rotations.h"
-#include "smath.h"
 
 static int finite(double x) { return x - x == 0.0; }
 

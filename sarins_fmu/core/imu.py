@@ -122,9 +122,8 @@ def increments(axes, angle0, rate0, accel, w_t, f_t, h, n_sub,
         (g_mis, (3, 3), "g_mis"), (g_quad, (3,), "g_quad"), (g_lowrate, (3,), "g_lowrate"),
         (g_lowrate_width, (3,), "g_lowrate_width"), (g_sens, (3, 3), "g_sens"), (a_mis, (3, 3), "a_mis"),
         (a_quad, (3,), "a_quad"))]
-    n_sub = int(n_sub)
-    if n_sub < 1 or not float(h) > 0:
-        raise ValueError(f"increments need h > 0 and n_sub >= 1, got h={h}, n_sub={n_sub}")
+    n_sub = _arrays.count(n_sub, "n_sub (minor steps per interval)")
+    h = _arrays.positive_finite(h, "h (interval, s)")
     angle0, rate0, accel, w_t, f_t, g_sf, g_bias, a_sf, a_bias = (a.ctypes.data for a in per_k)
     g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad = (a.ctypes.data for a in fixed)
     dtheta, dv = np.empty((n_int, 3)), np.empty((n_int, 3))
@@ -320,7 +319,8 @@ def build(table, par, t0: float, h: float, n_sub: int, age: float, value: int) -
     problem = check_params(par)
     if problem is not None:
         raise ValueError(f"IMU parameter {problem}")
-    _check(_build(table.ctypes.data, table.shape[0], par.ctypes.data, float(t0), float(h), int(n_sub), float(age),
+    n_sub = _arrays.count(n_sub, "n_sub (minor steps per interval)")
+    _check(_build(table.ctypes.data, table.shape[0], par.ctypes.data, float(t0), float(h), n_sub, float(age),
                   check_seed(value)))
 
 

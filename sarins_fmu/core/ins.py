@@ -74,8 +74,19 @@ def _view(buffer: np.ndarray, offset: int, count: int, dtype=np.float64) -> np.n
 
 def config_array(config) -> np.ndarray:
     """The settings array of ``sarins_ins_init`` from an :class:`sarins_fmu.ins.InsConfig`."""
-    return np.array([float(getattr(config, n)) for n in CONFIG_FIELDS]
-                    + [float(getattr(config.filter, n)) for n in FILTER_FIELDS])
+    values = []
+    for owner, fields, prefix in ((config, CONFIG_FIELDS, ""), (getattr(config, "filter", None), FILTER_FIELDS,
+                                                                  "filter.")):
+        for name in fields:
+            if not hasattr(owner, name):
+                raise ValueError(f"INS settings need an InsConfig (sarins_fmu.ins) with {prefix}{name}; got "
+                                 f"{type(config).__name__}")
+            try:
+                values.append(float(getattr(owner, name)))
+            except (TypeError, ValueError, OverflowError):
+                raise ValueError(f"INS setting {prefix}{name} must be a number, got "
+                                 f"{getattr(owner, name)!r}") from None
+    return np.array(values)
 
 
 def config_problem(config: np.ndarray) -> str | None:

@@ -1,8 +1,8 @@
+#include "smath.h"
 #include "nav3.h"
 
 #include "earth.h"
 #include "rotations.h"
-#include "smath.h"
 
 void sarins_mat_to_euler(const double *m, double *ypr)
 {

@@ -1,6 +1,6 @@
+#include "smath.h"
 #include "odo.h"
 
-#include "smath.h"
 
 static int finite(double x) { return x - x == 0.0; }
 

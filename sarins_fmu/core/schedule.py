@@ -166,7 +166,11 @@ def move_segments(angle: float, rate_max: float, accel_max: float, grid: float) 
 
 def integrate(times, accel, angle0, rate0) -> tuple:
     """(angle_bp, rate_bp) (M+1, A) of a schedule's breakpoint tables (``sarins_schedule_integrate``)."""
-    times = _arrays.read(times, np.shape(times)[:1], "times")
+    if np.ndim(times) != 1 or np.shape(times)[0] < 1:
+        raise ValueError(f"times must be a 1-D array of at least 1 breakpoint, got shape {np.shape(times)}")
+    if np.ndim(angle0) != 1 or np.shape(angle0)[0] < 1:
+        raise ValueError(f"angle0 must be a 1-D array of at least 1 axis, got shape {np.shape(angle0)}")
+    times = _arrays.read(times, np.shape(times), "times")
     n_times, n_axes = times.shape[0], np.shape(angle0)[0]
     accel = _arrays.read(accel, (n_times - 1, n_axes), "accel")
     angle0, rate0 = _arrays.read(angle0, (n_axes,), "angle0"), _arrays.read(rate0, (n_axes,), "rate0")

@@ -1,8 +1,8 @@
+#include "smath.h"
 #include "traj.h"
 
 #include "earth.h"
 #include "rotations.h"
-#include "smath.h"
 
 #define DEG (3.141592653589793 / 180.0)
 

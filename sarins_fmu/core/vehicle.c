@@ -1,4 +1,5 @@
 /* Seed 002's land vehicle (vehicle.h). */
+#include "smath.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -6,7 +7,6 @@
 #include "report.h"
 #include "rng.h"
 #include "schedule.h"
-#include "smath.h"
 #include "vehicle.h"
 
 #define PI 3.14159265358979323846
