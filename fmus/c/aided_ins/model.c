@@ -171,6 +171,28 @@ static void ai_release(sarins_ctx *c)
     c->work = NULL;
 }
 
+/* A state handed to the FMU (model.h "State validation"): every field within what do_step relies on. */
+static int ai_check_state(const sarins_ctx *c, int running)
+{
+    (void)running;
+    const ai_state *st = c->state;
+    const sarins_eskf *e = &st->eskf;
+    const long long big = 1LL << 53;
+    int ok = sarins_state_int(c, "last_count", st->last_count, 0, big) && sarins_state_int(c, "used", st->used, 0, big)
+             && sarins_state_int(c, "eskf.steps", e->steps, 0, big)
+             && sarins_state_int(c, "eskf.since_cov", e->since_cov, 0, 1000)
+             && sarins_state_real(c, "eskf.step", e->config[SARINS_ESKF_STEP], 1e-300, 1e300)
+             && sarins_state_real(c, "eskf.cov_every", e->config[SARINS_ESKF_COV_EVERY], 1.0, 1000.0)
+             && sarins_state_finite(c, "eskf.config", e->config, SARINS_ESKF_CONFIG)
+             && sarins_state_finite(c, "eskf.q", e->q, 4) && sarins_state_finite(c, "eskf.v", e->v, 3)
+             && sarins_state_finite(c, "eskf.pos", e->pos, 3) && sarins_state_finite(c, "eskf.bg", e->bg, 3)
+             && sarins_state_finite(c, "eskf.ba", e->ba, 3)
+             && sarins_state_finite(c, "eskf.p", e->p, SARINS_ESKF_N * SARINS_ESKF_N)
+             && sarins_state_finite(c, "eskf.x", e->x, SARINS_ESKF_N)
+             && sarins_state_finite(c, "eskf.w_ib", e->w_ib, 3) && sarins_state_finite(c, "eskf.f_n", e->f_n, 3);
+    return ok ? SARINS_OK : SARINS_ERROR;
+}
+
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(ai_state),
@@ -178,4 +200,5 @@ const sarins_model sarins_model_desc = {
     .initialize = ai_initialize,
     .do_step = ai_do_step,
     .release = ai_release,
+    .check_state = ai_check_state,
 };

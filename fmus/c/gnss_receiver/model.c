@@ -204,6 +204,24 @@ static void gr_release(sarins_ctx *c)
     c->work = NULL;
 }
 
+/* A state handed to the FMU (model.h "State validation"): every field within what do_step relies on. */
+static int gr_check_state(const sarins_ctx *c, int running)
+{
+    (void)running;
+    const gr_state *st = c->state;
+    const long long big = 1LL << 53;
+    int ok = sarins_state_int(c, "n_outages", st->n_outages, 0, MAX_OUTAGES)
+             && sarins_state_int(c, "k", st->k, 0, big) && sarins_state_int(c, "every", st->every, 0, big)
+             && sarins_state_int(c, "gnss.epochs", st->gnss.epochs, 0, big)
+             && sarins_state_finite(c, "gnss.b", st->gnss.b, 6)
+             && sarins_state_finite(c, "gnss.config", st->gnss.config, SARINS_GNSS_CONFIG)
+             && sarins_state_finite(c, "gnss.last_time", &st->gnss.last_time, 1)
+             && sarins_state_finite(c, "outages", st->outages, (size_t)(2 * st->n_outages))
+             && (st->every == 0 ? sarins_state_real(c, "step", st->step, 0.0, 0.0)
+                                : sarins_state_real(c, "step", st->step, 1e-300, 1e300));
+    return ok ? SARINS_OK : SARINS_ERROR;
+}
+
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(gr_state),
@@ -211,4 +229,5 @@ const sarins_model sarins_model_desc = {
     .initialize = gr_initialize,
     .do_step = gr_do_step,
     .release = gr_release,
+    .check_state = gr_check_state,
 };
