@@ -217,3 +217,31 @@ def test_a_step_not_dividing_the_fix_interval_or_changing_is_an_error(fmu):
             assert any(text in m for s, _, m in slave.log if s == 3), slave.log[-3:]
         finally:
             slave.free()
+
+
+def test_a_crafted_state_is_refused_naming_the_field(fmu, truth):
+    """A serialized state whose outage count is beyond its buffer (the glue's checksum recomputed, so its
+    checks pass): fmi2DeSerializeFMUstate is refused by the model's check_state naming the field."""
+    import struct
+
+    from test_native_drift_model_updater import _fnv1a
+
+    slave = Slave(fmu, "crafted")
+    try:
+        slave.set(**_params())
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+        for k, row in enumerate(_inputs(truth)[:7]):
+            slave.fmu.setReal([slave.vr[n] for n in INPUTS], list(row))
+            slave.fmu.doStep(k * STEP, STEP)
+        blob = bytearray(slave.fmu.serializeFMUstate(slave.fmu.getFMUstate()))
+        tail = struct.pack("<qqqd", 2, 7, 2, STEP)  # n_outages, k, every, step
+        assert blob.count(tail) == 1
+        struct.pack_into("<q", blob, blob.index(tail), 99)
+        head = next(h for h in range(40, 400) if struct.unpack_from("<Q", blob, h - 16)[0] == len(blob) - h)
+        struct.pack_into("<Q", blob, head - 8, _fnv1a(bytes(blob[head:])))
+        with pytest.raises(FMICallException, match="status 3"):
+            slave.fmu.deSerializeFMUstate(bytes(blob))
+        assert any("n_outages" in m for s, _, m in slave.log if s == 3), slave.log[-3:]
+    finally:
+        slave.free()
