@@ -134,6 +134,7 @@ def run_campaign(tasks, out_dir, *, workers: int | None = None, scheduler: str |
                     except Exception as exc:
                         raise TaskFailed(f"task {task.id} failed: {type(exc).__name__}: {exc}") from exc
                     results[task.id] = _store(out_dir, task, result, records[task.id])
+                    del result  # the stored copy stands for it: not two of a large result while the next runs
                     bar.update(1)
             elif todo:
                 _run_parallel(todo, out_dir, workers, scheduler, bar, records, results)

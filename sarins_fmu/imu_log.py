@@ -398,8 +398,10 @@ def _read_text_csv(path: Path, opts: ReadOptions, fmt: str) -> ImuLog:
             n_cols = len(header)
             any_rows = False
             for block in text.blocks():
-                check_lines(path, block, text.eol, n_cols - 1, MAX_DATA_LINE)
-                data = _parse_numbers(path, block, n_cols)
+                data = _fast_numbers(block, n_cols, text.eol)
+                if data is None:
+                    check_lines(path, block, text.eol, n_cols - 1, MAX_DATA_LINE)
+                    data = _parse_numbers(path, block, n_cols)
                 any_rows = True
                 plan.feed(builder, data)
             if not any_rows:
@@ -442,6 +444,20 @@ def _csv_head(path, text: TextReader):
 
 
 _META = re.compile(r"#\s*[A-Za-z_][A-Za-z0-9_]*\s*:.*")
+
+
+def _fast_numbers(block, n_cols: int, eol: bytes | None) -> np.ndarray | None:
+    """The block's numbers from the C core (grammar checked, values bit-identical to numpy's), or None when
+    it does not take the block (then :func:`check_lines` and :func:`_parse_numbers` read it and word errors)."""
+    if eol is None or _core_parse is None:
+        return None
+    return _core_parse(block.data, n_cols, eol == b"\r\n", MAX_DATA_LINE)
+
+
+try:
+    from .core.log_parse import parse_block as _core_parse
+except ImportError:  # the core is not built: numpy reads every block
+    _core_parse = None
 
 
 def _parse_numbers(path, block, n_cols: int) -> np.ndarray:

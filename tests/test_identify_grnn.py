@@ -147,3 +147,108 @@ def test_large_input_offset_keeps_precision():
     near = GRNN(0.07, standardize=False).fit(x, y).predict(q)
     far = GRNN(0.07, standardize=False).fit(x + 1e6, y).predict(q + 1e6)
     assert_allclose(far, near, rtol=1e-8)
+
+
+# ------------------------------------------------------------ truncated evaluation, exact to a bound
+U = EPS / 2  # unit roundoff
+
+
+def _truncation_bound(net, kept, tolerance):
+    """|truncated - dense| per output (grnn module docstring): the dropped weights each below tol / n, so
+    less than (n - k) tol / n times the targets' range, plus both evaluations' rounding: the dense sums'
+    gamma(n + 2) relative error on sum |y_j| P_j / sum P_j (<= max |y|), twice, and the cut's own rounding
+    (a weight at the cut, off by a few ulp, weighs tol / n)."""
+    y = net.y_train_
+    n = y.shape[0]
+    spread = y.max(axis=0) - y.min(axis=0)
+    gamma = (n + 2) * U / (1 - (n + 2) * U)
+    dropped = (n - np.asarray(kept))[:, None] * (tolerance / n) * (1 + 1e-12)
+    return dropped * spread + 2 * gamma * np.abs(y).max(axis=0) + 4 * U * np.abs(y).max(axis=0)
+
+
+@pytest.fixture(scope="module")
+def campaign_data():
+    """Seed 003's training and held-out recordings, short (in process, 0.1 s steps): real campaign inputs."""
+    from sarins_fmu.experiments import mems_calibration as mc
+
+    short = mc.with_profile(mc.PROFILES["quick"], step=0.1, warmup=20.0, train=dict(ramp_c_per_min=65.0, hold_min=0.5))
+    train = mc.dataset(mc.record_in_process("dynamic", short, seed=2), short)
+    test = mc.dataset(mc.record_in_process("heldout", short, seed=3), short)
+    return train, test
+
+
+@pytest.mark.parametrize("tolerance", [1e-9, 1e-3])
+def test_truncated_within_its_bound_on_campaign_data(campaign_data, tolerance):
+    """On the campaign's own inputs (held-out run, in time order and shuffled: the blocks' radii then grow)
+    the truncated GRNN is within the derived bound of the dense C kernel, and the cut does drop patterns."""
+    train, test = campaign_data
+    net = GRNN(0.07).fit(train.X[::2], train.Y[::2] - train.X[::2, :6])
+    q = np.concatenate([test.X[:4000], np.random.default_rng(1).permutation(test.X)[:500]])
+    y, kept = net.predict_truncated(q, tolerance=tolerance, return_kept=True)
+    dense = net.predict_dense(q)
+    assert np.all(np.abs(y - dense) <= _truncation_bound(net, kept, tolerance))
+    assert np.median(kept) < 0.5 * len(net.y_train_)  # the point of it: most patterns are not evaluated
+    if tolerance > 1e-6:
+        assert np.abs(y - dense).max() > 0  # a loose cut measurably moves the estimate, within its bound
+
+
+def test_compensator_batch_is_the_truncated_grnn(campaign_data):
+    """The campaigns' evaluation (GRNNCompensator.predict_batch, truncated) against the FMU's dense one
+    (predict): within the bound scaled by the target scale (y = x + z s + m, rounding of the last step)."""
+    from sarins_fmu.identify import compensators
+
+    train, test = campaign_data
+    comp = compensators.make("grnn", max_patterns=2000).fit(train.X, train.Y)
+    y, kept = comp.predict_batch(test.X[-4000:], return_kept=True)
+    dense = comp.predict(test.X[-4000:])
+    bound = _truncation_bound(comp.net, kept, 1e-9) * comp.target_scale + 4 * U * np.abs(dense)
+    assert np.all(np.abs(y - dense) <= bound)
+    assert kept.max() <= 2000 and kept.min() >= 1
+
+
+def test_truncated_on_adversarial_patterns():
+    """All patterns equal: every one is kept, the result is the dense one bit for bit.  One query far from
+    every pattern: the radius is relative to its nearest distance, so the nearest pattern is still found and
+    the estimate is its target (as dense).  Queries in a random order and a single row work too."""
+    rng = np.random.default_rng(5)
+    x = np.ones((300, 3))
+    y = rng.normal(size=(300, 2))
+    net = GRNN(0.07).fit(x, y)
+    q = np.vstack([np.ones((5, 3)), np.full((1, 3), 1.3), np.full((1, 3), -40.0)])
+    out, kept = net.predict_truncated(q, return_kept=True)
+    assert_array_equal(kept, 300)
+    assert_array_equal(out, net.predict_dense(q))
+
+    x = rng.normal(size=(500, 4))
+    y = rng.normal(size=(500, 2))
+    net = GRNN(0.07).fit(x, y)
+    far = np.full((1, 4), 1e4)
+    nearest = np.argmin(((x - far) ** 2).sum(axis=1))
+    out, kept = net.predict_truncated(np.vstack([x[:3] + 0.01, far]), return_kept=True)
+    assert kept[-1] >= 1
+    assert_allclose(out[-1], y[nearest], rtol=0, atol=1e-15)
+    assert_allclose(out, net.predict_dense(np.vstack([x[:3] + 0.01, far])),
+                    atol=float(_truncation_bound(net, kept, 1e-9).max()))
+    q = rng.normal(size=(700, 4)) * 3
+    out, kept = net.predict_truncated(q, return_kept=True)
+    assert np.all(np.abs(out - net.predict_dense(q)) <= _truncation_bound(net, kept, 1e-9))
+    assert net.predict_truncated(q[:1]).shape == (1, 2)
+    with pytest.raises(ValueError, match="tolerance"):
+        net.predict_truncated(q, tolerance=0.0)
+
+
+def test_truncated_does_not_depend_on_threads_or_chunks(campaign_data):
+    from sarins_fmu.core import nets
+    from sarins_fmu.identify import grnn
+
+    train, test = campaign_data
+    net = GRNN(0.07).fit(train.X[::3], train.Y[::3])
+    z = nets.standardize(test.X[:5000], net.scaling_.mean, net.scaling_.scale)
+
+    def run(**kw):
+        return grnn.predict_truncated(z, net._z_train, 0.07, lambda rows, blocks: nets.grnn_predict_blocks(
+            test.X[rows], net.scaling_.mean, net.scaling_.scale, net._z_train, net.y_train_, 0.07, blocks), **kw)[0]
+
+    one = run(threads=1)
+    assert_array_equal(run(threads=2, chunk_rows=1000, block=64), one)
+    assert_array_equal(run(threads=1, chunk_rows=512, block=512), one)

@@ -396,7 +396,7 @@ def quick_campaign(tmp_path_factory):
 
 
 def _assert_report_claims(summary: dict, one_layer) -> None:
-    """What the quick profile shows (docs/mems-calibration.md, *Quick profile after issue 20 item 5*): the
+    """What the quick profile shows (docs/mems-calibration.md, *Quick profile*): the
     one-layer recurrent networks ``one_layer`` beat both shallow models, their memoryless controls beat them."""
     from sarins.mems_calibration.report import MEMORY_EFFECT
 
@@ -741,3 +741,59 @@ def test_record_task_refuses_an_unknown_engine():
 
     with pytest.raises(ValueError, match="engine"):
         record_task("tumble", "quick", "unused", engine="warp")
+
+
+def test_progress_names_the_phase_and_scales_its_estimate():
+    """One line per event naming the phase; what is left is rescaled by the finished phases' measured time."""
+    import io
+    import time as _time
+
+    from sarins.mems_calibration.progress import Progress
+
+    out = io.StringIO()
+    p = Progress({"recording": 0.05, "fitting": 100.0, "done": 0.0}, stream=out)
+    p.start("recording", "5 recordings")
+    _time.sleep(1.2)  # 60 times the estimate: the machine is slow
+    p.start("fitting", "9 models")
+    lines = out.getvalue().splitlines()
+    assert lines[0].startswith("mems-calibration [recording 1/3] 5 recordings | elapsed 0:00, about 1:40 left")
+    assert lines[1].startswith("mems-calibration [fitting 2/3] 9 models | elapsed 0:01")
+    assert p.remaining() > 1000.0  # 100 s estimated, scaled by the measured ratio (at most 20)
+    assert set(p.measured) == {"recording"} and p.measured["recording"]["wall_s"] >= 1.2
+    silent = Progress({"a": 1.0}, enabled=False, stream=out)
+    silent.start("a", "x")
+    assert out.getvalue().count("\n") == 2
+
+
+def test_campaign_estimates_cover_every_phase():
+    from sarins.mems_calibration.campaign import estimates
+
+    est = estimates(QUICK, ["traditional", "rbf", "grnn", "lstm", "gru3"], "inprocess", None, 288_000, ["all"],
+                    ["rbf"], rnn_steps=400, grnn_patterns=5000, rbf_samples=10000)
+    assert list(est) == ["recording", "datasets", "fitting", "evaluation", "ablation", "report", "done"]
+    assert all(v > 0 for k, v in est.items() if k != "done")
+    assert est["fitting"] >= 400 * 0.108  # the GRU-3's steps at least (one process each)
+
+
+def test_parallel_fits_and_evaluations_give_the_sequential_numbers():
+    """Recurrent fits in forked processes and evaluations on threads: the same weights and statistics as
+    one at a time (each fit seeded; each evaluation independent)."""
+    from sarins.mems_calibration import analysis, campaign, fitting
+
+    X, Y = _toy_series(3000)
+    train = mems_calibration.Dataset(X, Y, np.arange(len(X)) * 0.1)
+    kinds = ["grnn", "lstm", "gru-memoryless"] if recurrent.torch_available() else ["grnn", "rbf"]
+    opts = dict(rnn_steps=3, grnn_patterns=300, rbf_samples=500)
+    two = fitting.fit_models(kinds, train, None, workers=2, **opts)
+    one = fitting.fit_models(kinds, train, None, workers=1, **opts)
+    for k in kinds:
+        np.testing.assert_array_equal(two[k].predict(X[:50]), one[k].predict(X[:50]))
+    floor = analysis.noise_floor(imu.preset("mems"), 0.1)
+    sets = {"a": train, "b": train.tail(700)}
+    par = campaign.evaluate_sets(two, sets, floor, threads=2, stream_samples={"a": 5})
+    seq = campaign.evaluate_sets(two, sets, floor, threads=1)
+    for key in sets:
+        for name in par[key][1]:
+            for metric, value in par[key][1][name].items():
+                np.testing.assert_array_equal(value, seq[key][1][name][metric])
+    assert par["a"][2]["grnn"]["stream_us"] > 0 and seq["a"][2]["grnn"]["stream_us"] is None

@@ -147,3 +147,49 @@ def test_bad_resource_locations_are_refused_by_shim_and_core(fmu_dir):
             assert line.startswith("INSTANCE"), line
         else:
             assert line.startswith("NULL") and text in line, line
+
+
+GLUE_HEADER_DIR = native.HERE.parent / "c"  # the shared glue's copy of the parser (fmus/c/sarins_uri.h)
+DRIVE_CASES = [  # (uri, path on Windows)
+    ("file:///Z:/tmp/fmu/resources", "Z:/tmp/fmu/resources"),
+    ("file:///c:/x%20y/", "c:/x y"),
+    ("file://localhost/D:/r", "D:/r"),
+    ("file:///C:", "C:"),
+    ("file:///tmp/x", "/tmp/x"),  # no drive letter: unchanged
+    ("file:///1:/x", "/1:/x"),
+    ("file:///ZZ:/x", "/ZZ:/x"),
+]
+
+
+def _run_drive_cases(run):
+    wrong = []
+    for uri, path in DRIVE_CASES:
+        got = run(uri)
+        if got != f"0\t{path}":
+            wrong.append(f"{uri!r}: got {got!r}, expected {path!r}")
+    assert not wrong, "\n".join(wrong)
+
+
+def test_glue_parser_drops_the_slash_before_a_windows_drive_letter(tmp_path):
+    """Compiled as for Windows (_WIN32): file:///Z:/p is the path Z:/p, which Windows opens (/Z:/p it cannot)."""
+    (tmp_path / "driver.c").write_text(DRIVER)
+    exe = tmp_path / "driver"
+    cmd = [native.compiler(), *native.WARNINGS, "-D_WIN32", "-O1", f"-I{GLUE_HEADER_DIR}", "-o", str(exe),
+           str(tmp_path / "driver.c")]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    _run_drive_cases(lambda uri: subprocess.run([str(exe), "4096", uri], capture_output=True, text=True,
+                                                timeout=60).stdout.rstrip("\n"))
+
+
+@pytest.mark.slow
+def test_glue_parser_under_wine_opens_windows_paths(wine_env, tmp_path):
+    """The same cases from a mingw-w64 build run under wine."""
+    (tmp_path / "driver.c").write_text(DRIVER)
+    exe = tmp_path / "driver.exe"
+    proc = subprocess.run(["x86_64-w64-mingw32-gcc", "-std=c11", "-Wall", "-Wextra", "-Werror", "-O1",
+                           f"-I{GLUE_HEADER_DIR}", "-o", str(exe), str(tmp_path / "driver.c")],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    _run_drive_cases(lambda uri: subprocess.run(["wine", str(exe), "4096", uri], capture_output=True, text=True,
+                                                env=wine_env, timeout=120).stdout.replace("\r", "").rstrip("\n"))

@@ -28,7 +28,8 @@ from pathlib import Path
 
 from sarins.cli import bounded_int, seed_value
 
-from .fitting import CONTROLS, RECURRENT, RNN_STREAMS, RNN_WINDOW, model_set, step_costs
+from .fitting import CONTROLS, RECURRENT, RNN_STREAMS, RNN_WINDOW, model_set, models_key, step_costs
+from .progress import Progress
 
 HELP = ("seed 003: MEMS IMU dynamic calibration on a 3-axis thermal rate table (traditional, RBFNN, GRNN, "
         "LSTM, GRU; held-out programme, ablation of the time-correlated errors)")
@@ -37,6 +38,10 @@ MODEL_DEFAULTS = {  # per profile: recurrent training steps, GRNN patterns, RBF 
     "quick": dict(rnn_steps=400, grnn_patterns=5000, rbf_samples=10000),
     "paper": dict(rnn_steps=4000, grnn_patterns=20000, rbf_samples=50000),
 }
+# per profile: samples of the third power-up evaluated, from its start; None: as many as the held-out run.
+# The quick profile (a smoke run) checks a quarter of its held-out length there; the training run's tail is
+# always as long as the held-out run (the report compares the two).
+CHECK_SAMPLES = {"quick": 288_000, "paper": None}
 DEFAULT_ABLATION_MODELS = "rbf,grnn,lstm,lstm-memoryless"
 
 
@@ -56,9 +61,10 @@ def add_arguments(parser) -> None:
                              "(quick 5000, paper 20000)")
     parser.add_argument("--rbf-samples", type=bounded_int(1, 1_000_000), default=None,
                         help="RBF training samples, evenly spaced, 1 .. 10**6 (quick 10000, paper 50000)")
-    parser.add_argument("--engine", choices=("cosim", "inprocess"), default="cosim",
-                        help="record through the FMUs under the master (default) or in process on the same library "
-                             "functions (the same numbers, about 20 times faster at the paper's 200 Hz)")
+    parser.add_argument("--engine", choices=("cosim", "inprocess"), default="inprocess",
+                        help="record in process on the library functions the FMUs run (default: the same numbers, "
+                             "tests/test_mems_calibration.py, about 20 times faster at the paper's 200 Hz) or "
+                             "through the Turntable and IMUThermal FMUs under the master (cosim)")
     parser.add_argument("--ablation", default="none",
                         help="time-correlated error terms and output dynamics to switch off one at a time, "
                              "comma-separated, from die-lag,gradient,hysteresis,flicker,rate-random-walk,turn-on,"
@@ -116,7 +122,8 @@ def run(args) -> int:
     summary = run_mems_calibration(args.profile, Path(args.out), kinds=kinds, workers=args.workers,
                                    scheduler=args.scheduler, progress=not args.no_progress, seed=args.seed,
                                    report_dir=args.report_dir, skipped=skipped, refit=args.refit,
-                                   ablations=ablations, ablation_kinds=ablation_kinds, engine=args.engine, **options)
+                                   ablations=ablations, ablation_kinds=ablation_kinds, engine=args.engine,
+                                   check_samples=CHECK_SAMPLES[args.profile], **options)
     for name, red in summary["reductions"].items():
         print(f"{name:16s} mean {red['mean']:6.1f} %  std {red['std']:6.1f} %  mean-abs {red['mae']:6.1f} %  "
               f"systematic {red['sys']:6.1f} %")
@@ -161,31 +168,84 @@ def record_all(profile_name: str, out: Path, *, workers=None, scheduler=None, pr
     tasks = [Task(kind, record_task, dict(kind=kind, **common), volatile=("fmu_dir",)) for kind in mc.KINDS]
     tasks += [Task(f"{kind}.no-{term}", record_task, dict(kind=kind, ablation=term, **common), volatile=("fmu_dir",))
               for term in ablations for kind in ("dynamic", "heldout")]
-    return run_campaign(tasks, out / "recordings", workers=workers, scheduler=scheduler, progress=progress,
-                        description="mems-calibration recordings")
+    return run_campaign(tasks, out / "recordings", workers=recording_workers(engine, workers, scheduler),
+                        scheduler=scheduler, progress=progress, description="mems-calibration recordings")
+
+
+def recording_workers(engine: str, workers, scheduler):
+    """Worker processes of the recordings: as given; by default one (this process) for the in-process
+    engine, whose arrays would otherwise be pickled back from the workers at a cost above the recording
+    itself (quick profile: 22 s in this process, 40 s with two workers), else every core (None)."""
+    if workers is not None or scheduler:
+        return workers
+    return 1 if engine == "inprocess" else None
 
 
 def evaluate(models: dict, test, floor, *, log=None, stream_samples: int = 300):
     """Residuals on ``test`` and the cost of each model.
 
-    Returns (residuals {name: (n, 6)} with 'raw' first, stats {name: dict},
-    info {name: n_parameters, fit_s, predict_s (whole test set, batch),
-    stream_us (per sample, one at a time as in the compensator FMU)}).
+    Returns (residuals {name: (n', 6)} with 'raw' first, every :func:`thinning`-th row (what the figures
+    plot), stats {name: dict} (of every row),
+    info {name: n_parameters, fit_s, predict_s (whole test set, batch; wall time, the evaluations of
+    :func:`evaluate_sets` running side by side), stream_us (per sample, one at a time as in the compensator
+    FMU)}).
     """
+    return evaluate_sets(models, {"test": test}, floor, log=log, stream_samples={"test": stream_samples})["test"]
+
+
+def evaluate_sets(models: dict, sets: dict, floor, *, log=None, stream_samples=None, threads=None) -> dict:
+    """:func:`evaluate` of every model on every dataset of ``sets`` ({name: Dataset}), the (model, dataset)
+    evaluations on ``threads`` threads (default ``SARINS_THREADS`` or every core; the C core releases the
+    GIL), longest first; ``stream_samples`` {set name: rows of the one-at-a-time timing} (default 0).
+    Returns {set name: (residuals, stats, info)} as :func:`evaluate`; the numbers do not depend on threads."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from sarins_fmu.core.imu import thread_count
+
     from . import analysis
 
-    residuals = {"raw": test.X[:, :6] - test.Y}
-    info = {}
-    for name, model in models.items():
+    stream_samples = stream_samples or {}
+    jobs = sorted(((name, key) for key in sets for name in models),
+                  key=lambda job: -EVAL_US_PER_SAMPLE.get(job[0].replace("-memoryless", ""), 1.0) * len(sets[job[1]]))
+
+    def one(job):
+        name, key = job
+        data = sets[key]
         if log:
-            log(f"mems-calibration: evaluating {name} on {len(test)} samples")
+            log(f"mems-calibration: evaluating {name} on {len(data)} samples ({key})")
         t0 = time.perf_counter()
-        residuals[name] = model.predict(test.X) - test.Y
-        predict_s = time.perf_counter() - t0
-        info[name] = dict(n_parameters=int(model.n_parameters), fit_s=float(model.fit_seconds or 0.0),
-                          predict_s=predict_s, stream_us=_stream_us(model, test.X[:stream_samples]))
-    stats = {name: analysis.residual_stats(r, floor) for name, r in residuals.items()}
-    return residuals, stats, info
+        residual = models[name].predict_batch(data.X) - data.Y
+        seconds = time.perf_counter() - t0
+        return residual[::thinning(len(data))], analysis.residual_stats(residual, floor), seconds
+
+    workers = max(1, min(len(jobs), thread_count() if threads is None else int(threads)))
+    with ThreadPoolExecutor(workers) as pool:
+        done = dict(zip(jobs, pool.map(one, jobs)))
+    out = {}
+    for key, data in sets.items():
+        raw = data.X[:, :6] - data.Y
+        residuals, stats = {"raw": raw[::thinning(len(data))]}, {"raw": analysis.residual_stats(raw, floor)}
+        info = {}
+        for name, model in models.items():
+            residuals[name], stats[name], predict_s = done[(name, key)]
+            info[name] = dict(n_parameters=int(model.n_parameters), fit_s=float(model.fit_seconds or 0.0),
+                              predict_s=predict_s,
+                              stream_us=_stream_us(model, data.X[:stream_samples.get(key, 0)]))
+        out[key] = (residuals, stats, info)
+    return out
+
+
+FIGURE_POINTS = 4000  # points per panel of the residual figures (report.residual_figure's max_points)
+
+
+def thinning(n: int) -> int:
+    """Row step of the residuals kept for the figures: every row the figures plot, no other."""
+    return max(1, n // FIGURE_POINTS)
+
+
+# C core's batch evaluation cost per sample (us, this machine, one core): orders the evaluations, longest first
+EVAL_US_PER_SAMPLE = {"traditional": 0.6, "rbf": 0.6, "grnn": 3.5, "lstm": 11.0, "gru": 7.8, "lstm3": 43.0,
+                      "gru3": 33.0}
 
 
 def _stream_us(model, rows) -> float | None:
@@ -197,6 +257,12 @@ def _stream_us(model, rows) -> float | None:
     for x in rows:
         stream.step(x)
     return (time.perf_counter() - t0) / len(rows) * 1e6
+
+
+def _take(recs, kind: str) -> dict:
+    """``recs[kind]``, its slot emptied (the caller holds the only reference)."""
+    rec, recs[kind] = recs[kind], None
+    return rec
 
 
 def _reductions(stats: dict) -> dict:
@@ -229,13 +295,14 @@ def run_ablations(ablations, recs: dict, full_test, prof, kinds, out: Path, floo
 
 def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, scheduler=None, progress=True, seed=3,
                          report_dir=None, rnn_steps=400, grnn_patterns=5000, rbf_samples=10000, skipped=(),
-                         refit=False, ablations=(), ablation_kinds=(), engine="cosim") -> dict:
+                         refit=False, ablations=(), ablation_kinds=(), engine="inprocess", check_samples=None) -> dict:
     """The whole campaign; returns the summary (also written to ``<out>/summary.json``).
 
     Like the recordings, fitted models are reused: ``<out>/models/<kind>.npz``
     from an earlier run with the same recordings, options and code
     (``<out>/models/index.json``) is loaded instead of fitted again, unless
-    ``refit``; likewise ``<out>/models/no-<term>/`` for each ablation.
+    ``refit``; likewise ``<out>/models/no-<term>/`` for each ablation.  ``check_samples``: samples of the
+    third power-up evaluated, from its start (None: the held-out length).
     """
     from dataclasses import asdict
 
@@ -251,42 +318,61 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     out = Path(out)
     wall = {}
     load_start = os.getloadavg()[0]
+    prof = mc.profile(profile_name)
+    fit_options = dict(rnn_steps=rnn_steps, grnn_patterns=grnn_patterns, rbf_samples=rbf_samples)
+    progress_lines = Progress(estimates(prof, kinds, engine, workers, check_samples, ablations, ablation_kinds,
+                                        **fit_options), enabled=progress)
+    progress_lines.start("recording", f"{len(mc.KINDS) + 2 * len(ablations)} recordings ({engine})")
     t0 = time.perf_counter()
     recs = record_all(profile_name, out, workers=workers, scheduler=scheduler, progress=progress, seed=seed,
                       ablations=ablations, engine=engine)
     wall["recording campaign (this call; 0 when resumed)"] = time.perf_counter() - t0
     for name in sorted(recs):
         wall[f"co-simulation {name}"] = float(recs[name].get("wall_s", float("nan")))
-    prof = mc.profile(profile_name)
-    train, test = mc.dynamic_dataset(recs["dynamic"], recs["heldout"], prof)
-    repowered = mc.dataset(recs["repowered"], prof)
-    fit = mc.traditional_calibration(recs["tumble"], recs["rates"], prof)
-    floor = analysis.noise_floor(imu.preset("mems"), prof.step)
-
-    log = (lambda text: print(text, file=sys.stderr, flush=True)) if progress else None  # noqa: E731
+    progress_lines.start("datasets", "truth of every sample, the traditional calibration")
+    report_dir = Path(report_dir) if report_dir else out
+    report_dir.mkdir(parents=True, exist_ok=True)
+    figures = [rep.programme_figure(report_dir / "fig_programmes.png", recs, prof).name]
     options = dict(rnn_steps=rnn_steps, grnn_patterns=grnn_patterns, rbf_samples=rbf_samples)
-    fitted_on = {k: recs[k] for k in ("dynamic", "tumble", "rates")}
+    key = models_key({k: recs[k] for k in ("dynamic", "tumble", "rates")}, options)
+    fit = mc.traditional_calibration(recs["tumble"], recs["rates"], prof)
+    # memory: each of the protocol's recordings is dropped once it is a dataset (the ablation's stay)
+    train = mc.dataset(_take(recs, "dynamic"), prof)
+    test = mc.dataset(_take(recs, "heldout"), prof)
+    repowered = mc.dataset(_take(recs, "repowered"), prof)
+    for kind in mc.KINDS:
+        recs[kind] = None
+    floor = analysis.noise_floor(imu.preset("mems"), prof.step)
+    n_check = len(test) if check_samples is None else min(int(check_samples), len(test))
+    repowered = mc.Dataset(repowered.X[:n_check], repowered.Y[:n_check], repowered.time[:n_check])
+
+    def log(text):
+        progress_lines.note(text.removeprefix("mems-calibration: "))
+    progress_lines.start("fitting", f"{len(kinds)} models")
     t0 = time.perf_counter()
-    models, reused, fit_load = model_set(out / "models", kinds, train, fit, fitted_on, options, refit=refit,
-                                         log=log)
+    models, reused, fit_load = model_set(out / "models", kinds, train, fit, key, options, refit=refit, log=log)
     wall["model fitting (this call)"] = time.perf_counter() - t0
+    progress_lines.start("evaluation", f"{len(models)} models on 3 sets (2 x {len(test)} + {n_check} samples)")
     t0 = time.perf_counter()
-    residuals, stats, info = evaluate(models, test, floor, log=log)
-    _, stats_repowered, _ = evaluate(models, repowered, floor, stream_samples=0)
-    _, stats_in_sample, _ = evaluate(models, train.tail(len(test)), floor, stream_samples=0)
+    sets = evaluate_sets(models, {"held-out": test, "repowered": repowered, "in-sample": train.tail(len(test))},
+                         floor, log=log, stream_samples={"held-out": 300})
+    residuals, stats, info = sets["held-out"]
+    stats_repowered, stats_in_sample = sets["repowered"][1], sets["in-sample"][1]
+    del sets
     wall["model evaluation"] = time.perf_counter() - t0
     red = _reductions(stats)
+    progress_lines.start("ablation", f"{len(ablations)} terms switched off")
     t0 = time.perf_counter()
     ablation = run_ablations(ablations, recs, test, prof, ablation_kinds, out, floor, options, refit=refit, log=log)
     wall["ablation fits and evaluation"] = time.perf_counter() - t0
 
-    report_dir = Path(report_dir) if report_dir else out
-    report_dir.mkdir(parents=True, exist_ok=True)
-    figures = rep.figures(report_dir, recs, prof, test, residuals)
+    progress_lines.start("report", "figures, per-step training costs, report.md")
+    step = thinning(len(test))
+    figures += rep.residual_figures(report_dir, test.time[::step], residuals)
     summary = dict(
         profile=profile_name, engine=engine, step=prof.step, cal_step=prof.cal_step, tumble_dwell=prof.tumble_dwell,
         warmup=prof.warmup, programmes={"training": asdict(prof.train), "held-out": asdict(prof.test)},
-        seeds={k: mc.run_seed(k, seed) for k in mc.KINDS}, n_train=len(train), n_test=len(test),
+        seeds={k: mc.run_seed(k, seed) for k in mc.KINDS}, n_train=len(train), n_test=len(test), n_check=n_check,
         gyro_fit_rms_dps=fit.gyro_rms_residual * 180 / np.pi, accel_fit_rms_mg=fit.accel_rms_residual / rep.G_MG,
         noise_floor=floor.tolist(), models=info, wall_s=wall, reductions=red, order=analysis.ordering(red),
         reductions_repowered=_reductions(stats_repowered), reductions_in_sample=_reductions(stats_in_sample),
@@ -294,7 +380,7 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
         stats={n: {k: v.tolist() for k, v in s.items()} for n, s in stats.items()},
         ablation=ablation, options=options, seed=seed, reused_models=reused, rnn_window=RNN_WINDOW,
         load_average=[load_start, os.getloadavg()[0]], fit_load_average=fit_load,
-        rnn_streams=RNN_STREAMS)
+        rnn_streams=RNN_STREAMS, phases=progress_lines.measured)
     if skipped:
         from sarins_fmu.identify.recurrent import INSTALL_HINT
 
@@ -302,5 +388,45 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     text = rep.markdown(summary, rep.calibration_tables(fit, imu.preset("mems")), figures)
     summary["report"] = str((report_dir / "report.md").resolve())
     write_text(report_dir / "report.md", text)
+    progress_lines.start("done", f"report {summary['report']}")
     write_text(out / "summary.json", json.dumps(summary, indent=1))
     return summary
+
+
+# in-process recording, CPU s per recorded sample (this machine; co-simulated: about 150 us per master step)
+RECORD_S_PER_SAMPLE = {"inprocess": 5e-6, "cosim": 150e-6}
+DATASET_S_PER_SAMPLE = 2.0e-6  # truth and inputs of one dynamic sample, s
+RBF_FIT_S_PER_SAMPLE = 9e-4  # RBF fit (2000 candidates, 30 neurons), s per training sample
+
+
+def estimates(prof, kinds, engine, workers, check_samples, ablations, ablation_kinds, *, rnn_steps, grnn_patterns,
+              rbf_samples) -> dict:
+    """Estimated seconds of each phase on the reference machine ({phase: s}, in order) from the campaign's
+    cost model: recording and dataset cost per sample, recurrent training steps (:data:`.fitting.STEP_MS`)
+    shared by the fitting processes, and C-core evaluation cost per sample (:data:`EVAL_US_PER_SAMPLE`)
+    shared by the evaluation threads."""
+    from sarins_fmu.core.imu import thread_count
+    from sarins_fmu.experiments import mems_calibration as mc
+
+    from .fitting import STEP_MS
+
+    cores = thread_count()
+    parallel = max(1, min(cores, workers or cores))
+    n = {k: mc.stop_time(k, prof) / (prof.step if k in mc.DYNAMIC_KINDS else prof.cal_step) for k in mc.KINDS}
+    n_dyn = n["dynamic"] + n["heldout"] + n["repowered"]
+    n_check = n["heldout"] if check_samples is None else min(check_samples, n["heldout"])
+
+    def fits(names):
+        steps = [rnn_steps * STEP_MS.get(k, 100.0) / 1e3 for k in names if k in RECURRENT]
+        rbf = RBF_FIT_S_PER_SAMPLE * min(rbf_samples, n["dynamic"]) if "rbf" in names else 0.0
+        return max(sum(steps) / parallel, max(steps, default=0.0)) + rbf
+
+    def evaluations(names, samples):
+        return sum(EVAL_US_PER_SAMPLE.get(k.replace("-memoryless", ""), 1.0) for k in names) * samples / 1e6 / cores
+
+    record = RECORD_S_PER_SAMPLE[engine] * (sum(n.values()) + 2 * len(ablations) * (n["dynamic"] + n["heldout"]))
+    record_parallel = recording_workers(engine, workers, None) or cores
+    return {"recording": record / max(1, min(cores, record_parallel)) + 3.0, "datasets": DATASET_S_PER_SAMPLE * n_dyn + 2.0,
+            "fitting": fits(kinds), "evaluation": evaluations(kinds, 2 * n["heldout"] + n_check),
+            "ablation": len(ablations) * (fits(ablation_kinds) + evaluations(ablation_kinds, n["heldout"])),
+            "report": 5.0 + (3.0 if any(k in RECURRENT for k in kinds) else 0.0), "done": 0.0}

@@ -20,31 +20,82 @@ RECURRENT = ("lstm", "gru", "lstm3", "gru3") + tuple(CONTROLS)
 RNN_WINDOW, RNN_STREAMS = 100, 32  # truncated-BPTT window (samples) and parallel streams (seed 003 gives neither)
 
 
+# one training step (ms, window 100, 32 streams, one thread, this machine): orders the fits, longest first
+STEP_MS = {"lstm": 13.0, "gru": 47.0, "lstm3": 91.0, "gru3": 108.0, "lstm-memoryless": 13.0,
+           "gru-memoryless": 13.0}
+_TRAIN = None  # the training set a forked fitting process inherits (not pickled to it)
+
+
 def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_samples: int, seed: int = 0,
-               log=None) -> dict:
+               log=None, workers: int | None = None) -> dict:
     """Fitted compensators by name (the traditional one from the calibration fit ``fit``; the controls of
     :data:`CONTROLS` as memoryless recurrent compensators).
 
-    ``log``: optional callable taking one line of progress text.
+    The recurrent fits (one torch thread each) run side by side in ``workers`` forked processes (default
+    ``SARINS_THREADS`` or every core), longest first; the others in this process meanwhile.  Each fit is
+    seeded, so the models do not depend on ``workers``.  ``log``: optional callable taking one line of
+    progress text.
     """
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    from sarins_fmu.core.imu import thread_count
+
+    global _TRAIN
+    rnn = dict(steps=rnn_steps, seed=seed, seq_len=RNN_WINDOW, streams=RNN_STREAMS)
+    options = {"rbf": dict(max_samples=rbf_samples), "grnn": dict(max_patterns=grnn_patterns)}
+    recurrent_kinds = sorted((k for k in kinds if k in RECURRENT), key=lambda k: -STEP_MS.get(k, 100.0))
+    workers = min(len(recurrent_kinds), thread_count() if workers is None else int(workers))
+    models, pending = {}, {}
+    pool = None
+    if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
+        _TRAIN = train
+        pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"))
+        if log:
+            log(f"mems-calibration: fitting {', '.join(recurrent_kinds)} on {len(train)} samples ({workers} "
+                "processes, longest first)")
+        for kind in recurrent_kinds:
+            pending[kind] = pool.submit(_fit_recurrent, kind, rnn)
+    try:
+        for kind in kinds:
+            if kind in pending:
+                continue
+            if log:
+                log(f"mems-calibration: fitting {kind} on {len(train)} samples")
+            if kind == "traditional":
+                t0 = time.perf_counter()
+                model = compensators_module().TraditionalCompensator(fit.gyro, fit.accel)
+                model.fit_seconds = time.perf_counter() - t0
+            elif kind in RECURRENT:
+                model = _fit_recurrent(kind, rnn, train)
+            else:
+                model = compensators_module().make(kind, **options[kind]).fit(train.X, train.Y)
+            models[kind] = model
+        names = {future: kind for kind, future in pending.items()}
+        for future in as_completed(names):
+            models[names[future]] = future.result()
+            if log:
+                log(f"mems-calibration: fitted {names[future]} ({models[names[future]].fit_seconds:.0f} s)")
+    finally:
+        if pool is not None:
+            pool.shutdown(cancel_futures=True)
+        _TRAIN = None
+    return {k: models[k] for k in kinds}
+
+
+def compensators_module():
     from sarins_fmu.identify import compensators
 
-    rnn = dict(steps=rnn_steps, seed=seed, seq_len=RNN_WINDOW, streams=RNN_STREAMS)
-    models = {}
-    for kind in kinds:
-        if log:
-            log(f"mems-calibration: fitting {kind} on {len(train)} samples")
-        if kind == "traditional":
-            t0 = time.perf_counter()
-            model = compensators.TraditionalCompensator(fit.gyro, fit.accel)
-            model.fit_seconds = time.perf_counter() - t0
-        elif kind in CONTROLS:
-            model = compensators.make(CONTROLS[kind], memory=False, **rnn).fit(train.X, train.Y)
-        else:
-            opts = {"rbf": dict(max_samples=rbf_samples), "grnn": dict(max_patterns=grnn_patterns)}.get(kind, rnn)
-            model = compensators.make(kind, **opts).fit(train.X, train.Y)
-        models[kind] = model
-    return models
+    return compensators
+
+
+def _fit_recurrent(kind: str, rnn: dict, train=None):
+    """One recurrent compensator (or memoryless control) fitted on ``train`` (default the inherited set)."""
+    train = _TRAIN if train is None else train
+    compensators = compensators_module()
+    if kind in CONTROLS:
+        return compensators.make(CONTROLS[kind], memory=False, **rnn).fit(train.X, train.Y)
+    return compensators.make(kind, **rnn).fit(train.X, train.Y)
 
 
 def _index(model_dir: Path) -> dict:
@@ -81,9 +132,10 @@ def _stored_models(model_dir: Path, kinds, key: str) -> dict:
     return stored
 
 
-def model_set(model_dir: Path, kinds, train, fit, recs: dict, options: dict, *, refit=False, log=None):
+def model_set(model_dir: Path, kinds, train, fit, recs, options: dict, *, refit=False, log=None):
     """The fitted models of one training set: reused from ``model_dir`` when made from the same
-    recordings ``recs``, options and code, else fitted and saved there.
+    recordings ``recs`` (or their :func:`models_key` with these options, a str), options and code, else
+    fitted and saved there.
 
     Returns (models, reused names, load): ``load`` is the machine's 1-min
     load average before and after the fits that made the models' fit times
@@ -92,7 +144,7 @@ def model_set(model_dir: Path, kinds, train, fit, recs: dict, options: dict, *, 
     from sarins.campaign import atomic_output, write_text
 
     model_dir.mkdir(parents=True, exist_ok=True)
-    key = models_key(recs, options)
+    key = recs if isinstance(recs, str) else models_key(recs, options)
     stored = {} if refit else _stored_models(model_dir, kinds, key)
     todo = [k for k in kinds if k not in stored]
     load_before = os.getloadavg()[0]

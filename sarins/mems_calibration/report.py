@@ -132,10 +132,16 @@ def programme_figure(path: Path, recs: dict, prof, max_points: int = 4000) -> Pa
 def figures(report_dir: Path, recs: dict, prof, test, residuals: dict) -> list:
     """Write the report's figures; their file names."""
     report_dir = Path(report_dir)
-    return [programme_figure(report_dir / "fig_programmes.png", recs, prof).name,
-            residual_figure(report_dir / "fig4_gyro_x_residual.png", test.time, residuals, 0,
+    return ([programme_figure(report_dir / "fig_programmes.png", recs, prof).name]
+            + residual_figures(report_dir, test.time, residuals))
+
+
+def residual_figures(report_dir: Path, time: np.ndarray, residuals: dict) -> list:
+    """Figs 4-5 analogues (held-out residuals at ``time``); their file names."""
+    report_dir = Path(report_dir)
+    return [residual_figure(report_dir / "fig4_gyro_x_residual.png", time, residuals, 0,
                             "Fig. 4 analogue: X gyro residual on the held-out run").name,
-            residual_figure(report_dir / "fig5_accel_x_residual.png", test.time, residuals, 3,
+            residual_figure(report_dir / "fig5_accel_x_residual.png", time, residuals, 3,
                             "Fig. 5 analogue: X accelerometer residual on the held-out run").name]
 
 
@@ -504,15 +510,23 @@ def markdown(summary: dict, fit_tables: str, figures: list[str]) -> str:
     load = s.get("load_average")
     load_text = "" if not load else (f" Wall times and costs are from a shared 2-core machine (1-min load average "
                                      f"{load[0]:.1f} at the start, {load[1]:.1f} at the end of the campaign).")
-    lines += ["", "Wall times: " + ", ".join(f"{k} {v:.0f} s" for k, v in s["wall_s"].items()) + "." + load_text,
+    phases = s.get("phases") or {}
+    phase_text = ("" if not phases else " Phases (wall / CPU s, CPU of this process and its fitting processes): "
+                  + ", ".join(f"{k} {v['wall_s']:.0f} / {v['cpu_s']:.0f}" for k, v in phases.items()) + ".")
+    lines += ["", "Wall times: " + ", ".join(f"{k} {v:.0f} s" for k, v in s["wall_s"].items()) + "." + load_text
+              + phase_text,
               "", "## Figures", ""]
     lines += [f"![{f}]({f})" for f in figures]
     o = s["options"]
     lines += ["", "## Notes", "",
-              f"GRNN pattern layer: at most {o['grnn_patterns']} evenly spaced training samples (the evaluation "
-              f"costs one exp per test-pattern pair). RBF trained on at most {o['rbf_samples']} evenly spaced "
+              f"GRNN pattern layer: at most {o['grnn_patterns']} evenly spaced training samples; evaluated "
+              "truncated (patterns whose weight is below 1e-9 / n of the largest left out, found by a k-d tree: each "
+              "output within 1e-9 of its training range of the dense GRNN, sarins_fmu/identify/grnn.py). "
+              f"RBF trained on at most {o['rbf_samples']} evenly spaced "
               f"samples (2000 centre candidates). Recurrent models: {o['rnn_steps']} NAdam steps on windows of "
               f"{s['rnn_window']} samples read by {s['rnn_streams']} parallel streams, state carried; prediction "
               "runs the test series statefully from a zero state. All networks learn the correction y - x "
-              "(standardised), see docs/mems-calibration.md."]
+              "(standardised), see docs/mems-calibration.md."
+              + (f" The third power-up is evaluated on its first {s['n_check']} samples."
+                 if s.get("n_check") not in (None, s["n_test"]) else "")]
     return "\n".join(lines) + "\n"

@@ -277,7 +277,9 @@ static int build_rnn(sarins_comp *c, const sarins_netfile *f, char *msg, size_t 
     if (status != SARINS_NETFILE_OK)
         return status;
     total += (size_t)(wout->count + bout->count);
-    double *b = malloc(total * sizeof(double));
+    /* + one scratch matrix for the transposition of the largest weight (G h x max(n_in, h)) */
+    const int64_t widest = r->n_in > h ? r->n_in : h;
+    double *b = malloc((total + (size_t)(g * h * widest)) * sizeof(double));
     if (b == NULL)
         return fail(msg, msg_len, SARINS_NETFILE_MEMORY, "out of memory for a recurrent network of %lld units",
                     (long long)h);
@@ -291,7 +293,14 @@ static int build_rnn(sarins_comp *c, const sarins_netfile *f, char *msg, size_t 
         }
     }
     copy(f, wout, p), r->w_out = p, p += wout->count;
-    copy(f, bout, p), r->b_out = p;
+    copy(f, bout, p), r->b_out = p, p += bout->count;
+    for (int l = 0; l < r->layers; l++) /* the kernel's layout: w_ih, w_hh transposed (nets.h) */
+        for (int q = 0; q < 2; q++) {
+            double *w = (double *)(q == 0 ? r->w_ih[l] : r->w_hh[l]);
+            int64_t cols = q == 0 ? (l == 0 ? r->n_in : h) : h;
+            memcpy(p, w, (size_t)(g * h * cols) * sizeof(double));
+            sarins_rnn_transpose(g * h, cols, p, w);
+        }
     c->block = b;
     return SARINS_NETFILE_OK;
 }
@@ -337,19 +346,40 @@ int64_t sarins_comp_state_size(const sarins_comp *c)
 
 int64_t sarins_comp_scratch_size(const sarins_comp *c) { return c->kind == SARINS_NET_KIND_GRNN ? c->grnn.n : 0; }
 
-/* one sample: x[7] -> y[6] */
-static int comp_one(const sarins_comp *c, double *state, const double *x, double *y, double *scratch)
+static int inputs_finite(const double *x)
 {
     for (int i = 0; i < SARINS_COMP_N_IN; i++)
         if (!isfinite(x[i]))
-            return SARINS_NET_INPUT;
+            return 0;
+    return 1;
+}
+
+/* a network's standardised correction z -> y = x + z s + m (the correction undone), checked finite */
+static int comp_finish(const sarins_comp *c, const double *x, const double *z, double *y)
+{
+    for (int o = 0; o < SARINS_COMP_N_OUT; o++)
+        y[o] = x[o] + z[o] * c->target_scale[o] + c->target_mean[o];
+    for (int o = 0; o < SARINS_COMP_N_OUT; o++)
+        if (!isfinite(y[o]))
+            return SARINS_NET_OUTPUT;
+    return SARINS_NET_OK;
+}
+
+/* one sample: x[7] -> y[6] */
+static int comp_one(const sarins_comp *c, double *state, const double *x, double *y, double *scratch)
+{
+    if (!inputs_finite(x))
+        return SARINS_NET_INPUT;
     double z[SARINS_COMP_N_OUT];
     switch (c->kind) {
     case SARINS_NET_KIND_TRADITIONAL:
         if (sarins_triad_compensate(c->gyro_k, c->gyro_b, 1, x, y) != 0
             || sarins_triad_compensate(c->accel_k, c->accel_b, 1, x + 3, y + 3) != 0)
             return SARINS_NET_SINGULAR;
-        break;
+        for (int o = 0; o < SARINS_COMP_N_OUT; o++)
+            if (!isfinite(y[o]))
+                return SARINS_NET_OUTPUT;
+        return SARINS_NET_OK;
     case SARINS_NET_KIND_RBF:
         sarins_rbf_eval(&c->rbf, 1, x, z);
         break;
@@ -364,12 +394,29 @@ static int comp_one(const sarins_comp *c, double *state, const double *x, double
         sarins_rnn_step(&c->rnn, state, zin, z);
     }
     }
-    if (c->kind != SARINS_NET_KIND_TRADITIONAL)
-        for (int o = 0; o < SARINS_COMP_N_OUT; o++) /* y = x + z s + m: the correction undone */
-            y[o] = x[o] + z[o] * c->target_scale[o] + c->target_mean[o];
-    for (int o = 0; o < SARINS_COMP_N_OUT; o++)
-        if (!isfinite(y[o]))
-            return SARINS_NET_OUTPUT;
+    return comp_finish(c, x, z, y);
+}
+
+int sarins_comp_run_grnn_blocks(const sarins_comp *c, int64_t n_blocks, const int64_t *row_ptr,
+                                const int64_t *cand_ptr, const int64_t *cand, double log_cut, const double *x,
+                                double *y, double *scratch, int64_t *kept)
+{
+    if (c->kind != SARINS_NET_KIND_GRNN)
+        return SARINS_NET_KIND;
+    double z[SARINS_COMP_N_OUT];
+    for (int64_t b = 0; b < n_blocks; b++)
+        for (int64_t r = row_ptr[b]; r < row_ptr[b + 1]; r++) {
+            const double *xr = x + r * SARINS_COMP_N_IN;
+            if (!inputs_finite(xr))
+                return SARINS_NET_INPUT;
+            int64_t k = sarins_grnn_eval_subset(&c->grnn, xr, cand_ptr[b + 1] - cand_ptr[b], cand + cand_ptr[b],
+                                                log_cut, z, scratch);
+            if (kept != NULL)
+                kept[r] = k;
+            int status = comp_finish(c, xr, z, y + r * SARINS_COMP_N_OUT);
+            if (status != SARINS_NET_OK)
+                return status;
+        }
     return SARINS_NET_OK;
 }
 

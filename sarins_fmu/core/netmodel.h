@@ -42,7 +42,8 @@ enum { SARINS_AXIAL_IN_LAT_ERROR_DEG = 0, SARINS_AXIAL_IN_LAT_DEG = 1, SARINS_AX
 
 /* evaluation statuses */
 enum { SARINS_NET_OK = 0, SARINS_NET_INPUT = 1 /* a used input is not finite */,
-       SARINS_NET_OUTPUT = 2 /* the result is not finite */, SARINS_NET_SINGULAR = 3 /* a singular K */ };
+       SARINS_NET_OUTPUT = 2 /* the result is not finite */, SARINS_NET_SINGULAR = 3 /* a singular K */,
+       SARINS_NET_KIND = 4 /* the call needs another kind of model */ };
 
 typedef struct {
     sarins_rbf rbf;
@@ -83,6 +84,14 @@ int64_t sarins_comp_scratch_size(const sarins_comp *c);
  * (then one evaluation at a time per model; with the caller's, the model is only read and several threads
  * may share it).  SARINS_NET_* status (x non-finite: SARINS_NET_INPUT, nothing written for that row on). */
 int sarins_comp_run(const sarins_comp *c, double *state, int64_t n, const double *x, double *y, double *scratch);
+
+/* The truncated GRNN (sarins_grnn_eval_blocks, nets.h) of a GRNN compensator over the rows x[n][7] -> y[n][6],
+ * row_ptr, cand_ptr, cand, log_cut, kept as there; scratch holds the largest block's candidate count.  The
+ * in-process batch evaluation (the IMUCompensator FMU runs the dense sarins_comp_run).  SARINS_NET_* status
+ * (SARINS_NET_KIND when c is not a GRNN). */
+int sarins_comp_run_grnn_blocks(const sarins_comp *c, int64_t n_blocks, const int64_t *row_ptr,
+                                const int64_t *cand_ptr, const int64_t *cand, double log_cut, const double *x,
+                                double *y, double *scratch, int64_t *kept);
 
 /* Handles for the ctypes binding: parse + build from bytes (NULL with a reason on failure), free. */
 sarins_axial *sarins_axial_open(const unsigned char *buf, size_t n, char *msg, size_t msg_len);

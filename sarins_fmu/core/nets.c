@@ -82,6 +82,59 @@ void sarins_grnn_eval(const sarins_grnn *net, int64_t n, const double *x, double
     }
 }
 
+int64_t sarins_grnn_eval_subset(const sarins_grnn *net, const double *x, int64_t n_cand, const int64_t *cand,
+                                double log_cut, double *y, double *scratch)
+{
+    const int64_t d = net->d, m = net->m;
+    const double inv_two_var = 1.0 / (2.0 * (net->sigma * net->sigma));
+    double z[SARINS_NET_MAX_INPUTS];
+    sarins_standardize(1, d, x, net->mean, net->scale, z);
+    double d2_min = INFINITY;
+    for (int64_t k = 0; k < n_cand; k++) {
+        scratch[k] = sq_dist(d, z, net->zt + cand[k] * d);
+        if (scratch[k] < d2_min)
+            d2_min = scratch[k];
+    }
+    /* the dense sum's terms (sarins_grnn_eval), in the same pattern order, those below the cut left out */
+    double s_d = 0.0;
+    int64_t kept = 0;
+    for (int64_t o = 0; o < m; o++)
+        y[o] = 0.0;
+    for (int64_t k = 0; k < n_cand; k++) {
+        double e = (d2_min - scratch[k]) * inv_two_var; /* ln(P_j / max P) */
+        if (e < log_cut)
+            continue;
+        double p = net_exp(e);
+        s_d += p;
+        kept++;
+        for (int64_t o = 0; o < m; o++)
+            y[o] += net->y[cand[k] * m + o] * p;
+    }
+    for (int64_t o = 0; o < m; o++)
+        y[o] = y[o] / s_d; /* no candidate: 0 / 0, NaN */
+    return kept;
+}
+
+void sarins_grnn_eval_blocks(const sarins_grnn *net, int64_t n_blocks, const int64_t *row_ptr,
+                             const int64_t *cand_ptr, const int64_t *cand, double log_cut, const double *x, double *y,
+                             double *scratch, int64_t *kept)
+{
+    for (int64_t b = 0; b < n_blocks; b++)
+        for (int64_t r = row_ptr[b]; r < row_ptr[b + 1]; r++) {
+            int64_t k = sarins_grnn_eval_subset(net, x + r * net->d, cand_ptr[b + 1] - cand_ptr[b],
+                                                cand + cand_ptr[b], log_cut, y + r * net->m, scratch);
+            if (kept != NULL)
+                kept[r] = k;
+        }
+}
+
+void sarins_rnn_transpose(int64_t rows, int64_t cols, const double *src, double *dst)
+{
+    for (int64_t i = 0; i < rows; i++)
+        for (int64_t j = 0; j < cols; j++)
+            dst[j * rows + i] = src[i * cols + j];
+}
+
 int64_t sarins_rnn_state_size(const sarins_rnn *net) { return 2 * (int64_t)net->layers * net->hidden; }
 
 /* g[rows] = w[rows][cols] v[cols] + b, each row summed in order j = 0 .. cols-1 (four rows at a time: four
@@ -111,14 +164,71 @@ static void affine(int64_t rows, int64_t cols, const double *w, const double *v,
     }
 }
 
+/* g[rows] = W v + b with W given transposed, wt[cols][rows] (wt[j][i] = W[i][j]): each g[i] is summed from 0.0
+ * in order j = 0 .. cols-1 and then b[i] added, exactly as affine does, so the result is the same bit for bit;
+ * eight rows at a time in registers (with GCC or clang as four two-lane vectors, each lane the scalar
+ * operation: SSE2's mulpd and addpd round as mulsd and addsd, and fp-contract is off, smath.h). */
+#if defined(__GNUC__) || defined(__clang__)
+typedef double net_v2 __attribute__((vector_size(16)));
+static net_v2 v2_load(const double *p)
+{
+    net_v2 r;
+    memcpy(&r, p, sizeof r);
+    return r;
+}
+static void v2_store(double *p, net_v2 v) { memcpy(p, &v, sizeof v); }
+#endif
+
+static void affine_t(int64_t rows, int64_t cols, const double *wt, const double *v, const double *b, double *g)
+{
+    int64_t i = 0;
+#if defined(__GNUC__) || defined(__clang__)
+    for (; i + 8 <= rows; i += 8) {
+        net_v2 s0 = {0.0, 0.0}, s1 = s0, s2 = s0, s3 = s0;
+        for (int64_t j = 0; j < cols; j++) {
+            const double *col = wt + j * rows + i;
+            const net_v2 vj = {v[j], v[j]};
+            s0 += vj * v2_load(col);
+            s1 += vj * v2_load(col + 2);
+            s2 += vj * v2_load(col + 4);
+            s3 += vj * v2_load(col + 6);
+        }
+        v2_store(g + i, s0 + v2_load(b + i));
+        v2_store(g + i + 2, s1 + v2_load(b + i + 2));
+        v2_store(g + i + 4, s2 + v2_load(b + i + 4));
+        v2_store(g + i + 6, s3 + v2_load(b + i + 6));
+    }
+#endif
+    for (; i < rows; i++) {
+        double s = 0.0;
+        for (int64_t j = 0; j < cols; j++)
+            s += v[j] * wt[j * rows + i];
+        g[i] = s + b[i];
+    }
+}
+
+/* 1 if every v[k] == 0 (either sign): then every product v[k] w (w finite) is +-0 and a sum of them from
+ * 0.0 is +0 exactly (round to nearest: +0 + -0 = +0) */
+static int all_zero(int64_t n, const double *v)
+{
+    for (int64_t k = 0; k < n; k++)
+        if (v[k] != 0.0)
+            return 0;
+    return 1;
+}
+
 /* One layer: input in[n_in], hidden h[hid] and cell c[hid] advanced in place. */
 static void rnn_layer(const sarins_rnn *net, int l, const double *in, int64_t n_in, double *h, double *c)
 {
     const int64_t hid = net->hidden;
     double gi[4 * SARINS_RNN_MAX_HIDDEN], gh[4 * SARINS_RNN_MAX_HIDDEN];
     const int64_t g = net->cell == SARINS_RNN_LSTM ? 4 : 3;
-    affine(g * hid, n_in, net->w_ih[l], in, net->b_ih[l], gi);
-    affine(g * hid, hid, net->w_hh[l], h, net->b_hh[l], gh);
+    affine_t(g * hid, n_in, net->w_ih[l], in, net->b_ih[l], gi);
+    if (all_zero(hid, h)) /* a zero state (a series' start, a memoryless control): the sums are exactly +0 */
+        for (int64_t k = 0; k < g * hid; k++)
+            gh[k] = 0.0 + net->b_hh[l][k]; /* what affine_t gives: 0.0 + (+-0) ... = +0, then + b */
+    else
+        affine_t(g * hid, hid, net->w_hh[l], h, net->b_hh[l], gh);
     if (net->cell == SARINS_RNN_LSTM) {
         for (int64_t k = 0; k < hid; k++) {
             double i = net_sigmoid(gi[k] + gh[k]);
@@ -214,4 +324,13 @@ void sarins_grnn_predict(int64_t d, int64_t n_patterns, int64_t m, const double 
 {
     const sarins_grnn net = {d, n_patterns, m, mean, scale, zt, yt, sigma};
     sarins_grnn_eval(&net, n, x, y, scratch);
+}
+
+void sarins_grnn_predict_blocks(int64_t d, int64_t n_patterns, int64_t m, const double *mean, const double *scale,
+                                const double *zt, const double *yt, double sigma, int64_t n_blocks,
+                                const int64_t *row_ptr, const int64_t *cand_ptr, const int64_t *cand, double log_cut,
+                                const double *x, double *y, double *scratch, int64_t *kept)
+{
+    const sarins_grnn net = {d, n_patterns, m, mean, scale, zt, yt, sigma};
+    sarins_grnn_eval_blocks(&net, n_blocks, row_ptr, cand_ptr, cand, log_cut, x, y, scratch, kept);
 }

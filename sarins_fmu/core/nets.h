@@ -42,7 +42,9 @@ typedef struct {
 } sarins_grnn;
 
 /* Stacked LSTM or GRU (PyTorch layout and gate order: LSTM i f g o, GRU r z n) with a linear output.
- * Layer l: w_ih [G h][n_in or h], w_hh [G h][h], b_ih, b_hh [G h]; w_out [n_out][h], b_out [n_out]. */
+ * Layer l: w_ih [G h][n_in or h], w_hh [G h][h], b_ih, b_hh [G h]; w_out [n_out][h], b_out [n_out].  The kernel
+ * reads w_ih and w_hh transposed: w_ih [n_in or h][G h], w_hh [h][G h] (sarins_rnn_transpose; the sums are those
+ * of PyTorch's layout, in the same order, bit for bit). */
 typedef struct {
     int cell; /* SARINS_RNN_LSTM or SARINS_RNN_GRU */
     int layers;
@@ -61,8 +63,28 @@ void sarins_rbf_eval(const sarins_rbf *net, int64_t n, const double *x, double *
 /* GRNN outputs y[n][m] of the inputs x[n][d]; scratch holds net->n doubles. */
 void sarins_grnn_eval(const sarins_grnn *net, int64_t n, const double *x, double *y, double *scratch);
 
+/* Truncated GRNN (exact to a bound): the output y[m] of one input x[d] over the candidate patterns
+ * cand[0 .. n_cand-1] (pattern indices, ascending, in [0, net->n)), keeping the terms whose weight relative to the
+ * largest candidate's, P_j / max P = exp(-(D_j^2 - min D^2) / (2 sigma^2)), is at least exp(log_cut).  The kept
+ * terms are those of sarins_grnn_eval in the same order, so with every pattern a candidate and nothing cut the
+ * result is the dense one bit for bit.  The candidates must hold the query's nearest pattern and every pattern
+ * above the cut (sarins_fmu/identify/grnn.py finds them with a k-d tree; the error bound is derived there).
+ * scratch holds n_cand doubles; returns the number of kept terms (no candidate: y is NaN, 0 returned). */
+int64_t sarins_grnn_eval_subset(const sarins_grnn *net, const double *x, int64_t n_cand, const int64_t *cand,
+                                double log_cut, double *y, double *scratch);
+
+/* sarins_grnn_eval_subset for the rows row_ptr[b] .. row_ptr[b+1]-1 of x[][d] and y[][m], block b's
+ * candidates cand[cand_ptr[b] .. cand_ptr[b+1]-1]; scratch holds the largest block's candidate count; kept[row]
+ * (may be NULL) receives each row's kept terms. */
+void sarins_grnn_eval_blocks(const sarins_grnn *net, int64_t n_blocks, const int64_t *row_ptr,
+                             const int64_t *cand_ptr, const int64_t *cand, double log_cut, const double *x, double *y,
+                             double *scratch, int64_t *kept);
+
 /* Doubles of a network's state: h then c, each [layers][hidden] (c unused by the GRU). */
 int64_t sarins_rnn_state_size(const sarins_rnn *net);
+
+/* dst[cols][rows] = src[rows][cols] (the layout of sarins_rnn's w_ih, w_hh; dst and src must not overlap). */
+void sarins_rnn_transpose(int64_t rows, int64_t cols, const double *src, double *dst);
 
 /* One time step: input x[n_in], state advanced in place, output y[n_out]. */
 void sarins_rnn_step(const sarins_rnn *net, double *state, const double *x, double *y);
@@ -77,5 +99,9 @@ void sarins_rbf_predict(int64_t d, int64_t k, int64_t m, const double *mean, con
 void sarins_grnn_predict(int64_t d, int64_t n_patterns, int64_t m, const double *mean, const double *scale,
                          const double *zt, const double *yt, double sigma, int64_t n, const double *x, double *y,
                          double *scratch);
+void sarins_grnn_predict_blocks(int64_t d, int64_t n_patterns, int64_t m, const double *mean, const double *scale,
+                                const double *zt, const double *yt, double sigma, int64_t n_blocks,
+                                const int64_t *row_ptr, const int64_t *cand_ptr, const int64_t *cand, double log_cut,
+                                const double *x, double *y, double *scratch, int64_t *kept);
 
 #endif

@@ -21,12 +21,15 @@ _I64, _F64, _P, _SZ = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p, ctypes.c
 
 MAX_INPUTS = 64  # SARINS_NET_MAX_INPUTS
 COMP_N_IN, COMP_N_OUT = 7, 6
-STATUS = {1: "an input is not finite", 2: "the result is not finite", 3: "a calibration matrix K is singular"}
+STATUS = {1: "an input is not finite", 2: "the result is not finite", 3: "a calibration matrix K is singular",
+          4: "not a GRNN compensator"}
 
 _checksum = function("sarins_netfile_checksum", ctypes.c_uint64, ctypes.c_char_p, _SZ)
 _standardize = function("sarins_standardize", None, _I64, _I64, _P, _P, _P, _P)
 _rbf = function("sarins_rbf_predict", None, _I64, _I64, _I64, _P, _P, _P, _P, _P, _F64, _I64, _P, _P)
 _grnn = function("sarins_grnn_predict", None, _I64, _I64, _I64, _P, _P, _P, _P, _F64, _I64, _P, _P, _P)
+_grnn_blocks = function("sarins_grnn_predict_blocks", None, _I64, _I64, _I64, _P, _P, _P, _P, _F64, _I64, _P, _P,
+                        _P, _F64, _P, _P, _P, _P)
 _triad = function("sarins_triad_compensate", ctypes.c_int, _P, _P, _I64, _P, _P)
 _axial_open = function("sarins_axial_open", _P, ctypes.c_char_p, _SZ, ctypes.c_char_p, _SZ)
 _axial_close = function("sarins_axial_close", None, _P)
@@ -36,6 +39,7 @@ _comp_close = function("sarins_comp_close", None, _P)
 _comp_state = function("sarins_comp_state_size", _I64, _P)
 _comp_scratch = function("sarins_comp_scratch_size", _I64, _P)
 _comp_run = function("sarins_comp_run", ctypes.c_int, _P, _P, _I64, _P, _P, _P)
+_comp_grnn_blocks = function("sarins_comp_run_grnn_blocks", ctypes.c_int, _P, _I64, _P, _P, _P, _F64, _P, _P, _P, _P)
 
 
 def netfile_checksum(data: bytes) -> int:
@@ -96,6 +100,40 @@ def grnn_predict_dense(x, mean, scale, z_train, y_train, sigma: float) -> np.nda
     _grnn(d, p, m, mean.ctypes.data, scale.ctypes.data, zt.ctypes.data, yt.ctypes.data, float(sigma), x.shape[0],
           x.ctypes.data, out.ctypes.data, scratch.ctypes.data)
     return out
+
+
+def _checked_blocks(blocks, n_rows: int, n_patterns: int):
+    """The int64 arrays (row_ptr, cand_ptr, cand) of ``blocks`` (a :class:`~sarins_fmu.identify.grnn.Blocks`),
+    checked against the rows and patterns they index (the C kernels trust them)."""
+    row_ptr, cand_ptr, cand = (np.ascontiguousarray(a, dtype=np.int64)
+                               for a in (blocks.row_ptr, blocks.cand_ptr, blocks.cand))
+    nb = len(row_ptr) - 1
+    if (nb < 0 or len(cand_ptr) != nb + 1 or row_ptr[0] != 0 or row_ptr[-1] != n_rows or cand_ptr[0] != 0
+            or cand_ptr[-1] != len(cand) or np.any(np.diff(row_ptr) < 0) or np.any(np.diff(cand_ptr) < 0)
+            or (len(cand) and (cand.min() < 0 or cand.max() >= n_patterns))):
+        raise ValueError("GRNN blocks do not index these rows and patterns")
+    scratch = np.empty(max(1, int(np.diff(cand_ptr).max(initial=0))))
+    return row_ptr, cand_ptr, cand, scratch
+
+
+def grnn_predict_blocks(x, mean, scale, z_train, y_train, sigma: float, blocks) -> tuple[np.ndarray, np.ndarray]:
+    """Outputs (n, m) of the truncated GRNN (``sarins_grnn_eval_blocks``) and each row's kept patterns (n,):
+    arguments as :func:`grnn_predict_dense`, ``blocks`` the candidates of
+    :func:`sarins_fmu.identify.grnn.neighbour_blocks` (with their ``log_cut``)."""
+    zt = np.ascontiguousarray(z_train, dtype=np.float64)
+    p, d = zt.shape
+    x = _rows(x, d)
+    yt = np.ascontiguousarray(y_train, dtype=np.float64)
+    m = yt.shape[1]
+    yt = _arrays.read(yt, (p, m), "y_train")
+    mean, scale = _arrays.read(mean, (d,), "mean"), _arrays.read(scale, (d,), "scale")
+    row_ptr, cand_ptr, cand, scratch = _checked_blocks(blocks, x.shape[0], p)
+    out = np.empty((x.shape[0], m))
+    kept = np.empty(x.shape[0], dtype=np.int64)
+    _grnn_blocks(d, p, m, mean.ctypes.data, scale.ctypes.data, zt.ctypes.data, yt.ctypes.data, float(sigma),
+                 len(row_ptr) - 1, row_ptr.ctypes.data, cand_ptr.ctypes.data, cand.ctypes.data, float(blocks.log_cut),
+                 x.ctypes.data, out.ctypes.data, scratch.ctypes.data, kept.ctypes.data)
+    return out, kept
 
 
 def triad_compensate(matrix, bias, measured) -> np.ndarray:
@@ -164,3 +202,18 @@ class CompensatorModel(_Handle):
         if status:
             raise ValueError(f"compensator: {STATUS[status]}")
         return out
+
+    def run_grnn_blocks(self, x, blocks) -> tuple[np.ndarray, np.ndarray]:
+        """Compensated rows (n, 6) of x (n, 7) by the truncated GRNN (``sarins_comp_run_grnn_blocks``) over the
+        candidates ``blocks`` (:func:`sarins_fmu.identify.grnn.neighbour_blocks` of the model's patterns),
+        and each row's kept patterns (n,)."""
+        x = _rows(x, COMP_N_IN)
+        row_ptr, cand_ptr, cand, scratch = _checked_blocks(blocks, x.shape[0], self.scratch_size)
+        out = np.empty((x.shape[0], COMP_N_OUT))
+        kept = np.empty(x.shape[0], dtype=np.int64)
+        status = _comp_grnn_blocks(self.ptr, len(row_ptr) - 1, row_ptr.ctypes.data, cand_ptr.ctypes.data,
+                                   cand.ctypes.data, float(blocks.log_cut), x.ctypes.data, out.ctypes.data,
+                                   scratch.ctypes.data, kept.ctypes.data)
+        if status:
+            raise ValueError(f"compensator: {STATUS[status]}")
+        return out, kept

@@ -56,6 +56,9 @@ int sarins_core_abi(void);
 #include "rls.h"
 #include "online.h"
 
+/* text IMU logs: sample lines parsed into doubles (sarins_fmu.imu_log) */
+#include "log_parse.h"
+
 /* seed 002's land vehicle: trajectory, body sway and vibration */
 #include "vehicle.h"
 

@@ -47,7 +47,7 @@ import numpy as np
 
 from . import netfile, recurrent
 from .calibration import TriadCalibration, compensate_triad
-from .grnn import GRNN
+from .grnn import GRNN, GRNN_TOLERANCE
 from .modelfile import get_array, load_model_file, save_model_file
 from .preprocessing import check_inputs, check_targets
 from .rbf import RBFNetwork
@@ -89,6 +89,11 @@ class Compensator:
     def predict(self, X) -> np.ndarray:
         """Compensated outputs (n, 6) of a time-ordered series of inputs (n, 7), by the C core."""
         return self.native().run(_check_xy(X))
+
+    def predict_batch(self, X) -> np.ndarray:
+        """:meth:`predict` of a whole series as the campaigns evaluate it: the same computation, except for
+        the GRNN (:meth:`GRNNCompensator.predict_batch`: truncated, exact to a stated bound)."""
+        return self.predict(X)
 
     def binary_arrays(self) -> dict:
         """The arrays of the binary model file (layout in ``sarins_fmu/core/netmodel.h``)."""
@@ -309,6 +314,19 @@ class GRNNCompensator(_NetworkResidual):
 
     def _limit(self):
         return self.max_patterns
+
+    def predict_batch(self, X, *, tolerance: float = GRNN_TOLERANCE, return_kept: bool = False):
+        """:meth:`predict` with the GRNN truncated to ``tolerance`` (:mod:`.grnn`: each standardised correction
+        within ``tolerance`` times its training range of the dense one, so each output within ``tolerance``
+        times that range times the target scale), by the C core over k-d tree candidates; the IMUCompensator
+        FMU and :meth:`predict` evaluate it dense.  ``return_kept``: also each row's kept patterns."""
+        from .grnn import predict_truncated
+
+        x = _check_xy(X)
+        model, net = self.native(), self.net
+        y, kept = predict_truncated(net.scaling_.apply(x), net._z_train, net.settings.sigma,
+                                    lambda rows, blocks: model.run_grnn_blocks(x[rows], blocks), tolerance=tolerance)
+        return (y, kept) if return_kept else y
 
     def _net_binary_arrays(self):
         net = self.net

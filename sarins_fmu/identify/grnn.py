@@ -31,6 +31,35 @@ Numerics
     is an extrapolation, flagged by ``return_distance=True`` (distance to the
     nearest training sample in standardised units, compare with σ).
 
+Truncation, exact to a bound (:meth:`GRNN.predict_truncated`, the campaigns' evaluation)
+    With the weights normalised by the largest, :math:`w_j = P_j / \max P \in (0, 1]` (the nearest
+    pattern's is exactly 1), every pattern whose weight is below :math:`c = \tau / n` (n patterns, relative
+    tolerance :math:`\tau`, default :data:`GRNN_TOLERANCE` = 1e-9) is left out: those with
+    :math:`D_j^2 > D_{min}^2 + R^2`, :math:`R^2 = 2\sigma^2 \ln(n / \tau)`.  Of the dense sums, the kept
+    part :math:`S_K \ge 1` remains and the dropped part :math:`S_R = \sum_{dropped} w_j < (n - k) c \le \tau`
+    goes (k kept).  The dense estimate is :math:`\hat y = (S_K \hat y_K + S_R \bar y_R) / (S_K + S_R)`,
+    :math:`\bar y_R` the weighted mean of the dropped targets, so
+
+    .. math::
+
+        \hat y_o - \hat y_{K,o} = \frac{S_R}{S_K + S_R} (\bar y_{R,o} - \hat y_{K,o}), \qquad
+        |\hat y_o - \hat y_{K,o}| < (n - k)\, c\, (\max_j y_{jo} - \min_j y_{jo}) \le \tau\, \mathrm{range}_o
+
+    (both means lie within the targets' range, and :math:`S_R / (S_K + S_R) \le S_R`).  The prediction
+    moves by less than τ times the range of each output's training targets; both are evaluated in float64
+    (the kept terms are the dense kernel's, in the same order, so the rounding of the two differs only by the
+    missing terms).
+
+    The candidates come from a k-d tree (``scipy.spatial.cKDTree``) in one vectorised call per chunk:
+    the queries, taken in blocks of :data:`SEARCH_BLOCK` consecutive rows (a time series: neighbours), each
+    block with its centre c and radius ρ (largest distance of a row to c) and the centre's nearest-pattern
+    distance :math:`D_c`.  A row q of the block has :math:`D_{min}(q) \le \rho + D_c`, so every pattern it
+    keeps lies within :math:`\rho + \sqrt{(\rho + D_c)^2 + R^2}` of c, and so does its nearest pattern
+    (within :math:`2\rho + D_c`): one ball query per block finds a superset, sorted by pattern index, and the
+    C kernel (``sarins_grnn_eval_subset``) applies the exact cut per row.  The radius is relative to the
+    nearest distance, so a query far from every pattern still finds its nearest one; a fixed number of
+    nearest neighbours would not be exact (the rate-table data hold many near-duplicate patterns).
+
 Memory
     Queries are processed in chunks so that at most ``chunk_elements``
     query-sample pairs are held at once (default 2**22, one 32 MB array,
@@ -42,6 +71,7 @@ Memory
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from itertools import chain
 from pathlib import Path
 
 import numpy as np
@@ -49,12 +79,17 @@ import numpy as np
 from .modelfile import get_array, load_model_file, save_model_file
 from .preprocessing import Scaling, check_inputs, check_targets, fit_scaling
 
-__all__ = ["GRNNSettings", "GRNN", "grnn_predict"]
+__all__ = ["GRNNSettings", "GRNN", "grnn_predict", "Blocks", "neighbour_blocks", "predict_truncated",
+           "GRNN_TOLERANCE"]
 
 FORMAT_TAG = "sarins_fmu.identify.grnn"
 FORMAT_VERSION = 1
 
 SEED003_SIGMA = 0.07  # smoothing factor of seed 003's GRNN, standardised units
+GRNN_TOLERANCE = 1e-9  # truncation: the prediction moves by less than this times each output's target range
+SEARCH_BLOCK = 128  # consecutive query rows sharing one k-d tree ball query
+CHUNK_ROWS = 2**17  # query rows searched and evaluated at once (memory bound: a few (rows, d) arrays)
+RADIUS_MARGIN = 1e-9  # relative widening of the ball radius against the tree's own distance rounding
 
 
 @dataclass(frozen=True)
@@ -139,6 +174,82 @@ def grnn_predict(
         out[sl] = (w @ y_train) / w.sum(axis=1)[:, None]
         nearest[sl] = np.sqrt(d2_min)
     return out, nearest
+
+
+@dataclass(frozen=True)
+class Blocks:
+    """Candidate patterns of blocks of consecutive query rows (CSR layout, int64).
+
+    Rows ``row_ptr[b] .. row_ptr[b+1]-1`` share the candidates ``cand[cand_ptr[b] .. cand_ptr[b+1]-1]``
+    (ascending pattern indices); ``log_cut`` is ln c, c the smallest kept weight relative to the largest.
+    """
+
+    row_ptr: np.ndarray
+    cand_ptr: np.ndarray
+    cand: np.ndarray
+    log_cut: float
+
+
+def log_cut(n_patterns: int, tolerance: float) -> float:
+    """ln c, c = tolerance / n: the weight (relative to the largest) below which a pattern is dropped."""
+    if not (np.isfinite(tolerance) and 0.0 < tolerance < 1.0):
+        raise ValueError(f"tolerance must be in (0, 1), got {tolerance!r}")
+    return float(np.log(tolerance / int(n_patterns)))
+
+
+def neighbour_blocks(tree, z_query: np.ndarray, sigma: float, tolerance: float = GRNN_TOLERANCE,
+                     block: int = SEARCH_BLOCK) -> Blocks:
+    """Candidates of the truncated GRNN for the standardised queries ``z_query`` (q >= 1, d): per block of
+    ``block`` consecutive rows, every pattern of ``tree`` (a ``cKDTree`` of the standardised patterns) within
+    rho + sqrt((rho + D_c)^2 + R^2) of the block's centre (module docstring), by one ball query."""
+    q, d = z_query.shape
+    starts = np.arange(0, q, int(block))
+    counts = np.diff(np.append(starts, q))
+    centres = np.add.reduceat(z_query, starts, axis=0) / counts[:, None]
+    rows_off = z_query - np.repeat(centres, counts, axis=0)
+    rho = np.sqrt(np.maximum.reduceat(np.einsum("ij,ij->i", rows_off, rows_off), starts))
+    cut = log_cut(tree.n, tolerance)
+    r2 = -2.0 * sigma**2 * cut  # R^2 = 2 sigma^2 ln(n / tol)
+    d_c, _ = tree.query(centres, k=1)
+    radius = (rho + np.sqrt((rho + d_c) ** 2 + r2)) * (1.0 + RADIUS_MARGIN)
+    lists = tree.query_ball_point(centres, radius, return_sorted=True)
+    sizes = np.fromiter(map(len, lists), dtype=np.int64, count=len(lists))
+    cand = np.fromiter(chain.from_iterable(lists), dtype=np.int64, count=int(sizes.sum()))
+    return Blocks(np.append(starts, q).astype(np.int64), np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64),
+                  cand, cut)
+
+
+def predict_truncated(z_query: np.ndarray, z_train: np.ndarray, sigma: float, evaluate, *,
+                      tolerance: float = GRNN_TOLERANCE, block: int = SEARCH_BLOCK, chunk_rows: int = CHUNK_ROWS,
+                      threads: int | None = None):
+    """Run ``evaluate(rows, blocks) -> (y, kept)`` over chunks of the queries with their candidates
+    (:func:`neighbour_blocks`); ``rows`` is the slice of query rows.  Chunks run on ``threads`` threads
+    (default ``SARINS_THREADS`` or every core; the tree search and the C kernel release the GIL); the result
+    does not depend on the number.  Returns (y, kept) stacked in row order."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from scipy.spatial import cKDTree
+
+    from sarins_fmu.core.imu import thread_count
+
+    tree = cKDTree(z_train)
+    if not len(z_query):
+        empty = np.zeros(1, dtype=np.int64)
+        return evaluate(slice(0, 0), Blocks(empty, empty, np.empty(0, dtype=np.int64),
+                                            log_cut(tree.n, tolerance)))
+    step = max(int(block), int(chunk_rows) // int(block) * int(block))
+    chunks = [slice(s, min(s + step, len(z_query))) for s in range(0, len(z_query), step)]
+
+    def one(rows):
+        return evaluate(rows, neighbour_blocks(tree, z_query[rows], sigma, tolerance, block))
+
+    workers = min(len(chunks), thread_count() if threads is None else int(threads))
+    if workers <= 1:
+        parts = [one(rows) for rows in chunks]
+    else:
+        with ThreadPoolExecutor(workers) as pool:
+            parts = list(pool.map(one, chunks))
+    return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
 
 
 class GRNN:
@@ -272,6 +383,26 @@ class GRNN:
         y = nets.grnn_predict_dense(x, self.scaling_.mean, self.scaling_.scale, self._z_train, self.y_train_,
                                     self.settings.sigma)
         return y[:, 0] if self._single_output else y
+
+    def predict_truncated(self, X: np.ndarray, *, tolerance: float = GRNN_TOLERANCE, return_kept: bool = False):
+        """The GRNN truncated to ``tolerance`` (module docstring: each output within tolerance times its
+        training targets' range of :meth:`predict_dense`), by the C core (``sarins_grnn_eval_blocks``) over the
+        candidates of a k-d tree; shape as :meth:`predict`.  ``return_kept``: also each row's kept patterns."""
+        from sarins_fmu.core import nets
+
+        if self.x_train_ is None or self.scaling_ is None:
+            raise RuntimeError("GRNN is not fitted: call fit() or load() first")
+        x = check_inputs(X, "X", n_features=self.n_features)
+        mean, scale = self.scaling_.mean, self.scaling_.scale
+
+        def evaluate(rows, blocks):
+            return nets.grnn_predict_blocks(x[rows], mean, scale, self._z_train, self.y_train_, self.settings.sigma,
+                                            blocks)
+
+        y, kept = predict_truncated(nets.standardize(x, mean, scale), self._z_train, self.settings.sigma, evaluate,
+                                    tolerance=tolerance)
+        y = y[:, 0] if self._single_output else y
+        return (y, kept) if return_kept else y
 
     # -------------------------------------------------------------- file IO
     def to_payload(self) -> tuple[dict, dict[str, np.ndarray]]:
