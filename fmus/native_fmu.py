@@ -85,6 +85,8 @@ NATIVE = {
     "IMUCompensator": NativeModel("imu_compensator"),  # its model: fmus.compensator_export
     "DriftModelUpdater": NativeModel("drift_model_updater"),
     "VehicleMotion": NativeModel("vehicle_motion"),
+    "GNSSReceiver": NativeModel("gnss_receiver"),
+    "AidedINS": NativeModel("aided_ins"),
 }
 
 # setup.py's flags (sarins_fmu core) plus hidden visibility: only the fmi2* functions are exported.  No
