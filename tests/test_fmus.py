@@ -169,7 +169,7 @@ def test_two_instances_do_not_share_state(fmu_dir):
             s.free()
 
 
-def test_fmu_runs_in_a_host_without_this_project(fmu_dir, tmp_path):
+def test_fmu_runs_in_a_host_without_this_project(fmu_dir, bridge_fmu, tmp_path):
     """numpy, scipy and fmpy importable, sarins_fmu not: the FMU brings it, its C core included."""
     import fmpy
     from test_fmi_contract import _tiny_log
@@ -197,7 +197,7 @@ def test_fmu_runs_in_a_host_without_this_project(fmu_dir, tmp_path):
                          record=("lat", "nav_time"))
         assert rows[-1][1] > 0 and abs(rows[-1][0] - 0.4925668) < 1e-3, rows[-1]
         from fmu_driver import Slave  # the chain is native (no Python); a Python-hosted FMU brings its library
-        player = Slave(Path({str(fmu_dir)!r}) / "IMULog.fmu", "player")
+        player = Slave(Path({str(bridge_fmu)!r}), "player")
         player.set(log_file={str(_tiny_log(tmp_path))!r})
         player.fmu.enterInitializationMode()
         player.fmu.exitInitializationMode()
@@ -231,8 +231,8 @@ from fmpy import simulate_fmu
 simulate_fmu(str(fixtures['Gain']), stop_time=1.0, step_size=0.5)
 import pythonfmu
 assert 'resources' in pythonfmu.__file__, pythonfmu.__file__  # the FMU's copy was imported
-from fmus.build import build_fmus
-fmu = build_fmus({str(tmp_path / 'out')!r}, names=['IMULog'])[0]
+from fmus.build import build_fmu
+fmu = build_fmu('imu_log_python_slave.py', Path({str(tmp_path / 'out')!r}))
 names = zipfile.ZipFile(fmu).namelist()
 assert any(n.startswith('binaries/') for n in names)
 assert any(n.endswith('/pythonfmu/fmi2slave.py') for n in names), names
@@ -252,15 +252,15 @@ def test_build_fmus_never_writes_an_fmu_that_cannot_run(tmp_path):
     assert not (tmp_path / "out" / "IMUCompensator.fmu").exists()
 
 
-def test_model_description_states_the_requirements(fmu_dir):
+def test_model_description_states_the_requirements(bridge_fmu):
     import zipfile
 
     from fmpy import read_model_description
 
-    md = read_model_description(str(fmu_dir / "IMULog.fmu"))  # the Python-hosted FMU
+    md = read_model_description(str(bridge_fmu))  # the Python-hosted FMU
     assert md.coSimulation.needsExecutionTool is True
     assert "sarins-fmi" in md.generationTool and "PythonFMU" in md.generationTool
-    with zipfile.ZipFile(fmu_dir / "IMULog.fmu") as z:
+    with zipfile.ZipFile(bridge_fmu) as z:
         doc = z.read("documentation/index.html").decode()
         assert not any(n.startswith("binaries/win64") for n in z.namelist())
     assert "CPython 3." in doc and "SARINS_FMU_PYTHON" in doc and "Linux x86-64" in doc

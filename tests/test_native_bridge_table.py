@@ -59,12 +59,12 @@ for mode in ("duplicate", "not-int", "not-tuple", "none"):
 """
 
 
-def test_malformed_variable_tables_are_refused(fmu_dir, tmp_path):
+def test_malformed_variable_tables_are_refused(bridge_fmu, tmp_path):
     from test_fmi_contract import _tiny_log
 
     tests = os.path.dirname(__file__)
     script = textwrap.dedent(SCRIPT).format(tests=tests, root=os.path.dirname(tests), patch=PATCH,
-                                            fmu=str(fmu_dir / "IMULog.fmu"), log=str(_tiny_log(tmp_path)))
+                                            fmu=str(bridge_fmu), log=str(_tiny_log(tmp_path)))
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr[-2000:]
     rows = {line.split(" | ")[0]: line.split(" | ")[1:] for line in proc.stdout.splitlines() if " | " in line}

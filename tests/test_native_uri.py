@@ -126,11 +126,11 @@ for uri in ["file://otherhost" + good[7:], good[:-4] + "%zzes", "http://example.
 """
 
 
-def test_bad_resource_locations_are_refused_by_shim_and_core(fmu_dir):
+def test_bad_resource_locations_are_refused_by_shim_and_core(bridge_fmu):
     """The first call goes through the shim (no core yet), the last three bad ones through the core."""
     tests = os.path.dirname(__file__)
     script = textwrap.dedent(SCRIPT).format(tests=tests, root=os.path.dirname(tests),
-                                            fmu=str(fmu_dir / "IMULog.fmu"))  # Python-hosted
+                                            fmu=str(bridge_fmu))  # Python-hosted
     script += "\nfor uri in ['file://otherhost' + good[7:], good[:-4] + '%zzes', 'http://x/r']:\n" \
               "    del log[:]\n" \
               "    c = f.fmi2Instantiate(name.encode(), 1, md.guid.encode(), uri.encode(), " \
