@@ -69,15 +69,6 @@ def fmu_dir(tmp_path_factory, pytestconfig):
 
 
 @pytest.fixture(scope="session")
-def bridge_fmu(tmp_path_factory):
-    """The Python-hosted IMULog (fmus/imu_log_python_slave.py through the pythonfmu bridge, fmus/native/),
-    built once per session for the bridge's tests: no shipped FMU is Python-hosted."""
-    from fmus.build import build_fmu
-
-    return build_fmu("imu_log_python_slave.py", tmp_path_factory.mktemp("bridge"))
-
-
-@pytest.fixture(scope="session")
 def fmu3_dir(tmp_path_factory, pytestconfig):
     """The FMI 3.0 Turntable, IMUThermal and StrapdownINS (linux x86-64 only: quick), built once per
     session; a skip without a C compiler.  Tests write only new files here."""

@@ -8,19 +8,15 @@ from . import UsageError
 
 
 def register(subparsers) -> None:
-    from fmus import SLAVES
     from fmus.native_fmu import NATIVE
 
-    hosted = [n for n in SLAVES if n not in NATIVE]
     p = subparsers.add_parser(
         "build-fmus", help="build the FMI 2.0 (or 3.0) co-simulation FMUs",
         description="Build the co-simulation FMUs. FMI 2.0 (default, into build/fmus): the native C FMUs "
                     f"{', '.join(n for n in NATIVE if n != 'IMUCompensator')} (and IMUCompensator with --compensator), "
                     "every FMI call in C, each with binaries/linux64, binaries/win64 and binaries/aarch64-linux (each "
-                    "when its compiler is installed) and sources/; the Python-hosted FMUs "
-                    + (f"{', '.join(hosted)} (binaries/linux64; they need CPython 3.11 with numpy at run time)"
-                       if hosted else "none (every FMU is native)")
-                    + "; the project's systems as .ssp beside them. FMI 3.0 (--fmi 3, into build/fmus3): the "
+                    "when its compiler is installed) and sources/; the project's systems as .ssp beside them. FMI 3.0 "
+                    "(--fmi 3, into build/fmus3): the "
                     "native FMUs only, binaries/x86_64-linux, x86_64-windows and aarch64-linux the same way, and "
                     "sources/. --system adds the static systems as one container FMU each (FMI 2.0).")
     p.add_argument("--out", type=Path, default=None,
@@ -67,9 +63,8 @@ def run_fmi3(args) -> int:
 def run(args) -> int:
     if args.fmi == 3:
         return run_fmi3(args)
-    from fmus.build import DEFAULT_NAMES, NEEDS_MODEL, build_fmus
-    from fmus.native import HOST_REQUIREMENTS
-    from fmus.native_fmu import NATIVE, platform_note
+    from fmus.build import NEEDS_MODEL, build_fmus
+    from fmus.native_fmu import platform_note
 
     args.out = args.out or Path("build") / "fmus"
     if args.compensator is not None:  # a bad model file fails before anything is built
@@ -101,6 +96,4 @@ def run(args) -> int:
 
         print(export_compensator(args.compensator, args.out))
     print(platform_note())
-    if any(n not in NATIVE for n in (DEFAULT_NAMES if names is None else names)):
-        print(f"Python-hosted FMUs: {HOST_REQUIREMENTS}")
     return 0
