@@ -17,4 +17,6 @@ SLAVES = {
     "IMUCompensator": "imu_compensator_slave.py",
     "VehicleMotion": "vehicle_motion_slave.py",
     "IMULog": "imu_log_slave.py",
+    "GNSSReceiver": "gnss_receiver_slave.py",
+    "AidedINS": "aided_ins_slave.py",
 }

@@ -86,6 +86,8 @@ NATIVE = {
     "DriftModelUpdater": NativeModel("drift_model_updater"),
     "VehicleMotion": NativeModel("vehicle_motion"),
     "IMULog": NativeModel("imu_log"),
+    "GNSSReceiver": NativeModel("gnss_receiver"),
+    "AidedINS": NativeModel("aided_ins"),
 }
 
 # setup.py's flags (sarins_fmu core) plus hidden visibility: only the fmi2* functions are exported.  No

@@ -53,6 +53,14 @@ RANGES = {
         "lat0": [2.0], "align_time": [-1.0], "coarse_time": [-1.0], "kf_arw": [-1.0],
         "kf_velocity_meas_std": [0.0], "kf_tilt0_std": [-1.0], "pitch0": [2.0],
     },
+    "GNSSReceiver": {
+        "rate_hz": [0.5, 25.0], "seed": [-1], "pos_gm_tau": [0.0], "vel_white_e": [-1.0], "lever_x": [1e400],
+        "outages": ["5:3", "a:b", "1:2;"*17],
+    },
+    "AidedINS": {
+        "step": [0.0, -1.0], "arw": [-1.0], "cov_every": [0.0, 2.5], "zupt_std": [0.0], "lat0": [2.0],
+        "gnss_pos_std_e": [0.0], "gnss_vel_std_u": [-1.0], "use_velocity": [2, -1], "latency": [-1.0],
+    },
     "VehicleMotion": {
         "legs": ["", "fly 3", "drive -5 10"], "lat0": [2.0], "lead_time": [-1.0], "grid": [0.0],
         "sway_period": [0.0], "reference_speed": [0.0], "body_seed": [-1],

@@ -228,7 +228,8 @@ def _tiny_log(folder):
     return write_log(folder / "tiny.csv", time, dtheta, dv, lat_deg=28.2)
 
 
-FMUS = ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "DriftModelUpdater", "VehicleMotion", "IMULog"]
+FMUS = ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "DriftModelUpdater", "VehicleMotion", "IMULog", "GNSSReceiver",
+        "AidedINS"]
 
 
 def fault_table(fmu_dir, tmp_path, names=FMUS, timeout=600):

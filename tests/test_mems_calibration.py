@@ -396,7 +396,7 @@ def quick_campaign(tmp_path_factory):
 
 
 def _assert_report_claims(summary: dict, one_layer) -> None:
-    """What the quick profile shows (docs/mems-calibration.md, *Quick profile after issue 20 item 5*): the
+    """What the quick profile shows (docs/mems-calibration.md, *Quick profile*): the
     one-layer recurrent networks ``one_layer`` beat both shallow models, their memoryless controls beat them."""
     from sarins.mems_calibration.report import MEMORY_EFFECT
 

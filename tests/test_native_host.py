@@ -17,10 +17,12 @@ from fmpy import read_model_description
 
 
 HERE = Path(__file__).resolve().parent
-NAMES = ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "DriftModelUpdater", "VehicleMotion"]
+NAMES = ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "DriftModelUpdater", "VehicleMotion", "GNSSReceiver",
+         "AidedINS"]
 QUICK = {"IMUThermal": {"internal_rate": 10.0},  # plain-Python minor loop: keep the default run short
          # a static, level, north-pointing IMU at 28.222 deg (Earth rate and gravity per 1 s step)
-         "StrapdownINS": {"dtheta_y": 6.4258e-5, "dtheta_z": 3.4486e-5, "dv_z": 9.7913, "align_time": 600.0}}
+         "StrapdownINS": {"dtheta_y": 6.4258e-5, "dtheta_z": 3.4486e-5, "dv_z": 9.7913, "align_time": 600.0},
+         "AidedINS": {"step": 1.0, "lat0": 0.49256, "dtheta_y": 6.4258e-5, "dtheta_z": 3.4486e-5, "dv_z": 9.7913}}
 
 
 @pytest.fixture(scope="session")

@@ -277,7 +277,8 @@ def test_state_keeps_which_coefficients_were_set(imu_fmu):
         for k in range(20):
             with_set.fmu.doStep(float(k), 1.0)
             rows.append(with_set.get(*OUTPUTS))
-        plain.fmu.setFMUstate(state)
+        # another instance takes it serialized (an in-memory state belongs to the instance that issued it)
+        plain.fmu.setFMUstate(plain.fmu.deSerializeFMUstate(with_set.fmu.serializeFMUstate(state)))
         again = []
         for k in range(20):
             plain.fmu.doStep(float(k), 1.0)

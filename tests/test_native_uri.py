@@ -1,5 +1,5 @@
-"""The native FMUs' one fmuResourceLocation parser (fmus/c/sarins_uri.h, issue 21): compiled here into a
-tiny driver with the system compiler and fed a table of URIs."""
+"""The native FMUs' one fmuResourceLocation parser (fmus/c/sarins_uri.h): compiled here into a tiny driver
+with the system compiler and fed a table of URIs (and, compiled as for Windows, the drive-letter cases)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,13 @@ import pytest
 from fmus.native_fmu import C_DIR
 
 OK, NULL, SCHEME, HOST, ESCAPE, TOO_LONG, EMPTY = range(7)
+WARNINGS = ("-std=c11", "-Wall", "-Wextra", "-Wpedantic", "-Werror")
+
+
+def _cc():
+    from test_native_fmus import _cc as cc
+
+    return cc()
 
 DRIVER = r"""
 #include <stdio.h>
@@ -73,9 +80,7 @@ def driver(tmp_path_factory):
     folder = tmp_path_factory.mktemp("uri")
     (folder / "driver.c").write_text(DRIVER)
     exe = folder / "driver"
-    from test_native_fmus import _cc
-
-    cmd = [_cc(), "-std=c11", "-Wall", "-Wextra", "-Werror", "-O1", f"-I{C_DIR}", "-o", str(exe), str(folder / "driver.c")]
+    cmd = [_cc(), *WARNINGS, "-O1", f"-I{C_DIR}", "-o", str(exe), str(folder / "driver.c")]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     return exe
@@ -89,3 +94,49 @@ def test_uri_table(driver):
         if (int(got_code), got_path) != (code, path):
             wrong.append(f"{uri!r} (buffer {length}): got {got_code} {got_path!r}, expected {code} {path!r}")
     assert not wrong, "\n".join(wrong)
+
+
+GLUE_HEADER_DIR = C_DIR  # fmus/c/sarins_uri.h
+DRIVE_CASES = [  # (uri, path on Windows)
+    ("file:///Z:/tmp/fmu/resources", "Z:/tmp/fmu/resources"),
+    ("file:///c:/x%20y/", "c:/x y"),
+    ("file://localhost/D:/r", "D:/r"),
+    ("file:///C:", "C:"),
+    ("file:///tmp/x", "/tmp/x"),  # no drive letter: unchanged
+    ("file:///1:/x", "/1:/x"),
+    ("file:///ZZ:/x", "/ZZ:/x"),
+]
+
+
+def _run_drive_cases(run):
+    wrong = []
+    for uri, path in DRIVE_CASES:
+        got = run(uri)
+        if got != f"0\t{path}":
+            wrong.append(f"{uri!r}: got {got!r}, expected {path!r}")
+    assert not wrong, "\n".join(wrong)
+
+
+def test_glue_parser_drops_the_slash_before_a_windows_drive_letter(tmp_path):
+    """Compiled as for Windows (_WIN32): file:///Z:/p is the path Z:/p, which Windows opens (/Z:/p it cannot)."""
+    (tmp_path / "driver.c").write_text(DRIVER)
+    exe = tmp_path / "driver"
+    cmd = [_cc(), *WARNINGS, "-D_WIN32", "-O1", f"-I{GLUE_HEADER_DIR}", "-o", str(exe),
+           str(tmp_path / "driver.c")]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    _run_drive_cases(lambda uri: subprocess.run([str(exe), "4096", uri], capture_output=True, text=True,
+                                                timeout=60).stdout.rstrip("\n"))
+
+
+@pytest.mark.slow
+def test_glue_parser_under_wine_opens_windows_paths(wine_env, tmp_path):
+    """The same cases from a mingw-w64 build run under wine."""
+    (tmp_path / "driver.c").write_text(DRIVER)
+    exe = tmp_path / "driver.exe"
+    proc = subprocess.run(["x86_64-w64-mingw32-gcc", "-std=c11", "-Wall", "-Wextra", "-Werror", "-O1",
+                           f"-I{GLUE_HEADER_DIR}", "-o", str(exe), str(tmp_path / "driver.c")],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    _run_drive_cases(lambda uri: subprocess.run(["wine", str(exe), "4096", uri], capture_output=True, text=True,
+                                                env=wine_env, timeout=120).stdout.replace("\r", "").rstrip("\n"))

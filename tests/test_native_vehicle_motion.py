@@ -116,7 +116,8 @@ def test_state_round_trip_mid_drive_repeats_the_run(fmu):
 @pytest.mark.parametrize("segment, in_segment", [(-3, 0), (10**6, 0), (0, -1), (0, 10**9)])
 def test_a_crafted_state_is_refused_with_the_reason_not_run(fmu, segment, in_segment):
     """A serialized state whose segment index or step in it is out of range (the glue's checksum recomputed,
-    so its checks pass): the next doStep is fmi2Error naming the vehicle state, no out-of-bounds read."""
+    so its checks pass): refused at deserialisation when outside the state's buffers (check_state), else at the
+    next doStep against the parameters' segments; fmi2Error naming the field, no out-of-bounds read."""
     from test_native_drift_model_updater import _fnv1a
 
     slave = Slave(fmu, "crafted")
@@ -132,6 +133,11 @@ def test_a_crafted_state_is_refused_with_the_reason_not_run(fmu, segment, in_seg
         struct.pack_into("<qq", blob, at, segment, in_segment)
         head = next(h for h in range(40, 400) if struct.unpack_from("<Q", blob, h - 16)[0] == len(blob) - h)
         struct.pack_into("<Q", blob, head - 8, _fnv1a(bytes(blob[head:])))
+        if segment < 0 or segment > 3 * 128 + 2 or in_segment < 0:  # outside the state's buffers: model.c's
+            with pytest.raises(FMICallException, match="status 3"):  # check_state refuses the blob itself
+                slave.fmu.deSerializeFMUstate(bytes(blob))
+            assert any("the state's vehicle." in m for s, _, m in slave.log if s == 3), slave.log[-3:]
+            return
         slave.fmu.setFMUstate(slave.fmu.deSerializeFMUstate(bytes(blob)))
         with pytest.raises(FMICallException, match="status 3"):
             slave.fmu.doStep(30.0, 1.0)

@@ -4,7 +4,8 @@
  *
  * Contract (the one fmus/native/core.c keeps for the Python-hosted FMUs):
  * - the state machine of FMI 2.0 section 4.2.4: a call out of order returns fmi2Error with a logged
- *   message and puts the instance in the error state, which only fmi2Reset or fmi2FreeInstance leave;
+ *   message and puts the instance in the error state, which only fmi2Reset, fmi2FreeInstance or fmi2SetFMUstate
+ *   to a state saved earlier (recovery, as FMI 2.0.x allows) leave;
  * - value references and types are checked against the model's variable table; fmi2Set* checks
  *   causality/variability against the current state;
  * - bad input gives fmi2Error with a logged reason, never fmi2Fatal, never a crash;
@@ -290,7 +291,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
     sarins_glue *g = (sarins_glue *)c;
-    REQUIRE(g, "fmi2SetFMUstate", SG_FMU_STATE_STATES);
+    REQUIRE(g, "fmi2SetFMUstate", SG_FMU_STATE_STATES | S_ERROR /* recovery: FMI 2.0.x, 3.0 */);
     return (fmi2Status)sg_set_state(g, FMUstate, "fmi2SetFMUstate");
 }
 

@@ -7,7 +7,7 @@
  *   Instantiated -> (EnterConfigurationMode <-> ExitConfigurationMode) -> EnterInitializationMode
  *   -> ExitInitializationMode -> Step Mode (DoStep ...) -> Terminate; Reset from anywhere.
  * - a call out of order returns fmi3Error with a logged message and puts the instance in the error state,
- *   which only fmi3Reset or fmi3FreeInstance leave;
+ *   which only fmi3Reset, fmi3FreeInstance or fmi3SetFMUState to a state saved earlier (recovery) leave;
  * - value references, types and the number of values are checked against the model's table; setters check
  *   causality/variability against the state (Configuration Mode: structural parameters only; there are
  *   none unless the model declares some, so it refuses every set);
@@ -396,7 +396,7 @@ fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState)
 {
     sarins_glue *g = (sarins_glue *)instance;
-    SG_REQUIRE(g, "fmi3SetFMUState", SG_FMU_STATE_STATES);
+    SG_REQUIRE(g, "fmi3SetFMUState", SG_FMU_STATE_STATES | S_ERROR /* recovery: FMI 2.0.x, 3.0 */);
     return (fmi3Status)sg_set_state(g, FMUState, "fmi3SetFMUState");
 }
 

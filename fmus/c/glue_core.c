@@ -85,6 +85,32 @@ void sarins_log(const sarins_ctx *c, int status, const char *fmt, ...)
     va_end(ap);
 }
 
+int sarins_state_real(const sarins_ctx *c, const char *field, double x, double lo, double hi)
+{
+    if (isfinite(x) && x >= lo && x <= hi)
+        return 1;
+    sarins_log(c, SARINS_ERROR, "the state's %s = %g is not finite and in %g .. %g", field, x, lo, hi);
+    return 0;
+}
+
+int sarins_state_int(const sarins_ctx *c, const char *field, long long x, long long lo, long long hi)
+{
+    if (x >= lo && x <= hi)
+        return 1;
+    sarins_log(c, SARINS_ERROR, "the state's %s = %lld is not in %lld .. %lld", field, x, lo, hi);
+    return 0;
+}
+
+int sarins_state_finite(const sarins_ctx *c, const char *field, const double *x, size_t n)
+{
+    for (size_t k = 0; k < n; k++)
+        if (!isfinite(x[k])) {
+            sarins_log(c, SARINS_ERROR, "the state's %s[%llu] = %g is not finite", field, (unsigned long long)k, x[k]);
+            return 0;
+        }
+    return 1;
+}
+
 void sg_log(sarins_glue *g, int status, const char *fmt, ...)
 {
     va_list ap;
@@ -121,8 +147,8 @@ static const char *state_name(int s)
 int sg_bad_state(sarins_glue *g, const char *fn)
 {
     if (g->state == S_ERROR) {
-        sg_log(g, SARINS_ERROR, "%s: not allowed after an earlier error (state 'error'); call %sReset or "
-               "%sFreeInstance", fn, g->prefix, g->prefix);
+        sg_log(g, SARINS_ERROR, "%s: not allowed after an earlier error (state 'error'); call %sReset, "
+               "%sFreeInstance, or set an FMU state saved before the error", fn, g->prefix, g->prefix);
         return SARINS_ERROR;
     }
     return sg_fail(g, "%s: not allowed in state '%s' (%s)", fn, state_name(g->state), g->standard);
@@ -222,7 +248,27 @@ int sg_check_outputs(sarins_glue *g, const char *fn)
 
 size_t sg_length(const sarins_glue *g, const sarins_var *v)
 {
-    return v->dim < 0 ? 1 : (size_t)g->ctx.i[v->dim];
+    return v->dim < 0 ? 1 : g->array_len[v->slot];
+}
+
+/* the structural parameter (an Integer) in Integer slot dim, or NULL */
+static const sarins_var *dimension_var(const sarins_table *t, int dim)
+{
+    for (size_t k = 0; k < t->n_vars; k++)
+        if (t->vars[k].type == SARINS_INTEGER && (int)t->vars[k].slot == dim)
+            return &t->vars[k];
+    return NULL;
+}
+
+int sg_array_usable(sarins_glue *g, const char *fn, const sarins_var *v)
+{
+    if (v->dim < 0 || (g->ctx.i[v->dim] >= 0 && (size_t)g->ctx.i[v->dim] == g->array_len[v->slot]))
+        return 1;
+    const sarins_var *n = dimension_var(g->table, v->dim);
+    sg_fail(g, "%s: %s has %llu elements; the structural parameter %s = %d takes effect only when %s leaves "
+            "Configuration Mode with it accepted (1 .. %d)", fn, v->name, (unsigned long long)g->array_len[v->slot],
+            n ? n->name : "?", g->ctx.i[v->dim], g->prefix, g->table->max_dim);
+    return 0;
 }
 
 /* NULL if every structural parameter sizing an array is in 1 .. max_dim, else the first bad one */
@@ -243,17 +289,14 @@ int sg_size_arrays(sarins_glue *g, const char *fn)
         return SARINS_OK;
     const sarins_var *bad = bad_dimension(t, g->ctx.i);
     if (bad != NULL) {
-        const sarins_var *n = NULL;
-        for (size_t k = 0; k < t->n_vars && n == NULL; k++)
-            if (t->vars[k].type == SARINS_INTEGER && (int)t->vars[k].slot == bad->dim)
-                n = &t->vars[k];
+        const sarins_var *n = dimension_var(t, bad->dim);
         return sg_fail(g, "%s: structural parameter %s = %d (the length of %s) must be in 1 .. %d", fn,
                        n ? n->name : "?", g->ctx.i[bad->dim], bad->name, t->max_dim);
     }
     size_t total = 0;
     for (size_t k = 0; k < t->n_vars; k++)
         if (t->vars[k].dim >= 0)
-            total += sg_length(g, &t->vars[k]);
+            total += (size_t)g->ctx.i[t->vars[k].dim];
     if (total != g->array_doubles || g->array_block == NULL) {
         double *block = calloc(total, sizeof(double));
         if (block == NULL)
@@ -267,7 +310,8 @@ int sg_size_arrays(sarins_glue *g, const char *fn)
         const sarins_var *v = &t->vars[k];
         if (v->dim >= 0) {
             g->ctx.a[v->slot] = g->array_block + at;
-            at += sg_length(g, v);
+            g->array_len[v->slot] = (size_t)g->ctx.i[v->dim];
+            at += g->array_len[v->slot];
         }
     }
     return SARINS_OK;
@@ -328,8 +372,10 @@ void sg_free(sarins_glue *g)
         return;
     if (g->ctx.work != NULL)
         g->model->release(&g->ctx);
+    sg_free_states(g); /* the states the host did not free die with the instance */
     free(g->ctx.state);
     free(g->ctx.a);
+    free(g->array_len);
     free(g->array_block);
     free(g->values);
     free(g->built);
@@ -405,7 +451,9 @@ int sg_init(sarins_glue *g, const char *instance_name, const char *token, int lo
     g->built = calloc(g->values_size ? g->values_size : 1, 1);
     g->ctx.state = calloc(g->model->state_size ? g->model->state_size : 1, 1);
     g->ctx.a = calloc(t->n_array ? t->n_array : 1, sizeof(double *));
-    if (!g->name || !g->cat_on || !g->by_vr || !g->outputs || !g->values || !g->built || !g->ctx.state || !g->ctx.a) {
+    g->array_len = calloc(t->n_array ? t->n_array : 1, sizeof(size_t));
+    if (!g->name || !g->cat_on || !g->by_vr || !g->outputs || !g->values || !g->built || !g->ctx.state || !g->ctx.a
+        || !g->array_len) {
         if (g->emit)
             g->emit(g, SARINS_ERROR, "logStatusError", "out of memory");
         return 0;
@@ -537,6 +585,8 @@ static const sarins_var *check_vr(sarins_glue *g, const char *fn, unsigned vr, i
         sg_fail(g, "%s: unknown value reference %u", fn, vr);
         return NULL;
     }
+    if (!sg_array_usable(g, fn, v))
+        return NULL;
     if (v->type != type) {
         sg_fail(g, "%s: %s (value reference %u) is a%s %s, not a%s %s", fn, v->name, vr,
                 v->type == SARINS_INTEGER ? "n" : "", TYPE_NAMES[v->type], type == SARINS_INTEGER ? "n" : "",
@@ -573,6 +623,8 @@ int sg_check_count(sarins_glue *g, const char *fn, const unsigned vr[], size_t n
     size_t want = 0;
     for (size_t k = 0; k < n && vr != NULL; k++) {
         const sarins_var *v = (size_t)vr[k] < g->n_vr ? g->by_vr[vr[k]] : NULL;
+        if (v != NULL && v->dim >= 0 && g->arrays_visible && !sg_array_usable(g, fn, v))
+            return 0;
         want += (v != NULL && v->dim >= 0 && g->arrays_visible) ? sg_length(g, v) : 1;
     }
     if (n_values != want) {
@@ -696,22 +748,61 @@ int sg_set_string(sarins_glue *g, const char *fn, const unsigned vr[], size_t n,
  * value block, model state size 8, model state, work-state size 8, work state, array elements 8, arrays */
 #define FIXED_PAYLOAD (4 + 4 + 8 + 8 + 4 * 8)
 
-/* In memory a state points to itself first: a pointer that is not a live state of this glue (freed, or the
- * state passed where the address of the variable holding it is expected) is refused instead of used. */
+/* In memory a state is its size and its bytes.  The instance keeps the address of every state it issued
+ * (sg_get_state, sg_deserialize) and has not freed: a pointer is recognised by comparing addresses only, so
+ * a freed, foreign (another instance's) or made-up pointer is refused without reading through it. */
 typedef struct fmu_state {
-    struct fmu_state *self; /* == the state while it lives; NULL once freed */
-    size_t size;            /* bytes of data */
-    unsigned char data[];   /* header + payload: the serialized bytes */
+    size_t size;          /* bytes of data */
+    unsigned char data[]; /* header + payload: the serialized bytes */
 } fmu_state;
 
-static const char *not_a_state(const void *p)
+/* the index of p among the instance's live states, or -1 */
+static long state_index(const sarins_glue *g, const void *p)
 {
-    const fmu_state *s = (const fmu_state *)p;
-    if (s == NULL)
+    for (size_t k = 0; k < g->n_states; k++)
+        if (g->states[k] == p)
+            return (long)k;
+    return -1;
+}
+
+static const char *not_a_state(const sarins_glue *g, const void *p)
+{
+    if (p == NULL)
         return "FMUState is NULL";
-    if (s->self != s)
-        return "FMUState is not a live FMU state of this FMU (freed, or not one)";
+    if (state_index(g, p) < 0)
+        return "FMUState is not a live FMU state of this instance (freed, another instance's, or not one)";
     return NULL;
+}
+
+/* remember s as issued; 0 (nothing changed) when out of memory */
+static int remember_state(sarins_glue *g, fmu_state *s)
+{
+    if (g->n_states == g->cap_states) {
+        size_t cap = g->cap_states ? 2 * g->cap_states : 8;
+        void **more = realloc(g->states, cap * sizeof *more);
+        if (more == NULL)
+            return 0;
+        g->states = more;
+        g->cap_states = cap;
+    }
+    g->states[g->n_states++] = s;
+    return 1;
+}
+
+static void forget_state(sarins_glue *g, const void *s)
+{
+    long k = state_index(g, s);
+    if (k >= 0)
+        g->states[k] = g->states[--g->n_states];
+}
+
+void sg_free_states(sarins_glue *g)
+{
+    for (size_t k = 0; k < g->n_states; k++)
+        free(g->states[k]);
+    free(g->states);
+    g->states = NULL;
+    g->n_states = g->cap_states = 0;
 }
 
 static uint64_t fnv1a(const unsigned char *p, size_t n)
@@ -753,18 +844,19 @@ int sg_get_state(sarins_glue *g, void **FMUstate, const char *fn)
     size_t total = HEADER_BYTES + (size_t)payload;
     /* an existing state of this model is overwritten in place when it has the size (FMI 2.0 allows reuse) */
     fmu_state *s = (fmu_state *)*FMUstate;
-    if (s != NULL && not_a_state(s) != NULL)
-        return sg_fail(g, "%s: *FMUState is not NULL and %s", fn, not_a_state(s));
+    if (s != NULL && not_a_state(g, s) != NULL)
+        return sg_fail(g, "%s: *FMUState is not NULL and %s", fn, not_a_state(g, s));
     if (s == NULL || s->size != total) {
         fmu_state *fresh = malloc(sizeof(fmu_state) + total);
-        if (fresh == NULL)
+        if (fresh == NULL || !remember_state(g, fresh)) {
+            free(fresh);
             return sg_fail(g, "%s: out of memory (%llu bytes)", fn, (unsigned long long)total);
+        }
         if (s != NULL) {
-            s->self = NULL;
+            forget_state(g, s);
             free(s);
         }
         s = fresh;
-        s->self = s;
         s->size = total;
     }
     unsigned char *p = s->data;
@@ -808,7 +900,65 @@ int sg_get_state(sarins_glue *g, void **FMUstate, const char *fn)
 }
 
 /* NULL if the blob of n bytes is a state of this model in this format, else the reason. */
-static const char *refuse_blob(const sarins_glue *g, const unsigned char *b, size_t n)
+/* NULL if the glue's fields and the model's state in a structurally valid payload keep their invariants, else
+ * the reason (the model's own reason is logged by its check_state).  Allocates two scratch copies. */
+static const char *refuse_fields(sarins_glue *g, const unsigned char *p)
+{
+    int32_t state, have_time;
+    double t_next, start_time;
+    memcpy(&state, p, 4);
+    memcpy(&have_time, p + 4, 4);
+    memcpy(&t_next, p + 8, 8);
+    memcpy(&start_time, p + 16, 8);
+    if (have_time != 0 && have_time != 1)
+        return "its have_time flag is neither 0 nor 1";
+    if (!isfinite(t_next) || !isfinite(start_time))
+        return "its communication point or start time is not finite";
+    if (have_time && !(t_next > start_time))
+        return "its next communication point is not after its start time";
+    const sarins_table *t = g->table;
+    const sarins_model *m = g->model;
+    unsigned char *values = malloc(g->values_size ? g->values_size : 1);
+    void *mstate = malloc(m->state_size ? m->state_size : 1);
+    const char *why = NULL;
+    if (values == NULL || mstate == NULL) {
+        why = "out of memory while checking it";
+        goto done;
+    }
+    memcpy(values, p + FIXED_PAYLOAD, g->values_size);
+    memcpy(mstate, p + FIXED_PAYLOAD + g->values_size + 8, m->state_size);
+    sarins_ctx c = g->ctx; /* the instance's view, pointed at the copies; no work, no arrays */
+    c.r = (double *)(void *)values;
+    c.i = (int *)(void *)(values + off_int(t));
+    c.b = (int *)(void *)(values + off_bool(t));
+    c.s = (char(*)[SARINS_STRING_MAX])(void *)(values + off_string(t));
+    c.set = values + off_set(t);
+    c.state = mstate;
+    c.work = NULL;
+    c.a = NULL;
+    c.start_time = start_time;
+    c.quiet = 0;
+    for (size_t k = 0; k < t->n_boolean && why == NULL; k++)
+        if (c.b[k] != 0 && c.b[k] != 1)
+            why = "a Boolean in it is neither 0 nor 1";
+    for (size_t k = 0; k < t->n_string && why == NULL; k++)
+        if (memchr(c.s[k], '\0', SARINS_STRING_MAX) == NULL)
+            why = "a String in it is not terminated";
+    for (size_t k = 0; k < t->n_vars && why == NULL; k++)
+        if (c.set[k] > 1)
+            why = "a set flag in it is neither 0 nor 1";
+    for (size_t k = 0; k < g->n_outputs && why == NULL && post_init(state); k++)
+        if (g->outputs[k]->dim < 0 && !isfinite(c.r[g->outputs[k]->slot]))
+            why = "an output in it is not finite";
+    if (why == NULL && m->check_state != NULL && m->check_state(&c, post_init(state)) != SARINS_OK)
+        why = "the model's state in it breaks the model's invariants";
+done:
+    free(values);
+    free(mstate);
+    return why;
+}
+
+static const char *refuse_blob(sarins_glue *g, const unsigned char *b, size_t n)
 {
     if (n < HEADER_BYTES)
         return "shorter than the header (truncated?)";
@@ -834,8 +984,12 @@ static const char *refuse_blob(const sarins_glue *g, const unsigned char *b, siz
     memcpy(&sum, b + OFF_CHECKSUM, 8);
     if (payload != (uint64_t)(n - HEADER_BYTES))
         return "its size does not match its header (truncated?)";
+#ifndef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION /* a fuzzer's mutations reach the fields behind it */
     if (fnv1a(b + HEADER_BYTES, (size_t)payload) != sum)
         return "its checksum does not match (corrupted)";
+#else
+    (void)sum;
+#endif
     uint64_t fixed = FIXED_PAYLOAD + g->values_size + 8 + g->model->state_size + 8 + 8;
     if (payload < fixed)
         return "its payload is too short for this model";
@@ -849,7 +1003,7 @@ static const char *refuse_blob(const sarins_glue *g, const unsigned char *b, siz
     if (counts[0] != g->table->n_real || counts[1] != g->table->n_integer || counts[2] != g->table->n_boolean
         || counts[3] != g->table->n_string || state_n != g->model->state_size)
         return "its variables or model state do not fit this model";
-    if (payload < fixed + work_n)
+    if (work_n > payload - fixed) /* payload >= fixed: no wrap-around (fixed + work_n could wrap) */
         return "its work-state size does not match its payload";
     uint64_t array_n, want = 0;
     memcpy(&array_n, p + fixed - 8 + work_n, 8);
@@ -863,20 +1017,20 @@ static const char *refuse_blob(const sarins_glue *g, const unsigned char *b, siz
             return "a structural parameter in it is out of range";
         want += (uint64_t)d;
     }
-    if (array_n != want || payload != fixed + work_n + 8 * array_n)
+    if (array_n != want || array_n > (payload - fixed - work_n) / 8 || payload != fixed + work_n + 8 * array_n)
         return "its arrays do not match its structural parameters or its payload";
     if (!(state == S_INSTANTIATED || state == S_INIT || post_init(state)))
         return "it holds an unknown FMI state";
     if (work_n > 0 && (!post_init(state) || g->model->load_work_state == NULL))
         return "it holds a work state this model does not take";
-    return NULL;
+    return refuse_fields(g, p);
 }
 
 int sg_set_state(sarins_glue *g, const void *FMUstate, const char *fn)
 {
     const fmu_state *s = (const fmu_state *)FMUstate;
-    if (not_a_state(s) != NULL)
-        return sg_fail(g, "%s: %s", fn, not_a_state(s));
+    if (not_a_state(g, s) != NULL)
+        return sg_fail(g, "%s: %s", fn, not_a_state(g, s));
     const char *why = refuse_blob(g, s->data, s->size);
     if (why != NULL)
         return sg_fail(g, "%s: the state is refused: %s", fn, why);
@@ -896,7 +1050,8 @@ int sg_set_state(sarins_glue *g, const void *FMUstate, const char *fn)
     const unsigned char *work = model_state + m->state_size + 8;
     if (post_init(state)) {
         /* c->work must come from the restored parameters: rebuild it unless it already does */
-        int same = g->have_built && g->built_start == start_time;
+        /* after an error the model's work is rebuilt whatever the parameters (recovery starts clean) */
+        int same = g->state != S_ERROR && g->have_built && g->built_start == start_time;
         for (size_t k = 0; same && k < g->table->n_vars; k++) {
             const sarins_var *v = &g->table->vars[k];
             if (v->causality != SARINS_PARAMETER && v->causality != SARINS_STRUCTURAL_PARAMETER)
@@ -947,15 +1102,15 @@ int sg_free_state(sarins_glue *g, void **FMUstate, const char *fn)
 {
     if (FMUstate == NULL)
         return sg_fail(g, "%s: FMUstate is NULL", fn);
+    if (state_index(g, FMUstate) >= 0) /* the state itself, not the address of the variable holding it */
+        return sg_fail(g, "%s: the argument is the FMU state itself; pass the address of the variable that holds "
+                       "it", fn);
     fmu_state *s = (fmu_state *)*FMUstate;
     if (s == NULL)
         return SARINS_OK;
-    if ((void *)FMUstate == (void *)s) /* the state itself, not the address of the variable holding it */
-        return sg_fail(g, "%s: the argument is the FMU state itself; pass the address of the variable that holds "
-                       "it", fn);
-    if (not_a_state(s) != NULL)
-        return sg_fail(g, "%s: %s", fn, not_a_state(s));
-    s->self = NULL;
+    if (not_a_state(g, s) != NULL)
+        return sg_fail(g, "%s: %s", fn, not_a_state(g, s));
+    forget_state(g, s);
     free(s);
     *FMUstate = NULL;
     return SARINS_OK;
@@ -963,8 +1118,8 @@ int sg_free_state(sarins_glue *g, void **FMUstate, const char *fn)
 
 int sg_state_size(sarins_glue *g, const void *FMUstate, size_t *size, const char *fn)
 {
-    if (size == NULL || not_a_state(FMUstate) != NULL)
-        return sg_fail(g, "%s: %s", fn, size == NULL ? "size is NULL" : not_a_state(FMUstate));
+    if (size == NULL || not_a_state(g, FMUstate) != NULL)
+        return sg_fail(g, "%s: %s", fn, size == NULL ? "size is NULL" : not_a_state(g, FMUstate));
     *size = ((const fmu_state *)FMUstate)->size;
     return SARINS_OK;
 }
@@ -972,8 +1127,8 @@ int sg_state_size(sarins_glue *g, const void *FMUstate, size_t *size, const char
 int sg_serialize(sarins_glue *g, const void *FMUstate, unsigned char *dst, size_t size, const char *fn)
 {
     const fmu_state *s = (const fmu_state *)FMUstate;
-    if (dst == NULL || not_a_state(s) != NULL)
-        return sg_fail(g, "%s: %s", fn, dst == NULL ? "serializedState is NULL" : not_a_state(s));
+    if (dst == NULL || not_a_state(g, s) != NULL)
+        return sg_fail(g, "%s: %s", fn, dst == NULL ? "serializedState is NULL" : not_a_state(g, s));
     if (size < s->size)
         return sg_fail(g, "%s: %llu bytes given, the state needs %llu (%sSerializedFMUstateSize)", fn,
                        (unsigned long long)size, (unsigned long long)s->size, g->prefix);
@@ -989,9 +1144,10 @@ int sg_deserialize(sarins_glue *g, const unsigned char *src, size_t size, void *
     if (why != NULL)
         return sg_fail(g, "%s: the serialized state is refused: %s", fn, why);
     fmu_state *s = malloc(sizeof(fmu_state) + size);
-    if (s == NULL)
+    if (s == NULL || !remember_state(g, s)) {
+        free(s);
         return sg_fail(g, "%s: out of memory (%llu bytes)", fn, (unsigned long long)size);
-    s->self = s;
+    }
     s->size = size;
     memcpy(s->data, src, size);
     *FMUstate = s;

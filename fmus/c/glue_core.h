@@ -56,6 +56,11 @@ struct sarins_glue {
     char *resources;        /* the resources folder (ctx.resources), owned */
     double *array_block;    /* every array's elements, one block */
     size_t array_doubles;   /* its length */
+    size_t *array_len;      /* by SARINS_A_* slot: the elements allocated for that array (what every access is
+                             * bounded by; a structural parameter set since then takes effect when the arrays
+                             * are next sized) */
+    void **states;          /* the FMU states this instance issued and has not freed (recognised by address) */
+    size_t n_states, cap_states;
 };
 
 #if defined(__GNUC__)
@@ -96,8 +101,12 @@ int sg_check_outputs(sarins_glue *g, const char *fn);
  * 1 .. max_dim, else SARINS_ERROR with the reason).  Called at instantiation, at the end of Configuration
  * Mode, before initialize() and at set-state. */
 int sg_size_arrays(sarins_glue *g, const char *fn);
-/* elements of a variable: 1 for a scalar, its structural parameter's value for an array */
+/* elements of a variable: 1 for a scalar, the elements allocated for an array (its structural parameter's
+ * value once the arrays were sized) */
 size_t sg_length(const sarins_glue *g, const sarins_var *v);
+/* 0 (logged error, error state) when v is an array whose structural parameter was set to another length
+ * than the one allocated (Configuration Mode not left yet, or a refused value): it cannot be read or set. */
+int sg_array_usable(sarins_glue *g, const char *fn, const sarins_var *v);
 /* the number of values for these value references (arrays: their lengths); 0 and a logged error if n_values
  * differs */
 int sg_check_count(sarins_glue *g, const char *fn, const unsigned vr[], size_t n, size_t n_values);
@@ -130,6 +139,8 @@ int sg_set_string(sarins_glue *g, const char *fn, const unsigned vr[], size_t n,
 int sg_get_state(sarins_glue *g, void **state, const char *fn);
 int sg_set_state(sarins_glue *g, const void *state, const char *fn);
 int sg_free_state(sarins_glue *g, void **state, const char *fn);
+/* free every state the instance issued and still holds (at sg_free) */
+void sg_free_states(sarins_glue *g);
 int sg_state_size(sarins_glue *g, const void *state, size_t *size, const char *fn);
 int sg_serialize(sarins_glue *g, const void *state, unsigned char *dst, size_t size, const char *fn);
 int sg_deserialize(sarins_glue *g, const unsigned char *src, size_t size, void **state, const char *fn);

@@ -39,6 +39,23 @@
  * c->work that is a function of the parameters only (a schedule) is not part of the state.  state_version
  * goes into serialized states: change it whenever the layout of c->state or of the work state changes.
  *
+ * State validation.  A state handed to the FMU (fmi2SetFMUstate / fmi3SetFMUState, and every deserialised
+ * blob) is checked before any of it is used: its structure (sizes, GUID, versions, checksum), then the glue's
+ * fields (FMI state known, have_time 0/1, communication point and start time finite and in order, Booleans
+ * and set flags 0/1, Strings terminated in their buffers, after initialisation every scalar Real output
+ * finite), then the model's optional check_state(c, running): c is a view of the blob's values and model
+ * state (c->state a copy, aligned; c->work and c->a are NULL: check what the state alone must satisfy) and
+ * running is 1 when the state is after initialisation.  It checks every field of c->state against the
+ * invariants do_step relies on (finite numbers, enums in range, counts and indices within their buffers,
+ * the communication step 0 before the first step and positive after) and returns SARINS_OK, or
+ * SARINS_ERROR with the field named (sarins_log).  A refused state changes nothing in the instance; a
+ * work state is checked by load_work_state against the rebuilt work.
+ *
+ * Recovery.  After an error (the instance in the error state), fmi2SetFMUstate / fmi3SetFMUState to a state
+ * saved earlier is allowed (FMI 2.0.x, 3.0): the glue rebuilds the model's work from the state's parameters
+ * (initialize()), then restores values, state, work state and arrays; the run continues bit for bit as from
+ * the moment the state was saved.
+ *
  * Set flags.  c->set[vr] (by value reference; the table's variables are numbered 0, 1, ... in that order)
  * is 1 once the host has set the variable with an fmi2Set* call since fmi2Instantiate or the last
  * fmi2Reset, else 0 (a start value is not "set").  A model uses it where the declaration says that setting
@@ -137,6 +154,7 @@ typedef struct {
     size_t (*work_state_size)(const sarins_ctx *c);    /* optional, with the next two */
     void (*save_work_state)(const sarins_ctx *c, unsigned char *dst);
     int (*load_work_state)(sarins_ctx *c, const unsigned char *src, size_t n);
+    int (*check_state)(const sarins_ctx *c, int running); /* optional: see "State validation" above */
 } sarins_model;
 
 /* Each model.c defines exactly this one object. */
@@ -151,6 +169,13 @@ void sarins_log(const sarins_ctx *c, int status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+
+/* For check_state (implemented by the glue): 1 when the state's field x is finite and in lo .. hi, else the
+ * field named in a logged error ("the state's <field> = <x> is not ...") and 0. */
+int sarins_state_real(const sarins_ctx *c, const char *field, double x, double lo, double hi);
+int sarins_state_int(const sarins_ctx *c, const char *field, long long x, long long lo, long long hi);
+/* the same for n doubles: every one finite (no range) */
+int sarins_state_finite(const sarins_ctx *c, const char *field, const double *x, size_t n);
 
 /* 1 when the host can reach the array variables (FMI 3.0), 0 when it cannot (FMI 2.0: c->a still exists, but
  * an array input is never set there, so a model that needs one refuses its parameters). */

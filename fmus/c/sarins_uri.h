@@ -87,6 +87,12 @@ static inline int sarins_uri_to_path(const char *uri, char *out, size_t outlen) 
     }
     out[k] = '\0';
     while (k > 1 && out[k - 1] == '/') out[--k] = '\0';
+#ifdef _WIN32
+    /* file:///C:/dir names the Windows path C:/dir (RFC 8089 E.2): drop the slash before a drive letter */
+    if (k >= 3 && out[0] == '/' && ((out[1] >= 'A' && out[1] <= 'Z') || (out[1] >= 'a' && out[1] <= 'z'))
+        && out[2] == ':' && (out[3] == '/' || out[3] == '\\' || out[3] == '\0'))
+        memmove(out, out + 1, k);
+#endif
     return SARINS_URI_OK;
 }
 

@@ -10,6 +10,7 @@
  *   in=VR,VR,...  nin=N  rows=FILE   Float64 inputs (arrays whole, N values in all) set before every step:
  *                                    FILE holds float64 values, native byte order, row k (N values) for the
  *                                    step from k steps done to k + 1
+ *   res=PATH                         fmi3InstantiateCoSimulation's resourcePath (default NULL)
  *   roundtrip=K                      after K steps: fmi3GetFMUState, the remaining steps (printed), then
  *                                    fmi3SetFMUState and the same steps again, printed as "AGAIN k ..."
  * Every call that does not return fmi3OK prints "STATUS <function> <status>", the logger's messages print
@@ -128,7 +129,7 @@ int main(int argc, char **argv)
     if (!host_resolve(lib, syms, sizeof syms / sizeof syms[0]))
         return 2;
     long roundtrip = -1;
-    const char *rows = NULL;
+    const char *rows = NULL, *resources = NULL;
     for (int k = 5; k < argc; k++) {
         if (strncmp(argv[k], "out=", 4) == 0)
             host_parse_vrs(argv[k] + 4, outs.vr, &outs.n_vr, MAX_VR);
@@ -142,6 +143,8 @@ int main(int argc, char **argv)
             rows = argv[k] + 5;
         else if (strncmp(argv[k], "roundtrip=", 10) == 0)
             roundtrip = atol(argv[k] + 10);
+        else if (strncmp(argv[k], "res=", 4) == 0)
+            resources = argv[k] + 4;
     }
     if ((outs.n_vr > 0 && outs.n_values < outs.n_vr) || (ins.n_vr > 0 && (ins.n_values < ins.n_vr || !rows))) {
         fprintf(stderr, "out= needs nout=, in= needs nin= and rows=\n");
@@ -154,7 +157,7 @@ int main(int argc, char **argv)
     }
     if (ins.n_vr > 0)
         n_in_rows /= (long)ins.n_values;
-    fmi3Instance c = f.instantiate("host", token, NULL, fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0, NULL,
+    fmi3Instance c = f.instantiate("host", token, resources, fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0, NULL,
                                    logger, NULL);
     if (!c) {
         printf("STATUS fmi3InstantiateCoSimulation NULL\n");

@@ -13,6 +13,7 @@
  *   in=VR,VR,...                     Real inputs set before every fmi2DoStep from rows=FILE
  *   rows=FILE                        float64 values, native byte order, one row of len(in) values per step:
  *                                    row k is set before the step from k steps done to k + 1
+ *   res=URI                          fmi2Instantiate's fmuResourceLocation (default file:///nonexistent)
  *   allocs                           print "ALLOCS n" = heap allocations counted (tests/native_host/
  *                                    alloc_counter.c, LD_PRELOAD) from after fmi2ExitInitializationMode to
  *                                    before fmi2Terminate (Linux only; "ALLOCS none" without the counter)
@@ -138,7 +139,7 @@ int main(int argc, char **argv)
     if (!host_resolve(lib, syms, sizeof syms / sizeof syms[0]))
         return 2;
     long roundtrip = -1;
-    const char *save = NULL, *load = NULL;
+    const char *save = NULL, *load = NULL, *resources = "file:///nonexistent";
     int allocs = 0;
     for (int k = 5; k < argc; k++) {
         if (strncmp(argv[k], "out=", 4) == 0) {
@@ -156,6 +157,8 @@ int main(int argc, char **argv)
             save = argv[k] + 5;
         } else if (strncmp(argv[k], "load=", 5) == 0) {
             load = argv[k] + 5;
+        } else if (strncmp(argv[k], "res=", 4) == 0) {
+            resources = argv[k] + 4;
         } else if (strcmp(argv[k], "allocs") == 0) {
             allocs = 1;
         }
@@ -163,7 +166,7 @@ int main(int argc, char **argv)
     if (n_ins > 0)
         n_in_rows /= (long)n_ins;
     fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
-    fmi2Component c = f.instantiate("host", fmi2CoSimulation, guid, "file:///nonexistent", &cb, fmi2False, fmi2False);
+    fmi2Component c = f.instantiate("host", fmi2CoSimulation, guid, resources, &cb, fmi2False, fmi2False);
     if (!c) {
         printf("STATUS fmi2Instantiate NULL\n");
         return 0;

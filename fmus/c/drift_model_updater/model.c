@@ -447,10 +447,37 @@ static int do_step(sarins_ctx *c, double t, double h)
 
 static void release(sarins_ctx *c) { c->work = NULL; /* nothing allocated: the state struct is all */ }
 
+/* Every field of the state within what do_step relies on (model.h, State validation): the RLS models, the
+ * stop filter and the stop record by the core's own checks, then the glue's own fields. */
+static int dmu_check_state(const sarins_ctx *c, int running)
+{
+    const dmu_state *s = c->state;
+    char msg[MSG];
+    if (running) {
+        if (sarins_rls_check(&s->rls, msg, sizeof msg) != SARINS_RLS_OK
+            || sarins_rls_check(&s->initial, msg, sizeof msg) != SARINS_RLS_OK
+            || sarins_stop_kf_check(&s->kf, msg, sizeof msg) != 0
+            || sarins_online_check(&s->upd, msg, sizeof msg) != 0) {
+            sarins_log(c, SARINS_ERROR, "the state's model or filter: %s", msg);
+            return SARINS_ERROR;
+        }
+    }
+    if (!sarins_state_real(c, "start_time", s->start_time, -1e300, 1e300)
+        || !sarins_state_real(c, "step", s->step, 0.0, 1e300)
+        || !sarins_state_int(c, "have_last_tag", s->have_last_tag, 0, 1)
+        || (s->have_last_tag && !sarins_state_real(c, "last_tag", s->last_tag, -1e300, 1e300))
+        || !sarins_state_int(c, "n_speeds", s->n_speeds, 0, HISTORY)
+        || !sarins_state_finite(c, "speed_tag", s->speed_tag, (size_t)s->n_speeds)
+        || !sarins_state_finite(c, "speed", s->speed, (size_t)s->n_speeds))
+        return SARINS_ERROR;
+    return SARINS_OK;
+}
+
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(dmu_state),
     .state_version = 1,
+    .check_state = dmu_check_state,
     .initialize = initialize,
     .do_step = do_step,
     .release = release,

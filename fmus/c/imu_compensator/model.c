@@ -176,10 +176,27 @@ static int ic_do_step(sarins_ctx *c, double t, double h)
     return SARINS_OK;
 }
 
+/* Every field of the state within what do_step relies on (model.h, State validation). */
+static int ic_check_state(const sarins_ctx *c, int running)
+{
+    const ic_state *s = c->state;
+    (void)running;
+    /* the communication step: 0 before the first step, positive after */
+    if (!sarins_state_int(c, "have_step", s->have_step, 0, 1)
+        || !sarins_state_real(c, "step", s->step, s->have_step ? 1e-300 : 0.0, s->have_step ? 1e300 : 0.0))
+        return SARINS_ERROR;
+    if (!sarins_state_int(c, "have_last", s->have_last, 0, 1)
+        || (s->have_last && !sarins_state_real(c, "last_tag", s->last_tag, -1e300, 1e300))
+        || !sarins_state_finite(c, "rnn", s->rnn, SARINS_COMP_MAX_STATE))
+        return SARINS_ERROR;
+    return SARINS_OK;
+}
+
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(ic_state),
     .state_version = 1,
+    .check_state = ic_check_state,
     .initialize = ic_initialize,
     .do_step = ic_do_step,
     .release = ic_release,

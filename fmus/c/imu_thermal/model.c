@@ -562,10 +562,22 @@ static int imu_load_work_state(sarins_ctx *c, const unsigned char *src, size_t n
     return SARINS_OK;
 }
 
+/* Every field of the state within what do_step relies on (model.h, State validation); the IMU arrays (the
+ * work state) are checked for their size by imu_load_work_state. */
+static int imu_check_state(const sarins_ctx *c, int running)
+{
+    const imu_state *s = c->state;
+    if (!sarins_state_int(c, "started", s->started, 0, running ? 1 : 0)
+        || !sarins_state_real(c, "step", s->step, s->started ? 1e-300 : 0.0, s->started ? 1e300 : 0.0))
+        return SARINS_ERROR;
+    return SARINS_OK;
+}
+
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(imu_state),
     .state_version = 1,
+    .check_state = imu_check_state,
     .initialize = imu_initialize,
     .do_step = imu_do_step,
     .release = imu_release,

@@ -194,10 +194,23 @@ static int ri_do_step(sarins_ctx *c, double t, double h)
     return SARINS_OK;
 }
 
+/* Every field of the state within what do_step relies on (model.h, State validation). */
+static int ri_check_state(const sarins_ctx *c, int running)
+{
+    const ri_state *s = c->state;
+    (void)running;
+    /* the communication step: 0 before the first step, positive after */
+    if (!sarins_state_int(c, "have_step", s->have_step, 0, 1)
+        || !sarins_state_real(c, "step", s->step, s->have_step ? 1e-300 : 0.0, s->have_step ? 1e300 : 0.0))
+        return SARINS_ERROR;
+    return SARINS_OK;
+}
+
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(ri_state),
     .state_version = 1,
+    .check_state = ri_check_state,
     .initialize = ri_initialize,
     .do_step = ri_do_step,
     .release = ri_release,

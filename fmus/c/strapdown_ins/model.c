@@ -217,10 +217,55 @@ static int do_step(sarins_ctx *c, double t, double h)
 
 static void release(sarins_ctx *c) { c->work = NULL; /* nothing allocated: the state struct is all */ }
 
+/* Every field of the state within what do_step relies on (model.h, State validation): the phase, the
+ * compensation queue's ring indices within its buffer, the step, every number finite. */
+static int ins_check_state(const sarins_ctx *c, int running)
+{
+    const sarins_ins_fmu *f = c->state;
+    const sarins_ins *s = &f->ins;
+    const sarins_ins_comp *q = &f->comp;
+    (void)running;
+    if (!sarins_state_int(c, "running", f->running, 0, 1) || !sarins_state_int(c, "phase", f->phase, 0, 2)
+        || !sarins_state_real(c, "step", f->step, f->running ? 1e-300 : 0.0, f->running ? 1e300 : 1e300)
+        || !sarins_state_real(c, "start_time", f->start_time, -1e300, 1e300)
+        || !sarins_state_int(c, "comp.first", q->first, 0, SARINS_INS_COMP_QUEUE - 1)
+        || !sarins_state_int(c, "comp.count", q->count, 0, SARINS_INS_COMP_QUEUE)
+        || !sarins_state_int(c, "comp.started", q->started, 0, 1)
+        || !sarins_state_finite(c, "config", f->config, SARINS_INS_CONFIG)
+        || !sarins_state_finite(c, "attitude0", f->attitude0, 3)
+        || !sarins_state_finite(c, "out", f->out, SARINS_INS_N_OUT)
+        || !sarins_state_finite(c, "comp.seen.value", q->seen.value, 3)
+        || !sarins_state_finite(c, "comp.current", q->current, 3)
+        || !sarins_state_int(c, "ins.steps", s->steps, 0, INT64_MAX)
+        || !sarins_state_int(c, "ins.n_coarse", s->n_coarse, 0, INT64_MAX)
+        || !sarins_state_int(c, "ins.n_align", s->n_align, 0, INT64_MAX)
+        || !sarins_state_finite(c, "ins.config", s->config, SARINS_INS_CONFIG)
+        || !sarins_state_finite(c, "ins.q0", s->q0, 4) || !sarins_state_finite(c, "ins.q", s->q, 4)
+        || !sarins_state_finite(c, "ins.v", s->v, 3)
+        || !sarins_state_real(c, "ins.pos[0] (latitude)", s->pos[0], -PI / 2, PI / 2)
+        || !sarins_state_finite(c, "ins.pos", s->pos, 3)
+        || !sarins_state_finite(c, "ins.gyro_comp", s->gyro_comp, 3)
+        || !sarins_state_finite(c, "ins.accel_comp", s->accel_comp, 3)
+        || !sarins_state_finite(c, "ins.x", s->x, SARINS_INS_ALIGN_STATES)
+        || !sarins_state_finite(c, "ins.p", s->p, SARINS_INS_ALIGN_STATES * SARINS_INS_ALIGN_STATES)
+        || !sarins_state_finite(c, "ins.q_diag", s->q_diag, SARINS_INS_ALIGN_STATES)
+        || !sarins_state_finite(c, "ins.q_b0b", s->q_b0b, 4) || !sarins_state_finite(c, "ins.v_b0", s->v_b0, 3)
+        || !sarins_state_finite(c, "ins.v_b0_half", s->v_b0_half, 3))
+        return SARINS_ERROR;
+    for (int64_t k = 0; k < q->count; k++) {
+        const sarins_ins_comp_pair *pair = &q->pending[(q->first + k) % SARINS_INS_COMP_QUEUE];
+        if (!sarins_state_finite(c, "comp.pending.value", pair->value, 3)
+            || !sarins_state_finite(c, "comp.pending.apply_from", &pair->apply_from, 1))
+            return SARINS_ERROR;
+    }
+    return SARINS_OK;
+}
+
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(sarins_ins_fmu),
     .state_version = 1,
+    .check_state = ins_check_state,
     .initialize = initialize,
     .do_step = do_step,
     .release = release,

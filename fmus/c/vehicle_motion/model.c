@@ -170,6 +170,25 @@ static int vm_do_step(sarins_ctx *c, double t, double h)
     return SARINS_OK;
 }
 
+/* The fields of the state do_step indexes or divides by, within their buffers and finite (model.h, State
+ * validation); the segment index against the segment buffer (the parameters' count is in the work). */
+static int vm_check_state(const sarins_ctx *c, int running)
+{
+    const vm_state *st = c->state;
+    const sarins_vehicle *v = &st->vehicle;
+    (void)running;
+    if (!sarins_state_int(c, "have_step", st->have_step, 0, 1)
+        || !sarins_state_real(c, "step", st->step, st->have_step ? 1e-300 : 0.0, st->have_step ? 1e300 : 0.0)
+        || !sarins_state_int(c, "vehicle.segment", v->segment, 0, 3 * MAX_LEGS + 2)
+        || !sarins_state_int(c, "vehicle.k", v->k, 0, INT64_MAX)
+        || !sarins_state_int(c, "vehicle.in_segment", v->in_segment, 0, INT64_MAX)
+        || !sarins_state_finite(c, "vehicle.phase", &v->phase[0][0], 2 * (1 + SARINS_VEHICLE_N_VIBRATION))
+        || !sarins_state_finite(c, "vehicle.speed", &v->speed, 1) || !sarins_state_finite(c, "vehicle.yaw", &v->yaw, 1)
+        || !sarins_state_finite(c, "vehicle.lat", &v->lat, 1) || !sarins_state_finite(c, "vehicle.lon", &v->lon, 1))
+        return SARINS_ERROR;
+    return SARINS_OK;
+}
+
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(vm_state),
@@ -177,4 +196,5 @@ const sarins_model sarins_model_desc = {
     .initialize = vm_initialize,
     .do_step = vm_do_step,
     .release = vm_release,
+    .check_state = vm_check_state,
 };

@@ -1,0 +1,86 @@
+"""AidedINS FMU: a strapdown INS with a 15-state error-state Kalman filter aided by GNSS fixes (the C
+core's nav3.h + eskf.h).
+
+The declaration of the native AidedINS FMU: its variables, descriptions, start values and the timing
+contract.  ``fmus/native_fmu.py`` writes the model description and the C variable table from it;
+``fmus/c/aided_ins/model.c`` computes it (``sarins_eskf_predict`` and ``sarins_eskf_gnss``, the kernels
+:func:`sarins_fmu.aided.navigate` runs in process).
+"""
+
+from pythonfmu import Fmi2Slave
+from pythonfmu.default_experiment import DefaultExperiment
+
+from fmus.slave_support import INPUT, OUTPUT, PARAMETER, declare
+from sarins_fmu.aided import FilterSettings
+from sarins_fmu.gnss import GNSSConfig
+
+# the filter settings in the core's order (eskf.h SARINS_ESKF_*), after the step: name, unit, text
+SETTINGS = (("arw", "rad/s0.5", "angle random walk"), ("vrw", "m/s/s0.5", "velocity random walk"),
+            ("gyro_rw", "rad/s/s0.5", "gyro bias random walk"), ("accel_rw", "m/s2/s0.5", "accel bias random walk"),
+            ("pos0_std", "m", "initial position std"), ("vel0_std", "m/s", "initial velocity std"),
+            ("tilt0_std", "rad", "initial tilt std"), ("heading0_std", "rad", "initial heading std"),
+            ("gyro_bias0_std", "rad/s", "initial gyro bias std"), ("accel_bias0_std", "m/s2", "initial accel bias std"),
+            ("lever_x", "m", "GNSS antenna lever arm, body right"), ("lever_y", "m", "lever arm, body front"),
+            ("lever_z", "m", "lever arm, body up"),
+            ("latency", "s", "age of a fix when it is applied (the co-simulation delay plus the receiver's)"),
+            ("zupt_std", "m/s", "ZUPT std (unused here)"), ("cov_every", "1", "steps per covariance propagation"),
+            ("nhc_std", "m/s", "NHC std (unused here)"), ("odo_std", "m/s", "odometer std (unused here)"))
+NAV = (("lat", "rad; deg", "latitude"), ("lon", "rad; deg", "longitude"), ("height", "m", "height"),
+       ("v_e", "m/s", "east velocity"), ("v_n", "m/s", "north velocity"), ("v_u", "m/s", "up velocity"),
+       ("yaw", "rad; deg", "yaw (CCW from north)"), ("pitch", "rad; deg", "pitch"), ("roll", "rad; deg", "roll"))
+
+
+class AidedINS(Fmi2Slave):
+
+    author = "sarins-fmu"
+    description = (
+        "A strapdown INS (nav3.h, ENU, body right-front-up) with a closed-loop 15-state error-state Kalman filter "
+        "(eskf.h: position, velocity, attitude errors, gyro and accel biases) aided by GNSS position and velocity "
+        "fixes. Contract: doStep(t, h) integrates the increments dtheta_*/dv_* (body rad, m/s) of [t, t + h] "
+        "(h = step, fixed), then, when the input fix_count grew since the last step and fix_valid is 1, applies "
+        "the fix (fix_lat .. fix_v_u) taken back by latency s; the outputs describe t + h: navigation, the "
+        "bias estimates and the filter's standard deviations (sqrt of P's diagonal). State outputs only (no "
+        "direct feedthrough). FMU state: get, set and serialize; no allocation after initialisation.")
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=600.0, step_size=0.01)
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        fs, g = FilterSettings(), GNSSConfig()
+        starts = {"pos0_std": fs.pos0_std, "vel0_std": fs.vel0_std, "tilt0_std": fs.tilt0_std,
+                  "heading0_std": fs.heading0_std, "zupt_std": fs.zupt_std, "cov_every": float(fs.cov_every),
+                  "nhc_std": fs.nhc_std, "odo_std": 1.0, "gyro_bias0_std": 1e-12, "accel_bias0_std": 1e-12}
+        declare(self, "real", "step", PARAMETER, "IMU step = communication step [s]", 0.01)
+        for name, unit, text in SETTINGS:
+            declare(self, "real", name, PARAMETER, f"{text} [{unit}]", starts.get(name, 0.0))
+        for name, unit, text in NAV:
+            declare(self, "real", f"{name}0", PARAMETER, f"initial {text} [{unit}]", 0.0)
+        for kind, values, unit in (("pos", g.pos_std(), "m"), ("vel", g.vel_std(), "m/s")):
+            for i, ax in enumerate("enu"):
+                declare(self, "real", f"gnss_{kind}_std_{ax}", PARAMETER,
+                        f"GNSS {kind}ition std assumed by the filter, {ax} axis [{unit}]".replace("velition",
+                                                                                                  "velocity"),
+                        float(values[i]))
+        declare(self, "integer", "use_velocity", PARAMETER, "1: apply the fixes' velocity too, 0: position only [1]",
+                1)
+        for q, unit in (("dtheta", "rad"), ("dv", "m/s")):
+            for ax in "xyz":
+                declare(self, "real", f"{q}_{ax}", INPUT, f"{q} increment over [t, t + h], body {ax} [{unit}]", 0.0)
+        declare(self, "integer", "fix_valid", INPUT, "1: the fix is valid [1]", 0)
+        for name, unit, text in NAV[:6]:
+            declare(self, "real", f"fix_{name}", INPUT, f"GNSS fix {text} (antenna) [{unit}]", 0.0)
+        declare(self, "integer", "fix_count", INPUT, "fixes given so far: a new fix when it grew [1]", 0)
+        for name, unit, text in NAV:
+            declare(self, "real", name, OUTPUT, f"computed {text} at t + h [{unit}]", 0.0)
+        for q, unit in (("bias_g", "rad/s"), ("bias_a", "m/s2")):
+            for ax in "xyz":
+                declare(self, "real", f"{q}_{ax}", OUTPUT, f"estimated {q.replace('_', ' ')}, body {ax} [{unit}]",
+                        0.0)
+        for q, unit in (("pos", "m"), ("vel", "m/s"), ("att", "rad")):
+            for ax in "enu":
+                declare(self, "real", f"sigma_{q}_{ax}", OUTPUT, f"filter std of the {q} error, {ax} axis [{unit}]",
+                        0.0)
+        declare(self, "integer", "fixes_used", OUTPUT, "valid fixes applied so far [1]", 0)
+
+    def do_step(self, current_time, step_size):
+        raise NotImplementedError("the AidedINS FMU is native: fmus/c/aided_ins/model.c computes it (this class only "
+                                  "declares its variables)")

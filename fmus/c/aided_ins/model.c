@@ -1,0 +1,204 @@
+/* AidedINS FMU (native): strapdown INS + 15-state error-state Kalman filter aided by GNSS fixes.
+ *
+ * The declaration (variables, descriptions, the timing contract) is fmus/aided_ins_slave.py; the filter is
+ * the C core's (sarins_fmu/core/eskf.h: sarins_eskf_predict, sarins_eskf_gnss), the kernels
+ * sarins_fmu.aided.navigate runs in process (aiding gnss): fed the same increments and the fixes at the
+ * steps after which navigate applies them, the outputs equal its rows bit for bit.  doStep(t, h) integrates
+ * the increments of [t, t + h], then applies a new valid fix.  Units: rad, m, m/s, rad/s, m/s^2, s.
+ */
+#include "smath.h"
+
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "eskf.h"
+#include "model.h"
+#include "nav3.h"
+#include "variables.h"
+
+#define STEP_TOL 1e-9 /* relative: the communication step equals the filter's step */
+
+/* What changes during a run (plain data: the FMU state copies it). */
+typedef struct {
+    sarins_eskf eskf;
+    int64_t last_count; /* fix_count input of the last applied / seen fix */
+    int64_t used;       /* valid fixes applied */
+} ai_state;
+
+/* 1 when st can be run, else 0 with the reason in msg. */
+static int ai_state_ok(const ai_state *st, char *msg, size_t size)
+{
+    int ok = st->last_count >= 0 && st->used >= 0 && st->eskf.steps >= 0 && st->eskf.since_cov >= 0
+             && st->eskf.config[SARINS_ESKF_STEP] > 0.0;
+    if (!ok)
+        snprintf(msg, size, "AidedINS state: a count or the step is out of range");
+    return ok;
+}
+
+static void publish(sarins_ctx *c, const ai_state *st)
+{
+    const sarins_eskf *e = &st->eskf;
+    double *r = c->r;
+    double val[9];
+    sarins_nav3_row(e->q, e->v, e->pos, val);
+    const int nav[9] = {SARINS_R_lat, SARINS_R_lon, SARINS_R_height, SARINS_R_v_e, SARINS_R_v_n, SARINS_R_v_u,
+                        SARINS_R_yaw, SARINS_R_pitch, SARINS_R_roll};
+    for (int i = 0; i < 9; i++)
+        r[nav[i]] = val[i];
+    const int bias[6] = {SARINS_R_bias_g_x, SARINS_R_bias_g_y, SARINS_R_bias_g_z, SARINS_R_bias_a_x,
+                         SARINS_R_bias_a_y, SARINS_R_bias_a_z};
+    for (int i = 0; i < 3; i++) {
+        r[bias[i]] = e->bg[i];
+        r[bias[3 + i]] = e->ba[i];
+    }
+    const int sig[9] = {SARINS_R_sigma_pos_e, SARINS_R_sigma_pos_n, SARINS_R_sigma_pos_u, SARINS_R_sigma_vel_e,
+                        SARINS_R_sigma_vel_n, SARINS_R_sigma_vel_u, SARINS_R_sigma_att_e, SARINS_R_sigma_att_n,
+                        SARINS_R_sigma_att_u};
+    for (int i = 0; i < 9; i++) {
+        double p = e->p[i * SARINS_ESKF_N + i];
+        r[sig[i]] = p > 0.0 ? sm_sqrt(p) : 0.0;
+    }
+    c->i[SARINS_I_fixes_used] = (int)st->used;
+}
+
+static int ai_initialize(sarins_ctx *c)
+{
+    const double *r = c->r;
+    double config[SARINS_ESKF_CONFIG] = {
+        r[SARINS_R_step], r[SARINS_R_arw], r[SARINS_R_vrw], r[SARINS_R_gyro_rw], r[SARINS_R_accel_rw],
+        r[SARINS_R_pos0_std], r[SARINS_R_vel0_std], r[SARINS_R_tilt0_std], r[SARINS_R_heading0_std],
+        r[SARINS_R_gyro_bias0_std], r[SARINS_R_accel_bias0_std], r[SARINS_R_lever_x], r[SARINS_R_lever_y],
+        r[SARINS_R_lever_z], r[SARINS_R_latency], r[SARINS_R_zupt_std], r[SARINS_R_cov_every], r[SARINS_R_nhc_std],
+        r[SARINS_R_odo_std]};
+    static const char *const names[SARINS_ESKF_CONFIG] = {
+        "step", "arw", "vrw", "gyro_rw", "accel_rw", "pos0_std", "vel0_std", "tilt0_std", "heading0_std",
+        "gyro_bias0_std", "accel_bias0_std", "lever_x", "lever_y", "lever_z", "latency", "zupt_std", "cov_every",
+        "nhc_std", "odo_std"};
+    for (int i = 0; i < SARINS_ESKF_CONFIG; i++) {
+        int lever = i >= SARINS_ESKF_LEVER_X && i <= SARINS_ESKF_LEVER_Z;
+        int positive = i == SARINS_ESKF_STEP || i == SARINS_ESKF_ZUPT_STD || i == SARINS_ESKF_NHC_STD
+                       || i == SARINS_ESKF_ODO_STD;
+        int whole = i == SARINS_ESKF_COV_EVERY;
+        if (!isfinite(config[i]) || (positive && !(config[i] > 0.0)) || (!lever && config[i] < 0.0)
+            || (whole && !(config[i] >= 1.0 && config[i] <= 1000.0 && sm_floor(config[i]) == config[i]))) {
+            sarins_log(c, SARINS_ERROR, "parameter %s = %.17g must be %s", names[i], config[i],
+                       lever ? "finite" : whole ? "a whole number 1 .. 1000" : positive ? "positive" : "finite and >= 0");
+            return SARINS_ERROR;
+        }
+    }
+    const char *std_names[6] = {"gnss_pos_std_e", "gnss_pos_std_n", "gnss_pos_std_u", "gnss_vel_std_e",
+                                "gnss_vel_std_n", "gnss_vel_std_u"};
+    const int std_slots[6] = {SARINS_R_gnss_pos_std_e, SARINS_R_gnss_pos_std_n, SARINS_R_gnss_pos_std_u,
+                              SARINS_R_gnss_vel_std_e, SARINS_R_gnss_vel_std_n, SARINS_R_gnss_vel_std_u};
+    for (int i = 0; i < 6; i++)
+        if (!(isfinite(r[std_slots[i]]) && r[std_slots[i]] > 0.0)) {
+            sarins_log(c, SARINS_ERROR, "parameter %s = %.17g must be positive", std_names[i], r[std_slots[i]]);
+            return SARINS_ERROR;
+        }
+    if (c->i[SARINS_I_use_velocity] != 0 && c->i[SARINS_I_use_velocity] != 1) {
+        sarins_log(c, SARINS_ERROR, "parameter use_velocity = %d must be 0 or 1", c->i[SARINS_I_use_velocity]);
+        return SARINS_ERROR;
+    }
+    double nav0[9] = {r[SARINS_R_lat0], r[SARINS_R_lon0], r[SARINS_R_height0], r[SARINS_R_v_e0], r[SARINS_R_v_n0],
+                      r[SARINS_R_v_u0], r[SARINS_R_yaw0], r[SARINS_R_pitch0], r[SARINS_R_roll0]};
+    static const char *const nav_names[9] = {"lat0", "lon0", "height0", "v_e0", "v_n0", "v_u0", "yaw0", "pitch0",
+                                             "roll0"};
+    for (int i = 0; i < 9; i++)
+        if (!isfinite(nav0[i]) || (i == 0 && sm_fabs(nav0[0]) > 89.9 * (3.141592653589793 / 180.0))) {
+            sarins_log(c, SARINS_ERROR, "parameter %s = %.17g must be finite%s", nav_names[i], nav0[i],
+                       i == 0 ? " and within +-89.9 deg" : "");
+            return SARINS_ERROR;
+        }
+    ai_state *st = c->state;
+    memset(st, 0, sizeof *st);
+    char msg[256];
+    if (sarins_eskf_init(&st->eskf, config, nav0, msg, sizeof msg)) {
+        sarins_log(c, SARINS_ERROR, "parameters (lat0 .. roll0, filter settings): %s", msg);
+        return SARINS_ERROR;
+    }
+    publish(c, st);
+    return SARINS_OK;
+}
+
+static int ai_do_step(sarins_ctx *c, double t, double h)
+{
+    ai_state *st = c->state;
+    char msg[256];
+    if (!ai_state_ok(st, msg, sizeof msg)) {
+        sarins_log(c, SARINS_ERROR, "%s", msg);
+        return SARINS_ERROR;
+    }
+    double step = st->eskf.config[SARINS_ESKF_STEP];
+    if (sm_fabs(h - step) > STEP_TOL * step) {
+        sarins_log(c, SARINS_ERROR, "ValueError: communication step %.17g s differs from parameter step %.17g s", h,
+                   step);
+        return SARINS_ERROR;
+    }
+    const double *r = c->r;
+    double dtheta[3] = {r[SARINS_R_dtheta_x], r[SARINS_R_dtheta_y], r[SARINS_R_dtheta_z]};
+    double dv[3] = {r[SARINS_R_dv_x], r[SARINS_R_dv_y], r[SARINS_R_dv_z]};
+    double pos[3] = {r[SARINS_R_fix_lat], r[SARINS_R_fix_lon], r[SARINS_R_fix_height]};
+    double vel[3] = {r[SARINS_R_fix_v_e], r[SARINS_R_fix_v_n], r[SARINS_R_fix_v_u]};
+    for (int i = 0; i < 3; i++)
+        if (!isfinite(dtheta[i]) || !isfinite(dv[i])) {
+            sarins_log(c, SARINS_ERROR, "ValueError: an increment input at t = %.17g s is not finite", t);
+            return SARINS_ERROR;
+        }
+    int64_t count = c->i[SARINS_I_fix_count];
+    int fresh = count > st->last_count && c->i[SARINS_I_fix_valid] != 0;
+    if (fresh)
+        for (int i = 0; i < 3; i++)
+            if (!isfinite(pos[i]) || !isfinite(vel[i])) {
+                sarins_log(c, SARINS_ERROR, "ValueError: a fix input at t = %.17g s is not finite", t);
+                return SARINS_ERROR;
+            }
+    sarins_eskf_predict(&st->eskf, dtheta, dv);
+    if (fresh) {
+        double std[6] = {r[SARINS_R_gnss_pos_std_e], r[SARINS_R_gnss_pos_std_n], r[SARINS_R_gnss_pos_std_u],
+                         r[SARINS_R_gnss_vel_std_e], r[SARINS_R_gnss_vel_std_n], r[SARINS_R_gnss_vel_std_u]};
+        sarins_eskf_gnss(&st->eskf, pos, vel, std, c->i[SARINS_I_use_velocity]);
+        st->used += 1;
+    }
+    if (count > st->last_count)
+        st->last_count = count;
+    publish(c, st);
+    return SARINS_OK;
+}
+
+static void ai_release(sarins_ctx *c)
+{
+    c->work = NULL;
+}
+
+/* A state handed to the FMU (model.h "State validation"): every field within what do_step relies on. */
+static int ai_check_state(const sarins_ctx *c, int running)
+{
+    (void)running;
+    const ai_state *st = c->state;
+    const sarins_eskf *e = &st->eskf;
+    const long long big = 1LL << 53;
+    int ok = sarins_state_int(c, "last_count", st->last_count, 0, big) && sarins_state_int(c, "used", st->used, 0, big)
+             && sarins_state_int(c, "eskf.steps", e->steps, 0, big)
+             && sarins_state_int(c, "eskf.since_cov", e->since_cov, 0, 1000)
+             && sarins_state_real(c, "eskf.step", e->config[SARINS_ESKF_STEP], 1e-300, 1e300)
+             && sarins_state_real(c, "eskf.cov_every", e->config[SARINS_ESKF_COV_EVERY], 1.0, 1000.0)
+             && sarins_state_finite(c, "eskf.config", e->config, SARINS_ESKF_CONFIG)
+             && sarins_state_finite(c, "eskf.q", e->q, 4) && sarins_state_finite(c, "eskf.v", e->v, 3)
+             && sarins_state_finite(c, "eskf.pos", e->pos, 3) && sarins_state_finite(c, "eskf.bg", e->bg, 3)
+             && sarins_state_finite(c, "eskf.ba", e->ba, 3)
+             && sarins_state_finite(c, "eskf.p", e->p, SARINS_ESKF_N * SARINS_ESKF_N)
+             && sarins_state_finite(c, "eskf.x", e->x, SARINS_ESKF_N)
+             && sarins_state_finite(c, "eskf.w_ib", e->w_ib, 3) && sarins_state_finite(c, "eskf.f_n", e->f_n, 3);
+    return ok ? SARINS_OK : SARINS_ERROR;
+}
+
+const sarins_model sarins_model_desc = {
+    .table = &SARINS_TABLE,
+    .state_size = sizeof(ai_state),
+    .state_version = 1,
+    .initialize = ai_initialize,
+    .do_step = ai_do_step,
+    .release = ai_release,
+    .check_state = ai_check_state,
+};
