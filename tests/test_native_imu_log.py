@@ -137,9 +137,12 @@ def test_state_round_trip_mid_log_repeats_the_run(fmu, long_log):
     assert again == out[120:] and there == out[120:]
 
 
-def test_a_crafted_state_is_refused_not_run(fmu, long_log):
-    """A serialized state whose sample index is beyond the log (the glue's checksum recomputed): the next doStep
-    is fmi2Error naming the FMU state."""
+@pytest.mark.parametrize("field, at, fmt, value, text", [("next", 0, "<q", 10**9, "FMU state does not fit"),
+                                                         ("have_step", 16, "<i", 7, "have_step")])
+def test_a_crafted_state_is_refused_not_run(fmu, long_log, field, at, fmt, value, text):
+    """A serialized state whose sample index is beyond the log, or whose have_step is not 0/1 (the glue's
+    checksum recomputed): refused with fmi2Error naming it (the index at the next doStep, where the log's length
+    is known; have_step when the state is set), never an out-of-bounds read."""
     from test_native_drift_model_updater import _fnv1a
 
     slave = _start(fmu, long_log, "crafted")
@@ -147,15 +150,15 @@ def test_a_crafted_state_is_refused_not_run(fmu, long_log):
         for k in range(30):
             slave.fmu.doStep(k * H, H)
         blob = bytearray(slave.fmu.serializeFMUstate(slave.fmu.getFMUstate()))
-        pattern = struct.pack("<qd", 30, H)
+        pattern = struct.pack("<qdi", 30, H, 1)
         assert blob.count(pattern) == 1
-        struct.pack_into("<q", blob, blob.index(pattern), 10**9)
+        struct.pack_into(fmt, blob, blob.index(pattern) + at, value)
         head = next(h for h in range(40, 400) if struct.unpack_from("<Q", blob, h - 16)[0] == len(blob) - h)
         struct.pack_into("<Q", blob, head - 8, _fnv1a(bytes(blob[head:])))
-        slave.fmu.setFMUstate(slave.fmu.deSerializeFMUstate(bytes(blob)))
         with pytest.raises(FMICallException, match="status 3"):
+            slave.fmu.setFMUstate(slave.fmu.deSerializeFMUstate(bytes(blob)))
             slave.fmu.doStep(30 * H, H)
-        assert any("FMU state does not fit" in m for s, _, m in slave.log if s == 3), slave.log[-3:]
+        assert any(text in m for s, _, m in slave.log if s == 3), slave.log[-3:]
     finally:
         slave.free()
 

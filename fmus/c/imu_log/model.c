@@ -698,6 +698,19 @@ static int il_do_step(sarins_ctx *c, double t, double h)
     return SARINS_OK;
 }
 
+/* A state handed to the FMU (model.h "State validation"): what the state alone must satisfy; the sample
+ * index against the log's length is checked by il_state_ok before each step. */
+static int il_check_state(const sarins_ctx *c, int running)
+{
+    (void)running;
+    const il_state *st = c->state;
+    int ok = sarins_state_int(c, "next", st->next, 0, 1LL << 53) &&
+             sarins_state_int(c, "have_step", st->have_step, 0, 1) &&
+             (st->have_step ? sarins_state_real(c, "step", st->step, 1e-300, 1e300)
+                            : sarins_state_real(c, "step", st->step, 0.0, 0.0));
+    return ok ? SARINS_OK : SARINS_ERROR;
+}
+
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(il_state),
@@ -705,4 +718,5 @@ const sarins_model sarins_model_desc = {
     .initialize = il_initialize,
     .do_step = il_do_step,
     .release = il_release,
+    .check_state = il_check_state,
 };
