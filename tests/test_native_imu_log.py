@@ -11,6 +11,7 @@ initialisation.
 from __future__ import annotations
 
 import gzip
+import os
 import struct
 import subprocess
 import zipfile
@@ -268,3 +269,43 @@ def test_c_hosts_with_empty_environment_fmi2_and_fmi3_equal_in_process(fmu, host
                            capture_output=True, text=True, timeout=120, env={})
     assert three.returncode == 0 and "STATUS" not in three.stdout, three.stdout[-2000:]
     assert table(three) == {k: out[k] for k in range(K + 1)}
+
+
+@pytest.mark.slow
+def test_sanitized_build_reads_good_and_bad_logs_clean(fmu, long_log, rate_log, tmp_path):
+    """AddressSanitizer + UndefinedBehaviorSanitizer over the glue and the model: both logs played with a state
+    round trip, and every refused log of the refusal test read; any report fails the run."""
+    from fmus.native_fmu import CFLAGS, fmi_headers_dir
+    from test_native_fmus import HOST_SRC, _cc
+
+    folder = tmp_path / "unzipped"
+    zipfile.ZipFile(fmu).extractall(folder)
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    sources = folder / "sources"
+    san = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O1"]
+    lib = tmp_path / "IMULog_san.so"
+    subprocess.run([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}",
+                    *sorted(str(p) for p in sources.glob("*.c")), "-o", str(lib)], check=True)
+    host = tmp_path / "host_san"
+    subprocess.run([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)],
+                   check=True)
+    env = {"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1", "PATH": os.environ.get("PATH", "")}
+
+    def run(log, steps, h, *more):
+        return subprocess.run([str(host), str(lib), md.guid, str(steps), repr(h), f"s{vr['log_file']}={log}",
+                               f"out={vr['dtheta_x']},{vr['log_time']}", *more], capture_output=True, text=True,
+                              timeout=600, env=env)
+
+    for log, h in ((long_log, H), (rate_log, 0.005)):
+        proc = run(log, K, h, "roundtrip=150")
+        assert proc.returncode == 0 and "STATUS" not in proc.stdout, proc.stdout[-2000:] + proc.stderr[-3000:]
+    bad = [GOOD_HEAD + "0.01,0,0,0,0,0,0.098\n0.02,0,nan,0,0,0,0.098\n", GOOD_HEAD + "0.01,0,0x1p3,0,0,0,0.098\n",
+           GOOD_HEAD + "0.01,0,0,0,0,0,0.098\r\n0.02,0,0,0,0,0,0.098\n", GOOD_HEAD + "0.01," + "9" * 5000 + "\n",
+           "# sarins-imu-log 1\n" + "# k: v\n" * 70, "# sarins-imu-log 1\n# lat_deg: 1\ntime_s," + "x," * 80 + "\n",
+           GOOD_HEAD, "", "\x1f\x8b"]
+    for j, text in enumerate(bad):
+        log = _text(tmp_path / f"bad{j}.csv", text)
+        proc = run(log, 5, H)
+        assert proc.returncode == 0 and "STATUS fmi2ExitInitializationMode 3" in proc.stdout, proc.stdout[-2000:]
+        assert "ERROR" not in proc.stderr and "runtime error" not in proc.stderr, proc.stderr[-3000:]
