@@ -1,3 +1,4 @@
+import fcntl
 import math
 import os
 import shutil
@@ -8,8 +9,14 @@ import pytest
 
 # Hermetic: the tests (and every process they start, which inherits this environment) write nothing
 # outside temporary folders.  HOME, the XDG folders and the FMUs' library cache point into one folder
-# made for this session and removed at its end, before anything below can look them up.
-HERMETIC_ROOT = Path(tempfile.mkdtemp(prefix="sarins-tests-"))
+# made for this session and removed at its end, before anything below can look them up.  Under
+# pytest-xdist the controller makes it and its workers (started after, with its environment) share it.
+_ROOT_VAR = "SARINS_TESTS_HERMETIC_ROOT"
+if os.environ.get("PYTEST_XDIST_WORKER") and os.environ.get(_ROOT_VAR):
+    HERMETIC_ROOT, _OWN_ROOT = Path(os.environ[_ROOT_VAR]), False
+else:
+    HERMETIC_ROOT, _OWN_ROOT = Path(tempfile.mkdtemp(prefix="sarins-tests-")), True
+    os.environ[_ROOT_VAR] = str(HERMETIC_ROOT)
 HERMETIC_ENV = {
     "HOME": HERMETIC_ROOT / "home",
     "XDG_CACHE_HOME": HERMETIC_ROOT / "cache",
@@ -26,7 +33,57 @@ from sarins_fmu.site import SITE_LAT_DEG  # noqa: E402 (after the environment is
 
 
 def pytest_unconfigure(config):
-    shutil.rmtree(HERMETIC_ROOT, ignore_errors=True)
+    if _OWN_ROOT:  # the controller's, after its workers have ended
+        shutil.rmtree(HERMETIC_ROOT, ignore_errors=True)
+
+
+MAX_AUTO_WORKERS = 4
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_auto_num_workers(config):
+    """Workers for ``-n auto`` (the default in pyproject's addopts): one per usable core, at most
+    MAX_AUTO_WORKERS (each holds the FMUs' and numerics' memory); none (in-process, serial, as the slow
+    acceptance tests are written for) when slow tests are selected or only one core is usable.  An
+    explicit ``-n N`` is used as given."""
+    if "slow" in (config.option.markexpr or "").replace("not slow", ""):
+        return 0
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return min(cores, MAX_AUTO_WORKERS) if cores > 1 else 0
+
+
+def built_once(tmp_path_factory, name, steps, last=None):
+    """The folder ``name`` filled once per test run by ``steps`` ({key: function(folder)}, independent
+    of each other) and then ``last(folder)``: in the session's temporary folder, or, under
+    pytest-xdist, in the run's folder shared by the workers, which split the steps between them (a
+    file lock per step: a worker builds the steps no other worker holds, then waits for the rest)."""
+    steps = dict(steps, **({"last": last} if last else {}))
+    if not os.environ.get("PYTEST_XDIST_WORKER"):
+        out = tmp_path_factory.mktemp(name)
+        for step in steps.values():
+            step(out)
+        return out
+    shared = tmp_path_factory.getbasetemp().parent  # this run's, above the workers' own folders
+    out, marks = shared / name, shared / f"{name}.steps"
+    out.mkdir(exist_ok=True)
+    marks.mkdir(exist_ok=True)
+
+    def run(key, wait):
+        with open(marks / f"{key}.lock", "w") as lock:
+            try:
+                fcntl.flock(lock, fcntl.LOCK_EX | (0 if wait else fcntl.LOCK_NB))
+            except BlockingIOError:  # another worker is on it
+                return
+            if not (marks / f"{key}.done").exists():
+                steps[key](out)
+                (marks / f"{key}.done").touch()
+
+    for key in steps:
+        if key != "last":
+            run(key, wait=False)
+    for key in steps:  # the others' steps done (or redone here if they failed), then the last one
+        run(key, wait=True)
+    return out
 
 
 def progress_line(config, text: str) -> None:
@@ -52,20 +109,23 @@ def lat():
 
 @pytest.fixture(scope="session")
 def fmu_dir(tmp_path_factory, pytestconfig):
-    """Every FMU built once per test session, with the project's systems
+    """Every FMU built once per test run (shared by pytest-xdist's workers), with the project's systems
     (``<name>.ssp``) beside them.  Tests write only new files here.  Linux x86-64 binaries only,
     but for the Turntable (every platform the build ships, when the cross compilers are there):
     the other platforms' binaries of every FMU are checked by the slow tests, which build their own."""
     from fmus.build import DEFAULT_NAMES, build_fmus
     from sarins.systems import write_systems
 
-    out = tmp_path_factory.mktemp("fmus")
-    progress_line(pytestconfig, f"building the session's FMUs in {out} ...")
-    build_fmus(out, ["Turntable"])
-    build_fmus(out, [n for n in DEFAULT_NAMES if n != "Turntable"], cross=False)
-    write_systems(out)
-    progress_line(pytestconfig, "built: " + ", ".join(sorted(p.stem for p in out.glob("*.fmu"))))
-    return out
+    def build(name):
+        return lambda out: build_fmus(out, [name], cross=None if name == "Turntable" else False)
+
+    def last(out):
+        write_systems(out)
+        progress_line(pytestconfig, "built: " + ", ".join(sorted(p.stem for p in out.glob("*.fmu"))))
+
+    progress_line(pytestconfig, "building the session's FMUs ...")
+    names = ["Turntable", *(n for n in DEFAULT_NAMES if n != "Turntable")]  # the longest (cross) build first
+    return built_once(tmp_path_factory, "fmus", {n: build(n) for n in names}, last)
 
 
 @pytest.fixture(scope="session")
@@ -77,11 +137,11 @@ def fmu3_dir(tmp_path_factory, pytestconfig):
 
     if shutil.which("gcc") is None and shutil.which("cc") is None:
         pytest.skip("no C compiler (gcc/cc)")
-    out = tmp_path_factory.mktemp("fmus3")
-    progress_line(pytestconfig, f"building the session's FMI 3.0 FMUs in {out} ...")
-    for name in ("Turntable", "IMUThermal", "StrapdownINS"):
-        build_native_fmu(name, SLAVES[name], out, fmi=3, win64=False, aarch64=False)
-    return out
+    def build(name):
+        return lambda out: build_native_fmu(name, SLAVES[name], out, fmi=3, win64=False, aarch64=False)
+
+    progress_line(pytestconfig, "building the session's FMI 3.0 FMUs ...")
+    return built_once(tmp_path_factory, "fmus3", {n: build(n) for n in ("Turntable", "IMUThermal", "StrapdownINS")})
 
 
 @pytest.fixture(scope="session")

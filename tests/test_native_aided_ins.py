@@ -181,7 +181,7 @@ def test_fmi3_variant_equals_navigate(case, tmp_path):
     from fmpy.validation import validate_fmu
 
     params, inputs, flags, expected = case
-    path = build_native_fmu("AidedINS", "aided_ins_slave.py", tmp_path, fmi=3, win64=False)
+    path = build_native_fmu("AidedINS", "aided_ins_slave.py", tmp_path, fmi=3, win64=False, aarch64=False)
     assert validate_fmu(str(path)) == []
     md = read_model_description(str(path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
