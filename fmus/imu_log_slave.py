@@ -1,11 +1,14 @@
-"""IMULog FMU: plays a recorded IMU log (docs/imu-log.md) as increments, e.g. into StrapdownINS."""
+"""IMULog FMU: plays a recorded IMU log (docs/imu-log.md) as increments, e.g. into StrapdownINS.
 
-import math
+The declaration of the native IMULog FMU: its variables, descriptions, start values and the timing
+contract.  ``fmus/native_fmu.py`` writes the model description and the C variable table from it;
+``fmus/c/imu_log/model.c`` reads the log (the project's CSV format 1, the rules of :mod:`sarins_fmu.imu_log`)
+and plays it.
+"""
 
 from pythonfmu import Fmi2Slave
 
-from fmus.slave_support import check_step, declare, default_experiment, discard_on_error, guarded, OUTPUT, PARAMETER, ParameterError
-from sarins_fmu.imu_log import LogError, read_log
+from fmus.slave_support import declare, default_experiment, OUTPUT, PARAMETER
 from sarins_fmu.thermal import SENSORS
 
 
@@ -13,20 +16,21 @@ class IMULog(Fmi2Slave):
 
     author = "sarins-fmu"
     description = (
-        "Plays a recorded IMU log (CSV or NPZ, sarins-imu-log format 1: timestamped angle and velocity "
+        "Plays a recorded IMU log (CSV, sarins-imu-log format 1: timestamped angle and velocity "
         "increments or rates in SI units, optional temperatures; checked when loaded). Contract: FMU time 0 "
         "is the start of the log's first interval (first time_s minus the log's interval h); the "
         "communication step must equal h; after doStep(t, h) the outputs are the log's increments over "
         "(t, t + h] in body axes, tagged increment_end_time = t + h as StrapdownINS expects, and the six "
         "temperatures at t + h (20 degC when the log has none). "
         "lat_deg, lon_deg and height_m of the log are outputs, to set the INS start from. A missing or bad "
-        "log fails fmi2ExitInitializationMode naming the line; stepping past the end of the log fails "
-        "the step. Held between steps: the sample index.")
+        "log fails fmi2ExitInitializationMode naming the line (an NPZ, gzip, vendor CSV, i2Nav or ROS "
+        "log is refused naming the conversion: write it with sarins_fmu.imu_log.write_log as .csv); stepping "
+        "past the end of the log fails the step. Held between steps: the sample index.")
     default_experiment = default_experiment(1.0)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        declare(self, "string", "log_file", PARAMETER, "path of the IMU log (.csv or .npz)", "")
+        declare(self, "string", "log_file", PARAMETER, "path of the IMU log (CSV format 1)", "")
         for ax in "xyz":
             declare(self, "real", f"dtheta_{ax}", OUTPUT, f"angle increment about body {ax} over the step [rad]", 0.0)
         for ax in "xyz":
@@ -40,47 +44,7 @@ class IMULog(Fmi2Slave):
         declare(self, "real", "lat_deg", OUTPUT, "static start latitude of the log [deg]", 0.0)
         declare(self, "real", "lon_deg", OUTPUT, "static start longitude of the log [deg]", 0.0)
         declare(self, "real", "height_m", OUTPUT, "static start height of the log [m]", 0.0)
-        self._log = None
-        self._step = None
 
-    @guarded
-    def exit_initialization_mode(self):
-        if not self.log_file:
-            raise ParameterError("parameter log_file is empty: give the path of an IMU log")
-        try:
-            self._log = read_log(self.log_file)
-        except LogError as exc:
-            raise ParameterError(f"parameter log_file: {exc}") from None
-        log = self._log
-        self.log_step = log.step
-        self.log_time = float(log.time[0] - log.step)
-        self.lat_deg, self.lon_deg, self.height_m = math.degrees(log.lat), math.degrees(log.lon), log.height
-        if log.temps is not None:
-            self._set_temps(log.temps[0])
-
-    def _set_temps(self, temps):
-        for j, sensor in enumerate(SENSORS):
-            setattr(self, f"temp_{sensor}", float(temps[j]))
-
-    @guarded
     def do_step(self, current_time, step_size):
-        log = self._log
-        try:
-            self._step = check_step(self, step_size, self._step)
-            if abs(step_size - log.step) > 1e-9 * log.step:
-                raise ValueError(f"communication step {step_size} s differs from the log's interval {log.step} s")
-            k = round(current_time / step_size)
-            if abs(k * step_size - current_time) > 1e-6 * step_size:
-                raise ValueError(f"time {current_time} s is not on the log's {log.step} s grid")
-            if k >= len(log.time):
-                raise ValueError(f"the log ends at FMU time {len(log.time) * log.step:.9g} s")
-        except ValueError as exc:
-            return discard_on_error(self, exc)
-        for i, ax in enumerate("xyz"):
-            setattr(self, f"dtheta_{ax}", float(log.dtheta[k, i]))
-            setattr(self, f"dv_{ax}", float(log.dv[k, i]))
-        if log.temps is not None:
-            self._set_temps(log.temps[k])
-        self.log_time = float(log.time[k])
-        self.increment_end_time = (k + 1) * step_size
-        return True
+        raise NotImplementedError("the IMULog FMU is native: fmus/c/imu_log/model.c plays the log (this "
+                                  "class only declares it)")

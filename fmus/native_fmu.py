@@ -85,6 +85,7 @@ NATIVE = {
     "IMUCompensator": NativeModel("imu_compensator"),  # its model: fmus.compensator_export
     "DriftModelUpdater": NativeModel("drift_model_updater"),
     "VehicleMotion": NativeModel("vehicle_motion"),
+    "IMULog": NativeModel("imu_log"),
     "GNSSReceiver": NativeModel("gnss_receiver"),
     "AidedINS": NativeModel("aided_ins"),
 }

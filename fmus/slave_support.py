@@ -9,16 +9,12 @@ Real variables declared with :func:`declare` live in one float64 buffer per
 slave instance (``slave._fmi_buffer``; ``slave._fmi_slots`` maps value
 reference -> slot).  The attribute ``slave.<name>`` reads and writes that
 slot (a class-level descriptor), so slave code and pythonfmu's own
-``get_real``/``set_real``/``to_xml`` work unchanged, and the native FMI layer
-(``fmus.native``) copies values in and out of the buffer without calling
-Python.  ``slave._fmi_real(names)`` gives the slots of named Reals for
-vectorised access.
+``get_real``/``set_real``/``to_xml`` work unchanged.  ``slave._fmi_real(names)``
+gives the slots of named Reals for vectorised access.
 
-Error handling.  The native FMI layer reports a Python exception escaping a
-slave method as fmi2Error with the exception logged, at the call that raised
-it; parameter checks therefore simply raise (:class:`ParameterError`) in
-``exit_initialization_mode``.  A message the slave logs with status fmi2Error
-also makes the call return fmi2Error.
+Error handling (a slave run in process): parameter checks raise
+(:class:`ParameterError`) in ``exit_initialization_mode``; a failed step logs
+its reason with status fmi2Error and returns False.
 """
 
 from __future__ import annotations

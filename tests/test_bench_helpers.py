@@ -5,9 +5,7 @@ A few steps keep it quick."""
 
 from __future__ import annotations
 
-import json
 import os
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -52,32 +50,3 @@ def test_start_up_feed_runs_five_real_steps(fmu_dir, c_host, tmp_path, name, hos
     [value] = values.values()
     output, expected = TAGGED[name]
     assert value == expected if expected is not None else value > 0, (output, value)
-
-
-def test_out_of_process_slaves_give_the_in_process_outputs(fmu_dir, tmp_path):
-    """Direct slave calls vs servers (one round trip per call, and batched): identical rows, servers exit 0."""
-    code = f"""
-import json, sys
-from pathlib import Path
-sys.path.insert(0, {str(BENCH)!r})
-import bench_out_of_process as oop
-params = {{"Turntable": {{"align_time": 20.0}}, "IMUThermal": {{"internal_rate": 10.0}},
-          "StrapdownINS": {{"align_time": 20.0, "coarse_time": 10.0}}}}
-rows, codes = {{}}, {{}}
-for label, kind, method in (("direct", "direct", "run_per_call"), ("per_call", "remote", "run_per_call"),
-                            ("batched", "remote", "run_batched")):
-    chain = oop.Chain(kind, Path({str(fmu_dir)!r}), params=params)
-    rows[label] = [[float(x) for x in r] for r in getattr(chain, method)(30)]
-    codes[label] = chain.free()
-print(json.dumps({{"rows": rows, "codes": codes}}))
-"""
-    env = dict(os.environ)
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300,
-                          cwd=tmp_path)
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    out = json.loads(proc.stdout.splitlines()[-1])
-    assert out["rows"]["per_call"] == out["rows"]["direct"]
-    assert out["rows"]["batched"] == out["rows"]["direct"]
-    assert out["codes"]["per_call"] == [0, 0, 0] and out["codes"]["batched"] == [0, 0, 0]
-    nav_time = [row[-1] for row in out["rows"]["direct"]]
-    assert nav_time[-1] == 10.0 and out["rows"]["direct"][-1][2] > 0  # navigating, with a position error

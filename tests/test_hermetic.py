@@ -25,14 +25,6 @@ def test_home_and_caches_point_into_the_sessions_temporary_folder(name):
     assert HERMETIC_ROOT.resolve().is_relative_to(Path(os.path.realpath(__import__("tempfile").gettempdir())))
 
 
-def test_the_fmu_library_cache_of_the_tests_is_in_the_temporary_folder():
-    from fmus.native import bridge
-
-    first = bridge._cache_base()[0]
-    assert first.resolve().is_relative_to(HERMETIC_ROOT.resolve()), first
-    assert Path.home().resolve().is_relative_to(HERMETIC_ROOT.resolve())
-
-
 def test_a_child_process_inherits_the_redirection():
     out = subprocess.run([sys.executable, "-c", "import pathlib; print(pathlib.Path.home())"], capture_output=True,
                          text=True, check=True).stdout.strip()

@@ -27,7 +27,7 @@ def log_file(tmp_path_factory):
     run_static(imu="nav-rlg", align_hours=ALIGN / 3600, nav_hours=NAV / 3600, seed=2,
                on_increments=lambda *c: chunks.append(c))
     cols = [np.concatenate([c[j] for c in chunks]) for j in range(4)]
-    return write_log(tmp_path_factory.mktemp("log") / "run.npz", *cols[:3], temps=cols[3], lat_deg=28.222)
+    return write_log(tmp_path_factory.mktemp("log") / "run.csv", *cols[:3], temps=cols[3], lat_deg=28.222)
 
 
 def test_log_played_into_the_ins_fmu_equals_the_in_process_replay(fmus, log_file):

@@ -1,20 +1,22 @@
-"""The native layer's one fmuResourceLocation parser (fmus/native/sarins_uri.h), used by the shim and the
-core (issue 21): compiled here into a tiny driver with the system compiler and fed a table of URIs;
-then the same refusals through a real FMU's fmi2Instantiate, first in the shim (core not loaded yet),
-then in the core."""
+"""The native FMUs' one fmuResourceLocation parser (fmus/c/sarins_uri.h): compiled here into a tiny driver
+with the system compiler and fed a table of URIs (and, compiled as for Windows, the drive-letter cases)."""
 
 from __future__ import annotations
 
-import os
 import subprocess
-import sys
-import textwrap
 
 import pytest
 
-from fmus import native
+from fmus.native_fmu import C_DIR
 
 OK, NULL, SCHEME, HOST, ESCAPE, TOO_LONG, EMPTY = range(7)
+WARNINGS = ("-std=c11", "-Wall", "-Wextra", "-Wpedantic", "-Werror")
+
+
+def _cc():
+    from test_native_fmus import _cc as cc
+
+    return cc()
 
 DRIVER = r"""
 #include <stdio.h>
@@ -78,7 +80,7 @@ def driver(tmp_path_factory):
     folder = tmp_path_factory.mktemp("uri")
     (folder / "driver.c").write_text(DRIVER)
     exe = folder / "driver"
-    cmd = [native.compiler(), *native.WARNINGS, "-O1", f"-I{native.HERE}", "-o", str(exe), str(folder / "driver.c")]
+    cmd = [_cc(), *WARNINGS, "-O1", f"-I{C_DIR}", "-o", str(exe), str(folder / "driver.c")]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     return exe
@@ -94,62 +96,7 @@ def test_uri_table(driver):
     assert not wrong, "\n".join(wrong)
 
 
-def test_the_layer_compiles_both_objects_from_the_one_parser():
-    for name in ("shim.c", "core.c"):
-        text = (native.HERE / name).read_text()
-        assert '#include "sarins_uri.h"' in text and "sarins_uri_to_path(" in text, name
-        assert "strtol(" not in text and "hexval(" not in text, name  # no second decoder left behind
-
-
-SCRIPT = """
-import ctypes, sys
-from pathlib import Path
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
-sys.path[0:0] = [{tests!r}, {root!r}]
-from orchestration import fmilog
-log = []
-name = fmilog.register("uri", lambda status, category, text: log.append((status, text)))
-path = {fmu!r}
-md = read_model_description(path)
-folder = extract(path)
-f = FMU2Slave(guid=md.guid, unzipDirectory=folder, modelIdentifier=md.coSimulation.modelIdentifier,
-              instanceName=name)
-good = Path(folder, "resources").as_uri()
-for uri in ["file://otherhost" + good[7:], good[:-4] + "%zzes", "http://example.com/resources", good]:
-    del log[:]
-    c = f.fmi2Instantiate(name.encode(), 1, md.guid.encode(), uri.encode(), ctypes.byref(fmilog.callbacks()),
-                          0, 0)
-    print("NULL" if not c else "INSTANCE", "|", " / ".join(t for s, t in log if s >= 3))
-    if c:
-        f.fmi2FreeInstance(c)
-"""
-
-
-def test_bad_resource_locations_are_refused_by_shim_and_core(fmu_dir):
-    """The first call goes through the shim (no core yet), the last three bad ones through the core."""
-    tests = os.path.dirname(__file__)
-    script = textwrap.dedent(SCRIPT).format(tests=tests, root=os.path.dirname(tests),
-                                            fmu=str(fmu_dir / "IMULog.fmu"))  # Python-hosted
-    script += "\nfor uri in ['file://otherhost' + good[7:], good[:-4] + '%zzes', 'http://x/r']:\n" \
-              "    del log[:]\n" \
-              "    c = f.fmi2Instantiate(name.encode(), 1, md.guid.encode(), uri.encode(), " \
-              "ctypes.byref(fmilog.callbacks()), 0, 0)\n" \
-              "    print('NULL' if not c else 'INSTANCE', '|', ' / '.join(t for s, t in log if s >= 3))\n"
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    lines = [line for line in proc.stdout.splitlines() if "|" in line]
-    assert len(lines) == 7, proc.stdout
-    expected = ["another host", "bad percent escape", "not a file: URI", None, "another host", "bad percent escape",
-                "not a file: URI"]
-    for line, text in zip(lines, expected):
-        if text is None:
-            assert line.startswith("INSTANCE"), line
-        else:
-            assert line.startswith("NULL") and text in line, line
-
-
-GLUE_HEADER_DIR = native.HERE.parent / "c"  # the shared glue's copy of the parser (fmus/c/sarins_uri.h)
+GLUE_HEADER_DIR = C_DIR  # fmus/c/sarins_uri.h
 DRIVE_CASES = [  # (uri, path on Windows)
     ("file:///Z:/tmp/fmu/resources", "Z:/tmp/fmu/resources"),
     ("file:///c:/x%20y/", "c:/x y"),
@@ -174,7 +121,7 @@ def test_glue_parser_drops_the_slash_before_a_windows_drive_letter(tmp_path):
     """Compiled as for Windows (_WIN32): file:///Z:/p is the path Z:/p, which Windows opens (/Z:/p it cannot)."""
     (tmp_path / "driver.c").write_text(DRIVER)
     exe = tmp_path / "driver"
-    cmd = [native.compiler(), *native.WARNINGS, "-D_WIN32", "-O1", f"-I{GLUE_HEADER_DIR}", "-o", str(exe),
+    cmd = [_cc(), *WARNINGS, "-D_WIN32", "-O1", f"-I{GLUE_HEADER_DIR}", "-o", str(exe),
            str(tmp_path / "driver.c")]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr

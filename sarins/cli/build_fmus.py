@@ -8,18 +8,15 @@ from . import UsageError
 
 
 def register(subparsers) -> None:
-    from fmus import SLAVES
     from fmus.native_fmu import NATIVE
 
-    hosted = [n for n in SLAVES if n not in NATIVE]
     p = subparsers.add_parser(
         "build-fmus", help="build the FMI 2.0 (or 3.0) co-simulation FMUs",
         description="Build the co-simulation FMUs. FMI 2.0 (default, into build/fmus): the native C FMUs "
                     f"{', '.join(n for n in NATIVE if n != 'IMUCompensator')} (and IMUCompensator with --compensator), "
                     "every FMI call in C, each with binaries/linux64, binaries/win64 and binaries/aarch64-linux (each "
-                    "when its compiler is installed) and sources/; the Python-hosted FMUs "
-                    f"{', '.join(hosted) or 'none'} (binaries/linux64; they need CPython 3.11 with numpy at run "
-                    "time); the project's systems as .ssp beside them. FMI 3.0 (--fmi 3, into build/fmus3): the "
+                    "when its compiler is installed) and sources/; the project's systems as .ssp beside them. FMI 3.0 "
+                    "(--fmi 3, into build/fmus3): the "
                     "native FMUs only, binaries/x86_64-linux, x86_64-windows and aarch64-linux the same way, and "
                     "sources/. --system adds the static systems as one container FMU each (FMI 2.0).")
     p.add_argument("--out", type=Path, default=None,
@@ -67,7 +64,6 @@ def run(args) -> int:
     if args.fmi == 3:
         return run_fmi3(args)
     from fmus.build import NEEDS_MODEL, build_fmus
-    from fmus.native import HOST_REQUIREMENTS
     from fmus.native_fmu import platform_note
 
     args.out = args.out or Path("build") / "fmus"
@@ -100,5 +96,4 @@ def run(args) -> int:
 
         print(export_compensator(args.compensator, args.out))
     print(platform_note())
-    print(f"Python-hosted FMUs: {HOST_REQUIREMENTS}")
     return 0
