@@ -8,9 +8,8 @@ contract.  ``fmus/native_fmu.py`` writes the model description and the C variabl
 """
 
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import INPUT, OUTPUT, PARAMETER, declare
+from fmus.slave_support import INPUT, OUTPUT, PARAMETER, declare, default_experiment
 from sarins_fmu.aided import FilterSettings
 from sarins_fmu.gnss import GNSSConfig
 
@@ -41,7 +40,7 @@ class AidedINS(Fmi2Slave):
         "the fix (fix_lat .. fix_v_u) taken back by latency s; the outputs describe t + h: navigation, the "
         "bias estimates and the filter's standard deviations (sqrt of P's diagonal). State outputs only (no "
         "direct feedthrough). FMU state: get, set and serialize; no allocation after initialisation.")
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=600.0, step_size=0.01)
+    default_experiment = default_experiment(0.01)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)

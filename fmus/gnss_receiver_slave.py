@@ -7,9 +7,8 @@ contract.  ``fmus/native_fmu.py`` writes the model description and the C variabl
 """
 
 from pythonfmu import Fmi2Slave
-from pythonfmu.default_experiment import DefaultExperiment
 
-from fmus.slave_support import INPUT, OUTPUT, PARAMETER, declare
+from fmus.slave_support import INPUT, OUTPUT, PARAMETER, declare, default_experiment
 from sarins_fmu.gnss import GNSSConfig
 
 
@@ -27,7 +26,7 @@ class GNSSReceiver(Fmi2Slave):
         "inside an outage window [start, end) ('start:end;start:end' s, at most 16; the error processes keep "
         "running). Between epochs the outputs hold the last fix. Latency is the consumer's (fix_time tags the "
         "fix). Outputs are state outputs (no direct feedthrough). FMU state: get, set and serialize.")
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=600.0, step_size=0.01)
+    default_experiment = default_experiment(0.01)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
