@@ -1,4 +1,5 @@
 #include "smath.h"
+#include "report.h"
 #include "eskf.h"
 
 #include "earth.h"
@@ -10,53 +11,41 @@
 #define N SARINS_ESKF_N
 #define IDX(i, j) ((i) * N + (j))
 
-static int finite(double x) { return x - x == 0.0; }
-
-static void say(char *msg, size_t size, const char *text)
-{
-    if (msg == NULL || size == 0)
-        return;
-    size_t i = 0;
-    for (; text[i] != '\0' && i + 1 < size; i++)
-        msg[i] = text[i];
-    msg[i] = '\0';
-}
-
 int64_t sarins_eskf_size(void) { return (int64_t)sizeof(sarins_eskf); }
 
 int sarins_eskf_init(sarins_eskf *s, const double *config, const double *nav0, char *msg, size_t size)
 {
     for (int i = 0; i < SARINS_ESKF_CONFIG; i++)
-        if (!finite(config[i])) {
-            say(msg, size, "a filter setting is not finite");
+        if (!isfinite(config[i])) {
+            sarins_say(msg, size, "a filter setting is not finite");
             return 1;
         }
     for (int i = 0; i < 9; i++)
-        if (!finite(nav0[i])) {
-            say(msg, size, "the start state is not finite");
+        if (!isfinite(nav0[i])) {
+            sarins_say(msg, size, "the start state is not finite");
             return 1;
         }
     if (!(config[SARINS_ESKF_STEP] > 0.0)) {
-        say(msg, size, "the IMU step must be positive");
+        sarins_say(msg, size, "the IMU step must be positive");
         return 1;
     }
     for (int i = SARINS_ESKF_ARW; i <= SARINS_ESKF_ACCEL_BIAS0_STD; i++)
         if (config[i] < 0.0) {
-            say(msg, size, "a filter standard deviation is negative");
+            sarins_say(msg, size, "a filter standard deviation is negative");
             return 1;
         }
     if (!(config[SARINS_ESKF_ZUPT_STD] > 0.0) || !(config[SARINS_ESKF_NHC_STD] > 0.0) ||
         !(config[SARINS_ESKF_ODO_STD] > 0.0) || config[SARINS_ESKF_LATENCY] < 0.0) {
-        say(msg, size, "the ZUPT, NHC and odometer stds must be positive and the latency not negative");
+        sarins_say(msg, size, "the ZUPT, NHC and odometer stds must be positive and the latency not negative");
         return 1;
     }
     if (!(config[SARINS_ESKF_COV_EVERY] >= 1.0 && config[SARINS_ESKF_COV_EVERY] <= 1000.0 &&
           sm_floor(config[SARINS_ESKF_COV_EVERY]) == config[SARINS_ESKF_COV_EVERY])) {
-        say(msg, size, "cov_every must be a whole number 1 .. 1000");
+        sarins_say(msg, size, "cov_every must be a whole number 1 .. 1000");
         return 1;
     }
     if (sm_fabs(nav0[0]) > 89.9 * (3.141592653589793 / 180.0)) {
-        say(msg, size, "the start latitude is outside +-89.9 deg");
+        sarins_say(msg, size, "the start latitude is outside +-89.9 deg");
         return 1;
     }
     for (size_t i = 0; i < sizeof *s; i++)
@@ -332,19 +321,19 @@ int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const doubl
     if (out_every < 1 || k < 0 || m < 0)
         return 1;
     for (int64_t i = 0; i < 3 * k; i++)
-        if (!finite(dtheta[i]) || !finite(dv[i]))
+        if (!isfinite(dtheta[i]) || !isfinite(dv[i]))
             return 1;
     for (int64_t i = 0; i < 9 * k; i++)
-        if (!finite(aid[i]))
+        if (!isfinite(aid[i]))
             return 1;
     for (int64_t j = 0; j < m * SARINS_ESKF_GNSS; j++)
-        if (!finite(gnss[j]))
+        if (!isfinite(gnss[j]))
             return 1;
     for (int64_t j = 1; j < m; j++)
         if (gnss[j * SARINS_ESKF_GNSS] < gnss[(j - 1) * SARINS_ESKF_GNSS])
             return 1;
     for (int i = 0; i < 3; i++)
-        if (!finite(vel_std[i]) || !(vel_std[i] > 0.0))
+        if (!isfinite(vel_std[i]) || !(vel_std[i] > 0.0))
             return 1;
     int64_t g = 0;
     while (g < m && gnss[g * SARINS_ESKF_GNSS] < 0.0) /* fixes before this run: skipped */

@@ -1,35 +1,24 @@
 #include "smath.h"
+#include "report.h"
 #include "gnss.h"
 
 #include "earth.h"
 #include "rotations.h"
 
-static int finite(double x) { return x - x == 0.0; }
-
-static void say(char *msg, size_t size, const char *text)
-{
-    if (msg == NULL || size == 0)
-        return;
-    size_t i = 0;
-    for (; text[i] != '\0' && i + 1 < size; i++)
-        msg[i] = text[i];
-    msg[i] = '\0';
-}
-
 int sarins_gnss_init(sarins_gnss *s, const double *config, uint64_t seed, char *msg, size_t size)
 {
     for (int i = 0; i < SARINS_GNSS_CONFIG; i++)
-        if (!finite(config[i])) {
-            say(msg, size, "a GNSS setting is not finite");
+        if (!isfinite(config[i])) {
+            sarins_say(msg, size, "a GNSS setting is not finite");
             return 1;
         }
     for (int i = SARINS_GNSS_POS_WHITE_E; i < SARINS_GNSS_CONFIG; i++)
         if (config[i] < 0.0) {
-            say(msg, size, "a GNSS standard deviation is negative");
+            sarins_say(msg, size, "a GNSS standard deviation is negative");
             return 1;
         }
     if (!(config[SARINS_GNSS_POS_TAU] > 0.0) || !(config[SARINS_GNSS_VEL_TAU] > 0.0)) {
-        say(msg, size, "a GNSS correlation time is not positive");
+        sarins_say(msg, size, "a GNSS correlation time is not positive");
         return 1;
     }
     for (int i = 0; i < SARINS_GNSS_CONFIG; i++)
@@ -72,18 +61,18 @@ int sarins_gnss_fixes(sarins_gnss *s, int64_t n, const double *time, const doubl
 {
     double prev = s->last_time;
     for (int64_t j = 0; j < n; j++) {
-        if (!finite(time[j]) || (s->epochs + j > 0 && !(time[j] > prev)))
+        if (!isfinite(time[j]) || (s->epochs + j > 0 && !(time[j] > prev)))
             return 1;
         prev = time[j];
         for (int c = 0; c < 9; c++)
-            if (!finite(truth[9 * j + c]))
+            if (!isfinite(truth[9 * j + c]))
                 return 1;
         for (int c = 0; c < 3; c++)
-            if (!finite(omega_ib[3 * j + c]))
+            if (!isfinite(omega_ib[3 * j + c]))
                 return 1;
     }
     for (int64_t i = 0; i < 2 * n_out; i++)
-        if (!finite(outages[i]))
+        if (!isfinite(outages[i]))
             return 1;
     const double *cf = s->config;
     for (int64_t j = 0; j < n; j++) {

@@ -1,32 +1,21 @@
 #include "smath.h"
+#include "report.h"
 #include "odo.h"
 
-
-static int finite(double x) { return x - x == 0.0; }
-
-static void say(char *msg, size_t size, const char *text)
-{
-    if (msg == NULL || size == 0)
-        return;
-    size_t i = 0;
-    for (; text[i] != '\0' && i + 1 < size; i++)
-        msg[i] = text[i];
-    msg[i] = '\0';
-}
 
 int sarins_odo_init(sarins_odo *s, const double *config, uint64_t seed, char *msg, size_t size)
 {
     for (int i = 0; i < SARINS_ODO_CONFIG; i++)
-        if (!finite(config[i])) {
-            say(msg, size, "an odometer setting is not finite");
+        if (!isfinite(config[i])) {
+            sarins_say(msg, size, "an odometer setting is not finite");
             return 1;
         }
     if (config[SARINS_ODO_NOISE_STD] < 0.0 || config[SARINS_ODO_RESOLUTION] < 0.0) {
-        say(msg, size, "the odometer noise std and resolution must not be negative");
+        sarins_say(msg, size, "the odometer noise std and resolution must not be negative");
         return 1;
     }
     if (sm_fabs(config[SARINS_ODO_SCALE_FACTOR]) >= 0.5) {
-        say(msg, size, "the odometer scale-factor error must be within +-0.5");
+        sarins_say(msg, size, "the odometer scale-factor error must be within +-0.5");
         return 1;
     }
     for (int i = 0; i < SARINS_ODO_CONFIG; i++)
@@ -38,7 +27,7 @@ int sarins_odo_init(sarins_odo *s, const double *config, uint64_t seed, char *ms
 int sarins_odo_speeds(sarins_odo *s, int64_t n, const double *speed, double *out)
 {
     for (int64_t i = 0; i < n; i++)
-        if (!finite(speed[i]))
+        if (!isfinite(speed[i]))
             return 1;
     double sf = s->config[SARINS_ODO_SCALE_FACTOR], sigma = s->config[SARINS_ODO_NOISE_STD];
     double res = s->config[SARINS_ODO_RESOLUTION];

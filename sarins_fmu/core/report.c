@@ -80,3 +80,11 @@ void sarins_join(char *buf, size_t len, const char *a, const char *b, const char
         buf[used] = '\0';
     }
 }
+
+void sarins_say(char *msg, size_t size, const char *text)
+{
+    if (msg == NULL || size == 0)
+        return;
+    msg[0] = '\0';
+    sarins_join(msg, size, text, "", "", "");
+}

@@ -24,6 +24,9 @@ int sarins_fail(report *r, int code, const char *fmt, ...)
 /* x as Python's repr(float) writes it: the shortest digits that read back as x, "100.0", "1e-05", "nan". */
 void sarins_format_number(char *buf, size_t len, double x);
 
+/* Copies text into msg (size bytes, truncated and terminated); nothing when msg is NULL or size 0. */
+void sarins_say(char *msg, size_t size, const char *text);
+
 /* Appends a, b, c and d to the string in buf (len bytes, truncated and terminated). */
 void sarins_join(char *buf, size_t len, const char *a, const char *b, const char *c, const char *d);
 

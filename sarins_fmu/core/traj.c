@@ -109,23 +109,21 @@ static void truth_row(const double *seg0, const double *rates, double tau, const
     imu_truth(&k, pos, row + 9, row + 12, dpos);
 }
 
-static int finite(double x) { return x - x == 0.0; }
-
 int sarins_traj_run(int64_t n_seg, const double *seg, const double *start, double h, int64_t substeps,
                     int64_t k_total, double *truth, double *dtheta, double *dv)
 {
-    if (n_seg < 1 || substeps < 1 || !(h > 0.0) || !finite(h) || k_total < 1)
+    if (n_seg < 1 || substeps < 1 || !(h > 0.0) || !isfinite(h) || k_total < 1)
         return SARINS_TRAJ_BAD;
     int64_t total = 0;
     for (int64_t j = 0; j < n_seg; j++) {
         const double *r = seg + SARINS_TRAJ_SEG * j;
-        if (!(r[0] >= 0.0 && r[0] <= 1e15 && sm_floor(r[0]) == r[0]) || !finite(r[1]) || !finite(r[2]) ||
-            !finite(r[3]))
+        if (!(r[0] >= 0.0 && r[0] <= 1e15 && sm_floor(r[0]) == r[0]) || !isfinite(r[1]) || !isfinite(r[2]) ||
+            !isfinite(r[3]))
             return SARINS_TRAJ_BAD;
         total += (int64_t)r[0];
     }
     for (int i = 0; i < SARINS_TRAJ_START; i++)
-        if (!finite(start[i]))
+        if (!isfinite(start[i]))
             return SARINS_TRAJ_BAD;
     if (total != k_total)
         return SARINS_TRAJ_BAD;
@@ -164,7 +162,7 @@ int sarins_traj_run(int64_t n_seg, const double *seg, const double *start, doubl
                 pos_c[c] = (sum - pos[c]) - add;
                 pos[c] = sum;
             }
-            if (!finite(pos[0]) || sm_fabs(pos[0]) >= 89.9 * DEG)
+            if (!isfinite(pos[0]) || sm_fabs(pos[0]) >= 89.9 * DEG)
                 return SARINS_TRAJ_BAD;
         }
         double tau_end = (double)n * h;
