@@ -16,7 +16,8 @@ from sarins_fmu.site import SITE_LAT
 
 EXTREMES = (1e308, -1e308, 5e-324, -5e-324, 1e300)
 NAMES = [name for name, _, _ in imu_params.PARAMETERS]
-BOUNDED = [f"gyro_bias_{a}" for a in "xyz"] + ["flicker_tau_min", "flicker_tau_max"] + [f"self_heating_{s}_{a}" for s in ("gyro", "accel") for a in "xyz"]
+BOUNDED = ([f"gyro_bias_{a}" for a in "xyz"] + ["flicker_tau_min", "flicker_tau_max"]
+           + [f"self_heating_{s}_{a}" for s in ("gyro", "accel") for a in "xyz"])
 
 
 def _first_steps_finite(name: str, value: float, steps: int = 3) -> bool:
