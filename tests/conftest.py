@@ -111,13 +111,16 @@ def lat():
 def fmu_dir(tmp_path_factory, pytestconfig):
     """Every FMU built once per test run (shared by pytest-xdist's workers), with the project's systems
     (``<name>.ssp``) beside them.  Tests write only new files here.  Linux x86-64 binaries only,
-    but for the Turntable (every platform the build ships, when the cross compilers are there):
-    the other platforms' binaries of every FMU are checked by the slow tests, which build their own."""
+    but for the Turntable (every platform the build ships, when the cross compilers are there); in a
+    run that selects the slow tests every FMU gets every platform, since their win64 and aarch64
+    checks take the FMUs from here."""
     from fmus.build import DEFAULT_NAMES, build_fmus
     from sarins.systems import write_systems
 
+    every_platform = "slow" in (pytestconfig.option.markexpr or "").replace("not slow", "")
+
     def build(name):
-        return lambda out: build_fmus(out, [name], cross=None if name == "Turntable" else False)
+        return lambda out: build_fmus(out, [name], cross=None if name == "Turntable" or every_platform else False)
 
     def last(out):
         write_systems(out)
