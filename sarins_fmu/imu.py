@@ -538,6 +538,9 @@ class IMU:
         if abs(n_sub - round(n_sub)) > 1e-6 or round(n_sub) < 1:
             raise ValueError(f"output interval {output_interval} s is not a whole number of "
                              f"minor steps at {internal_rate} Hz")
+        if round(n_sub) > core_imu.MAX_SUB:
+            raise ValueError(f"output interval {output_interval} s holds {round(n_sub)} minor steps at "
+                             f"{internal_rate} Hz; at most {core_imu.MAX_SUB} (SARINS_IMU_MAX_SUB, core/imu.h)")
         if not (math.isfinite(aging_days) and aging_days >= 0):
             raise ValueError("aging_days must be a non-negative number")
         self.model, self.base = model, base

@@ -6,6 +6,7 @@ parameters whose bounds the core derives (the flicker band, the self-heating ris
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -74,3 +75,14 @@ def test_a_gyro_bias_is_bounded_by_a_quarter_turn_per_minor_step():
     assert core_imu.check_rate_params(par, 100.0).startswith("gyro_bias_y ")
     with pytest.raises(ValueError, match="IMU parameter gyro_bias_z must be at most"):
         _first_steps_finite("gyro_bias_z", 1e3)
+
+
+def test_minor_steps_per_interval_are_bounded_in_python_and_in_the_core_header():
+    """2^30 minor steps per output interval at most (a state with more, or a fraction, is not a table)."""
+    header = (Path(core_imu.__file__).parent / "imu.h").read_text()
+    assert f"#define SARINS_IMU_MAX_SUB {core_imu.MAX_SUB} " in header
+    base = imu.StaticBase(SITE_LAT, 0.0, 0.0, 0.0)
+    model = imu.preset("nav-rlg")
+    with pytest.raises(ValueError, match="at most 1073741824"):
+        imu.IMU(model, base, output_interval=2.0**30 + 1, internal_rate=1.0)
+    imu.IMU(model, base, output_interval=2.0**30, internal_rate=1.0)

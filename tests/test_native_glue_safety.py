@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import shutil
 import struct
 import subprocess
@@ -180,6 +181,7 @@ def test_restoring_a_state_saved_before_an_error_recovers_bit_for_bit(fmus3, tur
 
 
 HEADER, FIXED = 104, 56  # glue_core.c: the blob's header bytes; the payload's fixed part (state .. counts)
+STRING_MAX = int(re.search(r"#define SARINS_STRING_MAX (\d+)", (Path(__file__).resolve().parents[1] / "fmus" / "c" / "model.h").read_text())[1])
 
 
 def _fnv1a(data: bytes) -> int:
@@ -196,7 +198,7 @@ def _resealed(blob: bytearray) -> bytes:
 
 def _model_state_offset(blob: bytes, n_vars: int) -> int:
     nr, ni, nb, ns = struct.unpack_from("<4Q", blob, HEADER + 24)
-    return HEADER + FIXED + 8 * nr + 4 * ni + 4 * nb + 256 * ns + n_vars + 8
+    return HEADER + FIXED + 8 * nr + 4 * ni + 4 * nb + STRING_MAX * ns + n_vars + 8
 
 
 def test_states_breaking_the_model_invariants_are_refused(fmus3):

@@ -105,6 +105,26 @@ def test_fmu_equals_the_in_process_trajectory_bit_for_bit_and_parks(fmu):
     assert np.all(parked[:, 3:9] == 0.0)  # no rate or acceleration once parked
 
 
+def test_a_long_legs_string_runs_as_in_process(fmu):
+    """A drive of 200 legs (1.3 kB: the campaigns' schedules are longer than 255 bytes) runs bit for bit."""
+    legs = "; ".join(f"drive {3 + k % 5} {4 + k % 7}; turn {15 * (1 + k % 3)}" for k in range(100))
+    assert len(legs) > 1000
+    params = {**PARAMS, "legs": legs, "lead_time": 0.0}
+    tr = _trajectory(params)
+    slave = Slave(fmu, "vm-long")
+    try:
+        slave.set(**params)
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+        rows = [slave.get(*OUT)]
+        for k in range(tr.n_steps):
+            slave.fmu.doStep(float(k), 1.0)
+            rows.append(slave.get(*OUT))
+    finally:
+        slave.free()
+    assert np.array_equal(np.array(rows), tr.rows)
+
+
 def test_state_round_trip_mid_drive_repeats_the_run(fmu):
     tr = _trajectory()
     k = 85  # in the first turn (lead 20 s, drive 60 s)

@@ -86,7 +86,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define SARINS_STRING_MAX 256 /* bytes of a String variable's buffer, terminating NUL included */
+#define SARINS_STRING_MAX 4096 /* bytes of a String variable's buffer, terminating NUL included (Linux PATH_MAX) */
 
 enum { SARINS_OK = 0, SARINS_WARNING = 1, SARINS_DISCARD = 2, SARINS_ERROR = 3 }; /* = fmi2Status values */
 enum { SARINS_REAL = 0, SARINS_INTEGER = 1, SARINS_BOOLEAN = 2, SARINS_STRING = 3 };

@@ -655,7 +655,8 @@ static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
     v->dyn_state = table_array(table, SARINS_IMU_DYN_STATE);
     /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub, (spare), (spare), the five parameters of
      * sarins_imu_axial_thermal_terms (block and relaxation times >= 0, width > 0) */
-    if (!(v->consts[1] > 0.0 && v->consts[5] >= 1.0 && v->consts[9] >= 0.0 && v->consts[11] > 0.0
+    if (!(v->consts[1] > 0.0 && v->consts[5] >= 1.0 && v->consts[5] <= (double)SARINS_IMU_MAX_SUB
+          && v->consts[5] == sm_nearbyint(v->consts[5]) && v->consts[9] >= 0.0 && v->consts[11] > 0.0
           && v->consts[12] >= 0.0))
         return SARINS_IMU_BAD_TABLE;
     return SARINS_IMU_OK;

@@ -68,6 +68,7 @@ enum {
 #define SARINS_IMU_MAX_AXES 8   /* gimbals the one-interval step accepts */
 #define SARINS_IMU_LANES 4      /* intervals the minor loop evaluates side by side */
 #define SARINS_IMU_N_CONSTS 13  /* length of the consts row (sarins_fmu/imu_step.py) */
+#define SARINS_IMU_MAX_SUB 1073741824 /* minor steps per output interval (2^30; an int64 loop count, exact in a double) */
 
 /* Reference temperature of the linear/quadratic coefficients, degC. */
 #define SARINS_IMU_T_REF 25.0

@@ -42,6 +42,7 @@ PARALLEL_MIN = 64  # intervals; below this a thread hand-off costs more than it 
 _CPUS = os.cpu_count() or 1  # (os.cpu_count() takes tens of microseconds: asked once)
 _ERRORS = {1: "the IMU state table does not fit the layout of sarins_fmu.imu_step (imu.h), or a random stream "
               "state in it is not one"}
+MAX_SUB = 2 ** 30  # minor steps per output interval (SARINS_IMU_MAX_SUB in imu.h)
 STREAMS = ("white", "gm", "flicker", "rrw", "turn_on", "ageing")  # stream ids 0.. (SARINS_IMU_STREAM_* in imu.h)
 _POOLS: dict[tuple, ThreadPoolExecutor] = {}
 _POOLS_LOCK = threading.Lock()

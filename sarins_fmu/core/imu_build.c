@@ -182,7 +182,7 @@ int sarins_imu_build(const int64_t *table, int64_t rows, const double *par, doub
                      double age, uint64_t seed) {
     const char *reason;
     if (par == NULL || sarins_imu_check_params(par, &reason) >= 0) return SARINS_IMU_BAD_TABLE;
-    if (!(h > 0.0 && h < INFINITY && n_sub >= 1 && isfinite(t0) && age >= 0.0 && age < INFINITY))
+    if (!(h > 0.0 && h < INFINITY && n_sub >= 1 && n_sub <= SARINS_IMU_MAX_SUB && isfinite(t0) && age >= 0.0 && age < INFINITY))
         return SARINS_IMU_BAD_TABLE;
     int64_t n_flicker = sarins_imu_flicker_count(par[SARINS_IMU_P_FLICKER_TAU_MIN], par[SARINS_IMU_P_FLICKER_TAU_MAX]);
     Arrays a;

@@ -38,7 +38,8 @@ int64_t sarins_imu_check_rate_params(const double *par, double internal_rate, co
 
 /* Fill the constant arrays of the IMU table (imu.h rows CONSTS, SENSOR_PAR, COEF, TRIAD, MATS, CORR_PAR
  * rows 0-5 and 7, PHI, Q, DYN_PAR; the PHI/Q/X_FLICKER rows must have sarins_imu_flicker_count rows) from par,
- * checked first: t0 the start time (s), h the output interval (s, > 0), n_sub minor steps per interval;
+ * checked first: t0 the start time (s), h the output interval (s, > 0), n_sub minor steps per interval
+ * (1 to SARINS_IMU_MAX_SUB);
  * the azimuth-drift coefficients aged by age (s; 0: not aged) with the AGEING stream of seed when an
  * ageing std is not zero.  The table's AXES and BASE rows are the caller's.  Returns SARINS_IMU_OK or
  * SARINS_IMU_BAD_TABLE (a bad parameter vector, h or n_sub, or a table of other shapes; nothing written). */

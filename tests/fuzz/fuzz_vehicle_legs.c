@@ -1,6 +1,6 @@
 /* libFuzzer harness of the vehicle's legs (sarins_fmu/core/vehicle.c: sarins_vehicle_parse_legs, then
  * sarins_vehicle_segments and up to 4000 steps of the stream): what the VehicleMotion FMU runs on its
- * `legs` String parameter, on arbitrary bytes (cut at 255 bytes and a NUL, as the glue's string buffer).
+ * `legs` String parameter, on arbitrary bytes (cut at 4095 bytes and a NUL, as the glue's string buffer).
  * The first byte, when present, picks the grid (1, 0.5, 0.01 or 7 s) and the start latitude.  Findings:
  * any sanitizer report, or an accepted drive whose published outputs are not finite while the stream
  * says it is valid (abort()).
@@ -10,7 +10,7 @@
  *       tests/fuzz/fuzz_vehicle_legs.c sarins_fmu/core/vehicle.c sarins_fmu/core/schedule.c \
  *       sarins_fmu/core/ambient.c sarins_fmu/core/earth.c sarins_fmu/core/rng.c sarins_fmu/core/report.c \
  *       sarins_fmu/core/smath.c -o /tmp/fuzz_vehicle_legs
- *   /tmp/fuzz_vehicle_legs -max_len=300 -max_total_time=60
+ *   /tmp/fuzz_vehicle_legs -max_len=4200 -max_total_time=60
  * Without libFuzzer (any C11 compiler, e.g. gcc -fsanitize=address,undefined), add -DSARINS_FUZZ_MAIN: the
  * program then runs the harness once on each line of the files named on its command line.
  */
@@ -22,7 +22,7 @@
 #include "smath.h"
 #include "vehicle.h"
 
-#define MAX_LEGS 128
+#define MAX_LEGS 2048 /* as fmus/c/vehicle_motion/model.c: SARINS_STRING_MAX / 2 */
 #define MAX_RUN 4000
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -30,7 +30,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     static const double grids[4] = {1.0, 0.5, 0.01, 7.0};
-    char text[256];
+    char text[4096];
     sarins_vehicle_params p;
     sarins_vehicle_params_default(&p);
     if (size > 0) {

@@ -484,6 +484,11 @@ static int start(sarins_ctx *c, imu_work *w, double t, double h)
                        "at %.17g Hz", h, internal_rate);
         return SARINS_ERROR;
     }
+    if (sm_nearbyint(n_sub) > (double)SARINS_IMU_MAX_SUB) {
+        sarins_log(c, SARINS_ERROR, "ValueError: output interval %.17g s holds %.17g minor steps at %.17g Hz; "
+                   "at most %d", interval, sm_nearbyint(n_sub), internal_rate, SARINS_IMU_MAX_SUB);
+        return SARINS_ERROR;
+    }
     double motion[3 * MAX_GIMBALS + 2];
     if (!read_motion(c, w->n_gimbals, motion))
         return step_error(c, "motion or ambient inputs contain NaN or infinity");

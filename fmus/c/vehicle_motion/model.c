@@ -33,6 +33,7 @@ typedef struct {
 typedef struct {
     sarins_vehicle_params params;
     sarins_vehicle_segment segments[3 * MAX_LEGS + 2];
+    sarins_leg legs[MAX_LEGS]; /* the parsed legs string (scratch of build) */
     int64_t n_segments, n_steps;
     double end_speed; /* m/s, after the last leg */
 } vm_work;
@@ -64,14 +65,13 @@ static int build(sarins_ctx *c, vm_work *w)
         return SARINS_ERROR;
     }
     p->seed = (uint64_t)c->i[SARINS_I_body_seed];
-    sarins_leg legs[MAX_LEGS];
     char msg[512];
-    int64_t n_legs = sarins_vehicle_parse_legs(c->s[SARINS_S_legs], legs, MAX_LEGS, msg, sizeof msg);
+    int64_t n_legs = sarins_vehicle_parse_legs(c->s[SARINS_S_legs], w->legs, MAX_LEGS, msg, sizeof msg);
     if (n_legs < 0) {
         sarins_log(c, SARINS_ERROR, "parameter legs: %s", msg);
         return SARINS_ERROR;
     }
-    int code = sarins_vehicle_segments(p, legs, n_legs, w->segments, 3 * MAX_LEGS + 2, &w->n_segments,
+    int code = sarins_vehicle_segments(p, w->legs, n_legs, w->segments, 3 * MAX_LEGS + 2, &w->n_segments,
                                        &w->n_steps, msg, sizeof msg);
     if (code) {
         sarins_log(c, SARINS_ERROR, "parameters (grid = step, legs = '%s'): %s", c->s[SARINS_S_legs], msg);
