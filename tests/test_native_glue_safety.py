@@ -181,7 +181,8 @@ def test_restoring_a_state_saved_before_an_error_recovers_bit_for_bit(fmus3, tur
 
 
 HEADER, FIXED = 104, 56  # glue_core.c: the blob's header bytes; the payload's fixed part (state .. counts)
-STRING_MAX = int(re.search(r"#define SARINS_STRING_MAX (\d+)", (Path(__file__).resolve().parents[1] / "fmus" / "c" / "model.h").read_text())[1])
+MODEL_H = Path(__file__).resolve().parents[1] / "fmus" / "c" / "model.h"
+STRING_MAX = int(re.search(r"#define SARINS_STRING_MAX (\d+)", MODEL_H.read_text())[1])  # bytes per String
 
 
 def _fnv1a(data: bytes) -> int:
