@@ -1,10 +1,13 @@
-"""Reading speed and peak memory of the IMU log reader on a vendor CSV of 10^6 and 10^7 rows.
+"""Reading speed and peak memory of the IMU log reader on CSV logs of 10^6 and 10^7 rows.
 
-    python benchmarks/bench_log_read.py [--rows 1000000 10000000] [--folder /tmp/sarins-bench-logs]
+    python benchmarks/bench_log_read.py [--rows 1000000 10000000] [--format vendor sarins]
+                                        [--folder /tmp/sarins-bench-logs]
 
-Each size is a vendor CSV like the real ADIS16405 records (``time_s,gyro_{x,y,z}_dps,
-accel_{x,y,z}_g``, 100 Hz, a static MEMS unit's values with its output steps), written once into
-``--folder`` (about 56 bytes a row).  For each, a fresh child process runs
+Each size of each format is written once into ``--folder``: ``vendor``, a vendor CSV like the real
+ADIS16405 records (``time_s,gyro_{x,y,z}_dps, accel_{x,y,z}_g``, 100 Hz, a static MEMS unit's values
+with its output steps, short decimals, about 56 bytes a row); ``sarins``, the project's own CSV as
+``write_log`` writes it (increments of a static navigation-grade unit at 100 Hz, every number with
+``%.17g``: 17 significant digits, about 165 bytes a row).  For each, a fresh child process runs
 ``sarins_fmu.imu_log.read_log`` on it (the streamed reader: blocks of lines, the line grammar,
 the unit checks, storage) and reports wall and CPU seconds and its peak resident memory
 (``ru_maxrss``) after the read; then, in the same process, the baseline: ``numpy.loadtxt`` of the
@@ -42,6 +45,26 @@ def write_csv(path: Path, rows: int, block: int = 200_000) -> None:
             np.savetxt(fh, np.column_stack([t, gyro, accel]), delimiter=",", fmt=["%.2f"] + ["%.2f"] * 3 + ["%.5f"] * 3)
 
 
+def write_sarins(path: Path, rows: int, block: int = 200_000) -> None:
+    """The project's CSV (``write_log``, ``%.17g``): a static unit at 45 deg N, right-front-up, 100 Hz."""
+    sys.path.insert(0, str(ROOT))
+    from sarins_fmu.imu_log import write_log
+
+    rng = np.random.default_rng(0)
+    h, lat = 0.01, np.radians(45.0)
+    rate = 7.292115e-5 * np.array([0.0, np.cos(lat), np.sin(lat)])
+    for k0 in range(0, rows, block):
+        k = min(block, rows - k0)
+        t = (k0 + np.arange(k)) * h
+        dtheta = rate * h + 1e-7 * rng.standard_normal((k, 3))
+        dv = np.array([0.0, 0.0, 9.806]) * h + 1e-5 * rng.standard_normal((k, 3))
+        if k0 == 0:
+            write_log(path, t, dtheta, dv, lat_deg=45.0)
+        else:
+            with open(path, "a") as fh:
+                np.savetxt(fh, np.column_stack([t, dtheta, dv]), delimiter=",", fmt="%.17g")
+
+
 def child(path: str) -> None:
     """Run in a fresh process: our reader, then the baseline; print one JSON line."""
     sys.path.insert(0, str(ROOT))
@@ -53,14 +76,16 @@ def child(path: str) -> None:
     w0, c0 = time.perf_counter(), time.process_time()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        log = read_log(path, ReadOptions(axes="frd"))
+        log = read_log(path, ReadOptions(axes="frd") if Path(path).name.startswith("vendor") else ReadOptions())
     wall, cpu = time.perf_counter() - w0, time.process_time() - c0
     rows = len(log.time)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     del log
     w0, c0 = time.perf_counter(), time.process_time()
     with open(path) as fh:
-        data = np.loadtxt(fh, delimiter=",", skiprows=1, max_rows=BASELINE_ROWS)
+        skip = next(k for k, line in enumerate(fh, 1) if line.startswith("time_s"))  # through the column header
+        fh.seek(0)
+        data = np.loadtxt(fh, delimiter=",", skiprows=skip, max_rows=BASELINE_ROWS)
     b_wall, b_cpu = time.perf_counter() - w0, time.process_time() - c0
     print(json.dumps({"rows": rows, "wall_s": wall, "cpu_s": cpu, "peak_rss_mb": peak / 1024,
                       "rss_before_mb": base_rss / 1024, "baseline_rows": int(data.shape[0]), "baseline_wall_s": b_wall,
@@ -70,6 +95,7 @@ def child(path: str) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rows", type=int, nargs="+", default=[1_000_000, 10_000_000])
+    parser.add_argument("--format", nargs="+", choices=["vendor", "sarins"], default=["vendor", "sarins"])
     parser.add_argument("--folder", type=Path, default=Path("/tmp/sarins-bench-logs"))
     parser.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -77,18 +103,18 @@ def main() -> None:
         child(args.child)
         return
     args.folder.mkdir(parents=True, exist_ok=True)
-    print("| rows | file | read wall s | read CPU s | rows/s (CPU) | peak RSS MB | loadtxt rows/s (CPU, 1e6 rows) | "
+    print("| format | rows | file | read wall s | read CPU s | rows/s (CPU) | peak RSS MB | loadtxt rows/s (CPU, 1e6 rows) | "
           "ours / loadtxt |")
-    print("|---|---|---|---|---|---|---|---|")
-    for rows in args.rows:
-        path = args.folder / f"vendor_{rows}.csv"
+    print("|---|---|---|---|---|---|---|---|---|")
+    for fmt, rows in [(fmt, rows) for fmt in args.format for rows in args.rows]:
+        path = args.folder / f"{fmt}_{rows}.csv"
         if not path.is_file():
-            write_csv(path, rows)
+            (write_csv if fmt == "vendor" else write_sarins)(path, rows)
         out = subprocess.run([sys.executable, __file__, "--child", str(path)], capture_output=True, text=True,
                              check=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
         r = json.loads(out.stdout.strip().splitlines()[-1])
         ours, theirs = r["rows"] / r["cpu_s"], r["baseline_rows"] / r["baseline_cpu_s"]
-        print(f"| {rows:.0e} | {path.stat().st_size / 2**20:.0f} MiB | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | "
+        print(f"| {fmt} | {rows:.0e} | {path.stat().st_size / 2**20:.0f} MiB | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | "
               f"{ours:,.0f} | {r['peak_rss_mb']:.0f} | {theirs:,.0f} | {ours / theirs:.2f} |", flush=True)
 
 
