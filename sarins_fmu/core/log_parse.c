@@ -4,11 +4,134 @@
 
 #include <stddef.h>
 
+#include "log_parse_tables.h"
+
 /* 10^0 .. 10^22: every one exact in binary64 */
 static const double POW10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
                                  1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
 #define MAX_EXACT_MANTISSA 9007199254740992ULL /* 2^53 */
-#define MAX_DIGITS 15                           /* significant digits kept below 2^53 */
+#define MAX_DIGITS 19                           /* significant digits held by a uint64_t: 10^19 - 1 < 2^64 */
+
+/* a b = *hi 2^64 + *lo, exactly */
+#if defined(__SIZEOF_INT128__) && !defined(SARINS_LOG_PARSE_PORTABLE)
+__extension__ typedef unsigned __int128 lp_u128;
+static void mul_64x64(uint64_t a, uint64_t b, uint64_t *hi, uint64_t *lo) {
+    lp_u128 p = (lp_u128)a * b;
+    *hi = (uint64_t)(p >> 64);
+    *lo = (uint64_t)p;
+}
+#else
+static void mul_64x64(uint64_t a, uint64_t b, uint64_t *hi, uint64_t *lo) {
+    uint64_t a0 = a & 0xffffffffu, a1 = a >> 32, b0 = b & 0xffffffffu, b1 = b >> 32;
+    uint64_t p00 = a0 * b0, p01 = a0 * b1, p10 = a1 * b0, p11 = a1 * b1;
+    uint64_t mid = (p00 >> 32) + (p01 & 0xffffffffu) + (p10 & 0xffffffffu); /* < 3 2^32 */
+    *lo = (mid << 32) | (p00 & 0xffffffffu);
+    *hi = p11 + (p01 >> 32) + (p10 >> 32) + (mid >> 32);
+}
+#endif
+
+/* leading zero bits of x != 0 */
+static int clz64(uint64_t x) {
+#if defined(__GNUC__) && !defined(SARINS_LOG_PARSE_PORTABLE)
+    return __builtin_clzll(x);
+#else
+    int n = 0;
+    while (!(x & 0x8000000000000000u)) {
+        x <<= 1;
+        n++;
+    }
+    return n;
+#endif
+}
+
+/* The double nearest N 2^E, ties to even (IEEE round to nearest, subnormals included), as its bits in *bits;
+ * 0 when it overflows.  N = n[2] 2^128 + n[1] 2^64 + n[0] with 2^190 <= N < 2^192.  The kept bits m are those
+ * of N from bit `shift` up: shift = bitlength(N) - 53 for a normal result, or the shift that puts the last
+ * kept bit at 2^-1074 (subnormal), whichever is larger; shift >= 137, so m, the rounding bit and part of the
+ * rest lie in n[2]. */
+static int round_n_192(const uint64_t n[3], int32_t e2, uint64_t *bits) {
+    int32_t len = 192 - clz64(n[2]);
+    int32_t shift = len - 53;
+    if (shift < -1074 - e2) shift = -1074 - e2;
+    int32_t s = shift - 128; /* >= 9 */
+    uint64_t m, half, rest;
+    if (s > 64) { /* N < 2^(shift - 1): below half the smallest step, rounds to zero */
+        m = 0;
+        half = 0;
+        rest = 0;
+    } else if (s == 64) {
+        m = 0;
+        half = n[2] >> 63;
+        rest = (n[2] << 1) | n[1] | n[0];
+    } else {
+        m = n[2] >> s;
+        half = (n[2] >> (s - 1)) & 1u;
+        rest = (n[2] & ((UINT64_C(1) << (s - 1)) - 1u)) | n[1] | n[0];
+    }
+    if (half && (rest || (m & 1u))) m++;
+    int32_t be = e2 + shift + 52; /* the value is m 2^(be - 52); normal: 2^52 <= m < 2^53 */
+    if (m == UINT64_C(1) << 53) {
+        m >>= 1;
+        be++;
+    }
+    if (be > 1023) return 0;
+    /* normal: biased exponent be + 1023 and m's leading bit (2^52) adds the one; subnormal: be = -1022, m < 2^52
+     * (m = 2^52 is the smallest normal, encoded the same way) */
+    *bits = ((uint64_t)(be + 1022) << 52) + m;
+    return 1;
+}
+
+/* w 10^q correctly rounded in *bits when q < 0 and 5^-q divides w: then w 10^q = (w / 5^-q) 2^q exactly, an
+ * integer below 2^64 times a power of two (the exact ties between two doubles are all of this kind).  0 if not. */
+static int exact_quotient(uint64_t w, int64_t q, uint64_t *bits) {
+    if (q >= 0 || q < -27) return 0; /* 5^28 > 2^64 > w */
+    uint64_t p = 1;
+    for (int64_t k = 0; k < -q; k++) p *= 5u;
+    if (w % p) return 0;
+    uint64_t v = w / p;
+    int l = clz64(v);
+    uint64_t n[3] = {0, 0, v << l}; /* 2^191 <= N = (v 2^l) 2^128 < 2^192 */
+    return round_n_192(n, (int32_t)q - l - 128, bits);
+}
+
+/* w 10^q correctly rounded (w != 0 and POW5_MIN_Q <= q <= POW5_MAX_Q), or 0 when the product cannot decide it
+ * or the result overflows (the caller then parses the block its own way).
+ *
+ * With l = clz(w), w' = w 2^l (2^63 <= w' < 2^64) and 5^q = A 2^e(q), T(q) <= A < T(q) + 1 (the table):
+ * w 10^q = X 2^(e(q) + q - l) with X = w' A in [w' T, w' T + w') -- exactly w' T when T(q) is exact.  Rounding
+ * is monotone, so when the 192-bit integers N = w' T and N + w' round to the same double, so does X (the
+ * idea of Eisel and Lemire's algorithm, with the full 192-bit product; the interval is 2^-126 of N wide, so
+ * the two differ only for X within that of a rounding boundary).  A decimal of <= 19 digits gets that close only
+ * as an exact tie between two doubles, with q < 0: exact_quotient() rounds it; anything else left is 0. */
+static int decimal_to_double(uint64_t w, int64_t q, double *value) {
+    int l = clz64(w);
+    uint64_t wn = w << l;
+    const uint64_t *t = POW5_128[q - POW5_MIN_Q];
+    int32_t e2 = (int32_t)POW5_EXP2[q - POW5_MIN_Q] + (int32_t)q - l;
+    uint64_t hh, hl, lh, ll;
+    mul_64x64(wn, t[0], &hh, &hl);
+    mul_64x64(wn, t[1], &lh, &ll);
+    uint64_t n[3];
+    n[0] = ll;
+    n[1] = hl + lh;
+    n[2] = hh + (n[1] < hl);
+    uint64_t bits;
+    if (!round_n_192(n, e2, &bits)) return 0;
+    if (q < 0 || q > POW5_EXACT_MAX_Q) { /* T(q) truncated: the upper end N + w' must round the same */
+        uint64_t u[3];
+        u[0] = n[0] + wn;
+        u[1] = n[1] + (u[0] < wn);
+        u[2] = n[2] + (u[1] < n[1]); /* N + w' < 2^192 (N <= (2^64 - 1)(2^128 - 1)) */
+        uint64_t upper;
+        if (!round_n_192(u, e2, &upper) || upper != bits) {
+            if (!exact_quotient(w, q, &bits)) return 0;
+        }
+    }
+    sm_bits64 b;
+    b.u = bits;
+    *value = b.d;
+    return 1;
+}
 
 static int is_blank(char c) { return c == ' ' || c == '\t'; }
 
@@ -55,16 +178,18 @@ static int parse_field(const char *p, int64_t n, double *value) {
         scale += eneg ? -exponent : exponent;
     }
     if (i != n) return 0;
-    if (mantissa > MAX_EXACT_MANTISSA) return 0;
-    double m = (double)mantissa; /* exact: mantissa <= 2^53 */
     double v;
     if (mantissa == 0) {
         v = 0.0;
-    } else if (scale >= 0 && scale <= 22) {
-        v = m * POW10[scale]; /* both exact: one correctly rounded product */
-    } else if (scale < 0 && scale >= -22) {
-        v = m / POW10[-scale]; /* both exact: one correctly rounded quotient */
-    } else {
+    } else if (mantissa <= MAX_EXACT_MANTISSA && scale >= 0 && scale <= 22) {
+        v = (double)mantissa * POW10[scale]; /* both exact: one correctly rounded product (Clinger) */
+    } else if (mantissa <= MAX_EXACT_MANTISSA && scale < 0 && scale >= -22) {
+        v = (double)mantissa / POW10[-scale]; /* both exact: one correctly rounded quotient */
+    } else if (scale < POW5_MIN_Q) {
+        v = 0.0; /* w 10^q < 2^64 10^-343 < 2^-1075, half the smallest subnormal: rounds to zero */
+    } else if (scale > POW5_MAX_Q) {
+        return 0; /* >= 10^309: overflows */
+    } else if (!decimal_to_double(mantissa, scale, &v)) {
         return 0;
     }
     *value = negative ? -v : v;

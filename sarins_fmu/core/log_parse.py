@@ -1,8 +1,8 @@
 """Binding of the core's text-log block parser (log_parse.h): sample lines -> doubles, or None.
 
 :func:`parse_block` returns the (K, n_cols) numbers of a block of whole CSV sample lines when every line
-keeps the log's line grammar and every field is a plain decimal the core converts exactly (Clinger's fast
-path: bit-identical to Python's ``float``); otherwise None, and the caller parses the block its own way
+keeps the log's line grammar and every field is a plain decimal of at most 19 significant digits that the
+core converts exactly (correctly rounded, bit-identical to Python's ``float``; see log_parse.h); otherwise None, and the caller parses the block its own way
 (numpy), which also words any error.
 """
 
