@@ -3,6 +3,7 @@
 #include "log_parse.h"
 
 #include <stddef.h>
+#include <string.h> /* memchr */
 
 #include "log_parse_tables.h"
 
@@ -81,6 +82,19 @@ static int round_n_192(const uint64_t n[3], int32_t e2, uint64_t *bits) {
     return 1;
 }
 
+/* 1 when N + w rounds to the same double as N (bits), N = n[2] n[1] n[0] as in round_n_192, w < 2^64 */
+static int same_rounding(const uint64_t n[3], uint64_t w, int32_t e2, uint64_t bits) {
+    uint64_t u[3];
+    u[0] = n[0] + w;
+    u[1] = n[1] + (u[0] < w);
+    u[2] = n[2] + (u[1] < n[1]); /* N + w < 2^192 (N <= (2^64 - 1)(2^128 - 1)) */
+    /* the usual case: the same top word and a nonzero rest below it at both ends (N + w can clear n[1] n[0] only
+     * by a carry into n[2]), so the same kept bits, rounding bit and sticky bit */
+    if (u[2] == n[2] && (n[1] | n[0])) return 1;
+    uint64_t upper;
+    return round_n_192(u, e2, &upper) && upper == bits;
+}
+
 /* w 10^q correctly rounded in *bits when q < 0 and 5^-q divides w: then w 10^q = (w / 5^-q) 2^q exactly, an
  * integer below 2^64 times a power of two (the exact ties between two doubles are all of this kind).  0 if not. */
 static int exact_quotient(uint64_t w, int64_t q, uint64_t *bits) {
@@ -117,16 +131,7 @@ static int decimal_to_double(uint64_t w, int64_t q, double *value) {
     n[2] = hh + (n[1] < hl);
     uint64_t bits;
     if (!round_n_192(n, e2, &bits)) return 0;
-    if (q < 0 || q > POW5_EXACT_MAX_Q) { /* T(q) truncated: the upper end N + w' must round the same */
-        uint64_t u[3];
-        u[0] = n[0] + wn;
-        u[1] = n[1] + (u[0] < wn);
-        u[2] = n[2] + (u[1] < n[1]); /* N + w' < 2^192 (N <= (2^64 - 1)(2^128 - 1)) */
-        uint64_t upper;
-        if (!round_n_192(u, e2, &upper) || upper != bits) {
-            if (!exact_quotient(w, q, &bits)) return 0;
-        }
-    }
+    if ((q < 0 || q > POW5_EXACT_MAX_Q) && !same_rounding(n, wn, e2, bits) && !exact_quotient(w, q, &bits)) return 0;
     sm_bits64 b;
     b.u = bits;
     *value = b.d;
@@ -135,65 +140,75 @@ static int decimal_to_double(uint64_t w, int64_t q, double *value) {
 
 static int is_blank(char c) { return c == ' ' || c == '\t'; }
 
-/* One field p[0..n) -> *value; 0 if not in the fast form (see the header). */
-static int parse_field(const char *p, int64_t n, double *value) {
-    int64_t i = 0;
-    while (i < n && is_blank(p[i])) i++;
-    while (n > i && is_blank(p[n - 1])) n--;
-    if (i == n) return 0;
+static int is_digit(char c) { return (unsigned)(c - '0') < 10u; }
+
+/* w 10^q (sign apart) -> *value; 0 if not taken (see the header). */
+static int to_double(uint64_t w, int64_t q, double *value) {
+    if (w == 0) {
+        *value = 0.0;
+    } else if (w <= MAX_EXACT_MANTISSA && q >= 0 && q <= 22) {
+        *value = (double)w * POW10[q]; /* both exact: one correctly rounded product (Clinger) */
+    } else if (w <= MAX_EXACT_MANTISSA && q < 0 && q >= -22) {
+        *value = (double)w / POW10[-q]; /* both exact: one correctly rounded quotient */
+    } else if (q < POW5_MIN_Q) {
+        *value = 0.0; /* w 10^q < 2^64 10^-343 < 2^-1075, half the smallest subnormal: rounds to zero */
+    } else if (q > POW5_MAX_Q) {
+        return 0; /* >= 10^309: overflows */
+    } else {
+        return decimal_to_double(w, q, value);
+    }
+    return 1;
+}
+
+/* The field that starts at p[i] and ends before p[end] at the latest: [blanks][+-]digits[.digits][(e|E)[+-]digits]
+ * [blanks] (or .digits) -> *value.  Returns the index after it (its trailing blanks), where the caller expects
+ * a comma or the line's end; -1 if no number in the fast form starts there. */
+static int64_t parse_field(const char *p, int64_t i, int64_t end, double *value) {
+    while (i < end && is_blank(p[i])) i++;
     int negative = 0;
-    if (p[i] == '+' || p[i] == '-') negative = p[i++] == '-';
-    uint64_t mantissa = 0;
-    int digits = 0, seen = 0;
-    int64_t scale = 0; /* value = mantissa * 10^(scale + exponent) */
-    while (i < n && p[i] >= '0' && p[i] <= '9') {
-        seen = 1;
-        if (mantissa == 0 && p[i] == '0') { i++; continue; }
-        if (++digits > MAX_DIGITS) return 0;
-        mantissa = mantissa * 10u + (uint64_t)(p[i++] - '0');
-    }
-    if (i < n && p[i] == '.') {
+    if (i < end && (p[i] == '+' || p[i] == '-')) negative = p[i++] == '-';
+    uint64_t w = 0; /* the significant digits; wraps only when there are more than 19, refused below */
+    int64_t digits = 0, scale = 0; /* value = w 10^(scale + exponent) */
+    int64_t z = i;
+    while (i < end && p[i] == '0') i++; /* leading zeros */
+    int seen = i > z;
+    int64_t d0 = i;
+    while (i < end && is_digit(p[i])) w = w * 10u + (uint64_t)(p[i++] - '0');
+    digits = i - d0;
+    seen |= digits > 0;
+    if (i < end && p[i] == '.') {
         i++;
-        while (i < n && p[i] >= '0' && p[i] <= '9') {
-            seen = 1;
-            scale--;
-            if (mantissa == 0 && p[i] == '0') { i++; continue; }
-            if (++digits > MAX_DIGITS) return 0;
-            mantissa = mantissa * 10u + (uint64_t)(p[i++] - '0');
+        if (digits == 0) { /* 0.000ddd: zeros after the point are not significant either */
+            z = i;
+            while (i < end && p[i] == '0') i++;
+            scale -= i - z;
+            seen |= i > z;
         }
+        int64_t f0 = i;
+        while (i < end && is_digit(p[i])) w = w * 10u + (uint64_t)(p[i++] - '0');
+        digits += i - f0;
+        scale -= i - f0;
+        seen |= i > f0;
     }
-    if (!seen) return 0;
-    if (i < n && (p[i] == 'e' || p[i] == 'E')) {
+    if (!seen || digits > MAX_DIGITS) return -1;
+    if (i < end && (p[i] == 'e' || p[i] == 'E')) {
         i++;
         int eneg = 0;
-        if (i < n && (p[i] == '+' || p[i] == '-')) eneg = p[i++] == '-';
+        if (i < end && (p[i] == '+' || p[i] == '-')) eneg = p[i++] == '-';
         int64_t exponent = 0;
-        int edigits = 0;
-        while (i < n && p[i] >= '0' && p[i] <= '9') {
+        int64_t e0 = i;
+        while (i < end && is_digit(p[i])) {
             if (exponent < 100000) exponent = exponent * 10 + (p[i] - '0');
             i++;
-            edigits++;
         }
-        if (!edigits) return 0;
+        if (i == e0) return -1;
         scale += eneg ? -exponent : exponent;
     }
-    if (i != n) return 0;
+    while (i < end && is_blank(p[i])) i++;
     double v;
-    if (mantissa == 0) {
-        v = 0.0;
-    } else if (mantissa <= MAX_EXACT_MANTISSA && scale >= 0 && scale <= 22) {
-        v = (double)mantissa * POW10[scale]; /* both exact: one correctly rounded product (Clinger) */
-    } else if (mantissa <= MAX_EXACT_MANTISSA && scale < 0 && scale >= -22) {
-        v = (double)mantissa / POW10[-scale]; /* both exact: one correctly rounded quotient */
-    } else if (scale < POW5_MIN_Q) {
-        v = 0.0; /* w 10^q < 2^64 10^-343 < 2^-1075, half the smallest subnormal: rounds to zero */
-    } else if (scale > POW5_MAX_Q) {
-        return 0; /* >= 10^309: overflows */
-    } else if (!decimal_to_double(mantissa, scale, &v)) {
-        return 0;
-    }
+    if (!to_double(w, scale, &v)) return -1;
     *value = negative ? -v : v;
-    return 1;
+    return i;
 }
 
 int64_t sarins_log_parse_block(const char *buf, int64_t len, int32_t n_cols, int32_t crlf, int32_t max_line,
@@ -201,29 +216,27 @@ int64_t sarins_log_parse_block(const char *buf, int64_t len, int32_t n_cols, int
     if (buf == NULL || out == NULL || len < 0 || n_cols < 1 || max_line < 0 || cap_rows < 0) return SARINS_LOG_NOT_TAKEN;
     int64_t rows = 0, start = 0;
     while (start < len) {
-        int64_t end = start;
-        while (end < len && buf[end] != '\n') end++;
-        int has_eol = end < len;
+        const char *nl = memchr(buf + start, '\n', (size_t)(len - start));
+        int64_t end = nl != NULL ? nl - buf : len;
         int64_t body_end = end;
-        if (has_eol && crlf) {
+        if (nl != NULL && crlf) {
             if (body_end == start || buf[body_end - 1] != '\r') return SARINS_LOG_NOT_TAKEN; /* LF among CRLF */
             body_end--;
         }
         if (body_end - start > max_line) return SARINS_LOG_NOT_TAKEN;
-        if (buf[start] == '#') return SARINS_LOG_NOT_TAKEN;
         if (rows >= cap_rows) return SARINS_LOG_NOT_TAKEN;
         double *row = out + rows * n_cols;
-        int32_t col = 0;
-        int64_t f = start;
-        for (int64_t i = start; i <= body_end; i++) {
-            if (i < body_end && buf[i] == '\r') return SARINS_LOG_NOT_TAKEN; /* CR inside, or CRLF among LF */
-            if (i == body_end || buf[i] == ',') {
-                if (col >= n_cols || !parse_field(buf + f, i - f, &row[col])) return SARINS_LOG_NOT_TAKEN;
-                col++;
-                f = i + 1;
+        int64_t i = start;
+        for (int32_t col = 0; col < n_cols; col++) {
+            /* a '#', a CR inside the line (or CRLF among LF) and a missing or extra field all stop a field */
+            i = parse_field(buf, i, body_end, &row[col]);
+            if (i < 0) return SARINS_LOG_NOT_TAKEN;
+            if (col + 1 < n_cols) {
+                if (i == body_end || buf[i] != ',') return SARINS_LOG_NOT_TAKEN;
+                i++;
             }
         }
-        if (col != n_cols) return SARINS_LOG_NOT_TAKEN;
+        if (i != body_end) return SARINS_LOG_NOT_TAKEN;
         rows++;
         start = end + 1;
     }
