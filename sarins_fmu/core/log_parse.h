@@ -11,9 +11,9 @@
  * tools/log_parse_gen.py), kept only when the product's error interval cannot change the rounding (Eisel and
  * Lemire's method), and an exact tie between two doubles by an exact integer division.  A value below half the
  * smallest subnormal is +-0.  Anything else (20 or more significant digits, an overflow to infinity, a product
- * the interval leaves undecided -- about 2^-60 of random inputs --, another number form, a grammar
- * error, a full buffer) makes the function return SARINS_LOG_NOT_TAKEN and the caller parses the block its
- * own way (which also words the error).  No allocation; reentrant.
+ * the interval leaves undecided -- about 2^-73 of random inputs --, another number form, a grammar error, a
+ * full buffer) makes the function return SARINS_LOG_NOT_TAKEN and the caller parses the block its own way
+ * (which also words the error).  No allocation; reentrant.
  */
 #ifndef SARINS_LOG_PARSE_H
 #define SARINS_LOG_PARSE_H

@@ -6,8 +6,8 @@
  * and rules of sarins_fmu.imu_log (tag line, '# key: value' metadata, the header, one kind of line end,
  * n_cols - 1 commas per line, strictly uniform clock within 1e-6 h, first sample in [0, h], finite values,
  * the full-scale and mean-gravity unit checks) and its numbers parsed into one table allocated once: the
- * core's block parser (log_parse.h, Clinger's exact fast path) where it takes the lines, else strtod, which
- * glibc rounds correctly: every number is the double Python's float() gives, so the outputs equal the
+ * core's block parser (log_parse.h: decimals of up to 19 significant digits, correctly rounded) where it takes
+ * the lines, else strtod, which glibc rounds correctly: every number is the double Python's float() gives, so the outputs equal the
  * in-process reader's bit for bit (rates become increments as rate * h there and here).  Other formats (NPZ,
  * gzip, vendor CSV, i2Nav, ROS) are refused naming the conversion.  do_step only indexes the table.
  * Units: rad, m/s, degC, s; lat_deg, lon_deg in deg, height_m in m.
