@@ -246,13 +246,15 @@ def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed
 
 def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aiding=("gnss", "zupt"), outages=(),
              settings: FilterSettings = FilterSettings(), seed: int = 0, gnss_velocity: bool = True,
-             odometer: OdometerConfig | None = None) -> AidedResult:
+             odometer: OdometerConfig | None = None, imu=None, fixes=None) -> AidedResult:
     """Aided navigation along ``truth`` (:class:`sarins_fmu.trajectory.Truth`).
 
     gnss : GNSSConfig or None (preset ``sps`` when 'gnss' is aided and None is given).
     aiding : subset of ('gnss', 'zupt', 'odometer', 'nhc').  outages : (m, 2) GNSS outage windows [start, end) s.
     odometer : OdometerConfig (default ``OdometerConfig()`` when 'odometer' is aided).
     seed : IMU errors, initial errors (stream of ``seed``) and GNSS errors (``seed``).
+    imu : the increments ``corrupt(truth, noise, seed)`` returns, when made already (a peer filter runs
+        the same data); fixes : ``gnss.simulate(truth, gnss, seed, outages)``'s fixes, likewise.
     """
     unknown = set(aiding) - set(AIDING)
     if unknown:
@@ -262,12 +264,13 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
     if "odometer" in aiding and odometer is None:
         odometer = OdometerConfig()
     step = truth.step
-    dtheta, dv, bg_true, ba_true = corrupt(truth, noise, seed)
+    dtheta, dv, bg_true, ba_true = corrupt(truth, noise, seed) if imu is None else imu
     rng = np.random.default_rng([seed, 3018])
     state = _core.EskfState(_config(noise, settings, gnss, step, odometer), _initial_state(truth, settings, rng))
     aid = per_step_aiding(truth, aiding, settings, odometer, rng, seed)
     if "gnss" in aiding:
-        fixes = gnss_mod.simulate(truth, gnss, seed, outages)
+        if fixes is None:
+            fixes = gnss_mod.simulate(truth, gnss, seed, outages)
         rows = fix_rows(fixes, gnss, step)
         vel_std = gnss.vel_std()
     else:
