@@ -147,7 +147,8 @@ def write_case(case: Case, folder: Path) -> Path:
 
 
 def run_kfgins(binary, case: Case, folder: Path):
-    """KF-GINS on the case written to ``folder``; (rows at our output times (n, 9), wall s, CPU s of the child)."""
+    """KF-GINS on the case written to ``folder``: our output steps (n,) found in its result, its rows
+    there (n, 9), wall s, CPU s of the child, bytes of its result files."""
     config = write_case(case, folder)
     t0 = time.perf_counter()
     before = os.times()
@@ -157,12 +158,13 @@ def run_kfgins(binary, case: Case, folder: Path):
     if proc.returncode != 0:
         raise RuntimeError(f"KF-GINS exited {proc.returncode}: {proc.stdout[-500:]} {proc.stderr[-500:]}")
     nav = kfgins.read_nav(folder / "out" / kfgins.NAV_FILE)
+    out_bytes = sum(f.stat().st_size for f in (folder / "out").iterdir())
     k = np.rint((nav.time - START_SOW) / case.truth.step).astype(np.int64)
     want = np.arange(1, case.truth.n_steps // case.settings.out_every + 1) * case.settings.out_every
     pos = np.searchsorted(k, want)
     found = (pos < k.size) & (k[np.minimum(pos, k.size - 1)] == want)
-    return want[found], nav.nav[pos[found]], wall, (after.children_user + after.children_system
-                                                     - before.children_user - before.children_system)
+    cpu = after.children_user + after.children_system - before.children_user - before.children_system
+    return want[found], nav.nav[pos[found]], wall, cpu, out_bytes
 
 
 def gravity_difference(lat: float, height: float) -> float:
@@ -175,50 +177,57 @@ def gravity_difference(lat: float, height: float) -> float:
 
 
 def compare(binary, minutes: float = 30.0, *, rate_hz: int = 100, imu: str = "tactical", gnss: str = "white",
-            seed: int = 0, workdir=None) -> dict:
-    """The comparison's numbers (JSON-ready)."""
+            seed: int = 0, workdir=None, repeats: int = 1, commit: str | None = None) -> dict:
+    """The comparison's numbers (JSON-ready).  Each filter runs ``repeats`` times on the same data
+    (identical results); the times are the fastest run's (wall and CPU s)."""
     case = make_case(minutes, rate_hz=rate_hz, imu=imu, gnss=gnss, seed=seed)
-    with tempfile.TemporaryDirectory(dir=workdir) as tmp:
-        idx, k_nav, k_wall, k_cpu = run_kfgins(binary, case, Path(tmp))
-    ours, wall, cpu = run_ours(case)
-    ours1, wall1, cpu1 = run_ours(case, cov_every=1)
-    truth_rows = case.truth.nav_rows()[idx]
+    k_wall = k_cpu = wall = cpu = wall1 = cpu1 = math.inf
+    for _ in range(repeats):
+        with tempfile.TemporaryDirectory(dir=workdir) as tmp:
+            idx, k_nav, w, c, out_bytes = run_kfgins(binary, case, Path(tmp))
+        k_wall, k_cpu = min(k_wall, w), min(k_cpu, c)
+        ours, w, c = run_ours(case)
+        wall, cpu = min(wall, w), min(cpu, c)
+        ours1, w, c = run_ours(case, cov_every=1)
+        wall1, cpu1 = min(wall1, w), min(cpu1, c)
+    truth_rows = case.truth.nav_rows(idx)
     ours_idx = np.arange(1, ours.time.size + 1) * case.settings.out_every
     sel = np.isin(ours_idx, idx)
     e_k = rms_errors(aided.nav_errors(k_nav, truth_rows))
     e_o = rms_errors(ours.error[sel])
     e_o1 = rms_errors(ours1.error[sel])
     return {
-        "kfgins_commit": kfgins_commit(),
+        "kfgins_commit": commit, "repeats": repeats,
         "duration_s": float(case.truth.time[-1]), "imu_rate_hz": rate_hz, "imu": imu, "gnss": gnss,
         "gnss_rate_hz": case.gnss.rate_hz, "gnss_fixes": int(case.fixes.valid.sum()), "seed": seed,
         "compared_rows": int(idx.size),
         "gravity_ours_minus_kfgins_mps2": gravity_difference(float(case.truth.lat[0]), float(case.truth.height[0])),
         "ours": {"cov_every": case.settings.cov_every, "rms": asdict(e_o), "wall_s": wall, "cpu_s": cpu},
         "ours_cov_every_1": {"cov_every": 1, "rms": asdict(e_o1), "wall_s": wall1, "cpu_s": cpu1},
-        "kfgins": {"rms": asdict(e_k), "wall_s": k_wall, "cpu_s": k_cpu},
+        "kfgins": {"rms": asdict(e_k), "wall_s": k_wall, "cpu_s": k_cpu, "result_bytes": out_bytes},
+        "ours_over_kfgins_max": max(a / b for a, b in zip(asdict(e_o).values(), asdict(e_k).values())),
+        "ours_over_kfgins_min": min(a / b for a, b in zip(asdict(e_o).values(), asdict(e_k).values())),
         "speed_ratio_wall": k_wall / wall, "speed_ratio_wall_cov_every_1": k_wall / wall1,
+        "speed_ratio_cpu": k_cpu / cpu, "speed_ratio_cpu_cov_every_1": k_cpu / cpu1,
     }
-
-
-def kfgins_commit() -> str | None:
-    """The KF-GINS commit the binary was built from, when stated in $SARINS_KFGINS_COMMIT."""
-    return os.environ.get("SARINS_KFGINS_COMMIT")
 
 
 def markdown(r: dict) -> str:
     """The comparison table."""
     head = ("| filter | horizontal RMS (m) | vertical RMS (m) | velocity RMS (m/s) | tilt RMS (deg) | heading RMS (deg) "
-            "| run time (s) |\n|---|---|---|---|---|---|---|\n")
+            "| run time wall / CPU (s) |\n|---|---|---|---|---|---|---|\n")
     rows = []
     for name, key in (("KF-GINS (21 states, P every IMU step)", "kfgins"),
                       (f"ours (15 states, P every {r['ours']['cov_every']} IMU steps)", "ours"),
                       ("ours (15 states, P every IMU step)", "ours_cov_every_1")):
         e = r[key]["rms"]
         rows.append(f"| {name} | {e['horizontal']:.3f} | {e['vertical']:.3f} | {e['velocity']:.4f} | "
-                    f"{e['tilt_deg']:.5f} | {e['heading_deg']:.4f} | {r[key]['wall_s']:.3f} |")
-    return head + "\n".join(rows) + (f"\n\nKF-GINS / ours run time: {r['speed_ratio_wall']:.1f}x "
-                                     f"({r['speed_ratio_wall_cov_every_1']:.1f}x with P every IMU step).\n")
+                    f"{e['tilt_deg']:.5f} | {e['heading_deg']:.4f} | {r[key]['wall_s']:.3f} / {r[key]['cpu_s']:.3f} |")
+    return head + "\n".join(rows) + (
+        f"\n\nOurs / KF-GINS RMS errors (P every {r['ours']['cov_every']} steps): {r['ours_over_kfgins_min']:.4f} .. "
+        f"{r['ours_over_kfgins_max']:.4f}.  KF-GINS / ours run time: {r['speed_ratio_wall']:.1f}x wall, {r['speed_ratio_cpu']:.1f}x CPU "
+        f"({r['speed_ratio_wall_cov_every_1']:.1f}x / {r['speed_ratio_cpu_cov_every_1']:.1f}x with P every IMU "
+        "step).\n")
 
 
 def main(argv=None) -> int:
@@ -229,13 +238,16 @@ def main(argv=None) -> int:
     ap.add_argument("--imu", default="tactical", choices=sorted(aided.IMU_NOISE))
     ap.add_argument("--gnss", default="white", choices=sorted(GNSS_CHOICES))
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--repeats", type=int, default=3, help="runs of each filter; the fastest is reported")
+    ap.add_argument("--kfgins-commit", default=None, help="the KF-GINS commit the binary was built from (recorded)")
     ap.add_argument("--json", type=Path)
     ap.add_argument("--markdown", type=Path)
     args = ap.parse_args(argv)
     if not args.kfgins or not os.access(args.kfgins, os.X_OK):
         print("kfgins_compare: give KF-GINS's binary with --kfgins or $SARINS_KFGINS", file=sys.stderr)
         return 2
-    r = compare(args.kfgins, args.minutes, rate_hz=args.rate_hz, imu=args.imu, gnss=args.gnss, seed=args.seed)
+    r = compare(args.kfgins, args.minutes, rate_hz=args.rate_hz, imu=args.imu, gnss=args.gnss, seed=args.seed,
+                repeats=args.repeats, commit=args.kfgins_commit)
     table = markdown(r)
     if args.json:
         args.json.write_text(json.dumps(r, indent=2) + "\n")

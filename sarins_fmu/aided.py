@@ -192,7 +192,7 @@ def _config(noise: ImuNoise, settings: FilterSettings, gnss_cfg, step: float, od
 
 def _initial_state(truth, settings: FilterSettings, rng) -> np.ndarray:
     """Start row with errors drawn from the filter's initial covariance."""
-    row = truth.nav_rows()[0].copy()
+    row = truth.nav_rows([0])[0]
     e = rng.standard_normal(9)
     r_m, r_n = earth.radii(row[0])
     row[0] += settings.pos0_std * e[1] / (r_m + row[2])
@@ -279,7 +279,7 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         rows, vel_std = np.zeros((0, 11)), np.ones(3)
     out = state.run(dtheta, dv, aid, rows, vel_std, gnss_velocity, settings.out_every)
     idx = np.arange(1, out.shape[0] + 1) * settings.out_every
-    true_rows = truth.nav_rows()[idx]
+    true_rows = truth.nav_rows(idx)
     nav = out[:, :9]
     return AidedResult(time=truth.time[idx], nav=nav, truth=true_rows, error=nav_errors(nav, true_rows),
                        cov=out[:, 15:].reshape(-1, 15, 15), bias_g=out[:, 9:12], bias_a=out[:, 12:15],
