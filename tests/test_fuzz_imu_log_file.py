@@ -58,7 +58,8 @@ def _seeds(folder: Path) -> list[Path]:
 
     damaged = {
         "empty": "", "header_only": "".join(lines[:5]), "cut_line": "".join(lines[:7]) + lines[7][:20],
-        "crlf": text.replace("\n", "\r\n"), "nan": field("nan"), "inf": field("inf"), "huge": field("1e400"), "long_digits": text.replace("1.0", "1.000000000000000000000001"),
+        "crlf": text.replace("\n", "\r\n"), "nan": field("nan"), "inf": field("inf"), "huge": field("1e400"),
+        "long_digits": text.replace("1.0", "1.000000000000000000000001"),
         "back_in_time": "".join(lines[:6] + [lines[7], lines[6]] + lines[8:]),
         "no_magic": "".join(lines[1:]), "extra_column": text.replace("\n", ",1\n"),
         "latitude_out": text.replace("lat_deg: 28.2", "lat_deg: 128.2"), "nul": text[:200] + "\0" + text[200:],
