@@ -192,7 +192,7 @@ def _config(noise: ImuNoise, settings: FilterSettings, gnss_cfg, step: float, od
 
 def _initial_state(truth, settings: FilterSettings, rng) -> np.ndarray:
     """Start row with errors drawn from the filter's initial covariance."""
-    row = truth.nav_rows()[0].copy()
+    row = truth.nav_rows([0])[0]
     e = rng.standard_normal(9)
     r_m, r_n = earth.radii(row[0])
     row[0] += settings.pos0_std * e[1] / (r_m + row[2])
@@ -246,13 +246,15 @@ def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed
 
 def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aiding=("gnss", "zupt"), outages=(),
              settings: FilterSettings = FilterSettings(), seed: int = 0, gnss_velocity: bool = True,
-             odometer: OdometerConfig | None = None) -> AidedResult:
+             odometer: OdometerConfig | None = None, imu=None, fixes=None) -> AidedResult:
     """Aided navigation along ``truth`` (:class:`sarins_fmu.trajectory.Truth`).
 
     gnss : GNSSConfig or None (preset ``sps`` when 'gnss' is aided and None is given).
     aiding : subset of ('gnss', 'zupt', 'odometer', 'nhc').  outages : (m, 2) GNSS outage windows [start, end) s.
     odometer : OdometerConfig (default ``OdometerConfig()`` when 'odometer' is aided).
     seed : IMU errors, initial errors (stream of ``seed``) and GNSS errors (``seed``).
+    imu : the increments ``corrupt(truth, noise, seed)`` returns, when made already (a peer filter runs
+        the same data); fixes : ``gnss.simulate(truth, gnss, seed, outages)``'s fixes, likewise.
     """
     unknown = set(aiding) - set(AIDING)
     if unknown:
@@ -262,12 +264,13 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
     if "odometer" in aiding and odometer is None:
         odometer = OdometerConfig()
     step = truth.step
-    dtheta, dv, bg_true, ba_true = corrupt(truth, noise, seed)
+    dtheta, dv, bg_true, ba_true = corrupt(truth, noise, seed) if imu is None else imu
     rng = np.random.default_rng([seed, 3018])
     state = _core.EskfState(_config(noise, settings, gnss, step, odometer), _initial_state(truth, settings, rng))
     aid = per_step_aiding(truth, aiding, settings, odometer, rng, seed)
     if "gnss" in aiding:
-        fixes = gnss_mod.simulate(truth, gnss, seed, outages)
+        if fixes is None:
+            fixes = gnss_mod.simulate(truth, gnss, seed, outages)
         rows = fix_rows(fixes, gnss, step)
         vel_std = gnss.vel_std()
     else:
@@ -276,7 +279,7 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         rows, vel_std = np.zeros((0, 11)), np.ones(3)
     out = state.run(dtheta, dv, aid, rows, vel_std, gnss_velocity, settings.out_every)
     idx = np.arange(1, out.shape[0] + 1) * settings.out_every
-    true_rows = truth.nav_rows()[idx]
+    true_rows = truth.nav_rows(idx)
     nav = out[:, :9]
     return AidedResult(time=truth.time[idx], nav=nav, truth=true_rows, error=nav_errors(nav, true_rows),
                        cov=out[:, 15:].reshape(-1, 15, 15), bias_g=out[:, 9:12], bias_a=out[:, 12:15],
