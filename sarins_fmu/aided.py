@@ -331,10 +331,11 @@ class OutageRow:
 
 
 def outage_table(result: AidedResult, outages) -> list:
-    """:class:`OutageRow` per outage window (the last output row before the window's end)."""
+    """:class:`OutageRow` per outage window: the last output row strictly before the window's end (the
+    first fix after the outage, valid at ``end``, is already applied in the row at ``end``)."""
     rows = []
     for start, end in np.asarray(outages, float).reshape(-1, 2):
-        i = int(np.searchsorted(result.time, end, side="right")) - 1
+        i = int(np.searchsorted(result.time, end - 1e-9, side="left")) - 1
         rows.append(OutageRow(float(start), float(end), float(result.horizontal_error()[i]),
                               float(result.horizontal_sigma()[i])))
     return rows
