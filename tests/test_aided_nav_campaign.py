@@ -21,6 +21,8 @@ from sarins_fmu.experiments.aided_nav import OUTAGES
 
 HERE = Path(__file__).resolve().parent
 RUNS = 3
+ZUPT_RUNS = 1
+TASKS = 1 + RUNS + ZUPT_RUNS
 
 
 def _table(report: str, header: str) -> list:
@@ -37,10 +39,10 @@ def _table(report: str, header: str) -> list:
 
 def test_tiny_campaign_report_matches_the_stored_runs(tmp_path, capsys):
     out = tmp_path / "aided"
-    argv = ["campaign", "aided-nav", "--profile", "quick", "--runs", str(RUNS), "--workers", "1", "--out", str(out),
-            "--no-progress"]
+    argv = ["campaign", "aided-nav", "--profile", "quick", "--runs", str(RUNS), "--zupt-runs", str(ZUPT_RUNS),
+            "--workers", "1", "--out", str(out), "--no-progress"]
     assert main(argv) == 0
-    assert f"{RUNS + 1} tasks ({RUNS + 1} computed now)" in capsys.readouterr().out
+    assert f"{TASKS} tasks ({TASKS} computed now)" in capsys.readouterr().out
     runs = [load_result(p) for p in sorted((out / "runs").glob("run-*.npz"))]
     assert len(runs) == RUNS
     report = (out / "report.md").read_text()
@@ -76,6 +78,19 @@ def test_tiny_campaign_report_matches_the_stored_runs(tmp_path, capsys):
     for name in ("trajectory.png", "errors_position.png", "errors_velocity.png", "errors_attitude.png", "nees.png",
                  "outage_growth.png"):
         assert (out / name).stat().st_size > 1000 and f"]({name})" in report
+    # the ZUPT-detector table from the stored runs
+    zupt = [load_result(p) for p in sorted((out / "runs").glob("zupt-*.npz"))]
+    assert len(zupt) == ZUPT_RUNS
+    (row,) = _table(report, "| stop windows |")
+    total = lambda key: sum(int(z[key]) for z in zupt)  # noqa: E731
+    m = total("stop_windows")
+    assert [int(row[i]) for i in (0, 1, 4, 5)] == [m, total("misses"), total("moving_windows"), total("false_stationary")]
+    assert float(row[2]) == pytest.approx(1e-3 * m, abs=5e-3)
+    assert float(row[7]) == pytest.approx(np.mean([z["delay_s"] for z in zupt]), abs=5e-3)
+    nav = _table(report, "| ZUPTs from |")
+    for line, key in zip(nav, ("error_truth_m", "error_imu_m")):
+        assert float(line[1]) == pytest.approx(np.sqrt(np.mean([z[key] ** 2 for z in zupt])), abs=5e-4)
+    assert summary["zupt_detection"]["misses"] == total("misses")
     traj = load_result(out / "runs" / "trajectory.npz")
     assert traj["stationary"][0] == 1 and traj["speed"].max() == pytest.approx(12.0)
 
@@ -84,8 +99,8 @@ def test_killed_campaign_resumes_without_recomputing_finished_tasks(tmp_path):
     """A test hook SIGKILLs the campaign after its 2nd stored result; the same command then computes
     only the rest and leaves the finished files untouched."""
     out = tmp_path / "aided"
-    args = ["campaign", "aided-nav", "--profile", "quick", "--runs", str(RUNS), "--workers", "1", "--out", str(out),
-            "--no-progress"]
+    args = ["campaign", "aided-nav", "--profile", "quick", "--runs", str(RUNS), "--zupt-runs", "0",
+            "--workers", "1", "--out", str(out), "--no-progress"]
     proc = subprocess.Popen([sys.executable, str(HERE / "hooks.py"), "--kill-after", "2", "-m", "sarins", *args],
                             start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:

@@ -108,13 +108,6 @@ def presets() -> dict:
     return out
 
 
-STOP_SEGMENTS = ({"kind": "stop", "duration": 30}, {"kind": "accelerate", "to_speed": 10, "accel": 1.0},
-                 {"kind": "cruise", "duration": 60}, {"kind": "accelerate", "to_speed": 0, "accel": 1.0},
-                 {"kind": "stop", "duration": 30}, {"kind": "accelerate", "to_speed": 8, "accel": 1.0},
-                 {"kind": "turn", "rate_dps": 6, "angle_deg": 90}, {"kind": "cruise", "duration": 60},
-                 {"kind": "accelerate", "to_speed": 0, "accel": 1.0}, {"kind": "stop", "duration": 30})
-
-
 def zupt_detection(runs: int = 20) -> dict:
     """The IMU-statistics ZUPT detector (sarins_fmu.zero_velocity, window 0.5 s, alpha 1e-3, vibration
     'car') on a drive with three 30 s stops, per grade: misses over disjoint windows wholly in the stops,
@@ -122,6 +115,7 @@ def zupt_detection(runs: int = 20) -> dict:
     detection in each stop; then GNSS-free navigation (zupt, odometer, nhc): RMS over the runs of the
     horizontal error at the end with truth ZUPTs, detected ZUPTs, and detected ZUPTs without vibration."""
     from sarins_fmu import zero_velocity as zv
+    from sarins_fmu.experiments.aided_nav import STOP_SEGMENTS
 
     truth = tr.generate(tr.Trajectory(tr.Start(lat_deg=32.0, lon_deg=118.0), STOP_SEGMENTS), 0.01)
     settings, car = zv.DetectorSettings(), zv.VIBRATION["car"]

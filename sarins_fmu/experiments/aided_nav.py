@@ -76,3 +76,61 @@ def monte_carlo_run(seed: int, cruise: float = CRUISE, outages=OUTAGES, imu: str
     return {"time": r.time, "error": r.error, "sigma": diag, "nees": np.column_stack([r.nees(b) for b in BLOCKS]),
             "outage_error": np.array([row.error for row in table]),
             "outage_sigma": np.array([row.sigma for row in table]), "cpu_s": cpu}
+
+
+# a drive with three 30 s stops for the zero-velocity detector (sarins_fmu.zero_velocity)
+STOP_SEGMENTS = ({"kind": "stop", "duration": 30}, {"kind": "accelerate", "to_speed": 10, "accel": 1.0},
+                 {"kind": "cruise", "duration": 60}, {"kind": "accelerate", "to_speed": 0, "accel": 1.0},
+                 {"kind": "stop", "duration": 30}, {"kind": "accelerate", "to_speed": 8, "accel": 1.0},
+                 {"kind": "turn", "rate_dps": 6, "angle_deg": 90}, {"kind": "cruise", "duration": 60},
+                 {"kind": "accelerate", "to_speed": 0, "accel": 1.0}, {"kind": "stop", "duration": 30})
+
+
+@functools.lru_cache(maxsize=1)
+def stop_drive(step: float = STEP) -> tr.Truth:
+    """Truth of :data:`STOP_SEGMENTS` (cached per process; read only)."""
+    return tr.generate(tr.Trajectory(tr.Start(lat_deg=LAT_DEG, lon_deg=118.0), STOP_SEGMENTS), step)
+
+
+ZUPT_WINDOW = 0.5  # detector window, s
+ZUPT_ALPHA = 1e-3  # probability that a stationary window is declared moving
+ZUPT_IMU = "tactical"
+ZUPT_VIBRATION = "car"
+
+
+def zupt_run(seed: int, imu: str = ZUPT_IMU, window: float = ZUPT_WINDOW, alpha: float = ZUPT_ALPHA,
+             vibration: str = ZUPT_VIBRATION) -> dict:
+    """One run of the IMU-statistics ZUPT detector on :func:`stop_drive` with the vibration preset
+    ``vibration``, then GNSS-free navigation (ZUPT, odometer, NHC) with the truth's and the detected ZUPTs.
+
+    Returns (scalars) stop_windows, misses: disjoint windows wholly inside the stops and those declared
+    moving; moving_windows, false_stationary: windows wholly in motion and those declared stationary;
+    delay_s: mean delay from a stop's start to its first detection; samples, gamma: the detector's N and
+    threshold; error_truth_m, error_imu_m: horizontal error at the end with truth / detected ZUPTs;
+    zupt_truth, zupt_imu: ZUPT steps; cpu_s.
+    """
+    import time
+
+    from .. import zero_velocity as zv
+
+    truth = stop_drive()
+    noise, vib = aided.IMU_NOISE[imu], zv.VIBRATION[vibration]
+    settings = zv.DetectorSettings(window=window, alpha=alpha)
+    t0 = time.process_time()
+    dtheta, dv, _, _ = aided.corrupt(truth, noise, seed)
+    vib_theta, vib_v = zv.vibrate(truth, vib, seed)
+    found = zv.detect(dtheta + vib_theta, dv + vib_v, truth.step, noise.vrw, noise.arw, settings)
+    n, still = found.samples, truth.stationary()
+    inside = np.convolve(still.astype(int), np.ones(n, int))[: still.size] == n
+    moving = np.convolve((~still).astype(int), np.ones(n, int))[: still.size] == n
+    disjoint = np.flatnonzero(inside)[::n]  # each stop is one run of whole windows: n apart, no shared sample
+    starts = np.flatnonzero(np.diff(np.concatenate([[0], still.astype(int)])) == 1)
+    delays = [int(np.argmax(found.stationary[s:])) * truth.step for s in starts]
+    kwargs = dict(noise=noise, aiding=("zupt", "odometer", "nhc"), seed=seed, vibration=vib, detector=settings)
+    r_truth = aided.navigate(truth, zupt_detect="truth", **kwargs)
+    r_imu = aided.navigate(truth, zupt_detect="imu", **kwargs)
+    return {"stop_windows": disjoint.size, "misses": int(np.sum(~found.stationary[disjoint])),
+            "moving_windows": int(moving.sum()), "false_stationary": int(np.sum(found.stationary & moving)),
+            "delay_s": float(np.mean(delays)), "samples": n, "gamma": found.gamma,
+            "error_truth_m": float(r_truth.horizontal_error()[-1]), "error_imu_m": float(r_imu.horizontal_error()[-1]),
+            "zupt_truth": r_truth.zupt_steps, "zupt_imu": r_imu.zupt_steps, "cpu_s": time.process_time() - t0}
