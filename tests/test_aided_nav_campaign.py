@@ -65,7 +65,7 @@ def test_tiny_campaign_report_matches_the_stored_runs(tmp_path, capsys):
     mean = np.mean([r["nees"] for r in runs], axis=0)
     band = (chi2.ppf(0.025, 3 * RUNS) / RUNS, chi2.ppf(0.975, 3 * RUNS) / RUNS)
     assert f"lies in {band[0]:.3f} .. {band[1]:.3f}" in report
-    for i, row in enumerate(_table(report, "| block |")):
+    for i, row in enumerate(_table(report, "| block | time-mean")):
         inside = np.mean((mean[:, i] >= band[0]) & (mean[:, i] <= band[1]))
         assert float(row[1]) == pytest.approx(mean[:, i].mean(), abs=5e-4)
         assert float(row[2].rstrip(" %")) == pytest.approx(100 * inside, abs=0.05)
