@@ -194,7 +194,7 @@ def _config(noise: ImuNoise, settings: FilterSettings, gnss_cfg, step: float, od
 
 def _initial_state(truth, settings: FilterSettings, rng) -> np.ndarray:
     """Start row with errors drawn from the filter's initial covariance."""
-    row = truth.nav_rows()[0].copy()
+    row = truth.nav_rows([0])[0]
     e = rng.standard_normal(9)
     r_m, r_n = earth.radii(row[0])
     row[0] += settings.pos0_std * e[1] / (r_m + row[2])
@@ -249,8 +249,8 @@ def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed
 
 def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aiding=("gnss", "zupt"), outages=(),
              settings: FilterSettings = FilterSettings(), seed: int = 0, gnss_velocity: bool = True,
-             odometer: OdometerConfig | None = None, zupt_detect: str = "truth", vibration=None,
-             detector=None) -> AidedResult:
+             odometer: OdometerConfig | None = None, imu=None, fixes=None, zupt_detect: str = "truth",
+             vibration=None, detector=None) -> AidedResult:
     """Aided navigation along ``truth`` (:class:`sarins_fmu.trajectory.Truth`).
 
     gnss : GNSSConfig or None (preset ``sps`` when 'gnss' is aided and None is given).
@@ -259,8 +259,11 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
     zupt_detect : 'truth' (ZUPT at the trajectory's stops) or 'imu' (at the steps the detector of
         :mod:`sarins_fmu.zero_velocity` declares stationary from the increments, with the IMU's
         noise densities and ``detector``, a :class:`~sarins_fmu.zero_velocity.DetectorSettings`).
-    vibration : :class:`~sarins_fmu.zero_velocity.Vibration` added to the increments while moving, or None.
+    vibration : :class:`~sarins_fmu.zero_velocity.Vibration` added to the increments while moving, or None
+        (added to ``imu`` too when given).
     seed : IMU errors, initial errors (stream of ``seed``), vibration and GNSS errors (``seed``).
+    imu : the increments ``corrupt(truth, noise, seed)`` returns, when made already (a peer filter runs
+        the same data); fixes : ``gnss.simulate(truth, gnss, seed, outages)``'s fixes, likewise.
     """
     from . import zero_velocity
 
@@ -274,7 +277,7 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
     if "odometer" in aiding and odometer is None:
         odometer = OdometerConfig()
     step = truth.step
-    dtheta, dv, bg_true, ba_true = corrupt(truth, noise, seed)
+    dtheta, dv, bg_true, ba_true = corrupt(truth, noise, seed) if imu is None else imu
     if vibration is not None:
         vib_theta, vib_v = zero_velocity.vibrate(truth, vibration, seed)
         dtheta, dv = dtheta + vib_theta, dv + vib_v
@@ -288,7 +291,8 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
     state = _core.EskfState(_config(noise, settings, gnss, step, odometer), _initial_state(truth, settings, rng))
     aid = per_step_aiding(truth, aiding, settings, odometer, rng, seed, stops)
     if "gnss" in aiding:
-        fixes = gnss_mod.simulate(truth, gnss, seed, outages)
+        if fixes is None:
+            fixes = gnss_mod.simulate(truth, gnss, seed, outages)
         rows = fix_rows(fixes, gnss, step)
         vel_std = gnss.vel_std()
     else:
@@ -297,7 +301,7 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         rows, vel_std = np.zeros((0, 11)), np.ones(3)
     out = state.run(dtheta, dv, aid, rows, vel_std, gnss_velocity, settings.out_every)
     idx = np.arange(1, out.shape[0] + 1) * settings.out_every
-    true_rows = truth.nav_rows()[idx]
+    true_rows = truth.nav_rows(idx)
     nav = out[:, :9]
     return AidedResult(time=truth.time[idx], nav=nav, truth=true_rows, error=nav_errors(nav, true_rows),
                        cov=out[:, 15:].reshape(-1, 15, 15), bias_g=out[:, 9:12], bias_a=out[:, 12:15],
