@@ -64,6 +64,10 @@ class DetectorSettings:
         """N, the window in samples of ``step`` s (at least 2)."""
         return max(2, int(round(self.window / step)))
 
+    def check(self, step: float) -> None:
+        """ValueError (the core's reason) unless the core takes this window at IMU step ``step`` s."""
+        _core.ZvdState([self.samples(step), step, 1.0, 1.0, threshold(self.samples(step), self.alpha)])
+
 
 def threshold(samples: int, alpha: float) -> float:
     """gamma = the (1 - alpha) quantile of chi-square(6 (samples - 1))."""

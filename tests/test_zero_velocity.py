@@ -173,3 +173,5 @@ def test_cli_zupt_detect(tmp_path, capsys):
     assert "--zupt-window" in refused(["--zupt-window", "0.3"])  # only with --zupt-detect imu
     assert "--imu-noise ideal" in refused(["--zupt-detect", "imu", "--imu-noise", "ideal"])
     assert "--vibration" in refused(["--vibration", "truck"])
+    err = refused(["--zupt-detect", "imu", "--zupt-window", "60"])  # 6000 samples at 100 Hz: the core's limit
+    assert "--zupt-window 60 s" in err and "2 .. 4096" in err

@@ -209,9 +209,11 @@ def _zupt_detection(args, aiding):
             raise UsageError(f"--zupt-window must be positive, got {window:g}")
         if not 0 < alpha < 1:
             raise UsageError(f"--zupt-alpha must be between 0 and 1 (exclusive), got {alpha:g}")
-        if window * args.imu_rate_hz > 4096:
-            raise UsageError(f"--zupt-window {window:g} s is above 4096 IMU samples")
         detector = zero_velocity.DetectorSettings(window=window, alpha=alpha)
+        try:
+            detector.check(1.0 / args.imu_rate_hz)
+        except ValueError as exc:
+            raise UsageError(f"--zupt-window {window:g} s at --imu-rate-hz {args.imu_rate_hz:g}: {exc}") from None
     return detect, vibration, detector
 
 

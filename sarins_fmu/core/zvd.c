@@ -12,7 +12,8 @@ int sarins_zvd_init(sarins_zvd *s, const double *config, char *msg, size_t size)
         }
     double n = config[SARINS_ZVD_WINDOW];
     if (n < 2.0 || n > (double)SARINS_ZVD_MAX_WINDOW || n != sm_nearbyint(n)) {
-        sarins_say(msg, size, "the zero-velocity detector window must be a whole number of samples, 2 .. 4096");
+        sarins_say(msg, size, "the zero-velocity detector window must be a whole number of samples, 2 .. "
+                              SARINS_ZVD_STR(SARINS_ZVD_MAX_WINDOW));
         return 1;
     }
     if (!(config[SARINS_ZVD_STEP] > 0.0 && config[SARINS_ZVD_VRW] > 0.0 && config[SARINS_ZVD_ARW] > 0.0 &&
