@@ -26,6 +26,7 @@ import shutil
 import tempfile
 import uuid
 import zipfile
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from xml.etree import ElementTree as ET
@@ -195,23 +196,56 @@ def model_description(name: str, guid: str, exposed: list[Exposed], step: float,
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
+# libdl.so.2 stays a dependency: on glibc before 2.34 dlopen is there, not in libc (from 2.34 on it is a stub;
+# named by file since a new glibc has no libdl.so for -ldl, only an empty libdl.a)
+LINUX_LIBS = ("-Wl,--no-as-needed", "-l:libdl.so.2")
+
+
 def linux_compile_line(cc: str = "cc") -> list[str]:
-    """The container's Linux compile line: the components' plus -ldl (dlopen)."""
-    return [*nf.compile_line(IDENTIFIER, cc), "-ldl"]
+    """The container's Linux compile line: the components' plus libdl (dlopen)."""
+    return [*nf.compile_line(IDENTIFIER, cc), *LINUX_LIBS]
+
+
+# compiled objects of the system-independent sources, per compiler and sources: {key: object bytes} (every
+# container of a process shares the glue's and smath's objects; only model.c, which includes the system's
+# variables.h, is compiled for each system; the objects are those `cc ... *.c` compiles one by one)
+_OBJECTS: dict[str, bytes] = {}
+
+
+def _run(cmd: list[str], cwd: Path) -> None:
+    import subprocess
+
+    proc = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"compiling the system container failed:\n{' '.join(cmd)}\n{proc.stderr}")
 
 
 def _compile(sources: Path, out: Path, cc: str, win64: bool) -> Path:
-    import subprocess
+    """Compile ``sources/`` (each .c to an object, then one link) into ``out``; the binary's path."""
+    import hashlib
 
-    files = sorted(p.name for p in sources.glob("*.c"))
+    flags = [*nf.CFLAGS] if win64 else [*nf.CFLAGS, "-fPIC"]
+    shared = sorted(p for p in sources.iterdir() if p.name not in ("model.c", "variables.h"))
+    digest = hashlib.sha256(repr((cc, flags)).encode())
+    for path in shared:
+        digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    objects = []
+    for path in sorted(sources.glob("*.c")):
+        obj = out / f"{path.stem}.o"
+        key = f"{digest.hexdigest()}:{path.name}"
+        if path.name != "model.c" and key in _OBJECTS:
+            obj.write_bytes(_OBJECTS[key])
+        else:
+            _run([cc, *flags, "-I.", "-c", path.name, "-o", str(obj)], sources)
+            if path.name != "model.c":
+                _OBJECTS[key] = obj.read_bytes()
+        objects.append(str(obj))
+    target = out / (f"{IDENTIFIER}.dll" if win64 else f"{IDENTIFIER}.so")
     if win64:
-        cmd = [cc, *nf.CFLAGS, "-shared", "-static", "-I.", *files, "-o", str(out / f"{IDENTIFIER}.dll")]
+        _run([cc, *flags, "-shared", "-static", *objects, "-o", str(target)], sources)
     else:
-        cmd = [cc, *nf.CFLAGS, "-fPIC", "-shared", "-I.", *files, "-o", str(out / f"{IDENTIFIER}.so"), "-ldl"]
-    proc = subprocess.run(cmd, cwd=sources, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(f"compiling the system container failed:\n{' '.join(cmd)}\n{proc.stderr}")
-    return Path(cmd[cmd.index("-o") + 1])
+        _run([cc, *flags, "-shared", *objects, "-o", str(target), *LINUX_LIBS], sources)
+    return target
 
 
 def _documentation(name: str, win64: bool, aarch64: bool) -> str:
@@ -261,15 +295,18 @@ def write_container_fmu(out_path: Path, *, name: str, parts: list[Part], exposed
         sources = tmp / "sources"
         c_files = nf.write_sources(IDENTIFIER, sources, variables_header(exposed, guid), 2, MODEL)
         md = model_description(name, guid, exposed, step, start_time, stop_time, c_files)
-        binaries = {f"binaries/linux64/{IDENTIFIER}.so": _compile(sources, tmp, nf.compiler(), False)}
+        jobs = {f"binaries/linux64/{IDENTIFIER}.so": (tmp / "linux64", nf.compiler(), False)}
         if win64:
-            binaries[f"binaries/win64/{IDENTIFIER}.dll"] = _compile(sources, tmp, nf.win64_compiler() or nf.MINGW,
-                                                                    True)
+            jobs[f"binaries/win64/{IDENTIFIER}.dll"] = (tmp / "win64", nf.win64_compiler() or nf.MINGW, True)
         if aarch64:
-            arm = tmp / "aarch64"
-            arm.mkdir()
-            binaries[f"binaries/{nf.ARM_PLATFORM}/{IDENTIFIER}.so"] = _compile(
-                sources, arm, nf.aarch64_compiler() or nf.AARCH64, False)
+            jobs[f"binaries/{nf.ARM_PLATFORM}/{IDENTIFIER}.so"] = (tmp / "aarch64", nf.aarch64_compiler() or nf.AARCH64,
+                                                                   False)
+        with ThreadPoolExecutor(max_workers=len(jobs)) as pool:  # the compilers run side by side
+            futures = {}
+            for arc, (folder, cc, windows) in jobs.items():
+                folder.mkdir()
+                futures[arc] = pool.submit(_compile, sources, folder, cc, windows)
+            binaries = {arc: future.result() for arc, future in futures.items()}
         out_path = Path(out_path)
         out_path.parent.mkdir(parents=True, exist_ok=True)
         partial = out_path.with_name(out_path.name + ".partial")
