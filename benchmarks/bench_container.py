@@ -38,10 +38,11 @@ def run(host: Path, fmu: Path, work: Path, stop: float | None) -> tuple[float, l
     with zipfile.ZipFile(fmu) as z:
         z.extractall(folder)
     identifier = md.coSimulation.modelIdentifier
-    steps = int(round((stop or md.defaultExperiment.stopTime) / md.defaultExperiment.stepSize))
+    step = float(md.defaultExperiment.stepSize)
+    steps = int(round((stop or float(md.defaultExperiment.stopTime)) / step))
     vrs = {v.name: v.valueReference for v in md.modelVariables}
     binary = folder / "binaries" / "linux64" / f"{identifier}.so"
-    cmd = ["env", "-i", str(host), str(binary), md.guid, str(steps), str(md.defaultExperiment.stepSize),
+    cmd = ["env", "-i", str(host), str(binary), md.guid, str(steps), repr(step),
            f"res=file://{(folder / 'resources').resolve().as_posix()}", "out=" + ",".join(str(vrs[n]) for n in OUTPUTS)]
     start = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True, check=True)

@@ -290,3 +290,33 @@ def test_win64_under_wine_and_aarch64_under_qemu_give_the_linux64_numbers(contai
                 prefix=("env", "-i", "qemu-aarch64", "-L", ARM_SYSROOT), timeout=1800)
     assert "STATUS" not in proc.stdout, proc.stdout[-3000:]
     assert _rows(proc) == linux
+
+
+def test_under_asan_and_ubsan_a_run_and_bad_plans_report_nothing(container, tmp_path):
+    """The container's sources built with AddressSanitizer and UBSan (leaks included) in a host built the
+    same way (the components as shipped): a run, then every bad plan, each one's error status and no
+    sanitizer report."""
+    from fmus.native_fmu import CFLAGS
+
+    _, folder, md, _ = container
+    san = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O1"]
+    sources = folder / "sources"
+    lib = tmp_path / "SystemContainer_san.so"
+    files = sorted(str(p) for p in sources.glob("*.c"))
+    subprocess.run([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}", *files,
+                    "-ldl", "-o", str(lib)], check=True)
+    host = tmp_path / "host_san"
+    subprocess.run([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)],
+                   check=True)
+    env = {"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"}
+    proc = _run(host, lib, md, folder, _out_arg(md), prefix=(), steps=50, env=env)
+    assert "runtime error" not in proc.stderr and "AddressSanitizer" not in proc.stderr, proc.stderr[-3000:]
+    assert "STATUS" not in proc.stdout and len(_rows(proc)) == 51, proc.stdout[-2000:]
+    for case, (spoil, expected) in BAD_PLANS.items():
+        copy = tmp_path / case.replace(" ", "_")
+        shutil.copytree(folder, copy, symlinks=True)
+        text = "".join(x + "\n" for x in spoil(_plan_lines(folder)))
+        (copy / "resources" / "container_plan.txt").write_text(text[:-1] if case == "no newline at the end" else text)
+        proc = _run(host, lib, md, copy, prefix=(), steps=3, env=env)
+        assert "runtime error" not in proc.stderr and "AddressSanitizer" not in proc.stderr, proc.stderr[-3000:]
+        assert "STATUS fmi2ExitInitializationMode 3" in proc.stdout and expected in proc.stdout, case

@@ -382,11 +382,7 @@ static int parse_plan(sarins_ctx *c, sc_work *w)
 {
     const sarins_table *t = &SARINS_TABLE;
     /* count the lines of each kind first: the arrays are sized from them */
-    size_t n_parts = 0, n_links = 0, lines = 0;
-    for (char *p = w->text; *p; p++) {
-        if (*p == '\n')
-            lines++;
-    }
+    size_t n_parts = 0, n_links = 0;
     for (char *line = w->text; *line;) {
         if (strncmp(line, "component ", 10) == 0)
             n_parts++;
@@ -397,9 +393,7 @@ static int parse_plan(sarins_ctx *c, sc_work *w)
             break;
         line = nl + 1;
     }
-    if (n_parts == 0)
-        return plan_error(c, 1, "no component");
-    w->parts = calloc(n_parts, sizeof *w->parts);
+    w->parts = calloc(n_parts ? n_parts : 1, sizeof *w->parts);
     w->map = calloc(t->n_vars ? t->n_vars : 1, sizeof *w->map);
     w->links = calloc(n_links ? n_links : 1, sizeof *w->links);
     if (w->parts == NULL || w->map == NULL || w->links == NULL) {
@@ -474,9 +468,12 @@ static int parse_plan(sarins_ctx *c, sc_work *w)
         }
         line = nl + 1;
     }
-    (void)lines;
+    if (line_no == 0)
+        return plan_error(c, 1, "expected 'sarins-container-plan 1' (the plan is empty)");
     if (!ended)
         return plan_error(c, line_no + 1, "no 'end' line (truncated plan?)");
+    if (w->n_parts == 0)
+        return plan_error(c, line_no, "no component");
     if (n_vars != t->n_vars)
         return plan_error(c, line_no, "the plan does not map every variable of the container");
     return SARINS_OK;
