@@ -47,8 +47,12 @@ __all__ = ["build_container_fmu", "CONTAINER_FMI_VERSION"]
 CONTAINER_FMI_VERSION = "2.0"
 
 
+ENGINES = ("fmpy", "sarins")
+
+
 def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
-                        step_size: float | None = None, parallel: bool = False) -> Path:
+                        step_size: float | None = None, parallel: bool = False,
+                        engine: str = "fmpy") -> Path:
     """Write ``system`` as one FMI 2.0 co-simulation container FMU.
 
     Parameters
@@ -61,7 +65,13 @@ def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
         Fixed step written as the default experiment's step (default: the
         system's).
     parallel : bool
-        Let the container step the components in parallel threads.
+        Let the container step the components in parallel threads (``engine="fmpy"`` only).
+    engine : str
+        ``"fmpy"``: FMPy's container binary (linux64, win64, darwin64).  ``"sarins"``: our own
+        (``fmus/system_container.py``: C on the components' glue, binaries linux64, win64 and
+        aarch64-linux, ``sources/``), same variables and the same coupling, bit for bit; the
+        container's variables have value references 0, 1, ... (no ``time``), FMU state is not
+        supported.
 
     Returns
     -------
@@ -76,6 +86,13 @@ def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
         If the installed fmpy has no (JSON-configured) ``container_fmu``.
     """
     from fmpy import read_model_description
+
+    if engine not in ENGINES:
+        raise ValueError(f"engine {engine!r}: one of {', '.join(ENGINES)}")
+    if engine == "sarins":
+        if parallel:
+            raise ValueError("parallel: only FMPy's container steps components in threads")
+        return _build_sarins(system, out_path, step_size)
     from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, Unknown
 
     try:
@@ -112,7 +129,8 @@ def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
                                       startConnectors=[_json_typed(start)],
                                       endElement=components[j], endConnectors=[end])
                        for i, start, j, end, _ in checked]
-        mappings = _exposed_variables(system, components, variables, checked)
+        mappings = {mapped: [(components[i], var)]
+                    for mapped, i, var in _exposed_variables(system, components, variables, checked)}
         description = ModelDescription(
             fmiVersion=CONTAINER_FMI_VERSION, modelName=system.name,
             instantiationToken="{" + str(uuid.uuid4()) + "}",
@@ -175,12 +193,12 @@ def _unique_copy(fmu: Path, folder: Path) -> Path:
     return target
 
 
-def _exposed_variables(system: System, components, variables, checked) -> dict:
-    """Container variables -> [(component, component variable)]."""
+def _exposed_variables(system: System, components, variables, checked) -> list:
+    """Container variables: [(variable, component index, component variable)]."""
     from fmpy.model_description import ModelVariable
 
     fed = {(j, end.name) for _, _, j, end, _ in checked}
-    mappings = {}
+    mappings = []
     for i, component in enumerate(system.components):
         for var in variables[i].values():
             exposed = var.causality == "output" or var.name in component.parameters or \
@@ -207,7 +225,7 @@ def _exposed_variables(system: System, components, variables, checked) -> dict:
                                    causality=causality, variability=variability,
                                    start=None if start is None else _literal(start),
                                    initial="exact" if causality == "parameter" else None)
-            mappings[mapped] = [(components[i], var)]
+            mappings.append((mapped, i, var))
     return mappings
 
 
@@ -216,3 +234,58 @@ def _literal(value) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     return repr(value) if isinstance(value, float) else str(value)
+
+
+class _Described:
+    """A component as _exposed_variables sees it (its model description)."""
+
+    def __init__(self, description):
+        self.modelDescription = description
+
+
+def _build_sarins(system, out_path, step_size) -> Path:
+    """``engine="sarins"``: the same checks and variables, written by fmus.system_container."""
+    from fmpy import read_model_description
+
+    try:
+        from fmus.system_container import Exposed, Link, Part, write_container_fmu
+    except ImportError as error:
+        raise ImporterUnavailableError(f"the sarins container needs the fmus package ({error})") from None
+    system = system if isinstance(system, System) else read_system(system)
+    step = system.step_size if step_size is None else step_size
+    parts, variables, files = [], [], []
+    for component in system.components:
+        path = system.fmu_path(component)
+        if not Path(path).is_file():
+            raise SystemDescriptionError("FMU file not found", file=str(path))
+        description = read_model_description(str(path), validate=False)
+        if description.fmiVersion != CONTAINER_FMI_VERSION:
+            raise SystemDescriptionError(
+                f"the container FMU is FMI {CONTAINER_FMI_VERSION} and hosts FMI "
+                f"{CONTAINER_FMI_VERSION} components only; this one is FMI "
+                f"{description.fmiVersion} (run the system with the master instead)",
+                file=str(path), component=component.name)
+        if description.coSimulation is None:
+            raise SystemDescriptionError("the container hosts co-simulation FMUs only", file=str(path),
+                                         component=component.name)
+        parts.append(Part(component.name, Path(path), description))
+        variables.append({v.name: v for v in description.modelVariables})
+        files.append(str(path))
+    names = [c.name for c in system.components]
+    checked = check_connections(system.connections, names, variables, files)
+    refuse_conversions(system, checked, [p.description for p in parts], files, "the container FMU")
+    links = [Link(value_type(start), i, start.valueReference, j, end.valueReference)
+             for i, start, j, end, _ in checked]
+    exposed = [Exposed(m.name, m.type, m.causality, m.variability,
+                       None if m.start is None else parse_literal(value_type(var), m.start,
+                                                                   component=parts[i].name,
+                                                                   variable=var.name),
+                       i, var.valueReference)
+               for m, i, var in _exposed_variables(system, [_Described(p.description) for p in parts],
+                                                   variables, checked)]
+    out_path = Path(out_path).resolve()
+    try:
+        return write_container_fmu(out_path, name=system.name, parts=parts, exposed=exposed, links=links,
+                                   step=step, start_time=system.start_time, stop_time=system.stop_time)
+    except ValueError as error:
+        raise SystemDescriptionError(str(error)) from None

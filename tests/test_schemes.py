@@ -1,6 +1,6 @@
 """Standard FMI step semantics: every shipped system gives the same navigation
 solution at the same nav_time under the master's Gauss-Seidel and Jacobi
-schemes, Ecos, libcosim and the FMPy container FMU (issue 11, parts 1 and 4).
+schemes, Ecos, libcosim and the container FMU (FMPy's binary and ours) (issue 11, parts 1 and 4).
 
 Jacobi adds one step of latency per link and Gauss-Seidel none, so rows are
 compared by their time tag (the INS's ``nav_time``), not by row number.  The
@@ -147,7 +147,8 @@ def test_libcosim_gives_the_same_solution_at_the_same_nav_time(fmu_dir):
         assert_same_solution(by_nav_time(_master(system, stop, "gauss-seidel")), by_nav_time(theirs), 890)
 
 
-def test_container_fmu_gives_the_same_solution_at_the_same_nav_time(fmu_dir, tmp_path):
+@pytest.mark.parametrize("engine", ["fmpy", "sarins"])  # FMPy's container binary and ours
+def test_container_fmu_gives_the_same_solution_at_the_same_nav_time(fmu_dir, tmp_path, engine):
     from fmpy import simulate_fmu
 
     from orchestration.container import build_container_fmu
@@ -156,10 +157,10 @@ def test_container_fmu_gives_the_same_solution_at_the_same_nav_time(fmu_dir, tmp
     for name in ("Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "VehicleMotion", "DriftModelUpdater"):
         shutil.copy2(fmu_dir / f"{name}.fmu", tmp_path / f"{name}.fmu")
     # the vehicle systems' String start values (IMUThermal base = "input", VehicleMotion legs) are applied by
-    # the container binary (fmi2SetString at instantiation)
+    # the container binary (fmi2SetString before initialisation)
     for make in SYSTEMS:
         system = make(tmp_path, stop / 3600)
-        fmu = build_container_fmu(system, tmp_path / f"{system.name}.fmu", step_size=1.0)
+        fmu = build_container_fmu(system, tmp_path / f"{system.name}.fmu", step_size=1.0, engine=engine)
         fix_fmu_description(fmu, [(c.name, c.source) for c in system.components])
         packed = simulate_fmu(str(fmu), stop_time=stop, output_interval=1.0, output=NAV + ["ins.nav_time"])
         assert_same_solution(by_nav_time(_master(system, stop, "gauss-seidel")), by_nav_time(packed), 890)

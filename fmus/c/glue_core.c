@@ -833,6 +833,8 @@ static int post_init(int state) { return (state & RUN_STATES) != 0; }
 
 int sg_get_state(sarins_glue *g, void **FMUstate, const char *fn)
 {
+    if (g->model->no_fmu_state)
+        return sg_fail(g, "%s: not supported (canGetAndSetFMUstate is false)", fn);
     if (FMUstate == NULL)
         return sg_fail(g, "%s: FMUstate is NULL", fn);
     const sarins_model *m = g->model;
@@ -1028,6 +1030,8 @@ static const char *refuse_blob(sarins_glue *g, const unsigned char *b, size_t n)
 
 int sg_set_state(sarins_glue *g, const void *FMUstate, const char *fn)
 {
+    if (g->model->no_fmu_state)
+        return sg_fail(g, "%s: not supported (canGetAndSetFMUstate is false)", fn);
     const fmu_state *s = (const fmu_state *)FMUstate;
     if (not_a_state(g, s) != NULL)
         return sg_fail(g, "%s: %s", fn, not_a_state(g, s));
@@ -1138,6 +1142,8 @@ int sg_serialize(sarins_glue *g, const void *FMUstate, unsigned char *dst, size_
 
 int sg_deserialize(sarins_glue *g, const unsigned char *src, size_t size, void **FMUstate, const char *fn)
 {
+    if (g->model->no_fmu_state)
+        return sg_fail(g, "%s: not supported (canGetAndSetFMUstate is false)", fn);
     if (src == NULL || FMUstate == NULL)
         return sg_fail(g, "%s: serializedState or FMUstate is NULL", fn);
     const char *why = refuse_blob(g, src, size);

@@ -155,6 +155,9 @@ typedef struct {
     void (*save_work_state)(const sarins_ctx *c, unsigned char *dst);
     int (*load_work_state)(sarins_ctx *c, const unsigned char *src, size_t n);
     int (*check_state)(const sarins_ctx *c, int running); /* optional: see "State validation" above */
+    int no_fmu_state; /* 1: FMU state is not supported (canGetAndSetFMUstate false): getting, setting and
+                       * deserialising a state is an error with the reason (a model whose state is not its
+                       * own to copy, such as the system container) */
 } sarins_model;
 
 /* Each model.c defines exactly this one object. */

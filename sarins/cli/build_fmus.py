@@ -26,7 +26,8 @@ def register(subparsers) -> None:
     p.add_argument("--only", nargs="+", metavar="NAME", help="build only these FMUs")
     p.add_argument("--system", action="store_true",
                    help="also write the standard static system and the identified one (seed 000's loop "
-                        "with the RBF identifier) as one FMU each (FMPy container, FMI 2.0)")
+                        "with the RBF identifier) as one FMU each (our system container, FMI 2.0: C, linux64, win64, "
+                        "aarch64-linux and sources/)")
     p.add_argument("--compensator", type=Path, metavar="MODEL_FILE",
                    help="ship this trained seed 003 compensator (JSON/npz) in IMUCompensator.fmu (as its binary model "
                         "file, resources/compensator.bin)")
