@@ -2,8 +2,8 @@
 native model (with the files it needs: tests/fuzz_fmus.py): built as a plain program with AddressSanitizer + UBSan (the state
 checksum skipped, so that changes reach the fields behind it), fed the model's own states and every one-byte
 change of one of them (two model/version pairs by default, all with SARINS_FUZZ_ALL=1); then (slow), with clang,
-libFuzzer for SARINS_FUZZ_SECONDS per model and version (default 5; .ci/run gives 60).  A finding is any
-sanitizer report, or a step returning OK with a non-finite output."""
+libFuzzer for SARINS_FUZZ_STATE_SECONDS (else SARINS_FUZZ_SECONDS, default 5) per model and version (.ci/run
+gives 25).  A finding is any sanitizer report, or a step returning OK with a non-finite output."""
 
 from __future__ import annotations
 
