@@ -2,7 +2,8 @@
 
 For each FMU (FMI 2.0, the FMI 3.0 variants, the system FMUs of ``build-fmus --system``) a fixed short
 case (the workloads of tests/test_portable_fmus.py where the FMU has one, else its default parameters and
-inputs for 50 steps of 1 s; every scalar Real/Float64 output) runs
+inputs for 50 steps of 1 s, of 0.01 s for GNSSReceiver and AidedINS; IMULog plays a synthetic 1 Hz log of
+120 samples; every scalar Real/Float64 output) runs
 
 - linux64: the shipped x86-64 Linux binary through the project's C host (tests/native_host/) under env -i,
 - glibc max: the newest ``GLIBC_`` symbol version the linux64 binary references (objdump -T),
@@ -50,6 +51,8 @@ from test_portable_fmus import (ARM_SYSROOT, HOST3_SRC, IMU_CASE, QEMU, STEPS, V
 # the workloads' parameters (tests/test_portable_fmus.py); any other FMU runs its defaults
 SETTINGS = {"Turntable": CASES["dual-axis chamber"], "IMUThermal": IMU_CASE, "VehicleMotion": VEHICLE_CASE}
 DEFAULT_STEPS = 50
+STEP_SIZES = {"AidedINS": 0.01, "GNSSReceiver": 0.01}  # s: FMUs whose contract needs a shorter step than 1 s
+LOG_ROWS = 120  # samples of the synthetic 1 Hz log the IMULog row plays
 LINES = [(cc, opt, arch) for cc in ("gcc", "clang") for opt in ("-O0", "-O3") for arch in ("", "-march=native")]
 PLATFORMS = {"2.0": {"linux64": ("linux64", ".so"), "win64": ("win64", ".dll"), "aarch64": (ARM_PLATFORM, ".so")},
              "3.0": {"linux64": ("x86_64-linux", ".so"), "win64": ("x86_64-windows", ".dll"),
@@ -86,20 +89,48 @@ class Case:
     steps: int
     settings: dict
     outputs: list[str]
+    step: float = 1.0  # s, the communication step
 
 
-def case_of(name: str, md) -> Case:
+def case_of(name: str, md, work: Path | None = None) -> Case:
+    """The FMU's case; the IMULog's needs ``work``, where its log is written."""
     by_name = {v.name: v for v in md.modelVariables}
     settings = {k: v for k, v in SETTINGS.get(name, {}).items() if k in by_name}
+    steps = STEPS.get(name) or DEFAULT_STEPS
+    if name == "IMULog":
+        if work is None:
+            raise ValueError("the IMULog case writes a log: give case_of a work folder")
+        settings["log_file"] = synthetic_log(work / "platform_log.csv")
+        steps = LOG_ROWS - 1
     outputs = [v.name for v in md.modelVariables if v.causality == "output" and v.type in ("Real", "Float64")
                and not getattr(v, "dimensions", None)]
-    return Case(STEPS.get(name) or DEFAULT_STEPS, settings, outputs)
+    return Case(steps, settings, outputs, STEP_SIZES.get(name, 1.0))
 
 
-def host_args(md, case: Case) -> list[str]:
+def synthetic_log(path: Path) -> Path:
+    """A 1 Hz log of LOG_ROWS samples (format 1, %.17g) whose increments and temperatures vary per sample:
+    slow sines with incommensurate periods, so a wrong row or column shows in every output."""
+    from sarins_fmu.imu_log import write_log
+
+    k = np.arange(1, LOG_ROWS + 1, dtype=float)
+    wave = np.sin(np.outer(k, [0.11, 0.13, 0.17, 0.19, 0.23, 0.29]))
+    temps = 25.0 + np.sin(np.outer(k, np.arange(1.0, 7.0) * 0.05))
+    return write_log(path, k, 1e-5 * wave[:, :3], 9.8 * np.array([0.0, 0.0, 1.0]) + 1e-3 * wave[:, 3:],
+                     lat_deg=28.222, temps=temps)
+
+
+def host_value(value, platform: str):
+    """A setting as the host on ``platform`` passes it: a path under wine is seen on drive Z:."""
+    if isinstance(value, Path):
+        return f"Z:{value.resolve().as_posix()}" if platform == "win64" else str(value)
+    return value
+
+
+def host_args(md, case: Case, platform: str = "linux64") -> list[str]:
     """The C hosts' arguments (tests/native_host/): settings, then the outputs to print."""
     vr = {v.name: v for v in md.modelVariables}
-    args = [f"{TYPE_CODES[vr[n].type]}{vr[n].valueReference}={value}" for n, value in case.settings.items()]
+    args = [f"{TYPE_CODES[vr[n].type]}{vr[n].valueReference}={host_value(value, platform)}"
+            for n, value in case.settings.items()]
     args.append("out=" + ",".join(str(vr[n].valueReference) for n in case.outputs))
     if md.fmiVersion.startswith("3"):
         args.append(f"nout={len(case.outputs)}")
@@ -210,7 +241,7 @@ def run_binary(hosts: Hosts, md, case: Case, binary: Path, platform: str, resour
     if not binary.is_file():
         raise RunFailed(f"no {binary.parent.name}/{binary.name}")
     prefix, exe = hosts.get(md.fmiVersion, platform)
-    cmd = [*prefix, str(exe), str(binary), md.guid, str(case.steps), "1.0", *host_args(md, case),
+    cmd = [*prefix, str(exe), str(binary), md.guid, str(case.steps), repr(case.step), *host_args(md, case, platform),
            *resource_arg(md, resources, platform)]
     return run_host(cmd, env=hosts.env(platform))
 
@@ -220,10 +251,10 @@ def run_fmusim(fmusim: str | None, fmu: Path, case: Case, work: Path) -> dict:
     if not fmusim or not Path(fmusim).is_file():
         raise RunFailed("fmusim absent (--fmusim / $FMUSIM; build: shared/FACTS.md)")
     out = work / f"{fmu.stem}_fmusim.csv"
-    cmd = ["env", "-i", fmusim, "--interface-type", "cs", "--stop-time", str(float(case.steps)),
-           "--output-interval", "1", "--output-file", str(out)]
+    cmd = ["env", "-i", fmusim, "--interface-type", "cs", "--stop-time", repr(case.steps * case.step),
+           "--output-interval", repr(case.step), "--output-file", str(out)]
     for name, value in case.settings.items():
-        cmd += ["--start-value", name, str(value)]
+        cmd += ["--start-value", name, host_value(value, "linux64")]
     for name in case.outputs:
         cmd += ["--output-variable", name]
     try:
@@ -238,7 +269,7 @@ def run_fmusim(fmusim: str | None, fmu: Path, case: Case, work: Path) -> dict:
         cols = [header.index(n) for n in case.outputs]
         rows = {}
         for r in reader:
-            rows[int(round(float(r[0])))] = np.array([float(r[c]) for c in cols])
+            rows[int(round(float(r[0]) / case.step))] = np.array([float(r[c]) for c in cols])
     return rows
 
 
@@ -267,7 +298,7 @@ def platform_row(fmu: Path, work: Path, hosts: Hosts, fmusim: str | None = None,
     folder = work / f"{fmu.stem}_{fmi[0]}"
     with zipfile.ZipFile(fmu) as z:
         z.extractall(folder)
-    case = case_of(fmu.stem, md)
+    case = case_of(fmu.stem, md, folder)
     res = folder / "resources" if (folder / "resources").is_dir() else None
     binary = {p: folder / "binaries" / d / f"{identifier}{ext}" for p, (d, ext) in PLATFORMS[fmi].items()}
     try:

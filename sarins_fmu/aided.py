@@ -10,8 +10,9 @@ constant bias per axis drawn from N(0, sigma^2) for each seed, and bias random w
 ideal increments of :mod:`sarins_fmu.trajectory` (vectorised numpy).  An odometer (core ``odo.h``)
 measures the forward speed; the non-holonomic constraint says the body's lateral and vertical
 velocities are zero while moving.  Stops are known from the
-trajectory (a vehicle's brake / odometer signal): a ZUPT is applied at every IMU step where the
-vehicle stands still (``Truth.stationary``), not detected from the IMU's statistics.  A stopped
+trajectory (a vehicle's brake / odometer signal; ``zupt_detect='truth'``, a ZUPT at every IMU step
+where the vehicle stands still, ``Truth.stationary``) or detected from the IMU's statistics
+(``zupt_detect='imu'``, :mod:`sarins_fmu.zero_velocity`, with the vehicle's vibration while moving).  A stopped
 vehicle still jitters (engine, wind, people): the zero-velocity pseudo-measurement carries white
 errors of ``FilterSettings.zupt_std`` per axis, simulated with the std the filter assumes (an
 exact zero measured with an assumed std would make the filter pessimistic at stops).
@@ -31,6 +32,7 @@ from .rotations import euler_to_mat
 from .units import DPH_TO_RPS, DPSH_TO_RPSS, UG_TO_MPS2
 
 AIDING = ("gnss", "zupt", "odometer", "nhc")
+ZUPT_DETECT = ("truth", "imu")  # where ZUPTs come from: the trajectory's stops, or the IMU's statistics
 
 
 @dataclass(frozen=True)
@@ -192,7 +194,7 @@ def _config(noise: ImuNoise, settings: FilterSettings, gnss_cfg, step: float, od
 
 def _initial_state(truth, settings: FilterSettings, rng) -> np.ndarray:
     """Start row with errors drawn from the filter's initial covariance."""
-    row = truth.nav_rows()[0].copy()
+    row = truth.nav_rows([0])[0]
     e = rng.standard_normal(9)
     r_m, r_n = earth.radii(row[0])
     row[0] += settings.pos0_std * e[1] / (r_m + row[2])
@@ -221,8 +223,9 @@ def body_speed(truth) -> np.ndarray:
     return np.einsum("ni,ni->n", mat[:, :, 1], truth.velocity_n)
 
 
-def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed: int) -> np.ndarray:
-    """(K, 9) rows of ``sarins_eskf_run``: ZUPT at stops, odometer speeds at its rate, NHC while moving.
+def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed: int, stops=None) -> np.ndarray:
+    """(K, 9) rows of ``sarins_eskf_run``: ZUPT at stops (``stops`` (K,) bool: the steps declared
+    stationary; default the truth's), odometer speeds at its rate, NHC while moving.
     The trajectories have no side-slip or bounce, so the zero-velocity and non-holonomic pseudo-
     measurements carry simulated white jitter of the std the filter assumes (``zupt_std``, ``nhc_std``):
     a real vehicle's stop and wheels violate them by about that much."""
@@ -230,7 +233,7 @@ def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed
     aid = np.zeros((k, 9))
     still = truth.stationary()
     if "zupt" in aiding:  # a stop's jitter: white, the std the filter assumes
-        aid[:, 0] = still
+        aid[:, 0] = still if stops is None else stops
         aid[:, 1:4] = aid[:, :1] * settings.zupt_std * rng.standard_normal((k, 3))
     if "odometer" in aiding:
         every = max(1, round(1.0 / (odometer.rate_hz * truth.step)))
@@ -246,28 +249,50 @@ def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed
 
 def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aiding=("gnss", "zupt"), outages=(),
              settings: FilterSettings = FilterSettings(), seed: int = 0, gnss_velocity: bool = True,
-             odometer: OdometerConfig | None = None) -> AidedResult:
+             odometer: OdometerConfig | None = None, imu=None, fixes=None, zupt_detect: str = "truth",
+             vibration=None, detector=None) -> AidedResult:
     """Aided navigation along ``truth`` (:class:`sarins_fmu.trajectory.Truth`).
 
     gnss : GNSSConfig or None (preset ``sps`` when 'gnss' is aided and None is given).
     aiding : subset of ('gnss', 'zupt', 'odometer', 'nhc').  outages : (m, 2) GNSS outage windows [start, end) s.
     odometer : OdometerConfig (default ``OdometerConfig()`` when 'odometer' is aided).
-    seed : IMU errors, initial errors (stream of ``seed``) and GNSS errors (``seed``).
+    zupt_detect : 'truth' (ZUPT at the trajectory's stops) or 'imu' (at the steps the detector of
+        :mod:`sarins_fmu.zero_velocity` declares stationary from the increments, with the IMU's
+        noise densities and ``detector``, a :class:`~sarins_fmu.zero_velocity.DetectorSettings`).
+    vibration : :class:`~sarins_fmu.zero_velocity.Vibration` added to the increments while moving, or None
+        (added to ``imu`` too when given).
+    seed : IMU errors, initial errors (stream of ``seed``), vibration and GNSS errors (``seed``).
+    imu : the increments ``corrupt(truth, noise, seed)`` returns, when made already (a peer filter runs
+        the same data); fixes : ``gnss.simulate(truth, gnss, seed, outages)``'s fixes, likewise.
     """
+    from . import zero_velocity
+
     unknown = set(aiding) - set(AIDING)
     if unknown:
         raise ValueError(f"unknown aiding {', '.join(sorted(unknown))}; choose from {', '.join(AIDING)}")
+    if zupt_detect not in ZUPT_DETECT:
+        raise ValueError(f"zupt_detect must be one of {', '.join(ZUPT_DETECT)}, got {zupt_detect!r}")
     if "gnss" in aiding and gnss is None:
         gnss = gnss_mod.PRESETS["sps"]
     if "odometer" in aiding and odometer is None:
         odometer = OdometerConfig()
     step = truth.step
-    dtheta, dv, bg_true, ba_true = corrupt(truth, noise, seed)
+    dtheta, dv, bg_true, ba_true = corrupt(truth, noise, seed) if imu is None else imu
+    if vibration is not None:
+        vib_theta, vib_v = zero_velocity.vibrate(truth, vibration, seed)
+        dtheta, dv = dtheta + vib_theta, dv + vib_v
+    info = {"seed": seed, "aiding": list(aiding), "zupt_detect": zupt_detect}
+    stops = None
+    if zupt_detect == "imu" and "zupt" in aiding:
+        found = zero_velocity.detect(dtheta, dv, step, noise.vrw, noise.arw, detector or zero_velocity.DetectorSettings())
+        stops = found.stationary
+        info.update({"detector_samples": found.samples, "detector_gamma": found.gamma, "detector_alpha": found.alpha})
     rng = np.random.default_rng([seed, 3018])
     state = _core.EskfState(_config(noise, settings, gnss, step, odometer), _initial_state(truth, settings, rng))
-    aid = per_step_aiding(truth, aiding, settings, odometer, rng, seed)
+    aid = per_step_aiding(truth, aiding, settings, odometer, rng, seed, stops)
     if "gnss" in aiding:
-        fixes = gnss_mod.simulate(truth, gnss, seed, outages)
+        if fixes is None:
+            fixes = gnss_mod.simulate(truth, gnss, seed, outages)
         rows = fix_rows(fixes, gnss, step)
         vel_std = gnss.vel_std()
     else:
@@ -276,13 +301,13 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         rows, vel_std = np.zeros((0, 11)), np.ones(3)
     out = state.run(dtheta, dv, aid, rows, vel_std, gnss_velocity, settings.out_every)
     idx = np.arange(1, out.shape[0] + 1) * settings.out_every
-    true_rows = truth.nav_rows()[idx]
+    true_rows = truth.nav_rows(idx)
     nav = out[:, :9]
     return AidedResult(time=truth.time[idx], nav=nav, truth=true_rows, error=nav_errors(nav, true_rows),
                        cov=out[:, 15:].reshape(-1, 15, 15), bias_g=out[:, 9:12], bias_a=out[:, 12:15],
                        bias_g_true=bg_true[idx - 1], bias_a_true=ba_true[idx - 1],
                        gnss_used=int(np.sum(rows[:, 1] > 0)) if len(rows) else 0, zupt_steps=int(aid[:, 0].sum()),
-                       info={"seed": seed, "aiding": list(aiding)})
+                       info=info)
 
 
 @dataclass(frozen=True)
@@ -331,10 +356,11 @@ class OutageRow:
 
 
 def outage_table(result: AidedResult, outages) -> list:
-    """:class:`OutageRow` per outage window (the last output row before the window's end)."""
+    """:class:`OutageRow` per outage window: the last output row strictly before the window's end (the
+    first fix after the outage, valid at ``end``, is already applied in the row at ``end``)."""
     rows = []
     for start, end in np.asarray(outages, float).reshape(-1, 2):
-        i = int(np.searchsorted(result.time, end, side="right")) - 1
+        i = int(np.searchsorted(result.time, end - 1e-9, side="left")) - 1
         rows.append(OutageRow(float(start), float(end), float(result.horizontal_error()[i]),
                               float(result.horizontal_sigma()[i])))
     return rows

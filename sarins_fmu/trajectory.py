@@ -254,9 +254,14 @@ class Truth:
     def n_steps(self) -> int:
         return self.dtheta.shape[0]
 
-    def nav_rows(self) -> np.ndarray:
-        """(K+1, 9) rows lat, lon, h, v E N U, yaw, pitch, roll (the INS's output layout)."""
-        return np.column_stack([self.lat, self.lon, self.height, self.velocity_n, self.attitude])
+    def nav_rows(self, index=None) -> np.ndarray:
+        """(K+1, 9) rows lat, lon, h, v E N U, yaw, pitch, roll (the INS's output layout); only the
+        rows at ``index`` (an integer array) when given."""
+        if index is None:
+            return np.column_stack([self.lat, self.lon, self.height, self.velocity_n, self.attitude])
+        index = np.asarray(index)
+        return np.column_stack([self.lat[index], self.lon[index], self.height[index], self.velocity_n[index],
+                                self.attitude[index]])
 
     def stationary(self) -> np.ndarray:
         """(K,) bool: the vehicle stands still over each step (zero speed and no body rotation wrt

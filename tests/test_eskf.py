@@ -84,13 +84,18 @@ truth = tr.generate(tr.Trajectory(tr.Start(lat_deg=30.0), segs), 0.05)
 cfg = gnss.preset("sps", rate_hz=2.0, lever_arm=(0.1, 0.5, 1.0), latency=0.1)
 r = aided.navigate(truth, gnss=cfg, outages=[[8, 12]], seed=1)
 assert np.isfinite(r.error).all()
+from sarins_fmu import zero_velocity as zv
+r = aided.navigate(truth, gnss=cfg, seed=2, zupt_detect="imu", vibration=zv.VIBRATION["car"],
+                   detector=zv.DetectorSettings(window=0.3))
+assert np.isfinite(r.error).all() and r.zupt_steps > 0
 print("sanitized run ok")
 """
 
 
 @pytest.mark.slow
 def test_aided_kernels_under_address_and_undefined_behaviour_sanitizers(tmp_path):
-    """Rebuild the core with ASan + UBSan and run trajectory, GNSS and filter through the binding."""
+    """Rebuild the core with ASan + UBSan and run trajectory, GNSS, zero-velocity detector and filter through the
+    binding."""
     import os
     import subprocess
     import sys

@@ -25,6 +25,19 @@ def test_turntable_row_from_a_gcc_build_of_its_sources_is_bit_identical(fmu_dir,
     assert "win64" not in row.cells and "| Turntable | 2.0 | 300 steps x 12 | " in pt.markdown([row])
 
 
+def test_imulog_row_plays_its_log_and_aided_ins_steps_at_a_hundredth(fmu_dir, tmp_path):
+    """The IMULog case writes its own 1 Hz log (the String setting is a path); AidedINS steps 0.01 s."""
+    if shutil.which("gcc") is None or shutil.which("objdump") is None:
+        pytest.skip("gcc or objdump not installed")
+    line = ("gcc", "-O0", "")
+    rows = [pt.platform_row(fmu_dir / f"{name}.fmu", tmp_path, pt.Hosts(tmp_path), lines=[line], others=())
+            for name in ("IMULog", "AidedINS")]
+    assert rows[0].cells["linux64"] == f"{pt.LOG_ROWS - 1} steps x 18", rows[0].cells
+    assert rows[1].cells["linux64"] == f"{pt.DEFAULT_STEPS} steps x 24", rows[1].cells
+    assert [r.cells[pt.line_name(line)] for r in rows] == ["0", "0"], [r.cells for r in rows]
+    assert pt.case_of("AidedINS", pt.read_model_description(str(fmu_dir / "AidedINS.fmu"))).step == 0.01
+
+
 def test_a_failing_run_is_a_reason_in_its_cell(fmu_dir, tmp_path):
     """A binary the host cannot load: the cell says why instead of a number."""
     hosts = pt.Hosts(tmp_path)
@@ -36,10 +49,11 @@ def test_a_failing_run_is_a_reason_in_its_cell(fmu_dir, tmp_path):
 
 
 @pytest.mark.slow
-def test_turntable_on_every_platform_and_compile_line_gives_the_linux64_numbers(fmu_dir, tmp_path):
+@pytest.mark.parametrize("name", ["Turntable", "IMULog", "AidedINS"])
+def test_on_every_platform_and_compile_line_gives_the_linux64_numbers(fmu_dir, tmp_path, name):
     """win64 under wine, aarch64 under qemu, 8 compile lines: bit-identical; fmusim (when built) within its
     CSV's %.16g rounding."""
-    row = pt.platform_row(fmu_dir / "Turntable.fmu", tmp_path, pt.Hosts(tmp_path),
+    row = pt.platform_row(fmu_dir / f"{name}.fmu", tmp_path, pt.Hosts(tmp_path),
                           fmusim=pt.os.environ.get("FMUSIM", "/work/tools/fmusim"))
     for column in ["win64", "aarch64", *map(pt.line_name, pt.LINES)]:
         assert row.cells[column] == "0" or "not installed" in row.cells[column] or "missing" in row.cells[column], \

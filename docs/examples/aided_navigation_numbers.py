@@ -66,7 +66,10 @@ def monte_carlo() -> dict:
     nees_cpu = time.process_time() - t0
     outage = aided.outage_monte_carlo(truth, 50, [[60, 90], [120, 180], [200, 320]], gnss=WHITE_GNSS,
                                       settings=settings)
-    return {"duration_s": float(truth.time[-1]), "runs": 50, "band": list(nees.band),
+    from scipy.stats import chi2
+
+    interval = [math.sqrt(chi2.ppf(q, 100) / 100) for q in (0.025, 0.975)]  # ratio if consistent: chi2(2R)/2R
+    return {"duration_s": float(truth.time[-1]), "runs": 50, "band": list(nees.band), "ratio_interval": interval,
             "nees_time_mean": {b: float(v.mean()) for b, v in nees.mean_nees.items()}, "nees_inside": nees.inside,
             "cpu_s_per_run": nees_cpu / 50,
             "outages": [{"window_s": list(w), "rms_error_m": e, "predicted_sigma_m": s, "ratio": e / s}
@@ -105,8 +108,83 @@ def presets() -> dict:
     return out
 
 
+def zupt_detection(runs: int = 20) -> dict:
+    """The IMU-statistics ZUPT detector (sarins_fmu.zero_velocity, window 0.5 s, alpha 1e-3, vibration
+    'car') on a drive with three 30 s stops, per grade: misses over disjoint windows wholly in the stops,
+    false 'stationary' over windows wholly in motion and its Chernoff bound, the delay to the first
+    detection in each stop; then GNSS-free navigation (zupt, odometer, nhc): RMS over the runs of the
+    horizontal error at the end with truth ZUPTs, detected ZUPTs, and detected ZUPTs without vibration."""
+    from sarins_fmu import zero_velocity as zv
+    from sarins_fmu.experiments.aided_nav import STOP_SEGMENTS
+
+    truth = tr.generate(tr.Trajectory(tr.Start(lat_deg=32.0, lon_deg=118.0), STOP_SEGMENTS), 0.01)
+    settings, car = zv.DetectorSettings(), zv.VIBRATION["car"]
+    still = truth.stationary()
+    out = {"duration_s": float(truth.time[-1]), "stop_steps": int(still.sum()), "runs": runs,
+           "window_s": settings.window, "alpha": settings.alpha}
+    for grade in ("tactical", "mems"):
+        noise = aided.IMU_NOISE[grade]
+        n = settings.samples(truth.step)
+        inside = np.convolve(still.astype(int), np.ones(n, int))[: still.size] == n
+        moving = np.convolve((~still).astype(int), np.ones(n, int))[: still.size] == n
+        disjoint = np.flatnonzero(inside)[::n]
+        starts = np.flatnonzero(np.diff(np.concatenate([[0], still.astype(int)])) == 1)
+        misses = false = 0
+        delays = []
+        t0 = time.process_time()
+        for seed in range(runs):
+            dtheta, dv, _, _ = aided.corrupt(truth, noise, seed)
+            vt, vv = zv.vibrate(truth, car, seed)
+            found = zv.detect(dtheta + vt, dv + vv, truth.step, noise.vrw, noise.arw, settings)
+            misses += int(np.sum(~found.stationary[disjoint]))
+            false += int(np.sum(found.stationary & moving))
+            delays += [int(np.argmax(found.stationary[s:])) * truth.step for s in starts]
+        cpu = (time.process_time() - t0) / runs
+        bound = zv.moving_window_bound(n, found.gamma, noise.vrw / math.sqrt(truth.step),
+                                       noise.arw / math.sqrt(truth.step), car)
+        nav = {}
+        for label, kwargs in (("truth", {"zupt_detect": "truth", "vibration": car}),
+                              ("imu", {"zupt_detect": "imu", "vibration": car}),
+                              ("imu, no vibration", {"zupt_detect": "imu", "vibration": None})):
+            err2, steps = 0.0, 0
+            for seed in range(runs):
+                r = aided.navigate(truth, noise=noise, aiding=("zupt", "odometer", "nhc"), seed=seed, **kwargs)
+                err2 += r.horizontal_error()[-1] ** 2
+                steps += r.zupt_steps
+            nav[label] = {"rms_final_horizontal_error_m": math.sqrt(err2 / runs), "mean_zupt_steps": steps / runs}
+        out[grade] = {"samples": n, "gamma": found.gamma, "disjoint_stop_windows": int(disjoint.size) * runs,
+                      "misses": misses, "moving_windows": int(moving.sum()) * runs, "false_stationary": false,
+                      "bound_per_window": bound, "max_delay_s": max(delays), "mean_delay_s": float(np.mean(delays)),
+                      "detector_cpu_s_per_run": cpu, "navigation": nav}
+    return out
+
+
+def _bound(p: float) -> str:
+    return "< 1e-300 (underflows)" if p == 0.0 else f"{p:.1e}"
+
+
+def print_zupt(numbers):
+    z = numbers["zupt_detection"]
+    print(f"\nZUPT detection, {z['runs']} runs of {z['duration_s']:.0f} s, window {z['window_s']} s, alpha {z['alpha']}")
+    print("| grade | N | gamma | missed stop windows | false 'stationary' (moving windows) | bound per window | "
+          "delay mean / max (s) |")
+    print("|---|---|---|---|---|---|---|")
+    for grade in ("tactical", "mems"):
+        g = z[grade]
+        print(f"| {grade} | {g['samples']} | {g['gamma']:.1f} | {g['misses']} / {g['disjoint_stop_windows']} | "
+              f"{g['false_stationary']} / {g['moving_windows']} | {_bound(g['bound_per_window'])} | "
+              f"{g['mean_delay_s']:.2f} / {g['max_delay_s']:.2f} |")
+    print("\n| grade | ZUPTs from | RMS final horizontal error (m) | mean ZUPT steps |")
+    print("|---|---|---|---|")
+    for grade in ("tactical", "mems"):
+        for label, v in z[grade]["navigation"].items():
+            print(f"| {grade} | {label} | {v['rms_final_horizontal_error_m']:.2f} | {v['mean_zupt_steps']:.0f} |")
+    print(f"(truth stop steps: {z['stop_steps']})")
+
+
 def main():
-    numbers = {"ideal_check": ideal_check(), "monte_carlo": monte_carlo(), "presets": presets(), "options": options()}
+    numbers = {"ideal_check": ideal_check(), "monte_carlo": monte_carlo(), "presets": presets(), "options": options(),
+               "zupt_detection": zupt_detection()}
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text(json.dumps(numbers, indent=1, default=float))
     ic = numbers["ideal_check"]
@@ -128,6 +206,7 @@ def main():
         w = o["window_s"]
         print(f"| {w[0]:.0f}-{w[1]:.0f} ({w[1] - w[0]:.0f} s) | {o['rms_error_m']:.3f} | {o['predicted_sigma_m']:.3f} | "
               f"{o['ratio']:.2f} |")
+    print(f"ratio if consistent (95 %): {mc['ratio_interval'][0]:.2f} .. {mc['ratio_interval'][1]:.2f}")
     print(f"\nCPU per run: {mc['cpu_s_per_run']:.3f} s\n")
     print("| preset | position std E, N, U (m) | horizontal RMS (m) | mean NEES pos / vel / att | 60 s outage error / sigma (m) |")
     print("|---|---|---|---|---|")
@@ -138,6 +217,7 @@ def main():
         print(f"| {name} | {std} | {p['horizontal_error_rms_m']:.3g} | {n['position']:.1f} / {n['velocity']:.1f} / "
               f"{n['attitude']:.1f} | {o['horizontal_error_m']:.3g} / {o['predicted_sigma_m']:.3g} |")
     print_options(numbers)
+    print_zupt(numbers)
 
 
 

@@ -32,6 +32,7 @@ CAMPAIGNS = {
     "axial-rbf": "sarins.axial_rbf.campaign",  # seed 000: RBF identification of the axial drift
     "online-rls": "sarins.online_rls.campaign",  # seed 002: temperature model updated online (FF-RLS)
     "mems-calibration": "sarins.mems_calibration.campaign",  # seed 003: MEMS IMU dynamic calibration
+    "aided-nav": "sarins.aided_nav.campaign",  # issue 30: GNSS/INS aided navigation, NEES and outages
 }
 
 

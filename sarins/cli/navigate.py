@@ -85,6 +85,15 @@ def register(sub) -> None:
     g.add_argument("--imu-noise", default="tactical", metavar="GRADE",
                    help="IMU noise grade of the aided run: ideal, tactical, mems (default tactical)")
     g.add_argument("--zupt-std", type=finite, default=0.01, help="zero-velocity update std, m/s (default 0.01)")
+    g.add_argument("--zupt-detect", choices=("truth", "imu"), default=None,
+                   help="where ZUPTs come from: truth (the trajectory's stops, default) or imu (a chi-square test on "
+                        "the IMU's increments, sarins_fmu.zero_velocity)")
+    g.add_argument("--zupt-window", type=finite, default=None, help="detector window, s (default 0.5; --zupt-detect imu)")
+    g.add_argument("--zupt-alpha", type=finite, default=None,
+                   help="probability that a stationary window is declared moving, 0 .. 1 exclusive (default 0.001; "
+                        "--zupt-detect imu)")
+    g.add_argument("--vibration", default=None, metavar="PRESET",
+                   help="vehicle vibration while moving: none, car (default car with --zupt-detect imu, else none)")
     p.set_defaults(func=run)
 
 
@@ -94,7 +103,8 @@ _STATIC_ONLY = {"lat_deg": "--lat-deg", "align_hours": "--align-hours", "nav_hou
                 "write_log": "--write-log"}
 _AIDED_ONLY = {"aiding": "--aiding", "gnss_outage": "--gnss-outage", "gnss": "--gnss", "gnss_rate_hz": "--gnss-rate-hz",
                "gnss_pos_std": "--gnss-pos-std", "imu_rate_hz": "--imu-rate-hz", "imu_noise": "--imu-noise",
-               "zupt_std": "--zupt-std"}
+               "zupt_std": "--zupt-std", "zupt_detect": "--zupt-detect", "zupt_window": "--zupt-window",
+               "zupt_alpha": "--zupt-alpha", "vibration": "--vibration"}
 
 
 def _outage(text: str) -> tuple:
@@ -132,6 +142,7 @@ def run_aided(args) -> int:
         raise UsageError(f"--gnss-pos-std must not be negative, got {args.gnss_pos_std:g}")
     if not args.zupt_std > 0:
         raise UsageError(f"--zupt-std must be positive, got {args.zupt_std:g}")
+    detect, vibration, detector = _zupt_detection(args, aiding)
     outages = [_outage(t) for t in args.gnss_outage]
     if outages and "gnss" not in aiding:
         raise UsageError("--gnss-outage needs --aiding gnss")
@@ -158,10 +169,11 @@ def run_aided(args) -> int:
     t0 = time.perf_counter()
     result = aided.navigate(truth, noise=aided.IMU_NOISE[args.imu_noise], gnss=receiver if "gnss" in aiding else None,
                             aiding=aiding, outages=outages, settings=aided.FilterSettings(zupt_std=args.zupt_std),
-                            seed=args.seed)
+                            seed=args.seed, zupt_detect=detect, vibration=vibration, detector=detector)
     out = aided.summary(result, outages)
     out.update({"wall_seconds": time.perf_counter() - t0, "seed": args.seed, "aiding": aiding, "gnss": args.gnss,
-                "imu_noise": args.imu_noise, "imu_rate_hz": args.imu_rate_hz, "gnss_rate_hz": args.gnss_rate_hz})
+                "imu_noise": args.imu_noise, "imu_rate_hz": args.imu_rate_hz, "gnss_rate_hz": args.gnss_rate_hz,
+                "zupt_detect": detect, "vibration": args.vibration or ("car" if detect == "imu" else "none")})
     if args.json:
         print(json.dumps(out, allow_nan=False))
     else:
@@ -169,6 +181,40 @@ def run_aided(args) -> int:
             shown = f"{value:.6g}" if isinstance(value, float) else value
             print(f"{key:>26}: {shown}")
     return 0
+
+
+def _zupt_detection(args, aiding):
+    """(zupt_detect, Vibration or None, DetectorSettings or None) of the options, or UsageError naming one."""
+    from sarins_fmu import aided, zero_velocity
+
+    detect = args.zupt_detect or "truth"
+    if detect == "truth":
+        refuse_unless(args, {"zupt_window": "--zupt-window", "zupt_alpha": "--zupt-alpha"}, False,
+                      "applies with --zupt-detect imu only")
+    if detect == "imu" and "zupt" not in aiding:
+        raise UsageError("--zupt-detect imu needs zupt in --aiding")
+    noise = aided.IMU_NOISE[args.imu_noise]
+    if detect == "imu" and not (noise.vrw > 0 and noise.arw > 0):
+        raise UsageError(f"--zupt-detect imu needs an IMU with noise (--imu-noise {args.imu_noise} has none to test "
+                         "against)")
+    name = args.vibration or ("car" if detect == "imu" else "none")
+    if name not in zero_velocity.VIBRATION:
+        raise UsageError(f"--vibration {name}: choose one of {', '.join(zero_velocity.VIBRATION)}")
+    vibration = zero_velocity.VIBRATION[name] if name != "none" else None
+    detector = None
+    if detect == "imu":
+        window = 0.5 if args.zupt_window is None else args.zupt_window
+        alpha = 1e-3 if args.zupt_alpha is None else args.zupt_alpha
+        if not window > 0:
+            raise UsageError(f"--zupt-window must be positive, got {window:g}")
+        if not 0 < alpha < 1:
+            raise UsageError(f"--zupt-alpha must be between 0 and 1 (exclusive), got {alpha:g}")
+        detector = zero_velocity.DetectorSettings(window=window, alpha=alpha)
+        try:
+            detector.check(1.0 / args.imu_rate_hz)
+        except ValueError as exc:
+            raise UsageError(f"--zupt-window {window:g} s at --imu-rate-hz {args.imu_rate_hz:g}: {exc}") from None
+    return detect, vibration, detector
 
 
 BYTES_PER_AIDED_STEP = 400  # per IMU step: truth rows, increments, filter output rows

@@ -152,3 +152,32 @@ class OdoState:
         if _odo_speeds(self.buffer.ctypes.data, speed.shape[0], speed.ctypes.data, out.ctypes.data) != 0:
             raise ValueError("odometer speeds must be finite")
         return out
+
+
+ZVD_CONFIG = 5
+_zvd_size = function("sarins_zvd_size", _I64)
+_zvd_init = function("sarins_zvd_init", ctypes.c_int, _P, _P, ctypes.c_char_p, ctypes.c_size_t)
+_zvd_run = function("sarins_zvd_run", ctypes.c_int, _P, _I64, _P, _P, _P, _P)
+
+
+class ZvdState:
+    """A ``sarins_zvd`` struct (zvd.h): settings (window N samples, step s, vrw m/s/sqrt(s), arw
+    rad/sqrt(s), threshold gamma); keeps its window between calls."""
+
+    def __init__(self, config):
+        config = _arrays.read(config, (ZVD_CONFIG,), "zero-velocity detector settings")
+        self.buffer = np.zeros((int(_zvd_size()) + 7) // 8)
+        msg = ctypes.create_string_buffer(256)
+        if _zvd_init(self.buffer.ctypes.data, config.ctypes.data, msg, 256) != 0:
+            raise ValueError(msg.value.decode())
+
+    def run(self, dtheta, dv):
+        """Statistic T (n,) (-1 while the window fills) and stationary flags (n,) bool for increments
+        dtheta, dv (n, 3) rad, m/s."""
+        n = np.shape(dtheta)[0]
+        dtheta, dv = _arrays.read(dtheta, (n, 3), "dtheta"), _arrays.read(dv, (n, 3), "dv")
+        stat, flag = np.empty(n), np.empty(n)
+        if _zvd_run(self.buffer.ctypes.data, n, dtheta.ctypes.data, dv.ctypes.data, stat.ctypes.data,
+                    flag.ctypes.data) != 0:
+            raise ValueError("the zero-velocity detector's increments must be finite")
+        return stat, flag > 0.5

@@ -43,6 +43,7 @@ int sarins_core_abi(void);
 #include "gnss.h"
 #include "eskf.h"
 #include "odo.h"
+#include "zvd.h"
 #include "ins_fmu_step.h"
 
 /* trained networks: model files, inference kernels, identifier and compensators */
