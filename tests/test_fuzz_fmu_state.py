@@ -1,37 +1,26 @@
-"""The native glue's FMU-state reader under sanitizers (tests/fuzz/fuzz_fmu_state.c), FMI 2.0 and 3.0, for the
-native models that run on their defaults: built as a plain program with AddressSanitizer + UBSan (the state
+"""The native glue's FMU-state reader under sanitizers (tests/fuzz/fuzz_fmu_state.c), FMI 2.0 and 3.0, for every
+native model (with the files it needs: tests/fuzz_fmus.py): built as a plain program with AddressSanitizer + UBSan (the state
 checksum skipped, so that changes reach the fields behind it), fed the model's own states and every one-byte
 change of one of them (two model/version pairs by default, all with SARINS_FUZZ_ALL=1); then (slow), with clang,
-libFuzzer for SARINS_FUZZ_SECONDS per model and version (default 5; .ci/run gives 60).  A finding is any
-sanitizer report, or a step returning OK with a non-finite output."""
+libFuzzer for SARINS_FUZZ_STATE_SECONDS (else SARINS_FUZZ_SECONDS, default 5) per model and version (.ci/run
+gives 25).  A finding is any sanitizer report, or a step returning OK with a non-finite output."""
 
 from __future__ import annotations
 
 import os
 import shutil
 import subprocess
-import zipfile
 from pathlib import Path
 
 import pytest
 
-from fmus import SLAVES
-from fmus.native_fmu import build_native_fmu
+from fuzz_fmus import MODELS, prepare
 
 pytestmark = pytest.mark.integration
 
 HARNESS = Path(__file__).resolve().parent / "fuzz" / "fuzz_fmu_state.c"
 REGRESSIONS = HARNESS.parent / "regressions"
-MODELS = ["Turntable", "StrapdownINS", "IMUThermal", "DriftModelUpdater"]
 FLAGS = ["-std=c11", "-g", "-O1", "-fno-sanitize-recover=all", "-DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION"]
-ENV = {"PATH": os.environ.get("PATH", ""), "ASAN_OPTIONS": "detect_leaks=1"}
-
-
-def _sources(name: str, fmi: int, tmp: Path) -> Path:
-    fmu = build_native_fmu(name, SLAVES[name], tmp / "fmu", fmi=fmi, win64=False, aarch64=False)
-    with zipfile.ZipFile(fmu) as z:
-        z.extractall(tmp / "unzipped")
-    return tmp / "unzipped" / "sources"
 
 
 def _compile(cc: str, src: Path, fmi: int, out: Path, sanitize: str, main: bool) -> Path:
@@ -53,11 +42,11 @@ def test_state_reader_under_sanitizers(tmp_path, name, fmi):
     cc = shutil.which("gcc") or shutil.which("cc")
     if cc is None:
         pytest.skip("no C compiler (gcc/cc)")
-    src = _sources(name, fmi, tmp_path)
+    src, env = prepare(name, fmi, tmp_path)
     exe = _compile(cc, src, fmi, tmp_path / "main", "address,undefined", main=True)
     seeds = tmp_path / "seeds"
     seeds.mkdir()
-    subprocess.run([str(exe), "--seeds", str(seeds)], check=True, env=ENV, timeout=300)
+    subprocess.run([str(exe), "--seeds", str(seeds)], check=True, env=env, timeout=300)
     files = sorted(seeds.iterdir())
     assert files
     blob = files[-1].read_bytes()
@@ -76,7 +65,7 @@ def test_state_reader_under_sanitizers(tmp_path, name, fmi):
         data[24:88] = guid
         (variants / f"regression{k}").write_bytes(bytes(data))
     inputs = [str(p) for p in files] + sorted(str(p) for p in variants.iterdir())
-    proc = subprocess.run([str(exe), *inputs], capture_output=True, text=True, env=ENV, timeout=600)
+    proc = subprocess.run([str(exe), *inputs], capture_output=True, text=True, env=env, timeout=600)
     assert proc.returncode == 0 and "runtime error" not in proc.stderr, proc.stderr[-3000:]
 
 
@@ -87,15 +76,15 @@ def test_libfuzzer_finds_nothing(tmp_path, name, fmi):
     clang = shutil.which("clang")
     if clang is None:
         pytest.skip("clang (with libFuzzer) not installed (Debian: apt-get install clang)")
-    seconds = int(os.environ.get("SARINS_FUZZ_SECONDS", "5"))
-    src = _sources(name, fmi, tmp_path)
+    seconds = int(os.environ.get("SARINS_FUZZ_STATE_SECONDS", os.environ.get("SARINS_FUZZ_SECONDS", "5")))
+    src, env = prepare(name, fmi, tmp_path)
     seeder = _compile(clang, src, fmi, tmp_path / "main", "address,undefined", main=True)
     corpus = tmp_path / "corpus"
     corpus.mkdir()
-    subprocess.run([str(seeder), "--seeds", str(corpus)], check=True, env=ENV, timeout=300)
+    subprocess.run([str(seeder), "--seeds", str(corpus)], check=True, env=env, timeout=300)
     fuzz = _compile(clang, src, fmi, tmp_path / "fuzz", "fuzzer,address,undefined", main=False)
     proc = subprocess.run([str(fuzz), f"-max_total_time={seconds}", "-max_len=200000", "-print_final_stats=1",
-                           str(corpus)], capture_output=True, text=True, env=ENV, timeout=seconds + 600,
+                           str(corpus)], capture_output=True, text=True, env=env, timeout=seconds + 600,
                           cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     runs = [line for line in proc.stderr.splitlines() if "stat::number_of_executed_units" in line]

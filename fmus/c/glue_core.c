@@ -568,10 +568,17 @@ int sg_settable_default(const sarins_glue *g, const sarins_var *v)
     return v->causality == SARINS_INPUT || (parameter && v->variability == SARINS_TUNABLE);
 }
 
+/* 1 when vr is FMI 3.0's time variable (FMI 2.0 has none: no value reference is time there, not even
+ * SG_NO_TIME_VR) */
+static int is_time(const sarins_glue *g, unsigned vr)
+{
+    return g->time_vr != SG_NO_TIME_VR && vr == g->time_vr;
+}
+
 /* One value reference: known, of this type, and (settable given) settable in this state. */
 static const sarins_var *check_vr(sarins_glue *g, const char *fn, unsigned vr, int type, sg_settable_fn settable)
 {
-    if (vr == g->time_vr) {
+    if (is_time(g, vr)) {
         if (type != SARINS_REAL)
             sg_fail(g, "%s: time (value reference %u) is a Float64", fn, vr);
         else if (settable != NULL)
@@ -612,7 +619,7 @@ int sg_check_args(sarins_glue *g, const char *fn, const unsigned vr[], size_t n,
         return 0;
     }
     for (size_t k = 0; k < n; k++)
-        if (!(type == SARINS_REAL && settable == NULL && vr[k] == g->time_vr)
+        if (!(type == SARINS_REAL && settable == NULL && is_time(g, vr[k]))
             && check_vr(g, fn, vr[k], type, settable) == NULL)
             return 0;
     return 1;
@@ -641,7 +648,7 @@ int sg_get_real(sarins_glue *g, const char *fn, const unsigned vr[], size_t n, d
         return SARINS_ERROR;
     size_t at = 0; /* arrays: the values of one variable follow each other */
     for (size_t k = 0; k < n; k++) {
-        if (vr[k] == g->time_vr) {
+        if (is_time(g, vr[k])) {
             value[at++] = sg_time(g);
             continue;
         }

@@ -8,6 +8,9 @@
  *   clang -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
  *       -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION [-DFMI3] -I. tests/fuzz/fuzz_fmu_state.c *.c -o fuzz_state
  *   ./fuzz_state -max_total_time=60 CORPUS_DIR
+ * A model that needs files (a model file in resources/, a log): the environment names them, read at every
+ * instantiation: SARINS_FUZZ_RESOURCES the FMU's unzipped resources folder (an absolute path; FMI 2.0 gets it
+ * as a file: URI), SARINS_FUZZ_PARAMS lines "name=value" set (by the variable's type) before initialisation.
  * Seeds: states of the model itself; without libFuzzer add -DSARINS_FUZZ_MAIN: `fuzz_state --seeds DIR`
  * writes them (after initialisation, after 3 and 20 steps of 1 s), `fuzz_state FILE...` runs the harness
  * once on each file.  tests/test_fuzz_fmu_state.py does both.
@@ -20,6 +23,17 @@
 #include "model.h"
 #include "variables.h"
 
+/* the resources folder (SARINS_FUZZ_RESOURCES) as FMI 2.0's file: URI (uri = 1) or FMI 3.0's path, or NULL */
+static const char *resources(int uri)
+{
+    static char buf[4200];
+    const char *dir = getenv("SARINS_FUZZ_RESOURCES");
+    if (dir == NULL || dir[0] == '\0')
+        return NULL;
+    snprintf(buf, sizeof buf, "%s%s", uri ? "file://" : "", dir);
+    return buf;
+}
+
 #ifdef FMI3
 #include "fmi3Functions.h"
 typedef fmi3Instance inst;
@@ -28,11 +42,18 @@ static void logger(fmi3InstanceEnvironment env, fmi3Status status, fmi3String ca
 {
     (void)env; (void)status; (void)category; (void)message;
 }
+#define SETR(c, vr, x) fmi3SetFloat64((c), &(vr), 1, &(x), 1)
+#define SETI(c, vr, x) fmi3SetInt32((c), &(vr), 1, &(x), 1)
+#define SETB(c, vr, x) fmi3SetBoolean((c), &(vr), 1, &(x), 1)
+#define SETS(c, vr, x) fmi3SetString((c), &(vr), 1, &(x), 1)
+typedef fmi3Int32 int_t;
+typedef fmi3Boolean bool_t;
+static int set_params(inst c);
 static inst start(void)
 {
-    inst c = fmi3InstantiateCoSimulation("fuzz", SARINS_TABLE.guid, NULL, fmi3False, fmi3False, fmi3False,
+    inst c = fmi3InstantiateCoSimulation("fuzz", SARINS_TABLE.guid, resources(0), fmi3False, fmi3False, fmi3False,
                                          fmi3False, NULL, 0, NULL, logger, NULL);
-    if (c == NULL || fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) != fmi3OK
+    if (c == NULL || set_params(c) != 0 || fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) != fmi3OK
         || fmi3ExitInitializationMode(c) != fmi3OK)
         abort(); /* the model's defaults must run */
     return c;
@@ -57,10 +78,18 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
     (void)env; (void)name; (void)status; (void)category; (void)message;
 }
 static const fmi2CallbackFunctions CALLBACKS = {logger, calloc, free, NULL, NULL};
+#define SETR(c, vr, x) fmi2SetReal((c), &(vr), 1, &(x))
+#define SETI(c, vr, x) fmi2SetInteger((c), &(vr), 1, &(x))
+#define SETB(c, vr, x) fmi2SetBoolean((c), &(vr), 1, &(x))
+#define SETS(c, vr, x) fmi2SetString((c), &(vr), 1, &(x))
+typedef fmi2Integer int_t;
+typedef fmi2Boolean bool_t;
+static int set_params(inst c);
 static inst start(void)
 {
-    inst c = fmi2Instantiate("fuzz", fmi2CoSimulation, SARINS_TABLE.guid, NULL, &CALLBACKS, fmi2False, fmi2False);
-    if (c == NULL || fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK
+    inst c = fmi2Instantiate("fuzz", fmi2CoSimulation, SARINS_TABLE.guid, resources(1), &CALLBACKS, fmi2False,
+                             fmi2False);
+    if (c == NULL || set_params(c) != 0 || fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK
         || fmi2EnterInitializationMode(c) != fmi2OK || fmi2ExitInitializationMode(c) != fmi2OK)
         abort();
     return c;
@@ -78,6 +107,40 @@ static inst start(void)
 #endif
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+/* SARINS_FUZZ_PARAMS: "name=value" lines, each set by its variable's type; 0, or 1 on an unknown name or a
+ * refused value */
+static int set_params(inst c)
+{
+    const char *p = getenv("SARINS_FUZZ_PARAMS");
+    while (p != NULL && *p != '\0') {
+        const char *end = strchr(p, '\n'), *eq = strchr(p, '=');
+        size_t n = end ? (size_t)(end - p) : strlen(p);
+        char line[4200];
+        if (eq == NULL || eq > p + n || n >= sizeof line)
+            return 1;
+        memcpy(line, p, n);
+        line[n] = '\0';
+        line[eq - p] = '\0';
+        const char *value = line + (eq - p) + 1;
+        const sarins_var *var = NULL;
+        for (size_t v = 0; v < SARINS_TABLE.n_vars && var == NULL; v++)
+            if (strcmp(SARINS_TABLE.vars[v].name, line) == 0)
+                var = &SARINS_TABLE.vars[v];
+        if (var == NULL)
+            return 1;
+        unsigned vr = var->vr;
+        double r = strtod(value, NULL);
+        int_t i = (int_t)strtol(value, NULL, 10);
+        bool_t b = (bool_t)(strtol(value, NULL, 10) != 0);
+        int rc = var->type == SARINS_REAL ? (int)SETR(c, vr, r) : var->type == SARINS_INTEGER ? (int)SETI(c, vr, i)
+               : var->type == SARINS_BOOLEAN ? (int)SETB(c, vr, b) : (int)SETS(c, vr, value);
+        if (rc != 0)
+            return 1;
+        p = end ? end + 1 : p + n;
+    }
+    return 0;
+}
 
 /* the blob's next communication point (payload offset 8) or its start time, so that steps can continue */
 static double blob_time(const uint8_t *data, size_t size)

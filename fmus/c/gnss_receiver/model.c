@@ -137,12 +137,17 @@ static int gr_initialize(sarins_ctx *c)
 static int fix_step(sarins_ctx *c, gr_state *st, double h)
 {
     double rate = c->r[SARINS_R_rate_hz];
-    double every = 1.0 / (rate * h);
-    int64_t n = (int64_t)(every + 0.5);
+    double every = 1.0 / (rate * h); /* inf for a step so small that rate * h underflows */
     if (1.0 / rate < h * (1.0 - GRID_TOL)) {
         sarins_log(c, SARINS_ERROR, "ValueError: GNSS rate %.17g Hz is above the step rate %.17g Hz", rate, 1.0 / h);
         return SARINS_ERROR;
     }
+    if (!(every < 9007199254740992.0)) { /* 2^53 steps per fix: beyond any whole number a double holds */
+        sarins_log(c, SARINS_ERROR, "ValueError: GNSS interval %.17g s is not a whole number of steps (%.17g s)",
+                   1.0 / rate, h);
+        return SARINS_ERROR;
+    }
+    int64_t n = (int64_t)(every + 0.5);
     if (n < 1 || sm_fabs((double)n * h * rate - 1.0) > GRID_TOL) {
         sarins_log(c, SARINS_ERROR, "ValueError: GNSS interval %.17g s is not a whole number of steps (%.17g s)",
                    1.0 / rate, h);
