@@ -5,22 +5,30 @@
 #include "earth.h"
 #include "rotations.h"
 
-int sarins_gnss_init(sarins_gnss *s, const double *config, uint64_t seed, char *msg, size_t size)
+/* 1 when config holds (finite, standard deviations >= 0, correlation times > 0), else 0 with msg. */
+static int config_ok(const double *config, char *msg, size_t size)
 {
     for (int i = 0; i < SARINS_GNSS_CONFIG; i++)
         if (!isfinite(config[i])) {
             sarins_say(msg, size, "a GNSS setting is not finite");
-            return 1;
+            return 0;
         }
     for (int i = SARINS_GNSS_POS_WHITE_E; i < SARINS_GNSS_CONFIG; i++)
         if (config[i] < 0.0) {
             sarins_say(msg, size, "a GNSS standard deviation is negative");
-            return 1;
+            return 0;
         }
     if (!(config[SARINS_GNSS_POS_TAU] > 0.0) || !(config[SARINS_GNSS_VEL_TAU] > 0.0)) {
         sarins_say(msg, size, "a GNSS correlation time is not positive");
-        return 1;
+        return 0;
     }
+    return 1;
+}
+
+int sarins_gnss_init(sarins_gnss *s, const double *config, uint64_t seed, char *msg, size_t size)
+{
+    if (!config_ok(config, msg, size))
+        return 1;
     for (int i = 0; i < SARINS_GNSS_CONFIG; i++)
         s->config[i] = config[i];
     sarins_rng_stream(&s->rng, seed, 30);
@@ -111,3 +119,25 @@ int sarins_gnss_fixes(sarins_gnss *s, int64_t n, const double *time, const doubl
 }
 
 int64_t sarins_gnss_size(void) { return (int64_t)sizeof(sarins_gnss); }
+
+int sarins_gnss_check(const sarins_gnss *s, char *msg, size_t size)
+{
+    if (!config_ok(s->config, msg, size))
+        return 1;
+    /* an even increment repeats its draws within 2^63 of them; 0 repeats one, which the polar method may
+     * reject for ever */
+    if (!(s->rng.gamma & 1u) || !(s->rng.has_spare == 0 || s->rng.has_spare == 1) || !isfinite(s->rng.spare)) {
+        sarins_say(msg, size, "the GNSS random stream is not one the receiver makes");
+        return 1;
+    }
+    for (int i = 0; i < 6; i++)
+        if (!isfinite(s->b[i])) {
+            sarins_say(msg, size, "a GNSS correlated error is not finite");
+            return 1;
+        }
+    if (!isfinite(s->last_time) || s->epochs < 0) {
+        sarins_say(msg, size, "the GNSS epoch clock is out of range");
+        return 1;
+    }
+    return 0;
+}

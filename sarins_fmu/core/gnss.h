@@ -54,6 +54,11 @@ int sarins_gnss_init(sarins_gnss *s, const double *config, uint64_t seed, char *
 int sarins_gnss_fixes(sarins_gnss *s, int64_t n, const double *time, const double *truth, const double *omega_ib,
                       int64_t n_out, const double *outages, double *out);
 
+/* 0 when s is a state sarins_gnss_init and sarins_gnss_fixes can make (settings as init checks them, an odd
+ * random-stream increment, finite correlated errors and epoch time, epochs >= 0), else 1 with a reason in msg
+ * (for a state a host hands back: FMU state). */
+int sarins_gnss_check(const sarins_gnss *s, char *msg, size_t size);
+
 /* sizeof(sarins_gnss), for a binding that holds the struct in its own buffer */
 int64_t sarins_gnss_size(void);
 

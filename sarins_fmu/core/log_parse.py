@@ -2,8 +2,8 @@
 
 :func:`parse_block` returns the (K, n_cols) numbers of a block of whole CSV sample lines when every line
 keeps the log's line grammar and every field is a plain decimal of at most 19 significant digits that the
-core converts exactly (correctly rounded, bit-identical to Python's ``float``; see log_parse.h); otherwise None, and the caller parses the block its own way
-(numpy), which also words any error.
+core converts exactly (correctly rounded, bit-identical to Python's ``float``; see log_parse.h); otherwise
+None, and the caller parses the block its own way (numpy), which also words any error.
 """
 
 from __future__ import annotations

@@ -212,7 +212,6 @@ static void gr_release(sarins_ctx *c)
 /* A state handed to the FMU (model.h "State validation"): every field within what do_step relies on. */
 static int gr_check_state(const sarins_ctx *c, int running)
 {
-    (void)running;
     const gr_state *st = c->state;
     const long long big = 1LL << 53;
     int ok = sarins_state_int(c, "n_outages", st->n_outages, 0, MAX_OUTAGES)
@@ -224,6 +223,11 @@ static int gr_check_state(const sarins_ctx *c, int running)
              && sarins_state_finite(c, "outages", st->outages, (size_t)(2 * st->n_outages))
              && (st->every == 0 ? sarins_state_real(c, "step", st->step, 0.0, 0.0)
                                 : sarins_state_real(c, "step", st->step, 1e-300, 1e300));
+    char msg[160];
+    if (ok && running && sarins_gnss_check(&st->gnss, msg, sizeof msg)) { /* the receiver's own invariants */
+        sarins_log(c, SARINS_ERROR, "the state's %s", msg);
+        ok = 0;
+    }
     return ok ? SARINS_OK : SARINS_ERROR;
 }
 
