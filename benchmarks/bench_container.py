@@ -2,7 +2,7 @@
 
 Packs ``IdentifiedStaticSystem`` (sarins/systems ``standard_static_identified`` at its defaults: 4 h
 alignment, 84 h of navigation, 1 s step) with :func:`orchestration.container.build_container_fmu` twice,
-``engine="sarins"`` (ours) and ``engine="fmpy"`` (FMPy 0.3.32's container binary, the baseline), runs
+``engine=write_container_fmu`` (ours) and ``engine="fmpy"`` (FMPy 0.3.32's container binary, the baseline), runs
 each through the project's C host (tests/native_host/native_fmu_host.c, logging off) under ``env -i``
 for the DefaultExperiment and prints the wall times, their ratio and whether the final outputs are
 bit-identical.  Both runs take the same component FMUs (``--fmu-dir``, else built here).
@@ -58,6 +58,7 @@ def main(argv=None) -> int:
     ap.add_argument("--fmu-dir", type=Path, help="folder with the component FMUs (default: build them)")
     ap.add_argument("--stop", type=float, help="stop time, s (default: the DefaultExperiment's)")
     args = ap.parse_args(argv)
+    from fmus.system_container import write_container_fmu
     from orchestration.container import build_container_fmu
     from sarins.systems import SYSTEM_FMUS, SYSTEMS
 
@@ -76,7 +77,8 @@ def main(argv=None) -> int:
         system = SYSTEMS[SYSTEM_FMUS["IdentifiedStaticSystem"]](work)
         results = {}
         for engine in ("fmpy", "sarins"):
-            fmu = build_container_fmu(system, work / f"Identified_{engine}.fmu", step_size=1.0, engine=engine)
+            fmu = build_container_fmu(system, work / f"Identified_{engine}.fmu", step_size=1.0,
+                                      engine=write_container_fmu if engine == "sarins" else engine)
             results[engine] = run(host, fmu, work, args.stop)
         (t_fmpy, v_fmpy, steps), (t_ours, v_ours, _) = results["fmpy"], results["sarins"]
         print(f"IdentifiedStaticSystem, {steps} steps of 1 s, C host under env -i")

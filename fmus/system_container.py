@@ -2,14 +2,15 @@
 
 The container is a model behind the shared glue (``fmus/c/system_container/model.c``, interface
 ``fmus/c/model.h``) whose variable table is the system's: :func:`write_container_fmu` (called by
-:func:`orchestration.container.build_container_fmu` with ``engine="sarins"``) writes
+:func:`orchestration.container.build_container_fmu` with ``engine=write_container_fmu``) writes
 
 * ``modelDescription.xml`` (FMI 2.0 co-simulation, ``modelIdentifier`` ``SystemContainer``, no FMU state)
   and ``variables.h`` from the same rows: every exposed ``component.variable``, value references 0, 1, ...;
 * ``resources/<folder>/``: each component FMU unzipped (folder: the FMU's file stem, unique);
 * ``resources/container_plan.txt``: the plain-text plan the binary reads when initialisation ends
   (components with folder, model identifier and GUID; container variable -> component variable; the
-  connections), format in model.c;
+  connections), format in model.c; the parts, exposed variables and links it takes are
+  ``orchestration.container``'s ``Part``, ``Exposed`` and ``Link`` (read by attribute);
 * ``binaries/linux64`` (glibc 2.17 or later: the dl* functions are bound to their oldest versions),
   ``binaries/win64`` and ``binaries/aarch64-linux`` when their cross compilers are on PATH, ``sources/``
   and ``documentation/index.html`` with the compile lines.
@@ -22,12 +23,10 @@ from __future__ import annotations
 
 import html
 import re
-import shutil
 import tempfile
 import uuid
 import zipfile
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
@@ -42,39 +41,30 @@ _TABLE_TYPE = {"Real": 0, "Integer": 1, "Enumeration": 1, "Boolean": 2, "String"
 LOG_CATEGORIES = ("logStatusWarning", "logStatusDiscard", "logStatusError", "logStatusFatal", "logAll")
 
 
-@dataclass(frozen=True)
-class Part:
-    """One component: its name in the system, its FMU file and its (FMPy) model description."""
-
-    name: str
-    fmu: Path
-    description: object
+MAX_COMPONENT_BYTES = 1 << 30  # uncompressed bytes of one component FMU copied into the container
 
 
-@dataclass(frozen=True)
-class Exposed:
-    """One container variable: ``name`` (``component.variable``), FMI 2.0 type, causality, variability, start
-    (Python value or None) and the component variable it maps to (part index, value reference)."""
-
-    name: str
-    type: str
-    causality: str
-    variability: str
-    start: object
-    part: int
-    vr: int
-    description: str = ""
-
-
-@dataclass(frozen=True)
-class Link:
-    """A connection: type and (part index, value reference) at both ends."""
-
-    type: str
-    src: int
-    src_vr: int
-    dst: int
-    dst_vr: int
+def _copy_members(part, out: zipfile.ZipFile, prefix: str) -> None:
+    """Every file of the component FMU ``part.fmu`` into ``out`` under ``prefix``, member by member (nothing
+    written to disk); ValueError naming the component for a member that would leave its folder (absolute,
+    ``..``, a drive or a backslash) or an archive over MAX_COMPONENT_BYTES."""
+    try:
+        archive = zipfile.ZipFile(part.fmu)
+    except (zipfile.BadZipFile, OSError) as error:
+        raise ValueError(f"component {part.name}: {part.fmu} is not a readable FMU ({error})") from None
+    with archive:
+        members = [m for m in archive.infolist() if not m.is_dir()]
+        if sum(m.file_size for m in members) > MAX_COMPONENT_BYTES:
+            raise ValueError(f"component {part.name}: {part.fmu} unpacks to more than {MAX_COMPONENT_BYTES} bytes")
+        for member in sorted(members, key=lambda m: m.filename):
+            name = member.filename
+            parts = name.split("/")
+            if name.startswith("/") or "\\" in name or ":" in parts[0] or ".." in parts or "" in parts:
+                raise ValueError(f"component {part.name}: member {name!r} of {part.fmu} leaves its folder")
+            info = zipfile.ZipInfo(prefix + name)
+            info.external_attr = (0o755 if name.startswith("binaries/") else 0o644) << 16
+            info.compress_type = zipfile.ZIP_DEFLATED
+            out.writestr(info, archive.read(member))
 
 
 def _check_plain(text: str, what: str, name: str) -> None:
@@ -83,7 +73,7 @@ def _check_plain(text: str, what: str, name: str) -> None:
                          "([A-Za-z0-9_.-], not starting with '.')")
 
 
-def plan_text(parts: list[Part], folders: list[str], exposed: list[Exposed], links: list[Link]) -> str:
+def plan_text(parts: list, folders: list[str], exposed: list, links: list) -> str:
     """The plan (resources/container_plan.txt), format in fmus/c/system_container/model.c."""
     lines = ["sarins-container-plan 1"]
     for part, folder in zip(parts, folders):
@@ -103,7 +93,7 @@ def plan_text(parts: list[Part], folders: list[str], exposed: list[Exposed], lin
     return "\n".join(lines) + "\n"
 
 
-def _row_start(e: Exposed) -> tuple[str, str, str]:
+def _row_start(e: object) -> tuple[str, str, str]:
     """(Real, Integer/Boolean, String) start constants of a table row."""
     real, integer, string = "0.0", "0", "NULL"
     if e.start is not None:
@@ -116,7 +106,7 @@ def _row_start(e: Exposed) -> tuple[str, str, str]:
     return real, integer, string
 
 
-def variables_header(exposed: list[Exposed], guid: str) -> str:
+def variables_header(exposed: list, guid: str) -> str:
     """``variables.h`` of the container (the table the glue checks every call against)."""
     counts = [0, 0, 0, 0]
     rows = []
@@ -141,7 +131,7 @@ def variables_header(exposed: list[Exposed], guid: str) -> str:
         f"    SARINS_CATEGORIES, {len(LOG_CATEGORIES)}, 0, 1}};", "", "#endif", ""])
 
 
-def _literal(e: Exposed) -> str:
+def _literal(e: object) -> str:
     if e.type == "Boolean":
         return "true" if e.start else "false"
     if e.type == "Real":
@@ -149,7 +139,7 @@ def _literal(e: Exposed) -> str:
     return str(e.start)
 
 
-def model_description(name: str, guid: str, exposed: list[Exposed], step: float, start_time: float,
+def model_description(name: str, guid: str, exposed: list, step: float, start_time: float,
                       stop_time: float | None, source_files: list[str]) -> bytes:
     """The container's FMI 2.0 co-simulation model description."""
     root = ET.Element("fmiModelDescription", {
@@ -271,12 +261,10 @@ def _documentation(name: str, win64: bool, aarch64: bool) -> str:
             "fmi2ExitInitializationMode.</p></body></html>")
 
 
-def write_container_fmu(out_path: Path, *, name: str, parts: list[Part], exposed: list[Exposed], links: list[Link],
+def write_container_fmu(out_path: Path, *, name: str, parts: list, exposed: list, links: list,
                         step: float, start_time: float, stop_time: float | None, win64: bool | None = None,
                         aarch64: bool | None = None) -> Path:
     """Write the container FMU (see the module docstring); returns ``out_path``."""
-    from orchestration.archive import extract_archive
-
     nf.compiler()
     win64 = nf.win64_compiler() is not None if win64 is None else win64
     aarch64 = nf.aarch64_compiler() is not None if aarch64 is None else aarch64
@@ -321,17 +309,7 @@ def write_container_fmu(out_path: Path, *, name: str, parts: list[Part], exposed
                 z.write(path, f"sources/{path.name}")
             z.writestr(f"resources/{PLAN}", plan)
             for part, folder in zip(parts, folders):
-                unzipped = extract_archive(part.fmu, kind="fmu", component=part.name)
-                try:
-                    for path in sorted(unzipped.rglob("*")):
-                        if path.is_file():
-                            arc = f"resources/{folder}/{path.relative_to(unzipped).as_posix()}"
-                            info = zipfile.ZipInfo(arc)
-                            info.external_attr = (0o755 if "/binaries/" in arc else 0o644) << 16
-                            info.compress_type = zipfile.ZIP_DEFLATED
-                            z.writestr(info, path.read_bytes())
-                finally:
-                    shutil.rmtree(unzipped, ignore_errors=True)
+                _copy_members(part, z, f"resources/{folder}/")
             z.writestr("documentation/index.html", _documentation(name, win64, aarch64))
         partial.replace(out_path)
     return out_path

@@ -33,7 +33,9 @@ from __future__ import annotations
 import shutil
 import tempfile
 import uuid
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 from .coupling import check_connections, value_type
 from .errors import ImporterUnavailableError, SystemDescriptionError
@@ -47,12 +49,47 @@ __all__ = ["build_container_fmu", "CONTAINER_FMI_VERSION"]
 CONTAINER_FMI_VERSION = "2.0"
 
 
-ENGINES = ("fmpy", "sarins")
+@dataclass(frozen=True)
+class Part:
+    """One component of a container built by a writer (``engine`` a callable): its name in the system, its
+    FMU file and its (FMPy) model description."""
+
+    name: str
+    fmu: Path
+    description: object
+
+
+@dataclass(frozen=True)
+class Exposed:
+    """One container variable: ``name`` (``component.variable``), FMI 2.0 type, causality, variability, start
+    (Python value or None) and the component variable it maps to (part index, value reference)."""
+
+    name: str
+    type: str
+    causality: str
+    variability: str
+    start: object
+    part: int
+    vr: int
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class Link:
+    """A connection: type and (part index, value reference) at both ends."""
+
+    type: str
+    src: int
+    src_vr: int
+    dst: int
+    dst_vr: int
+
+
 
 
 def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
                         step_size: float | None = None, parallel: bool = False,
-                        engine: str = "fmpy") -> Path:
+                        engine: str | Callable = "fmpy") -> Path:
     """Write ``system`` as one FMI 2.0 co-simulation container FMU.
 
     Parameters
@@ -66,12 +103,13 @@ def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
         system's).
     parallel : bool
         Let the container step the components in parallel threads (``engine="fmpy"`` only).
-    engine : str
-        ``"fmpy"``: FMPy's container binary (linux64, win64, darwin64).  ``"sarins"``: our own
-        (``fmus/system_container.py``: C on the components' glue, binaries linux64, win64 and
-        aarch64-linux, ``sources/``), same variables and the same coupling, bit for bit; the
-        container's variables have value references 0, 1, ... (no ``time``), FMU state is not
-        supported.
+    engine : str or callable
+        ``"fmpy"``: FMPy's container binary (linux64, win64, darwin64).  A callable: a container
+        writer of your own, called as ``engine(out_path, name=, parts=, exposed=, links=, step=,
+        start_time=, stop_time=)`` with the checked :class:`Part`, :class:`Exposed` and
+        :class:`Link` lists (same variables as FMPy's, value references 0, 1, ...), returning the
+        written FMU; its ``ValueError`` becomes a SystemDescriptionError.  (The project's own:
+        ``fmus.system_container.write_container_fmu``.)
 
     Returns
     -------
@@ -87,12 +125,12 @@ def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
     """
     from fmpy import read_model_description
 
-    if engine not in ENGINES:
-        raise ValueError(f"engine {engine!r}: one of {', '.join(ENGINES)}")
-    if engine == "sarins":
+    if callable(engine):
         if parallel:
             raise ValueError("parallel: only FMPy's container steps components in threads")
-        return _build_sarins(system, out_path, step_size)
+        return _build_with_writer(system, out_path, step_size, engine)
+    if engine != "fmpy":
+        raise ValueError(f"engine {engine!r}: 'fmpy' or a container writer (a callable)")
     from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, Unknown
 
     try:
@@ -243,14 +281,10 @@ class _Described:
         self.modelDescription = description
 
 
-def _build_sarins(system, out_path, step_size) -> Path:
-    """``engine="sarins"``: the same checks and variables, written by fmus.system_container."""
+def _build_with_writer(system, out_path, step_size, write_container_fmu: Callable) -> Path:
+    """``engine`` a writer: the same checks and variables as FMPy's container, written by the writer."""
     from fmpy import read_model_description
 
-    try:
-        from fmus.system_container import Exposed, Link, Part, write_container_fmu
-    except ImportError as error:
-        raise ImporterUnavailableError(f"the sarins container needs the fmus package ({error})") from None
     system = system if isinstance(system, System) else read_system(system)
     step = system.step_size if step_size is None else step_size
     parts, variables, files = [], [], []

@@ -49,13 +49,14 @@ def _system(folder: Path):
 def container(fmu_dir, tmp_path_factory):
     """(the .fmu, its unzipped folder, model description, the system) of the identified system packed by our
     container."""
+    from fmus.system_container import write_container_fmu
     from orchestration.container import build_container_fmu
 
     tmp = tmp_path_factory.mktemp("system_container")
     for name in COMPONENTS:
         shutil.copy2(fmu_dir / f"{name}.fmu", tmp / f"{name}.fmu")
     system = _system(tmp)
-    fmu = build_container_fmu(system, tmp / "Identified.fmu", step_size=1.0, engine="sarins")
+    fmu = build_container_fmu(system, tmp / "Identified.fmu", step_size=1.0, engine=write_container_fmu)
     folder = tmp / "unzipped"
     with zipfile.ZipFile(fmu) as z:
         z.extractall(folder)

@@ -202,10 +202,11 @@ SYSTEM_FMUS = {"StandardStaticSystem": "standard_static", "IdentifiedStaticSyste
 
 def build_system_fmu(fmu_dir: Path | str, name: str = "StandardStaticSystem") -> Path:
     """A shipped static system (FMUs in ``fmu_dir``) packed as one FMU (our system container, FMI 2.0:
-    :func:`orchestration.container.build_container_fmu` with ``engine="sarins"``)
+    :func:`orchestration.container.build_container_fmu` with ``engine=write_container_fmu``)
     ``<fmu_dir>/<name>.fmu``: ``StandardStaticSystem`` (turntable -> IMU -> INS) or
     ``IdentifiedStaticSystem`` (seed 000's loop, the RBF identifier feeding the INS)."""
     from fmus.build import fix_fmu_description
+    from fmus.system_container import write_container_fmu
     from orchestration.container import build_container_fmu
 
     if name not in SYSTEM_FMUS:
@@ -214,7 +215,7 @@ def build_system_fmu(fmu_dir: Path | str, name: str = "StandardStaticSystem") ->
     from sarins_fmu.files import refuse_links
 
     refuse_links([Path(fmu_dir) / f"{name}.fmu"], "system FMU")
-    path = build_container_fmu(system, Path(fmu_dir) / f"{name}.fmu", step_size=1.0, engine="sarins")
+    path = build_container_fmu(system, Path(fmu_dir) / f"{name}.fmu", step_size=1.0, engine=write_container_fmu)
     fix_fmu_description(path, [(c.name, c.source) for c in system.components])
     return path
 

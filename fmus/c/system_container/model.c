@@ -27,6 +27,8 @@
  * component; nothing outside the resources folder is opened (folders and identifiers are plain names).
  * FMU state is not supported (the components' states are not the container's to copy).
  */
+#include "smath.h" /* first in every C file: the floating-point contract (the container copies values only) */
+
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
