@@ -254,7 +254,7 @@ def run_fmusim(fmusim: str | None, fmu: Path, case: Case, work: Path) -> dict:
     cmd = ["env", "-i", fmusim, "--interface-type", "cs", "--stop-time", repr(case.steps * case.step),
            "--output-interval", repr(case.step), "--output-file", str(out)]
     for name, value in case.settings.items():
-        cmd += ["--start-value", name, host_value(value, "linux64")]
+        cmd += ["--start-value", name, str(host_value(value, "linux64"))]
     for name in case.outputs:
         cmd += ["--output-variable", name]
     try:
