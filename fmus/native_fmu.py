@@ -480,6 +480,18 @@ def _documentation(name: str, description: str, identifier: str, win64: bool, fm
             f"{contract}</p></body></html>")
 
 
+def write_binaries_and_sources(z: zipfile.ZipFile, binaries: dict[str, Path], sources: Path) -> None:
+    """Into the FMU archive ``z``: each binary (archive name -> built file, executable) and every file of
+    ``sources`` under ``sources/``."""
+    for arc, path in binaries.items():
+        info = zipfile.ZipInfo(arc)
+        info.external_attr = 0o755 << 16
+        info.compress_type = zipfile.ZIP_DEFLATED
+        z.writestr(info, path.read_bytes())
+    for path in sorted(sources.iterdir()):
+        z.write(path, f"sources/{path.name}")
+
+
 def build_native_fmu(name: str, slave_file: str | None, out_dir: Path, fmi: int = 2, win64: bool | None = None,
                      model: NativeModel | None = None, slave=None, resources: dict[str, bytes] | None = None,
                      aarch64: bool | None = None) -> Path:
@@ -529,13 +541,7 @@ def build_native_fmu(name: str, slave_file: str | None, out_dir: Path, fmi: int 
         target = out_dir / f"{identifier}.fmu"
         with zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("modelDescription.xml", md)
-            for arc, path in binaries.items():
-                info = zipfile.ZipInfo(arc)
-                info.external_attr = 0o755 << 16
-                info.compress_type = zipfile.ZIP_DEFLATED
-                z.writestr(info, path.read_bytes())
-            for path in sorted(sources.iterdir()):
-                z.write(path, f"sources/{path.name}")
+            write_binaries_and_sources(z, binaries, sources)
             for arc, data in sorted(files.items()):
                 z.writestr(f"resources/{arc}", data)
             root = ET.fromstring(md)

@@ -300,13 +300,7 @@ def write_container_fmu(out_path: Path, *, name: str, parts: list, exposed: list
         partial = out_path.with_name(out_path.name + ".partial")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("modelDescription.xml", md)
-            for arc, path in binaries.items():
-                info = zipfile.ZipInfo(arc)
-                info.external_attr = 0o755 << 16
-                info.compress_type = zipfile.ZIP_DEFLATED
-                z.writestr(info, path.read_bytes())
-            for path in sorted(sources.iterdir()):
-                z.write(path, f"sources/{path.name}")
+            nf.write_binaries_and_sources(z, binaries, sources)
             z.writestr(f"resources/{PLAN}", plan)
             for part, folder in zip(parts, folders):
                 _copy_members(part, z, f"resources/{folder}/")

@@ -123,8 +123,6 @@ def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
     ImporterUnavailableError
         If the installed fmpy has no (JSON-configured) ``container_fmu``.
     """
-    from fmpy import read_model_description
-
     if callable(engine):
         if parallel:
             raise ValueError("parallel: only FMPy's container steps components in threads")
@@ -148,13 +146,7 @@ def build_container_fmu(system: System | str | Path, out_path: str | Path, *,
         components, variables, files = [], [], []
         for component in system.components:
             path = _unique_copy(system.fmu_path(component), Path(scratch) / "fmus")
-            description = read_model_description(str(path), validate=False)
-            if description.fmiVersion != CONTAINER_FMI_VERSION:
-                raise SystemDescriptionError(
-                    f"the container FMU is FMI {CONTAINER_FMI_VERSION} and hosts FMI "
-                    f"{CONTAINER_FMI_VERSION} components only; this one is FMI "
-                    f"{description.fmiVersion} (run the system with the master instead)",
-                    file=str(system.fmu_path(component)), component=component.name)
+            description = _hosted_description(path, system.fmu_path(component), component.name)
             components.append(cfg.Component(name=component.name, filename=path,
                                             modelDescription=description))
             variables.append({v.name: v for v in description.modelVariables})
@@ -274,6 +266,21 @@ def _literal(value) -> str:
     return repr(value) if isinstance(value, float) else str(value)
 
 
+def _hosted_description(path, file, component: str):
+    """The model description of the FMU at ``path`` (``file``: the name errors give), which must be
+    FMI 2.0 like the container."""
+    from fmpy import read_model_description
+
+    description = read_model_description(str(path), validate=False)
+    if description.fmiVersion != CONTAINER_FMI_VERSION:
+        raise SystemDescriptionError(
+            f"the container FMU is FMI {CONTAINER_FMI_VERSION} and hosts FMI "
+            f"{CONTAINER_FMI_VERSION} components only; this one is FMI "
+            f"{description.fmiVersion} (run the system with the master instead)",
+            file=str(file), component=component)
+    return description
+
+
 class _Described:
     """A component as _exposed_variables sees it (its model description)."""
 
@@ -283,7 +290,6 @@ class _Described:
 
 def _build_with_writer(system, out_path, step_size, write_container_fmu: Callable) -> Path:
     """``engine`` a writer: the same checks and variables as FMPy's container, written by the writer."""
-    from fmpy import read_model_description
 
     system = system if isinstance(system, System) else read_system(system)
     step = system.step_size if step_size is None else step_size
@@ -292,13 +298,7 @@ def _build_with_writer(system, out_path, step_size, write_container_fmu: Callabl
         path = system.fmu_path(component)
         if not Path(path).is_file():
             raise SystemDescriptionError("FMU file not found", file=str(path))
-        description = read_model_description(str(path), validate=False)
-        if description.fmiVersion != CONTAINER_FMI_VERSION:
-            raise SystemDescriptionError(
-                f"the container FMU is FMI {CONTAINER_FMI_VERSION} and hosts FMI "
-                f"{CONTAINER_FMI_VERSION} components only; this one is FMI "
-                f"{description.fmiVersion} (run the system with the master instead)",
-                file=str(path), component=component.name)
+        description = _hosted_description(path, path, component.name)
         if description.coSimulation is None:
             raise SystemDescriptionError("the container hosts co-simulation FMUs only", file=str(path),
                                          component=component.name)
