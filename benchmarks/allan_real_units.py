@@ -7,7 +7,8 @@ accelerometer: the read-outs N, B, K, Q with their 95 % intervals (``sarins_fmu.
 IEEE graphical readings with allantools (its overlapping deviation at 1 s, and at B's averaging
 time over 0.664), and the datasheet figures; then the Allan deviation of the preset fitted to the
 record (``sarins allan --write-preset``) against the real one per octave from 0.1 s to a tenth of
-the record: its closed form, and a simulated record ``--sim-factor`` times as long.
+the record: its closed form, and a simulated record ``--sim-factor`` times as long; and the periodic
+terms the fit kept, with each channel's worst deviation without one.
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ def main() -> None:
     p.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data" / "adis16405")
     p.add_argument("--sim-factor", type=float, default=10.0)
     args = p.parse_args()
-    ratio_rows = []
+    ratio_rows, periodic_rows = [], []
     print("| unit | channel | N | B | K | Q | allantools sigma(1 s) | allantools sigma(tau_B)/0.664 | datasheet |")
     print("|---|---|---|---|---|---|---|---|---|")
     for unit in ("unit1", "unit2"):
@@ -70,6 +71,9 @@ def main() -> None:
                   f"{DATASHEET[triad]} |", flush=True)
         record = len(log.time) * h
         fit = allan_preset.fit_preset(curves, record, log.means, log.lat, log.height)
+        for j, ch in enumerate(CHANNELS):
+            without = allan_preset.fit_channel(curves[ch], record, fit.band, periodic=False).worst
+            periodic_rows.append((unit, ch, fit.channels[j], without, fit.band))
         sim = allan_preset.simulate_rates(fit.model, args.sim_factor * record, 1.0 / h, seed=2)
         for j, ch in enumerate(CHANNELS):
             c = curves[ch]
@@ -93,6 +97,17 @@ def main() -> None:
     print()
     print(f"flicker band and fits: see sarins allan --write-preset; record {record:g} s, "
           f"octaves {taus[0]:g} .. {taus[-1]:g} s ({math.log2(taus[-1] / taus[0]):.0f} octaves)")
+    print()
+    print("Periodic terms kept by the fit (amplitude: gyros deg/h, accelerometers mm/s^2) and the worst "
+          "deviation of the closed form with and without one")
+    print()
+    print("| unit | channel | flicker band s | amplitude | frequency Hz | worst | worst without |")
+    print("|---|---|---|---|---|---|---|")
+    for unit, ch, c, without, band in periodic_rows:
+        scale = 180.0 / math.pi * 3600.0 if ch.startswith("gyro") else 1e3
+        term = (f"{c.periodic_amplitude * scale:.3g} | {c.periodic_frequency:.3g}" if c.periodic_amplitude > 0
+                else "- | -")
+        print(f"| {unit} | {ch} | {band[0]:g} .. {band[1]:g} | {term} | {c.worst * 100:.1f} % | {without * 100:.1f} % |")
 
 
 if __name__ == "__main__":

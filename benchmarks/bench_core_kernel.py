@@ -6,7 +6,9 @@ error terms, low-rate nonlinearity on) beside the same arithmetic written as
 one flat scalar C loop (one gimbal, no function-pointer or array-shape
 generality), compiled here at run time with the core's flags and timed in C.
 The core is timed one interval at a time (its scalar path, the reference of
-the lanes), in SIMD lanes on one thread, and in lanes on all threads.  Then
+the lanes and the FMU step's loop; also without the low-rate and quadratic
+terms, as nav-rlg, and with the gimbal still at pi, an alignment dwell), in
+SIMD lanes on one thread, and in lanes on all threads.  Then
 the whole ``IMU.step`` of the ``mems`` and ``nav-rlg`` presets on the same
 motion (thermal model, every error term, all their random numbers drawn in
 the C core), and a whole in-process static run (``run_static``: turntable,
@@ -158,21 +160,25 @@ def yardstick_ns(n_int: int, repeat: int) -> float:
     return float(out[0])
 
 
-def core_args(n_int: int):
-    """The arguments of core_imu.increments for the yardstick's workload."""
+def core_args(n_int: int, case: str = "mems"):
+    """The arguments of core_imu.increments for the yardstick's workload (``case`` "mems"); "nav-rlg": the
+    same without the low-rate and quadratic terms (as the nav-rlg preset); "still": that, the gimbal held at
+    pi (rate and acceleration zero: an alignment dwell)."""
     k = np.arange(n_int)
-    angle0 = (0.001 * k)[:, None]
+    angle0 = np.full((n_int, 1), math.pi) if case == "still" else (0.001 * k)[:, None]
+    rate = 0.0 if case == "still" else RATE
+    lowrate, quad_g, quad_a = (LOWRATE, QUAD_G, QUAD_A) if case == "mems" else (0.0, 0.0, 0.0)
     mis = MIS * np.array([[0.0, 1.0, -1.0], [-1.0, 0.0, 1.0], [1.0, -1.0, 0.0]])
-    return ([[0.0, 0.0, 1.0]], angle0, np.full((n_int, 1), RATE), np.zeros((n_int, 1)), np.tile(W_T, (n_int, 1)),
+    return ([[0.0, 0.0, 1.0]], angle0, np.full((n_int, 1), rate), np.zeros((n_int, 1)), np.tile(W_T, (n_int, 1)),
             np.tile(F_T, (n_int, 1)), 1.0, N_SUB, np.full((n_int, 3), G_SF), mis, np.full((n_int, 3), G_BIAS),
-            np.full(3, QUAD_G), np.full(3, LOWRATE), np.full(3, WIDTH), np.full((3, 3), G_SENS),
-            np.full((n_int, 3), A_SF), mis, np.full((n_int, 3), A_BIAS), np.full(3, QUAD_A))
+            np.full(3, quad_g), np.full(3, lowrate), np.full(3, WIDTH), np.full((3, 3), G_SENS),
+            np.full((n_int, 3), A_SF), mis, np.full((n_int, 3), A_BIAS), np.full(3, quad_a))
 
 
-def core_ns(n_int: int, repeat: int, threads: int, lanes: bool = True) -> float:
+def core_ns(n_int: int, repeat: int, threads: int, lanes: bool = True, case: str = "mems") -> float:
     """ns per sample of the core's minor loop through its binding (best of ``repeat``); ``lanes=False``: the
-    scalar path, one interval at a time."""
-    args = core_args(n_int)
+    scalar path, one interval at a time (the FMU step's); ``case`` as :func:`core_args`."""
+    args = core_args(n_int, case)
     core_imu.increments(*core_args(64), threads=threads)  # thread pool start-up outside the timing
     best = math.inf
     for _ in range(repeat):
@@ -235,6 +241,8 @@ def measure(n_int: int, repeat: int, rounds: int) -> tuple[float, dict]:
     threads = core_imu.thread_count()
     figures = {
         "core minor loop, scalar, 1 thread": lambda: core_ns(n_int, repeat, 1, lanes=False),
+        "  the same, nav-rlg terms": lambda: core_ns(n_int, repeat, 1, lanes=False, case="nav-rlg"),
+        "  the same, gimbal still at pi": lambda: core_ns(n_int, repeat, 1, lanes=False, case="still"),
         "core minor loop, SIMD, 1 thread": lambda: core_ns(n_int, repeat, 1),
         f"core minor loop, SIMD, {threads} threads": lambda: core_ns(n_int, repeat, threads),
         "IMU.step mems, 1 thread": lambda: imu_step_ns(n_int, repeat, 1),

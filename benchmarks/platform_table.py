@@ -2,7 +2,7 @@
 
 For each FMU (FMI 2.0, the FMI 3.0 variants, the system FMUs of ``build-fmus --system``) a fixed short
 case (the workloads of tests/test_portable_fmus.py where the FMU has one, else its default parameters and
-inputs for 50 steps of 1 s, of 0.01 s for GNSSReceiver and AidedINS; IMULog plays a synthetic 1 Hz log of
+inputs for 50 steps of 1 s, of 0.01 s for GNSSReceiver, AidedINS and TrajectoryIMU; IMULog plays a synthetic 1 Hz log of
 120 samples; every scalar Real/Float64 output) runs
 
 - linux64: the shipped x86-64 Linux binary through the project's C host (tests/native_host/) under env -i,
@@ -51,7 +51,7 @@ from test_portable_fmus import (ARM_SYSROOT, HOST3_SRC, IMU_CASE, QEMU, STEPS, V
 # the workloads' parameters (tests/test_portable_fmus.py); any other FMU runs its defaults
 SETTINGS = {"Turntable": CASES["dual-axis chamber"], "IMUThermal": IMU_CASE, "VehicleMotion": VEHICLE_CASE}
 DEFAULT_STEPS = 50
-STEP_SIZES = {"AidedINS": 0.01, "GNSSReceiver": 0.01}  # s: FMUs whose contract needs a shorter step than 1 s
+STEP_SIZES = {"AidedINS": 0.01, "GNSSReceiver": 0.01, "TrajectoryIMU": 0.01}  # s: FMUs whose contract needs a shorter step than 1 s
 LOG_ROWS = 120  # samples of the synthetic 1 Hz log the IMULog row plays
 LINES = [(cc, opt, arch) for cc in ("gcc", "clang") for opt in ("-O0", "-O3") for arch in ("", "-march=native")]
 PLATFORMS = {"2.0": {"linux64": ("linux64", ".so"), "win64": ("win64", ".dll"), "aarch64": (ARM_PLATFORM, ".so")},

@@ -19,4 +19,5 @@ SLAVES = {
     "IMULog": "imu_log_slave.py",
     "GNSSReceiver": "gnss_receiver_slave.py",
     "AidedINS": "aided_ins_slave.py",
+    "TrajectoryIMU": "trajectory_imu_slave.py",
 }

@@ -1,15 +1,16 @@
-"""AidedINS FMU: a strapdown INS with a 15-state error-state Kalman filter aided by GNSS fixes (the C
-core's nav3.h + eskf.h).
+"""AidedINS FMU: a strapdown INS with a 15-state error-state Kalman filter aided by GNSS fixes and
+zero-angular-rate updates at stops (the C core's nav3.h + eskf.h).
 
 The declaration of the native AidedINS FMU: its variables, descriptions, start values and the timing
 contract.  ``fmus/native_fmu.py`` writes the model description and the C variable table from it;
-``fmus/c/aided_ins/model.c`` computes it (``sarins_eskf_predict`` and ``sarins_eskf_gnss``, the kernels
+``fmus/c/aided_ins/model.c`` computes it (``sarins_eskf_predict``, ``sarins_eskf_zaru`` and ``sarins_eskf_gnss``, the kernels
 :func:`sarins_fmu.aided.navigate` runs in process).
 """
 
 from pythonfmu import Fmi2Slave
 
-from fmus.slave_support import INPUT, OUTPUT, PARAMETER, declare, default_experiment
+from fmus.slave_support import INPUT, NO_TAG, OUTPUT, PARAMETER, declare, default_experiment
+from sarins_fmu import aided
 from sarins_fmu.aided import FilterSettings
 from sarins_fmu.gnss import GNSSConfig
 
@@ -23,7 +24,9 @@ SETTINGS = (("arw", "rad/s0.5", "angle random walk"), ("vrw", "m/s/s0.5", "veloc
             ("lever_z", "m", "lever arm, body up"),
             ("latency", "s", "age of a fix when it is applied (the co-simulation delay plus the receiver's)"),
             ("zupt_std", "m/s", "ZUPT std (unused here)"), ("cov_every", "1", "steps per covariance propagation"),
-            ("nhc_std", "m/s", "NHC std (unused here)"), ("odo_std", "m/s", "odometer std (unused here)"))
+            ("nhc_std", "m/s", "NHC std (unused here)"), ("odo_std", "m/s", "odometer std (unused here)"),
+            ("zaru_std", "rad/s", "zero-angular-rate update std per step (the gyro's white rate noise arw / sqrt(step); "
+                                  "navigate's default)"))
 NAV = (("lat", "rad; deg", "latitude"), ("lon", "rad; deg", "longitude"), ("height", "m", "height"),
        ("v_e", "m/s", "east velocity"), ("v_n", "m/s", "north velocity"), ("v_u", "m/s", "up velocity"),
        ("yaw", "rad; deg", "yaw (CCW from north)"), ("pitch", "rad; deg", "pitch"), ("roll", "rad; deg", "roll"))
@@ -35,10 +38,20 @@ class AidedINS(Fmi2Slave):
     description = (
         "A strapdown INS (nav3.h, ENU, body right-front-up) with a closed-loop 15-state error-state Kalman filter "
         "(eskf.h: position, velocity, attitude errors, gyro and accel biases) aided by GNSS position and velocity "
-        "fixes. Contract: doStep(t, h) integrates the increments dtheta_*/dv_* (body rad, m/s) of [t, t + h] "
-        "(h = step, fixed), then, when the input fix_count grew since the last step and fix_valid is 1, applies "
-        "the fix (fix_lat .. fix_v_u) taken back by latency s; the outputs describe t + h: navigation, the "
-        "bias estimates and the filter's standard deviations (sqrt of P's diagonal). State outputs only (no "
+        "fixes and zero-angular-rate updates at stops. Contract: doStep(t, h) integrates the increments "
+        "dtheta_*/dv_* (body rad, m/s) of [t, t + h] "
+        "(h = step, fixed), then, when the input zaru is 1 (the vehicle stood still over the interval), a "
+        "zero-angular-rate update (the step's compensated rate against the Earth rate, std zaru_std), then, when "
+        "the input fix_count grew since the last step and fix_valid is 1, applies the fix (fix_lat .. fix_v_u) "
+        "taken back by latency s; the outputs describe t + h: navigation, the "
+        "bias estimates and the filter's standard deviations (sqrt of P's diagonal). Time-tagged (increment_end_time "
+        "connected, e.g. from TrajectoryIMU, with fix_time and fix_horizon from GNSSReceiver): the increments are "
+        "those of the interval ending at increment_end_time (zaru with them), each taken once and in order (a "
+        "repeated tag waits); "
+        "an interval ending at T is integrated once every fix valid up to T - latency is in (fix_horizon), "
+        "then the fixes navigate applies after it (available time fix_time + latency within the interval) are "
+        "applied in order; nav_time tags the outputs. So Gauss-Seidel and Jacobi give the same rows at the same "
+        "nav_time (Jacobi later). At most 4 intervals and 8 fixes wait. State outputs only (no "
         "direct feedthrough). FMU state: get, set and serialize; no allocation after initialisation.")
     default_experiment = default_experiment(0.01)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
@@ -47,7 +60,8 @@ class AidedINS(Fmi2Slave):
         fs, g = FilterSettings(), GNSSConfig()
         starts = {"pos0_std": fs.pos0_std, "vel0_std": fs.vel0_std, "tilt0_std": fs.tilt0_std,
                   "heading0_std": fs.heading0_std, "zupt_std": fs.zupt_std, "cov_every": float(fs.cov_every),
-                  "nhc_std": fs.nhc_std, "odo_std": 1.0, "gyro_bias0_std": 1e-12, "accel_bias0_std": 1e-12}
+                  "nhc_std": fs.nhc_std, "odo_std": 1.0, "gyro_bias0_std": 1e-12, "accel_bias0_std": 1e-12,
+                  "zaru_std": aided.ZARU_STD_FLOOR}  # arw 0 (the start): navigate's default for an ideal gyro
         declare(self, "real", "step", PARAMETER, "IMU step = communication step [s]", 0.01)
         for name, unit, text in SETTINGS:
             declare(self, "real", name, PARAMETER, f"{text} [{unit}]", starts.get(name, 0.0))
@@ -68,6 +82,13 @@ class AidedINS(Fmi2Slave):
         for name, unit, text in NAV[:6]:
             declare(self, "real", f"fix_{name}", INPUT, f"GNSS fix {text} (antenna) [{unit}]", 0.0)
         declare(self, "integer", "fix_count", INPUT, "fixes given so far: a new fix when it grew [1]", 0)
+        declare(self, "integer", "zaru", INPUT,
+                "1: the vehicle stood still over the increments' interval: apply a zero-angular-rate update [1]", 0)
+        declare(self, "real", "increment_end_time", INPUT,
+                "time tag: end of the increments' interval; -1e9: the increments are of [t, t + h] [s]", NO_TAG)
+        declare(self, "real", "fix_time", INPUT, "validity time of the fix (time-tagged mode) [s]", 0.0)
+        declare(self, "real", "fix_horizon", INPUT,
+                "every fix valid up to this time has been given (time-tagged mode) [s]", NO_TAG)
         for name, unit, text in NAV:
             declare(self, "real", name, OUTPUT, f"computed {text} at t + h [{unit}]", 0.0)
         for q, unit in (("bias_g", "rad/s"), ("bias_a", "m/s2")):
@@ -79,6 +100,7 @@ class AidedINS(Fmi2Slave):
                 declare(self, "real", f"sigma_{q}_{ax}", OUTPUT, f"filter std of the {q} error, {ax} axis [{unit}]",
                         0.0)
         declare(self, "integer", "fixes_used", OUTPUT, "valid fixes applied so far [1]", 0)
+        declare(self, "real", "nav_time", OUTPUT, "time of the navigation outputs [s]", 0.0)
 
     def do_step(self, current_time, step_size):
         raise NotImplementedError("the AidedINS FMU is native: fmus/c/aided_ins/model.c computes it (this class only "

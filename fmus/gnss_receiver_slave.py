@@ -8,7 +8,7 @@ contract.  ``fmus/native_fmu.py`` writes the model description and the C variabl
 
 from pythonfmu import Fmi2Slave
 
-from fmus.slave_support import INPUT, OUTPUT, PARAMETER, declare, default_experiment
+from fmus.slave_support import INPUT, NO_TAG, OUTPUT, PARAMETER, declare, default_experiment
 from sarins_fmu.gnss import GNSSConfig
 
 
@@ -25,7 +25,12 @@ class GNSSReceiver(Fmi2Slave):
         "the inputs set for t_k and publishes it after the step: fix_time = t_k, fix_count + 1, fix_valid 0 "
         "inside an outage window [start, end) ('start:end;start:end' s, at most 16; the error processes keep "
         "running). Between epochs the outputs hold the last fix. Latency is the consumer's (fix_time tags the "
-        "fix). Outputs are state outputs (no direct feedthrough). FMU state: get, set and serialize.")
+        "fix). Time-tagged truth (truth_time connected, e.g. from TrajectoryIMU): the inputs are the truth at "
+        "truth_time, a communication point; each point's truth is taken once, in order (a repeated tag waits: "
+        "Jacobi's one-step delay), an epoch's fix is computed when its truth arrives, and fix_horizon says up to "
+        "which time every fix has been published, so a consumer gets the same fixes under Gauss-Seidel and "
+        "Jacobi. Unconnected (truth_time = -1e9), the inputs are the truth at t. Outputs are state outputs (no "
+        "direct feedthrough). FMU state: get, set and serialize.")
     default_experiment = default_experiment(0.01)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
 
     def __init__(self, **kwargs):
@@ -56,6 +61,7 @@ class GNSSReceiver(Fmi2Slave):
         for ax in "xyz":
             declare(self, "real", f"omega_ib_{ax}", INPUT, f"true body rate wrt inertial space, {ax} axis [rad/s]",
                     0.0)
+        declare(self, "real", "truth_time", INPUT, "time tag of the truth inputs; -1e9: the truth is at t [s]", NO_TAG)
         declare(self, "integer", "fix_valid", OUTPUT, "1: the last fix is valid, 0: outage or no fix yet [1]", 0)
         for name, unit, text in (("fix_lat", "rad; deg", "latitude"), ("fix_lon", "rad; deg", "longitude"),
                                  ("fix_height", "m", "height"), ("fix_v_e", "m/s", "east velocity"),
@@ -64,6 +70,9 @@ class GNSSReceiver(Fmi2Slave):
         declare(self, "real", "fix_time", OUTPUT, "validity time of the last fix (start time before the first) [s]",
                 0.0)
         declare(self, "integer", "fix_count", OUTPUT, "fixes given so far (a new fix: it grew) [1]", 0)
+        declare(self, "real", "fix_horizon", OUTPUT,
+                "time of the truth last taken: every fix valid up to it is published (-1e9 before the first) [s]",
+                NO_TAG)
 
     def do_step(self, current_time, step_size):
         raise NotImplementedError("the GNSSReceiver FMU is native: fmus/c/gnss_receiver/model.c computes it (this "

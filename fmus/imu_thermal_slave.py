@@ -41,7 +41,8 @@ class IMUThermal(Fmi2Slave):
         "never set (no turntable connected), the motion inputs are constants: a fixed table. So the "
         "increments are bit-identical under every scheme. All "
         "outputs are state outputs (no direct feedthrough). Held between steps: thermal state, "
-        "bias-instability state, noise generator, the previous motion set. "
+        "bias-instability state, noise generator, the periodic terms' phases (drawn from the seed), the previous "
+        "motion set. "
         "Moving base (base = input): the vehicle motion is a second time-tagged start-of-step set, tagged "
         "base_motion_time and chosen like the turntable's: the vehicle attitude as Euler angles yaw (CCW from "
         "north), pitch, roll with mat_nv = Rz(yaw) Rx(pitch) Ry(roll) (ENU, body right-front-up), their rates "
@@ -75,9 +76,11 @@ class IMUThermal(Fmi2Slave):
         declare(self, "string", "thermal_start", PARAMETER, "hot or cold start", "hot")
         declare(self, "real", "aging_days", PARAMETER, "age of the drift model since calibration [d]", 0.0)
         defaults = imu_params.flatten(imu.preset("nav-rlg"))
-        for name, unit, _ in imu_params.PARAMETERS:
-            shown = f"{unit}; {UNIT_DISPLAY[unit]}" if unit in UNIT_DISPLAY else unit
-            self._declare_coefficient(name, defaults[name], shown)
+        units = {name: f"{unit}; {UNIT_DISPLAY[unit]}" if unit in UNIT_DISPLAY else unit
+                 for name, unit, _ in imu_params.PARAMETERS}
+        for name in units:
+            if name not in imu_params.PERIODIC_NAMES:  # declared last (below)
+                self._declare_coefficient(name, defaults[name], units[name])
         for j in (1, 2, 3):
             declare(self, "real", f"angle_{j}", INPUT, f"gimbal {j} angle at motion_time [rad; deg]", 0.0)
             declare(self, "real", f"rate_{j}", INPUT, f"gimbal {j} rate at motion_time [rad/s; deg/s]", 0.0)
@@ -117,6 +120,8 @@ class IMUThermal(Fmi2Slave):
                 "steps, a whole number); the scalar increments are the sums over the sub-intervals (no coning or "
                 "sculling across them), the temperatures the last one's. 1: one interval per step. FMI 3.0: a "
                 "structural parameter, the length of the *_sub arrays", 1)
+        for name in imu_params.PERIODIC_NAMES:  # after n_sub, for the same reason
+            self._declare_coefficient(name, defaults[name], units[name])
 
     def _declare_coefficient(self, name, start, unit):
         """A model coefficient: setting it overrides the preset (model.c reads the glue's set flag)."""

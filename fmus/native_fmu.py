@@ -88,6 +88,7 @@ NATIVE = {
     "IMULog": NativeModel("imu_log"),
     "GNSSReceiver": NativeModel("gnss_receiver"),
     "AidedINS": NativeModel("aided_ins"),
+    "TrajectoryIMU": NativeModel("trajectory_imu"),
 }
 
 # setup.py's flags (sarins_fmu core) plus hidden visibility: only the fmi2* functions are exported.  No

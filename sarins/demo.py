@@ -172,8 +172,7 @@ def run_demo(*, lat_deg: float = SITE_LAT_DEG, align_hours: float = 4.0, identif
     system = standard_static_identified(fmu_dir, hours=hours, identifier=ident, **params)
     record = ["ins.lat_error", "ins.position_error", "ins.nav_time", "imu.temp_gyro_z", "identifier.axial_drift"]
     steps = int(round(hours * HOUR))
-    phases.start("loading", "loading the FMUs (the native ones are plain C; the Python-hosted RBFIdentifier "
-                 "starts its interpreter layer)")
+    phases.start("loading", "loading the FMUs (native C: Turntable, IMUThermal, StrapdownINS, RBFIdentifier)")
     bar = phases.progress(steps)
 
     def on_step(t, master):

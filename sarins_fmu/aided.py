@@ -15,7 +15,10 @@ where the vehicle stands still, ``Truth.stationary``) or detected from the IMU's
 (``zupt_detect='imu'``, :mod:`sarins_fmu.zero_velocity`, with the vehicle's vibration while moving).  A stopped
 vehicle still jitters (engine, wind, people): the zero-velocity pseudo-measurement carries white
 errors of ``FilterSettings.zupt_std`` per axis, simulated with the std the filter assumes (an
-exact zero measured with an assumed std would make the filter pessimistic at stops).
+exact zero measured with an assumed std would make the filter pessimistic at stops).  At the same
+stop steps a zero-angular-rate update (ZARU, aiding ``'zaru'``) compares the step's compensated gyro
+rate with the Earth's rate seen in the body; its noise is the gyro's own (white angle noise over one
+step, std ``arw / sqrt(h)``), so nothing is simulated for it.
 """
 
 from __future__ import annotations
@@ -31,8 +34,9 @@ from .core import aided as _core
 from .rotations import euler_to_mat
 from .units import DPH_TO_RPS, DPSH_TO_RPSS, UG_TO_MPS2
 
-AIDING = ("gnss", "zupt", "odometer", "nhc")
+AIDING = ("gnss", "zupt", "odometer", "nhc", "zaru")
 ZUPT_DETECT = ("truth", "imu")  # where ZUPTs come from: the trajectory's stops, or the IMU's statistics
+COVARIANCE = ("full", "diagonal")  # what navigate's result keeps of the filter's P
 
 
 @dataclass(frozen=True)
@@ -56,6 +60,11 @@ class ImuNoise:
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"IMU {name} must be a non-negative number, got {value!r}")
 
+    def array(self) -> np.ndarray:
+        """The settings array of the core's ``aided_imu.h`` (arw, vrw, gyro_bias_std, accel_bias_std,
+        gyro_rw, accel_rw; SI)."""
+        return np.array([self.arw, self.vrw, self.gyro_bias_std, self.accel_bias_std, self.gyro_rw, self.accel_rw])
+
 
 # Hypothetical grades (our choice, round numbers typical of the class; no data sheet):
 IMU_NOISE = {
@@ -69,13 +78,24 @@ IMU_NOISE = {
 }
 
 
-def corrupt(truth, noise: ImuNoise, seed: int):
+IMU_STREAMS = ("numpy", "core")  # where corrupt's draws come from
+
+
+def corrupt(truth, noise: ImuNoise, seed: int, stream: str = "numpy"):
     """Increments with errors, and the true biases per step.
 
     Returns dtheta, dv (K, 3) and bias_g, bias_a (K, 3) (the bias over each step, rad/s, m/s^2):
         dtheta = dtheta_true + b_g h + arw sqrt(h) n,   dv = dv_true + b_a h + vrw sqrt(h) n,
         b(t_k) = b_0 + sum rw sqrt(h) n,   b_0 ~ N(0, bias_std^2).
+    stream : 'numpy' (numpy's generator seeded [seed, 3017]: the draws of every aided run so far) or
+        'core' (the C core's ``aided_imu.h``, stream 32 of ``seed``, the recursion b(t_{k+1}) = b(t_k) +
+        rw sqrt(h) n: the draws the TrajectoryIMU FMU makes one step at a time, bit for bit).
     """
+    if stream == "core":
+        dtheta, dv, bias = _core.aided_imu_run(noise.array(), truth.step, seed, truth.dtheta, truth.dv)
+        return dtheta, dv, bias[:, :3], bias[:, 3:]
+    if stream != "numpy":
+        raise ValueError(f"IMU stream must be one of {', '.join(IMU_STREAMS)}, got {stream!r}")
     rng = np.random.default_rng([seed, 3017])
     k, h = truth.n_steps, truth.step
     b0 = rng.standard_normal((2, 3)) * [[noise.gyro_bias_std], [noise.accel_bias_std]]
@@ -90,7 +110,12 @@ def corrupt(truth, noise: ImuNoise, seed: int):
 
 @dataclass(frozen=True)
 class FilterSettings:
-    """Filter tuning (SI).  By default the filter's IMU noise equals the simulated IMU's."""
+    """Filter tuning (SI).  By default the filter's IMU noise equals the simulated IMU's.
+
+    zaru_std : rad/s, the zero-angular-rate update's std per IMU step; None (default): the gyro's white
+        rate noise over one step, ``arw / sqrt(h)`` of the run's :class:`ImuNoise` and step h
+        (:func:`zaru_std`; tactical at 100 Hz: 2.9e-4 rad/s).
+    """
 
     pos0_std: float = 1.0  # m
     vel0_std: float = 0.1  # m/s
@@ -100,12 +125,17 @@ class FilterSettings:
     nhc_std: float = 0.05  # m/s, lateral and vertical body velocity (non-holonomic constraint)
     cov_every: int = 10  # IMU steps per covariance propagation
     out_every: int = 10  # IMU steps per output row
+    zaru_std: float | None = None  # rad/s per step; None: arw / sqrt(h) (see the class docstring)
 
     def __post_init__(self):
         for name in ("pos0_std", "vel0_std", "tilt0_std", "heading0_std", "zupt_std", "nhc_std"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"filter {name} must be positive, got {value!r}")
+        value = self.zaru_std
+        if value is not None and not (isinstance(value, (int, float)) and not isinstance(value, bool)
+                                      and math.isfinite(value) and value > 0):
+            raise ValueError(f"filter zaru_std must be positive (rad/s) or None, got {self.zaru_std!r}")
         for name in ("cov_every", "out_every"):
             if not (isinstance(getattr(self, name), int) and 1 <= getattr(self, name) <= 1000):
                 raise ValueError(f"filter {name} must be a whole number 1 .. 1000")
@@ -115,8 +145,9 @@ class FilterSettings:
 class AidedResult:
     """An aided run at the output rate: time (n,) s; nav (n, 9) computed lat, lon, h, v, yaw, pitch,
     roll; truth (n, 9) the same of the truth; error (n, 9) position ENU m, velocity ENU m/s, attitude
-    phi ENU rad; cov (n, 15, 15) the filter's P; bias_g, bias_a (n, 3) estimates; bias_g_true,
-    bias_a_true (n, 3)."""
+    phi ENU rad; cov (n, 15, 15) the filter's P, or None when the run kept only its diagonal
+    (``navigate(..., covariance="diagonal")``); bias_g, bias_a (n, 3) estimates; bias_g_true,
+    bias_a_true (n, 3); variance (n, 15) P's diagonal (SI squared, the error state's order)."""
 
     time: np.ndarray
     nav: np.ndarray
@@ -129,10 +160,15 @@ class AidedResult:
     bias_a_true: np.ndarray
     gnss_used: int = 0
     zupt_steps: int = 0
+    zaru_steps: int = 0
     info: dict = field(default_factory=dict)
+    variance: np.ndarray | None = None
 
     def nees(self, block: str) -> np.ndarray:
         """(n,) normalised estimation error squared of 'position', 'velocity' or 'attitude' (3 dof)."""
+        if self.cov is None:
+            raise ValueError("NEES needs the filter's full covariance: this run kept its diagonal only "
+                             "(navigate(..., covariance='diagonal'))")
         i = {"position": 0, "velocity": 3, "attitude": 6}[block]
         e = self.error[:, i:i + 3]
         p = self.cov[:, i:i + 3, i:i + 3]
@@ -144,6 +180,8 @@ class AidedResult:
 
     def horizontal_sigma(self) -> np.ndarray:
         """(n,) filter's predicted horizontal sigma sqrt(P_EE + P_NN), m."""
+        if self.variance is not None:
+            return np.sqrt(self.variance[:, 0] + self.variance[:, 1])
         return np.sqrt(self.cov[:, 0, 0] + self.cov[:, 1, 1])
 
 
@@ -182,6 +220,18 @@ class OdometerConfig:
         return max(math.sqrt(self.noise_std**2 + self.resolution**2 / 12.0), 1e-6)
 
 
+ZARU_STD_FLOOR = 1e-12  # rad/s: the std of an ideal gyro's (arw = 0) rate, kept positive as the core requires
+
+
+def zaru_std(noise: ImuNoise, settings: FilterSettings, step: float) -> float:
+    """The ZARU std the filter uses, rad/s: ``settings.zaru_std``, or by default the white rate noise of
+    one step of the gyro, ``arw / sqrt(step)`` (an angle random walk arw rad/sqrt(s) integrated over h
+    gives an angle std arw sqrt(h), a mean rate std arw / sqrt(h)); at least ZARU_STD_FLOOR."""
+    if settings.zaru_std is not None:
+        return float(settings.zaru_std)
+    return max(noise.arw / math.sqrt(step), ZARU_STD_FLOOR)
+
+
 def _config(noise: ImuNoise, settings: FilterSettings, gnss_cfg, step: float, odometer=None) -> np.ndarray:
     lever = gnss_cfg.lever_arm if gnss_cfg is not None else (0.0, 0.0, 0.0)
     latency = gnss_cfg.latency if gnss_cfg is not None else 0.0
@@ -189,7 +239,7 @@ def _config(noise: ImuNoise, settings: FilterSettings, gnss_cfg, step: float, od
     return np.array([step, noise.arw, noise.vrw, noise.gyro_rw, noise.accel_rw, settings.pos0_std, settings.vel0_std,
                      settings.tilt0_std, settings.heading0_std, max(noise.gyro_bias_std, 1e-12),
                      max(noise.accel_bias_std, 1e-12), *lever, latency, settings.zupt_std, settings.cov_every,
-                     settings.nhc_std, odo_std])
+                     settings.nhc_std, odo_std, zaru_std(noise, settings, step)])
 
 
 def _initial_state(truth, settings: FilterSettings, rng) -> np.ndarray:
@@ -224,17 +274,20 @@ def body_speed(truth) -> np.ndarray:
 
 
 def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed: int, stops=None) -> np.ndarray:
-    """(K, 9) rows of ``sarins_eskf_run``: ZUPT at stops (``stops`` (K,) bool: the steps declared
-    stationary; default the truth's), odometer speeds at its rate, NHC while moving.
+    """(K, 10) rows of ``sarins_eskf_run``: ZUPT and / or ZARU at stops (``stops`` (K,) bool: the steps
+    declared stationary; default the truth's), odometer speeds at its rate, NHC while moving.
     The trajectories have no side-slip or bounce, so the zero-velocity and non-holonomic pseudo-
     measurements carry simulated white jitter of the std the filter assumes (``zupt_std``, ``nhc_std``):
     a real vehicle's stop and wheels violate them by about that much."""
     k = truth.n_steps
-    aid = np.zeros((k, 9))
-    still = truth.stationary()
+    aid = np.zeros((k, _core.ESKF_AID))
+    needs_still = (("zupt" in aiding or "zaru" in aiding) and stops is None) or "nhc" in aiding
+    still = truth.stationary() if needs_still else None
     if "zupt" in aiding:  # a stop's jitter: white, the std the filter assumes
         aid[:, 0] = still if stops is None else stops
         aid[:, 1:4] = aid[:, :1] * settings.zupt_std * rng.standard_normal((k, 3))
+    if "zaru" in aiding:  # the measurement is the gyro's own rate: nothing drawn
+        aid[:, 9] = still if stops is None else stops
     if "odometer" in aiding:
         every = max(1, round(1.0 / (odometer.rate_hz * truth.step)))
         idx = np.arange(every - 1, k, every)  # after the step ending at (idx + 1) h
@@ -250,13 +303,13 @@ def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed
 def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aiding=("gnss", "zupt"), outages=(),
              settings: FilterSettings = FilterSettings(), seed: int = 0, gnss_velocity: bool = True,
              odometer: OdometerConfig | None = None, imu=None, fixes=None, zupt_detect: str = "truth",
-             vibration=None, detector=None) -> AidedResult:
+             vibration=None, detector=None, imu_stream: str = "numpy", covariance: str = "full") -> AidedResult:
     """Aided navigation along ``truth`` (:class:`sarins_fmu.trajectory.Truth`).
 
     gnss : GNSSConfig or None (preset ``sps`` when 'gnss' is aided and None is given).
-    aiding : subset of ('gnss', 'zupt', 'odometer', 'nhc').  outages : (m, 2) GNSS outage windows [start, end) s.
+    aiding : subset of ('gnss', 'zupt', 'odometer', 'nhc', 'zaru').  outages : (m, 2) GNSS outage windows [start, end) s.
     odometer : OdometerConfig (default ``OdometerConfig()`` when 'odometer' is aided).
-    zupt_detect : 'truth' (ZUPT at the trajectory's stops) or 'imu' (at the steps the detector of
+    zupt_detect : 'truth' (ZUPT / ZARU at the trajectory's stops) or 'imu' (at the steps the detector of
         :mod:`sarins_fmu.zero_velocity` declares stationary from the increments, with the IMU's
         noise densities and ``detector``, a :class:`~sarins_fmu.zero_velocity.DetectorSettings`).
     vibration : :class:`~sarins_fmu.zero_velocity.Vibration` added to the increments while moving, or None
@@ -264,9 +317,16 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
     seed : IMU errors, initial errors (stream of ``seed``), vibration and GNSS errors (``seed``).
     imu : the increments ``corrupt(truth, noise, seed)`` returns, when made already (a peer filter runs
         the same data); fixes : ``gnss.simulate(truth, gnss, seed, outages)``'s fixes, likewise.
+    imu_stream : where the IMU's errors are drawn (:func:`corrupt`'s ``stream``): 'numpy' or 'core' (the
+        TrajectoryIMU FMU's, so the ``vehicle_gnss`` system gives the same run).
+    covariance : what the result keeps of the filter's P at each output time: 'full' (``cov`` (n, 15, 15)
+        and ``variance``) or 'diagonal' (``variance`` only, ``cov`` None: no NEES; the core then writes 30
+        numbers per output row instead of 240).  The filter runs the same either way.
     """
     from . import zero_velocity
 
+    if covariance not in COVARIANCE:
+        raise ValueError(f"covariance must be one of {', '.join(COVARIANCE)}, got {covariance!r}")
     unknown = set(aiding) - set(AIDING)
     if unknown:
         raise ValueError(f"unknown aiding {', '.join(sorted(unknown))}; choose from {', '.join(AIDING)}")
@@ -277,18 +337,20 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
     if "odometer" in aiding and odometer is None:
         odometer = OdometerConfig()
     step = truth.step
-    dtheta, dv, bg_true, ba_true = corrupt(truth, noise, seed) if imu is None else imu
+    dtheta, dv, bg_true, ba_true = corrupt(truth, noise, seed, imu_stream) if imu is None else imu
     if vibration is not None:
         vib_theta, vib_v = zero_velocity.vibrate(truth, vibration, seed)
         dtheta, dv = dtheta + vib_theta, dv + vib_v
     info = {"seed": seed, "aiding": list(aiding), "zupt_detect": zupt_detect}
     stops = None
-    if zupt_detect == "imu" and "zupt" in aiding:
+    if zupt_detect == "imu" and ("zupt" in aiding or "zaru" in aiding):
         found = zero_velocity.detect(dtheta, dv, step, noise.vrw, noise.arw, detector or zero_velocity.DetectorSettings())
         stops = found.stationary
         info.update({"detector_samples": found.samples, "detector_gamma": found.gamma, "detector_alpha": found.alpha})
     rng = np.random.default_rng([seed, 3018])
     state = _core.EskfState(_config(noise, settings, gnss, step, odometer), _initial_state(truth, settings, rng))
+    if "zaru" in aiding:
+        info["zaru_std"] = zaru_std(noise, settings, step)
     aid = per_step_aiding(truth, aiding, settings, odometer, rng, seed, stops)
     if "gnss" in aiding:
         if fixes is None:
@@ -299,15 +361,18 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         if len(outages):
             gnss_mod.check_outages(outages, truth.time[-1])
         rows, vel_std = np.zeros((0, 11)), np.ones(3)
-    out = state.run(dtheta, dv, aid, rows, vel_std, gnss_velocity, settings.out_every)
+    full = covariance == "full"
+    out = state.run(dtheta, dv, aid, rows, vel_std, gnss_velocity, settings.out_every, full_cov=full)
     idx = np.arange(1, out.shape[0] + 1) * settings.out_every
     true_rows = truth.nav_rows(idx)
     nav = out[:, :9]
+    cov = out[:, 15:].reshape(-1, 15, 15) if full else None
     return AidedResult(time=truth.time[idx], nav=nav, truth=true_rows, error=nav_errors(nav, true_rows),
-                       cov=out[:, 15:].reshape(-1, 15, 15), bias_g=out[:, 9:12], bias_a=out[:, 12:15],
+                       cov=cov, bias_g=out[:, 9:12], bias_a=out[:, 12:15],
                        bias_g_true=bg_true[idx - 1], bias_a_true=ba_true[idx - 1],
                        gnss_used=int(np.sum(rows[:, 1] > 0)) if len(rows) else 0, zupt_steps=int(aid[:, 0].sum()),
-                       info=info)
+                       zaru_steps=int(aid[:, 9].sum()), info=info,
+                       variance=np.diagonal(cov, axis1=1, axis2=2) if full else out[:, 15:])
 
 
 @dataclass(frozen=True)
@@ -384,6 +449,7 @@ def summary(result: AidedResult, outages=()) -> dict:
         "mean_nees": {b: float(np.mean(result.nees(b))) for b in ("position", "velocity", "attitude")},
         "gnss_fixes_used": result.gnss_used,
         "zupt_steps": result.zupt_steps,
+        "zaru_steps": result.zaru_steps,
         "outages": [{"start_s": r.start, "end_s": r.end, "horizontal_error_m": r.error, "predicted_sigma_m": r.sigma,
                      "ratio": r.ratio} for r in outage_table(result, outages)],
     }

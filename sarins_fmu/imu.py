@@ -26,6 +26,11 @@ every minor-step increment at the internal rate (the C core's minor loop,
 * white noise n: angle / velocity random walk.  It is added to each output
   increment with its exact integrated variance (N(0, rw^2 h)); this is the
   same distribution as summing minor-step noise, at a fraction of the cost.
+* periodic disturbance ``a sin(2 pi f t + phi)`` per sensor (all zero in
+  every built-in preset): its exact integral over each output interval is
+  added to the increment, so the rate's Allan variance is
+  ``a^2 sin^4(pi f tau) / (pi f tau)^2`` at every multiple of the interval;
+  the phase phi is drawn once per seed (``sarins_fmu/core/imu.h``).
 
 Every random number (white noise, Gauss-Markov, the time-correlated terms,
 turn-on bias, ageing) is drawn in the C core from its own seeded stream
@@ -70,6 +75,7 @@ CORRELATED_FIELDS = ("bias_dtdt", "scale_factor_dtdt", "hysteresis", "hysteresis
                      "rate_random_walk", "turn_on_bias")
 DYNAMICS_FIELDS = ("filter_time_constant", "rate_hysteresis", "rate_hysteresis_width", "rate_hysteresis_time",
                    "rate_hysteresis_tc")
+PERIODIC_FIELDS = ("periodic_amplitude", "periodic_frequency")
 
 
 @dataclass(frozen=True)
@@ -98,6 +104,10 @@ class TriadErrors:
     rate_hysteresis_time : (3,) s, its relaxation time (0: none, a pure play)
     rate_hysteresis_tc : (3,) 1/degC, relative change of c with temperature
     (output dynamics: see :mod:`sarins_fmu.imu_dynamics`)
+    periodic_amplitude : (3,) amplitude a of a periodic disturbance a sin(2 pi f t + phi) on the output
+        rate (rad/s or m/s^2; 0: none)
+    periodic_frequency : (3,) its frequency f, Hz (> 0 where a > 0; at most the minor loop's Nyquist
+        frequency internal_rate / 2, checked when an :class:`IMU` is built)
     """
 
     bias: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -122,12 +132,19 @@ class TriadErrors:
     rate_hysteresis_width: np.ndarray = field(default_factory=lambda: np.ones(3))
     rate_hysteresis_time: np.ndarray = field(default_factory=lambda: np.zeros(3))
     rate_hysteresis_tc: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    periodic_amplitude: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    periodic_frequency: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self):
         for name in ("bias", "scale_factor", "random_walk", "bias_instability", "bias_corr_time",
                      "bias_tc1", "bias_tc2", "scale_factor_tc", "quadratic", *CORRELATED_FIELDS,
-                     *DYNAMICS_FIELDS):
+                     *DYNAMICS_FIELDS, *PERIODIC_FIELDS):
             object.__setattr__(self, name, _vec3(getattr(self, name), name))
+        for name in PERIODIC_FIELDS:
+            if np.any(getattr(self, name) < 0):
+                raise ValueError(f"{name} must be non-negative")
+        if np.any((self.periodic_amplitude > 0) & (self.periodic_frequency <= 0)):
+            raise ValueError("periodic_frequency must be positive where the periodic amplitude is not zero")
         for name in ("filter_time_constant", "rate_hysteresis_time"):
             if np.any(getattr(self, name) < 0):
                 raise ValueError(f"{name} must be non-negative")
@@ -566,7 +583,7 @@ class IMU:
                        np.zeros((7, 3)), np.zeros((9, 3)), np.ascontiguousarray(self.axes), base,
                        np.zeros((len(core_imu.STREAMS), core_rng.WORDS)), np.zeros((8, 6)), np.zeros((3, 6)),
                        np.zeros(n_flicker), np.zeros((n_flicker, 6)), np.zeros((n_flicker, 6)),
-                       np.zeros((imu_dynamics.PAR_ROWS, 6)), np.zeros((imu_dynamics.STATE_ROWS, 6)))
+                       np.zeros((imu_dynamics.PAR_ROWS, 6)), np.zeros((imu_dynamics.STATE_ROWS, 6)), np.zeros((3, 6)))
         self._table = array_table(self._state)  # the same arrays as the C core sees them
         flat = flatten(m)
         core_imu.build(self._table, [flat[name] for name in core_imu.param_names()], self.t0, self.h, self.n_sub,

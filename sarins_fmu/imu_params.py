@@ -40,6 +40,10 @@ _TRIAD_UNITS = {  # field -> (gyro unit, accelerometer unit)
     "rate_hysteresis_time": ("s", "s"),
     "rate_hysteresis_tc": ("1/degC", "1/degC"),
 }
+_PERIODIC_UNITS = {  # field -> (gyro unit, accelerometer unit); last in PARAMETERS (added after the others)
+    "periodic_amplitude": ("rad/s", "m/s2"),
+    "periodic_frequency": ("Hz", "Hz"),
+}
 _AXIAL_SCALARS = ("axial_drift_grad", "axial_block_time_constant", "axial_hysteresis", "axial_hysteresis_width",
                   "axial_hysteresis_relax_time")  # scalar ImuModel fields of the azimuth gyro's thermal terms
 _OFF_DIAGONAL = [(i, j) for i in range(3) for j in range(3) if i != j]
@@ -79,10 +83,15 @@ def _names():
         out.append((f"self_heating_{sensor}", "degC", ("thermal", "self_heating", j)))
         out.append((f"time_constant_{sensor}", "s", ("thermal", "time_constant", j)))
         out.append((f"die_time_constant_{sensor}", "s", ("thermal", "die_time_constant", j)))
+    for t, triad in enumerate(("gyro", "accel")):
+        for f, units in _PERIODIC_UNITS.items():
+            for i, ax in enumerate(AXES):
+                out.append((f"{triad}_{f}_{ax}", units[t], (triad, f, i)))
     return out
 
 
 PARAMETERS = _names()
+PERIODIC_NAMES = tuple(name for name, _, key in PARAMETERS if key[1:2] and key[1] in _PERIODIC_UNITS)
 UNITS = {name: unit for name, unit, _ in PARAMETERS}
 
 
@@ -130,6 +139,7 @@ def apply_overrides(model: ImuModel, overrides: dict) -> ImuModel:
             arrays["top"][key[0]] = np.array(value)
         else:
             arrays["top"][key[0]][key[1]] = value
+    _check_named(model, overrides)
     top = arrays["top"]
     return replace(
         model,
@@ -143,6 +153,17 @@ def apply_overrides(model: ImuModel, overrides: dict) -> ImuModel:
         flicker_tau_min=float(top["flicker_tau_min"]), flicker_tau_max=float(top["flicker_tau_max"]),
         **{name: float(top[name]) for name in _AXIAL_SCALARS},
     )
+
+
+def _check_named(model: ImuModel, overrides: dict) -> None:
+    """The core's parameter checks (``sarins_imu_check_params``) on ``model`` with ``overrides``: ValueError
+    naming the flat parameter at fault (the model's own checks would name its field, not the flat name)."""
+    from .core import imu as core_imu
+
+    flat = {**flatten(model), **{name: float(value) for name, value in overrides.items()}}
+    problem = core_imu.check_params([flat[name] for name in core_imu.param_names()])
+    if problem is not None:
+        raise ValueError(f"IMU parameter {problem}")
 
 
 # --------------------------------------------------------------------------- the C core's copy (one source)

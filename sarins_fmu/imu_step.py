@@ -15,7 +15,8 @@ interval called from C without Python (the native IMUThermal FMU's step,
    coning and sculling);
 3. ``sarins_imu_dynamics``: the output dynamics with memory (size effect,
    rate hysteresis, output filter; :mod:`sarins_fmu.imu_dynamics`);
-4. ``sarins_imu_white_noise``: angle / velocity random walk.
+4. ``sarins_imu_white_noise``: the periodic disturbance and the angle /
+   velocity random walk.
 
 The constant arrays are built by the C core from the model's flat parameters
 (``sarins_imu_build`` in ``imu_build.h``) and a run starts with
@@ -64,14 +65,16 @@ Array layout (``s`` below, the tuple :meth:`IMU.state_arrays` returns):
                          accelerometer lever arm x, y, z
 16    dyn_state (4, 6)   filter outputs, play operators, previous gyro means,
                          started flags
+17    periodic (3, 6)    periodic disturbance: amplitude (rad/s, m/s^2),
+                         frequency (Hz), phase (rad, drawn at seeding)
 ====  =================  =====================================================
 """
 
 from __future__ import annotations
 
 CONSTS, CLOCK, SENSOR_PAR, STATE, COEF, TRIAD, MATS, AXES, BASE, RNG, CORR_PAR, CORR_STATE, PHI, Q, \
-    X_FLICKER, DYN_PAR, DYN_STATE = range(17)
-N_STATE_ARRAYS = 17
+    X_FLICKER, DYN_PAR, DYN_STATE, PERIODIC = range(18)
+N_STATE_ARRAYS = 18
 N_CONSTS = 13  # length of consts (SARINS_IMU_N_CONSTS in imu.h)
 T_REF = 25.0  # reference temperature of the linear/quadratic coefficients, degC (SARINS_IMU_T_REF in imu.h)
 ONE_D = (CONSTS, CLOCK, PHI)  # the 1-D members of the tuple (the others are 2-D)

@@ -185,9 +185,14 @@ class ThermalModel:
 
 
 def _check_temperature(values) -> None:
+    """An ambient (degC) within [-273.15, AMBIENT_MAX] (SARINS_IMU_AMBIENT_MAX, the core's imu_build.h: the IMU's
+    parameter bounds are derived for that range)."""
+    from .core.imu import AMBIENT_MAX
+
     values = np.asarray(values, float)
-    if not np.isfinite(values).all() or np.any(values < -273.15):
-        raise ValueError("ambient temperature must be finite and above absolute zero (degC)")
+    if not np.isfinite(values).all() or np.any(values < -273.15) or np.any(values > AMBIENT_MAX):
+        raise ValueError(f"ambient temperature must be finite, above absolute zero and at most {AMBIENT_MAX:g} degC "
+                         "(SARINS_IMU_AMBIENT_MAX)")
 
 
 def chamber_profile(duration: float, *, low_c: float = -25.0, high_c: float = 40.0,

@@ -60,6 +60,7 @@ RANGES = {
     "AidedINS": {
         "step": [0.0, -1.0], "arw": [-1.0], "cov_every": [0.0, 2.5], "zupt_std": [0.0], "lat0": [2.0],
         "gnss_pos_std_e": [0.0], "gnss_vel_std_u": [-1.0], "use_velocity": [2, -1], "latency": [-1.0],
+        "zaru_std": [0.0, -1.0],
     },
     "VehicleMotion": {
         "legs": ["", "fly 3", "drive -5 10"], "lat0": [2.0], "lead_time": [-1.0], "grid": [0.0],
@@ -74,6 +75,11 @@ RANGES = {
         "trigger_time": [-1.0], "latency": [-1.0], "model_file": ["/nonexistent/model.json"],
     },
     "IMULog": {"log_file": ["", "/nonexistent/log.csv"]},
+    "TrajectoryIMU": {
+        "segments": ["", "1 0 0", "1.5 0 0 0", "1 0 0 0 0", "0 0 0 0"], "step": [0.0, -1.0, 2.0],
+        "substeps": [0, 1001], "lat0": [1.6], "pitch0": [1.56], "speed0": [-1.0], "arw": [-1.0], "gyro_rw": [-1.0],
+        "seed": [-1],
+    },
 }
 
 # parameters that need another one set to matter (a value is refused only with these set too)

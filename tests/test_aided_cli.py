@@ -48,9 +48,12 @@ def test_aided_run_prints_json_with_the_outage_row(tmp_path, capsys):
     (SEGMENTS, ["--gnss-rate-hz", "20", "--imu-rate-hz", "10"], "--gnss-rate-hz 20 is above the IMU rate"),
     (SEGMENTS, ["--gnss-pos-std", "-1"], "--gnss-pos-std must not be negative"),
     (SEGMENTS, ["--zupt-std", "-0.1"], "--zupt-std must be positive"),
+    (SEGMENTS, ["--aiding", "gnss,zupt,zaru", "--zaru-std", "-0.0001"], "--zaru-std must be positive"),
+    (SEGMENTS, ["--aiding", "gnss,zupt,zaru", "--zaru-std", "nan"], "--zaru-std: must be finite"),
+    (SEGMENTS, ["--zaru-std", "1e-4"], "--zaru-std needs zaru in --aiding"),
     (SEGMENTS, ["--gnss-outage", "100:200"], "--gnss-outage 100:200 is outside the run"),
     (SEGMENTS, ["--gnss-outage", "abc"], "--gnss-outage abc"),
-    (SEGMENTS, ["--aiding", "gnss,magnetometer"], "--aiding gnss,magnetometer: choose from gnss, zupt, odometer, nhc"),
+    (SEGMENTS, ["--aiding", "gnss,magnetometer"], "--aiding gnss,magnetometer: choose from gnss, zupt, odometer, nhc, zaru"),
     (SEGMENTS, ["--nav-hours", "3"], "--nav-hours does not apply to an aided run"),
 ])
 def test_bad_input_exits_2_naming_it(tmp_path, capsys, segments, extra, words):
@@ -72,3 +75,15 @@ def test_gnss_free_run_with_odometer_and_nhc(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["gnss_fixes_used"] == 0 and out["aiding"] == ["zupt", "odometer", "nhc"]
     assert out["horizontal_error_max_m"] < 50
+
+
+def test_zaru_at_the_stops(tmp_path, capsys):
+    """--aiding gnss,zupt,zaru: a ZARU at every stop step (the ZUPT's), the same seed otherwise."""
+    argv = ["navigate", "--trajectory", write(tmp_path), "--imu-rate-hz", "50", "--json", "--seed", "3"]
+    assert run([*argv, "--aiding", "gnss,zupt,zaru"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["zaru_steps"] == out["zupt_steps"] == 30 * 50
+    assert out["aiding"] == ["gnss", "zupt", "zaru"] and out["horizontal_error_max_m"] < 20
+    assert run([*argv, "--aiding", "gnss,zupt"]) == 0
+    plain = json.loads(capsys.readouterr().out)
+    assert plain["zaru_steps"] == 0 and plain["heading_error_rms_deg"] != out["heading_error_rms_deg"]

@@ -39,8 +39,9 @@ def _table(report: str, header: str) -> list:
 
 def test_tiny_campaign_report_matches_the_stored_runs(tmp_path, capsys):
     out = tmp_path / "aided"
+    absent = tmp_path / "no-kf-gins"  # no KF-GINS binary there: the comparison is skipped, saying why
     argv = ["campaign", "aided-nav", "--profile", "quick", "--runs", str(RUNS), "--zupt-runs", str(ZUPT_RUNS),
-            "--workers", "1", "--out", str(out), "--no-progress"]
+            "--workers", "1", "--out", str(out), "--no-progress", "--kfgins", str(absent)]
     assert main(argv) == 0
     assert f"{TASKS} tasks ({TASKS} computed now)" in capsys.readouterr().out
     runs = [load_result(p) for p in sorted((out / "runs").glob("run-*.npz"))]
@@ -93,6 +94,10 @@ def test_tiny_campaign_report_matches_the_stored_runs(tmp_path, capsys):
     assert summary["zupt_detection"]["misses"] == total("misses")
     traj = load_result(out / "runs" / "trajectory.npz")
     assert traj["stationary"][0] == 1 and traj["speed"].max() == pytest.approx(12.0)
+    # the KF-GINS section: one line saying it was skipped and why
+    section = report.split("## Against KF-GINS on the same data\n\n", 1)[1].split("\n\n", 1)[0]
+    assert section == f"KF-GINS comparison skipped: {absent} is not an executable file."
+    assert summary["kfgins"] == {"skipped": f"{absent} is not an executable file"}
 
 
 def test_killed_campaign_resumes_without_recomputing_finished_tasks(tmp_path):
@@ -100,7 +105,7 @@ def test_killed_campaign_resumes_without_recomputing_finished_tasks(tmp_path):
     only the rest and leaves the finished files untouched."""
     out = tmp_path / "aided"
     args = ["campaign", "aided-nav", "--profile", "quick", "--runs", str(RUNS), "--zupt-runs", "0",
-            "--workers", "1", "--out", str(out), "--no-progress"]
+            "--workers", "1", "--out", str(out), "--no-progress", "--kfgins", str(tmp_path / "no-kf-gins")]
     proc = subprocess.Popen([sys.executable, str(HERE / "hooks.py"), "--kill-after", "2", "-m", "sarins", *args],
                             start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
@@ -124,3 +129,47 @@ def test_bad_runs_option_exits_2(tmp_path, capsys):
         main(["campaign", "aided-nav", "--runs", "1", "--out", str(tmp_path / "x")])
     assert exc.value.code == 2
     assert "--runs" in capsys.readouterr().err
+
+
+def test_failing_kfgins_is_reported_as_skipped(tmp_path):
+    """A KF-GINS that exits with an error: the task stores the failure, the report's section says the
+    comparison was skipped and how KF-GINS failed, in one line."""
+    from sarins.aided_nav.report import _kfgins_lines, kfgins_summary
+    from sarins_fmu.experiments.aided_nav import kfgins_run
+
+    fake = tmp_path / "KF-GINS"
+    fake.write_text("#!/bin/sh\necho 'no config here' >&2\nexit 3\n")
+    fake.chmod(0o755)
+    result = kfgins_run(str(fake), 0.5, repeats=1)
+    assert result["comparison"] == "" and "exited 3" in result["failure"] and "no config here" in result["failure"]
+    lines = _kfgins_lines(kfgins_summary({"kfgins": result}))
+    assert lines[2].startswith("KF-GINS comparison skipped: KF-GINS failed: RuntimeError: KF-GINS exited 3")
+    assert lines[3:] == [""]
+
+
+@pytest.mark.slow
+def test_campaign_report_compares_with_kfgins(tmp_path):
+    """With KF-GINS's binary ($SARINS_KFGINS) the report carries the comparison table, its numbers those
+    of the stored comparison, ours within 10 % of KF-GINS's RMS errors (or smaller)."""
+    from sarins_fmu.experiments.kfgins_compare import find_binary
+
+    binary, why = find_binary()
+    if binary is None:
+        pytest.skip(f"KF-GINS comparison: {why}")
+    out = tmp_path / "aided"
+    argv = ["campaign", "aided-nav", "--profile", "quick", "--runs", "2", "--zupt-runs", "0", "--workers", "1",
+            "--out", str(out), "--no-progress", "--kfgins", binary]
+    assert main(argv) == 0
+    report = (out / "report.md").read_text()
+    k = json.loads(str(load_result(out / "runs" / "kfgins.npz")["comparison"]))
+    assert json.loads((out / "summary.json").read_text())["kfgins"] == k
+    rows = _table(report, "| filter | horizontal RMS (m)")
+    assert [r[0] for r in rows] == ["KF-GINS (21 states, P every IMU step)", "ours (15 states, P every 10 IMU steps)",
+                                    "ours (15 states, P every IMU step)"]
+    for row, key in zip(rows, ("kfgins", "ours", "ours_cov_every_1")):
+        assert float(row[1]) == pytest.approx(k[key]["rms"]["horizontal"], abs=5e-4)
+        assert row[6] == f"{k[key]['wall_s']:.3f} / {k[key]['cpu_s']:.3f}"
+    assert f"{k['speed_ratio_wall']:.1f}x wall, {k['speed_ratio_cpu']:.1f}x CPU" in report
+    assert k["duration_s"] > 290 and k["compared_rows"] > 2900
+    for key in ("position", "velocity", "attitude_deg"):
+        assert k["ours"]["rms"][key] <= 1.1 * k["kfgins"]["rms"][key], key

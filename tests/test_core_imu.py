@@ -183,6 +183,42 @@ def test_simd_lanes_give_the_scalar_loops_bits(n_axes, lowrate):
             assert np.array_equal(got.view(np.uint64), want.view(np.uint64))
 
 
+@pytest.mark.parametrize("n_axes", [1, 2, 3])
+@pytest.mark.parametrize("quad", [False, True])
+def test_one_interval_loop_shortcuts_keep_the_lanes_bits(n_axes, quad):
+    """The one-interval loop (the FMU's step) takes a still gimbal's cos and sin once per interval, the parts
+    of gimbal 0's rotation that do not depend on its angle once, and leaves out the quadratic terms' division
+    by dt when their coefficients are zero; the interval lanes (the in-process run) do none of that.  Bit for
+    bit the same, signed zeros too: still gimbals at multiples of pi/2 (the exact reduction of sin and cos)
+    and at +-0 with +-0 rates and accelerations, Earth rate and gravity with exact zero components, error
+    terms all +-0 (an ideal sensor: zero sums) or random."""
+    rng = np.random.default_rng(40 + n_axes + 10 * quad)
+    k = 16
+    axes = rng.standard_normal((n_axes, 3))
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    axes[0] = [0.0, 0.0, 1.0]
+    choose = rng.choice
+    gimbal = [choose([0.0, -0.0, math.pi / 2, math.pi, -math.pi, 1.5 * math.pi, 1e-30, 0.3], (k, n_axes)),
+              choose([0.0, -0.0, 0.1], (k, n_axes)), choose([0.0, -0.0, 0.05], (k, n_axes))]
+    gimbal[1][:4] = gimbal[2][:4] = 0.0  # all gimbals still
+    gimbal[1][4:6] = gimbal[2][4:6] = -0.0
+    w_t = np.tile([0.0, 5.5e-5, 4.2e-5], (k, 1))
+    w_t[::3] = -0.0
+    f_t = np.tile([-0.0, 0.0, 9.79], (k, 1))
+    for scale in (0.0, 0.3):  # standard normals times 0.0: zeros of both signs
+        errors = _errors(k, rng, scale=scale)
+        errors["g_lowrate"] = np.zeros(3)
+        if not quad:
+            errors["g_quad"] = np.zeros(3) * -1.0
+            errors["a_quad"] = np.zeros(3)
+        for n_sub, h in ((200, 1.0), (7, 0.3)):
+            scalar = _increments(axes, *gimbal, w_t, f_t, h=h, n_sub=n_sub, threads=1, lanes=False, **errors)
+            lanes = _increments(axes, *gimbal, w_t, f_t, h=h, n_sub=n_sub, threads=1, **errors)
+            assert all(np.isfinite(x).all() for x in scalar)
+            for got, want in zip(lanes, scalar):
+                assert np.array_equal(got.view(np.uint64), want.view(np.uint64))
+
+
 def test_imu_runs_are_the_same_whatever_sarins_threads(monkeypatch):
     sched = turntable.single_axis("forward-reverse", 400.0, grid=1.0, align_time=0.0)
     runs = []

@@ -290,3 +290,26 @@ def test_a_refused_row_names_the_reason_and_keeps_the_rows_before():
     rows[1] = np.zeros(50)
     with pytest.raises(ValueError, match="89.9"):
         up.step(*rows)
+
+
+
+@pytest.mark.parametrize("field, value", [(1, -1), (2, -1), (1, 2**53 + 1), (2, 2**62), (1, 2**63 - 1)])
+def test_updater_check_refuses_event_counts_no_run_can_reach(field, value):
+    """A restored updater state whose counters are negative or above 2^53 (a crafted FMU state: the fuzzer's
+    n_updates + n_resets overflowed int64) is refused by the state check, naming the range."""
+    state = core.OnlineState(100.0, 0.01)
+    state.check()
+    core._view(state.buffer, int(core._ONLINE_OFF[field]), 1, np.int64)[0] = value
+    with pytest.raises(ValueError, match=r"counts not 0 \.\. 2\^53"):
+        state.check()
+
+
+@pytest.mark.parametrize("value, ok", [(0, True), (2**53, True), (-1, False), (2**53 + 1, False), (2**63 - 1, False)])
+def test_rls_check_bounds_the_update_count(value, ok):
+    rls = core.RlsState(np.zeros(3), np.eye(3), 0.0)
+    rls.n_updates = value
+    if ok:
+        rls.check()
+    else:
+        with pytest.raises(ValueError, match=r"update count not 0 \.\. 2\^53"):
+            rls.check()

@@ -33,7 +33,7 @@ def config(changes=None):
 def test_without_updates_the_filter_is_the_mechanization(truth):
     state = core.EskfState(config(), truth.nav_rows()[0])
     k = truth.n_steps
-    out = state.run(truth.dtheta, truth.dv, np.zeros((k, 9)), np.zeros((0, 11)), np.ones(3), True, 1)
+    out = state.run(truth.dtheta, truth.dv, np.zeros((k, core.ESKF_AID)), np.zeros((0, 11)), np.ones(3), True, 1)
     q = aided.euler_to_mat(*truth.attitude[0])
     from sarins_fmu.rotations import mat_to_quat
     q = mat_to_quat(q).copy()
@@ -55,6 +55,22 @@ def test_gnss_and_zupt_bound_the_errors_and_keep_p_positive(truth):
         assert np.array_equal(p, p.T) and np.linalg.eigvalsh(p).min() > 0
     # heading becomes observable through the accelerations and turns: its sigma shrinks from 5 mrad
     assert math.sqrt(r.cov[-1, 8, 8]) < 0.5 * 5e-3
+
+
+def test_diagonal_covariance_keeps_the_run_and_drops_only_p(truth):
+    """covariance='diagonal': the same navigation, biases and variances bit for bit, no P (so no NEES, a
+    clear error), the horizontal sigma from the variances; an unknown choice is refused naming it."""
+    full = aided.navigate(truth, gnss=WHITE_GNSS, seed=4, aiding=("gnss", "zupt", "nhc"))
+    diag = aided.navigate(truth, gnss=WHITE_GNSS, seed=4, aiding=("gnss", "zupt", "nhc"), covariance="diagonal")
+    assert diag.cov is None and diag.variance.shape == (full.time.size, 15)
+    for name in ("nav", "bias_g", "bias_a", "error", "variance"):
+        assert np.array_equal(getattr(full, name), getattr(diag, name)), name
+    assert np.array_equal(full.variance, np.diagonal(full.cov, axis1=1, axis2=2))
+    assert np.array_equal(diag.horizontal_sigma(), full.horizontal_sigma())
+    with pytest.raises(ValueError, match="NEES needs the filter's full covariance"):
+        diag.nees("position")
+    with pytest.raises(ValueError, match="covariance must be one of full, diagonal, got 'upper'"):
+        aided.navigate(truth, gnss=WHITE_GNSS, covariance="upper")
 
 
 def test_lever_arm_is_estimated_away(truth):
@@ -86,16 +102,16 @@ r = aided.navigate(truth, gnss=cfg, outages=[[8, 12]], seed=1)
 assert np.isfinite(r.error).all()
 from sarins_fmu import zero_velocity as zv
 r = aided.navigate(truth, gnss=cfg, seed=2, zupt_detect="imu", vibration=zv.VIBRATION["car"],
-                   detector=zv.DetectorSettings(window=0.3))
-assert np.isfinite(r.error).all() and r.zupt_steps > 0
+                   detector=zv.DetectorSettings(window=0.3), aiding=("gnss", "zupt", "zaru"))
+assert np.isfinite(r.error).all() and r.zupt_steps > 0 and r.zaru_steps == r.zupt_steps
 print("sanitized run ok")
 """
 
 
 @pytest.mark.slow
 def test_aided_kernels_under_address_and_undefined_behaviour_sanitizers(tmp_path):
-    """Rebuild the core with ASan + UBSan and run trajectory, GNSS, zero-velocity detector and filter through the
-    binding."""
+    """Rebuild the core with ASan + UBSan and run trajectory, GNSS, zero-velocity detector and filter (ZUPT and
+    ZARU) through the binding."""
     import os
     import subprocess
     import sys

@@ -229,7 +229,7 @@ def _tiny_log(folder):
 
 
 FMUS = ["Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier", "DriftModelUpdater", "VehicleMotion", "IMULog", "GNSSReceiver",
-        "AidedINS"]
+        "AidedINS", "TrajectoryIMU"]
 
 
 def fault_table(fmu_dir, tmp_path, names=FMUS, timeout=600):
@@ -257,6 +257,22 @@ def fault_table(fmu_dir, tmp_path, names=FMUS, timeout=600):
     return rows
 
 
+OUTCOMES = ("clean", "wrong status", "silently accepted", "hang", "crash")
+
+
+def outcome_table(rows) -> str:
+    """category | cases | one column per outcome, and a total (rows of :func:`fault_table`)."""
+    from collections import Counter
+
+    counts = Counter((r[1], r[3]) for r in rows)
+    categories = list(dict.fromkeys(r[1] for r in rows))
+    lines = ["category | cases | " + " | ".join(OUTCOMES)]
+    for name in categories + ["total"]:
+        row = [sum(counts[(c, o)] for c in (categories if name == "total" else [name])) for o in OUTCOMES]
+        lines.append(f"{name} | {sum(row)} | " + " | ".join(map(str, row)))
+    return "\n".join(lines)
+
+
 @pytest.mark.slow
 def test_every_fmu_through_the_whole_fault_list(fmu_dir, tmp_path):
     """Issue 21: each FMU, in a fresh FMPy process, through every fault of tests/fmu_faults.py: bad values of
@@ -265,6 +281,7 @@ def test_every_fmu_through_the_whole_fault_list(fmu_dir, tmp_path):
     fmi2Error and a logged reason (a parameter at fmi2ExitInitializationMode, named), no hang, no crash."""
     rows = fault_table(fmu_dir, tmp_path)
     assert {r[0] for r in rows} == set(FMUS)
+    print("\n" + outcome_table(rows))  # the fault pass's table (pytest -s)
     bad = [r for r in rows if r[3] != "clean"]
     assert not bad, "\n".join(" | ".join(map(str, r)) for r in bad)
 

@@ -84,7 +84,8 @@ def test_libfuzzer_finds_nothing(tmp_path, name, fmi):
     corpus.mkdir()
     subprocess.run([str(seeder), "--seeds", str(corpus)], check=True, env=env, timeout=300)
     fuzz = _compile(clang, src, fmi, tmp_path / "fuzz", "fuzzer,address,undefined", main=False)
-    proc = subprocess.run([str(fuzz), f"-max_total_time={seconds}", "-max_len=200000", "-print_final_stats=1",
+    proc = subprocess.run([str(fuzz), f"-max_total_time={seconds}", "-max_len=200000", "-rss_limit_mb=2560",
+                           "-print_final_stats=1",
                            str(corpus)], capture_output=True, text=True, env=env, timeout=seconds + 600,
                           cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]

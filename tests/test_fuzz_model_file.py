@@ -12,6 +12,7 @@ import struct
 import subprocess
 from pathlib import Path
 
+import libfuzzer
 import numpy as np
 import pytest
 
@@ -138,10 +139,9 @@ def test_harness_under_sanitizers_on_mutated_files(tmp_path):
 
 @pytest.mark.slow
 def test_libfuzzer_finds_nothing_in_a_minute(tmp_path):
-    """clang's libFuzzer with ASan + UBSan on the harness, seeded with the valid files, 60 s."""
-    clang = shutil.which("clang")
-    if clang is None:
-        pytest.skip("clang (with libFuzzer) not installed (Debian: apt-get install clang)")
+    """clang's libFuzzer with ASan + UBSan on the harness, seeded with the valid files, for
+    SARINS_FUZZ_SECONDS (default 60; .ci/run gives 60)."""
+    clang = libfuzzer.clang_or_skip()
     exe = tmp_path / "fuzz"
     subprocess.run([clang, "-std=c11", "-g", "-O1", "-fsanitize=fuzzer,address,undefined",
                     "-fno-sanitize-recover=all", NO_CHECKSUM, f"-I{CORE}", str(HARNESS), *map(str, CORE_FILES),
@@ -150,7 +150,4 @@ def test_libfuzzer_finds_nothing_in_a_minute(tmp_path):
     corpus.mkdir()
     for k, data in enumerate(_valid_files()):
         (corpus / f"seed{k}").write_bytes(data)
-    proc = subprocess.run([str(exe), "-max_len=8192", "-max_total_time=60", "-print_final_stats=1", str(corpus)],
-                          capture_output=True, text=True, timeout=900, cwd=tmp_path)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    assert "stat::number_of_executed_units" in proc.stderr
+    print("rls model file", libfuzzer.run(exe, corpus, libfuzzer.budget(60), "-max_len=8192"))

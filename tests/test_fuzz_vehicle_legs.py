@@ -10,6 +10,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import libfuzzer
 import numpy as np
 import pytest
 
@@ -61,3 +62,19 @@ def test_legs_parser_and_stream_hold_under_sanitizers(tmp_path):
     assert f"fuzz harness: {len(inputs)} inputs" in run.stdout, report[-2000:]
     for marker in ("AddressSanitizer", "runtime error:", "UndefinedBehaviorSanitizer"):
         assert marker not in report, report[-4000:]
+
+
+@pytest.mark.slow
+def test_libfuzzer_finds_nothing_in_the_legs_parser(tmp_path):
+    """The same harness under clang's libFuzzer (ASan + UBSan) for SARINS_FUZZ_SECONDS (default 5; .ci/run
+    gives 60), seeded with the valid texts and a sample of the token soups."""
+    clang = libfuzzer.clang_or_skip()
+    exe = tmp_path / "fuzz"
+    subprocess.run([clang, "-std=c11", "-g", "-O1", "-Wall", "-Wextra", "-Werror",
+                    "-fsanitize=fuzzer,address,undefined", "-fno-sanitize-recover=all", f"-I{CORE}", str(HARNESS),
+                    *map(str, CORE_FILES), "-o", str(exe)], check=True)
+    corpus = tmp_path / "corpus"
+    corpus.mkdir()
+    for k, data in enumerate(_inputs()[::25]):
+        (corpus / f"seed{k:04d}").write_bytes(data)
+    print("vehicle legs", libfuzzer.run(exe, corpus, libfuzzer.budget(5), "-max_len=4096", "-timeout=20"))

@@ -1,23 +1,21 @@
 """Our data in KF-GINS's text formats (sarins_fmu.kfgins): written files read back, frame changes on
 known rotations, the raw-increment conversion against KF-GINS's corrections; and (slow) the comparison
-with KF-GINS itself on the same data (benchmarks/kfgins_compare.py), when its binary is given."""
+with KF-GINS itself on the same data (sarins_fmu.experiments.kfgins_compare, the work of
+benchmarks/kfgins_compare.py), when its binary is given."""
 
 from __future__ import annotations
 
 import math
-import os
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from sarins_fmu import aided, kfgins
 from sarins_fmu import trajectory as tr
+from sarins_fmu.experiments import kfgins_compare
 from sarins_fmu.imu_log import ReadOptions, read_log
 from sarins_fmu.rotations import euler_to_mat
 
-BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
 D = math.radians
 
 
@@ -121,12 +119,9 @@ def test_nav_result_read_back(tmp_path, truth):
 
 
 def _kfgins_binary():
-    path = os.environ.get("SARINS_KFGINS")
-    if not path:
-        pytest.skip("SARINS_KFGINS is not set (the path of a KF-GINS binary built from github:i2Nav-WHU/KF-GINS; "
-                    "see docs/aided-navigation.md)")
-    if not (os.path.isfile(path) and os.access(path, os.X_OK)):
-        pytest.skip(f"SARINS_KFGINS={path} is not an executable file")
+    path, why = kfgins_compare.find_binary()
+    if path is None:
+        pytest.skip(f"KF-GINS comparison: {why}")
     return path
 
 
@@ -135,11 +130,6 @@ def test_same_accuracy_as_kfgins_on_the_same_data(tmp_path):
     """A 5-minute drive, tactical IMU, 1 Hz GNSS: our RMS position, velocity and attitude errors within
     10 % of KF-GINS's (or smaller)."""
     binary = _kfgins_binary()
-    sys.path.insert(0, str(BENCH))
-    try:
-        import kfgins_compare
-    finally:
-        sys.path.remove(str(BENCH))
     r = kfgins_compare.compare(binary, 5.0, workdir=tmp_path)
     assert r["compared_rows"] > 2900
     for key in ("position", "velocity", "attitude_deg", "horizontal", "vertical", "heading_deg"):

@@ -2,7 +2,8 @@
 
 Fed the increments of sarins_fmu.aided.corrupt and each GNSS fix at the step after which navigate applies
 it (its own schedule, aided.fix_rows), the outputs (navigation, bias estimates, the filter's sigmas) equal
-navigate(aiding=('gnss',)) at every step bit for bit, through FMPy and through the C host with an empty
+navigate(aiding=('gnss',)) at every step bit for bit, and with the input zaru set at the trajectory's stop
+steps navigate(aiding=('gnss', 'zaru')), through FMPy and through the C host with an empty
 environment (no allocation after initialisation); an FMU state taken mid-run repeats the rest, also
 deserialized into another instance; bad parameters are refused naming them.
 """
@@ -35,14 +36,13 @@ OUT = NAV + [f"bias_{q}_{a}" for q in "ga" for a in "xyz"] + [f"sigma_{q}_{a}" f
 INPUTS = [f"{q}_{a}" for q in ("dtheta", "dv") for a in "xyz"] + [f"fix_{n}" for n in NAV[:6]]
 SETTING_NAMES = ["step", "arw", "vrw", "gyro_rw", "accel_rw", "pos0_std", "vel0_std", "tilt0_std", "heading0_std",
                  "gyro_bias0_std", "accel_bias0_std", "lever_x", "lever_y", "lever_z", "latency", "zupt_std",
-                 "cov_every", "nhc_std", "odo_std"]
+                 "cov_every", "nhc_std", "odo_std", "zaru_std"]
 
 
-@pytest.fixture(scope="module")
-def case():
-    """(params, per-step inputs (K, 12), per-step fix flags (K, 2) valid/new, expected (K, 24))."""
+def make_case(aiding):
+    """(params, per-step inputs (K, 12), per-step flags (K, 3) fix valid / fix new / zaru, expected (K, 24))."""
     truth = tr.generate(tr.Trajectory(tr.Start(lat_deg=35.0, heading_deg=-30.0), SEGMENTS), STEP)
-    result = aided.navigate(truth, noise=NOISE, gnss=GNSS, aiding=("gnss",), outages=OUTAGES, settings=SETTINGS,
+    result = aided.navigate(truth, noise=NOISE, gnss=GNSS, aiding=aiding, outages=OUTAGES, settings=SETTINGS,
                             seed=SEED)
     dtheta, dv, _, _ = aided.corrupt(truth, NOISE, SEED)
     nav0 = aided._initial_state(truth, SETTINGS, np.random.default_rng([SEED, 3018]))
@@ -54,16 +54,31 @@ def case():
     k = truth.n_steps
     inputs = np.zeros((k, 12))
     inputs[:, :3], inputs[:, 3:6] = dtheta, dv
-    flags = np.zeros((k, 2), int)
+    flags = np.zeros((k, 3), int)
+    if "zaru" in aiding:
+        flags[:, 2] = truth.stationary()
     for row in rows:
         i = int(row[0])
         if i < k:
             inputs[i, 6:] = row[2:8]
-            flags[i] = (int(row[1]), 1)
+            flags[i, :2] = (int(row[1]), 1)
     sigma = np.sqrt(np.diagonal(result.cov, axis1=1, axis2=2)[:, :9])
     expected = np.column_stack([result.nav, result.bias_g, result.bias_a, sigma])
     assert 0 < (flags[:, 1] & ~flags[:, 0]).sum() < flags[:, 1].sum()  # the outage drops some fixes
     return params, inputs, flags, expected
+
+
+@pytest.fixture(scope="module")
+def case():
+    return make_case(("gnss",))
+
+
+@pytest.fixture(scope="module")
+def zaru_case():
+    """GNSS and ZARU at the first second's stop (50 steps)."""
+    c = make_case(("gnss", "zaru"))
+    assert c[2][:, 2].sum() == 50 and not np.array_equal(c[3], make_case(("gnss",))[3])
+    return c
 
 
 @pytest.fixture(scope="module")
@@ -79,7 +94,8 @@ def _run(fmu, case, state_at=None):
     def steps(s, start, end, out):
         for k in range(start, end):
             s.fmu.setReal([s.vr[n] for n in INPUTS], list(inputs[k]))
-            s.fmu.setInteger([s.vr["fix_valid"], s.vr["fix_count"]], [int(flags[k, 0]), int(counts[k])])
+            s.fmu.setInteger([s.vr["fix_valid"], s.vr["fix_count"], s.vr["zaru"]],
+                             [int(flags[k, 0]), int(counts[k]), int(flags[k, 2])])
             s.fmu.doStep(k * STEP, STEP)
             out.append(s.get(*OUT))
 
@@ -120,6 +136,33 @@ def test_fmu_equals_navigate_bit_for_bit(fmu, case):
 def test_state_round_trip_repeats_the_rest(fmu, case):
     out, again, there = _run(fmu, case, state_at=180)
     assert again == out[180:] and there == out[180:]
+
+
+def test_fmu_with_zaru_equals_navigate_bit_for_bit(fmu, zaru_case):
+    got, used = _run(fmu, zaru_case)
+    assert np.array_equal(got, zaru_case[3])
+    assert used == zaru_case[2][:, 0].sum() > 10
+
+
+def test_state_round_trip_in_a_stop_with_zaru(fmu, zaru_case):
+    out, again, there = _run(fmu, zaru_case, state_at=30)
+    assert again == out[30:] and there == out[30:]
+
+
+def test_bad_zaru_input_is_refused(fmu, case):
+    from fmpy.fmi1 import FMICallException
+
+    slave = Slave(fmu, "bad_zaru")
+    try:
+        slave.set(**case[0])
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+        slave.fmu.setInteger([slave.vr["zaru"]], [2])
+        with pytest.raises(FMICallException, match="status 3"):
+            slave.fmu.doStep(0.0, STEP)
+        assert any("input zaru = 2" in m for status, _, m in slave.log if status == 3), slave.log
+    finally:
+        slave.free()
 
 
 def test_c_host_empty_environment_no_allocation(fmu, case, tmp_path):
@@ -169,18 +212,21 @@ def test_c_host_empty_environment_no_allocation(fmu, case, tmp_path):
     ({"cov_every": 2.5}, "cov_every"),
     ({"gnss_pos_std_n": 0.0}, "gnss_pos_std_n"),
     ({"use_velocity": 2}, "use_velocity"),
+    ({"zaru_std": -1e-4}, "zaru_std"),
+    ({"zaru_std": float("nan")}, "zaru_std"),
     ({"lat0": 1.6}, "lat0"),
 ])
 def test_bad_parameters_are_refused(fmu, params, text):
     check_parameter_error(fmu, params, text)
 
 
-def test_fmi3_variant_equals_navigate(case, tmp_path):
+@pytest.mark.parametrize("name", ["case", "zaru_case"])
+def test_fmi3_variant_equals_navigate(name, request, tmp_path):
     from fmpy import extract
     from fmpy.fmi3 import FMU3Slave
     from fmpy.validation import validate_fmu
 
-    params, inputs, flags, expected = case
+    params, inputs, flags, expected = request.getfixturevalue(name)
     path = build_native_fmu("AidedINS", "aided_ins_slave.py", tmp_path, fmi=3, win64=False, aarch64=False)
     assert validate_fmu(str(path)) == []
     md = read_model_description(str(path))
@@ -195,7 +241,8 @@ def test_fmi3_variant_equals_navigate(case, tmp_path):
         got = []
         for k, row in enumerate(inputs):
             fmu.setFloat64([vr[n] for n in INPUTS], list(row))
-            fmu.setInt32([vr["fix_valid"], vr["fix_count"]], [int(flags[k, 0]), int(counts[k])])
+            fmu.setInt32([vr["fix_valid"], vr["fix_count"], vr["zaru"]], [int(flags[k, 0]), int(counts[k]),
+                                                                        int(flags[k, 2])])
             fmu.doStep(k * STEP, STEP)
             got.append(fmu.getFloat64([vr[n] for n in OUT]))
         assert np.array_equal(np.array(got), expected)

@@ -62,6 +62,9 @@ SCENARIOS = {
     "2 s steps at 100 Hz": dict(params={"gimbals": "x,z", "internal_rate": 100.0, "seed": 2}, h=2.0),
     "moving base": dict(params={"gimbals": "x,z", "base": "input", "preset": "mems", "seed": 9}, moving=True),
     "fixed table": dict(params={"seed": 4}, fixed=True),
+    "periodic terms over mems": dict(params={"preset": "mems", "gimbals": "x,z", "seed": 6,
+                                             "gyro_periodic_amplitude_z": 2e-5, "gyro_periodic_frequency_z": 0.31,
+                                             "accel_periodic_amplitude_y": 0.008, "accel_periodic_frequency_y": 0.7}),
 }
 
 
@@ -214,7 +217,8 @@ def test_static_base_earth_rate_and_gravity_are_the_libraries(imu_fmu):
 
 # ----------------------------------------------------------------- FMU state, C host, allocations
 
-HOST_CASES = {"nav-rlg": {"seed": 7}, "mems x,z": {"preset": "mems", "gimbals": "x,z", "seed": 2}}
+HOST_CASES = {"nav-rlg": {"seed": 7}, "mems x,z": {"preset": "mems", "gimbals": "x,z", "seed": 2},
+              "periodic": {"seed": 3, "accel_periodic_amplitude_x": 0.005, "accel_periodic_frequency_x": 0.23}}
 
 
 @pytest.mark.parametrize("case", list(HOST_CASES))
@@ -244,7 +248,8 @@ def test_get_step_set_step_again_is_bit_identical_in_the_c_host(unzipped, host, 
 
 
 def test_state_serialized_in_one_process_continues_identically_in_another(imu_fmu, tmp_path):
-    values = {"preset": "mems", "gimbals": "x,z", "seed": 8, "gyro_flicker_z": 2e-6}
+    values = {"preset": "mems", "gimbals": "x,z", "seed": 8, "gyro_flicker_z": 2e-6, "accel_periodic_amplitude_z": 4e-3,
+              "accel_periodic_frequency_z": 0.37}
     script = STATE_SCRIPT.format(tests=str(HERE), root=str(HERE.parent), fmu=str(imu_fmu), values=values,
                                  outputs=OUTPUTS)
 
@@ -319,7 +324,14 @@ def test_no_heap_allocation_after_initialisation(unzipped, tmp_path):
     ({"internal_rate": 0.0}, "parameter internal_rate"),
     ({"flicker_tau_min": 5e-324}, "parameter flicker_tau_min = 4.9406564584124654e-324"),
     ({"gyro_bias_x": 1e308}, "parameter gyro_bias_x = 1e+308"),
-    ({"gyro_bias_x": 400.0}, "IMU parameter gyro_bias_x must be at most pi/2 rad per minor step"),
+    ({"gyro_bias_x": 400.0}, "parameter gyro_bias_x = 400 is outside [-314.15926535897933, 314.15926535897933] at "
+                              "internal_rate 200 Hz: must be at most pi/2 rad per minor step"),
+    ({"gyro_scale_factor_y": 1.5}, "parameter gyro_scale_factor_y = 1.5 is outside"),
+    ({"accel_periodic_amplitude_y": -1e-3}, "IMU parameter accel_periodic_amplitude_y must be non-negative"),
+    ({"gyro_periodic_amplitude_x": 1e-5}, "IMU parameter gyro_periodic_frequency_x must be positive where"),
+    ({"accel_periodic_amplitude_x": 5e-3, "accel_periodic_frequency_x": 100.5},
+     "parameter accel_periodic_frequency_x = 100.5 Hz: IMU parameter accel_periodic_frequency_x must be at most "
+     "the Nyquist frequency of the minor loop, internal_rate / 2 (internal_rate 200 Hz)"),
 ])
 def test_bad_parameters_are_refused_at_initialisation_with_the_reason(imu_fmu, params, text):
     check_parameter_error(imu_fmu, params, text)

@@ -425,9 +425,9 @@ def test_non_finite_or_non_positive_model_values_are_refused():
             nets.CompensatorModel(netfile.to_bytes("grnn", arrays | {name: value}))
 
 
-def test_the_fuzz_harness_builds_and_runs_clean_on_the_model_files(tmp_path):
-    """tests/fuzz/fuzz_netfile.c under clang's libFuzzer with ASan and UBSan: a short run from the
-    model files of every kind (the long runs are its header's command)."""
+def _netfile_fuzzer(tmp_path):
+    """tests/fuzz/fuzz_netfile.c built with libFuzzer, ASan and UBSan, and a corpus of the model files of every
+    kind: (executable, corpus), or a skip."""
     import shutil
     import subprocess
     from pathlib import Path
@@ -451,9 +451,27 @@ def test_the_fuzz_harness_builds_and_runs_clean_on_the_model_files(tmp_path):
     (corpus / "hot.bin").write_bytes(DriftIdentifier(DEFAULT_MODELS["hot"]).binary())
     for kind in compensators.KINDS:
         (corpus / f"{kind}.bin").write_bytes(fitted(kind).binary())
+    return exe, corpus
+
+
+def test_the_fuzz_harness_builds_and_runs_clean_on_the_model_files(tmp_path):
+    """tests/fuzz/fuzz_netfile.c under clang's libFuzzer with ASan and UBSan: 5,000 runs from the model files
+    of every kind (the timed run is the slow test below)."""
+    import subprocess
+
+    exe, corpus = _netfile_fuzzer(tmp_path)
     run = subprocess.run([str(exe), "-runs=5000", "-max_len=65536", "-seed=1", str(corpus)], capture_output=True,
                          text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
+
+
+@pytest.mark.slow
+def test_libfuzzer_finds_nothing_in_the_network_files(tmp_path):
+    """The same harness for SARINS_FUZZ_SECONDS (default 5; .ci/run gives 60)."""
+    import libfuzzer
+
+    exe, corpus = _netfile_fuzzer(tmp_path)
+    print("network files", libfuzzer.run(exe, corpus, libfuzzer.budget(5), "-max_len=65536"))
 
 
 def test_drift_identifier_reads_its_binary_file(tmp_path):

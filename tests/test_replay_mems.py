@@ -81,6 +81,10 @@ def test_errors_name_the_options_and_the_file(tmp_path):
     with pytest.raises(ValueError, match=r"the log \(0.3333 h, .*r.csv\) is not longer than the 0.5 h alignment "
                                          r"\(--align-hours\)"):
         replay(log, align_hours=0.5, path=str(path))
+    with pytest.raises(ValueError, match=r"the log \(0.3333 h, .*r.csv\) is not longer than the 4 h alignment "
+                                         r"\(--align-hours; without it 4 h to gyrocompass, or 10 min with "
+                                         r"--heading-deg\)"):
+        replay(log, path=str(path))  # the gyros see the Earth rate: the length is what is wrong
     nolat = ImuLog(time=log.time, dtheta=log.dtheta, dv=log.dv, temps=None, ref=None, lat=None)
     with pytest.raises(AlignmentError, match="does not state the latitude .*--lat-deg"):
         replay(nolat, align_hours=0.25, path="v.csv")
@@ -117,13 +121,46 @@ def test_the_acceptance_commands_on_the_real_units(real_adis, unit, capsys):
     from sarins.cli import main
 
     path = str(REAL_DATA / f"{unit}.csv.gz")
-    base = ["replay", path, "--axes", "frd", "--lat-deg", "51.08", "--align-hours", "0.5", "--json"]
+    base = ["replay", path, "--axes", "frd", "--lat-deg", "51.08", "--json"]  # the issue's command, as written
     assert main([*base, "--heading-deg", "0"]) == 0
     out = json.loads(capsys.readouterr().out)
-    roll, pitch = _levelling(real_adis[unit], 1800.0)
+    assert out["align_hours"] == pytest.approx(1 / 6) and out["alignment"] == "levelling + given heading"
+    roll, pitch = _levelling(real_adis[unit], 600.0)
     assert abs(out["roll_deg"] - roll) < 0.5 and abs(out["pitch_deg"] - pitch) < 0.5
     assert main(base) == 2
     assert "--heading-deg" in capsys.readouterr().err
     assert main(["allan", "--log", path, "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert all(ch["random_walk"] is not None and ch["bias_instability"] is not None for ch in out["channels"][:3])
+
+
+def test_without_align_hours_levelling_takes_ten_minutes_at_most_half_the_log(tmp_path):
+    """The default alignment: 10 min when levelling (a short MEMS log fits), capped at half the log,
+    whole samples; the levelled attitude equals the one of an explicit 1/6 h."""
+    from sarins_fmu.experiments.replay import default_align_hours
+
+    gyro, accel, _ = allan.static_record(imu.preset("nav-rlg"), 1500.0, 1.0, seed=2, lat_deg=45.0)
+    log = read_log(write_log(tmp_path / "l.csv", np.arange(1, 1501.0), gyro, accel, lat_deg=45.0))
+    assert default_align_hours(log, None) == 4.0
+    assert default_align_hours(log, 0.0) * 3600 == pytest.approx(600.0)
+    out = replay(log, heading=0.3)
+    same = replay(log, heading=0.3, align_hours=1 / 6)
+    assert out.info["align_hours"] * 3600 == pytest.approx(600.0)
+    np.testing.assert_array_equal(out.attitude, same.attitude)
+    short = ImuLog(time=log.time[:700], dtheta=log.dtheta[:700], dv=log.dv[:700], temps=None, ref=None, lat=log.lat,
+                   interval=log.step)
+    assert replay(short, heading=0.3).info["align_hours"] * 3600 == pytest.approx(350.0)
+
+
+@pytest.mark.filterwarnings("ignore:.*taken as the Earth rate plus a MEMS-class gyro bias")
+def test_a_short_mems_log_without_heading_names_heading_not_the_length(tmp_path):
+    """A log shorter than the 4 h default whose gyros cannot see the Earth rate: the message names
+    --heading-deg (what the user must add), not --align-hours."""
+    rng = np.random.default_rng(4)
+    n = 1200
+    gyro = np.tile([0.004, -0.003, 0.001], (n, 1)) + 1e-4 * rng.standard_normal((n, 3))  # 825 deg/h bias
+    accel = np.tile([0.0, 0.0, 9.80], (n, 1)) + 1e-3 * rng.standard_normal((n, 3))
+    log = read_log(write_log(tmp_path / "m.csv", np.arange(1, n + 1.0), gyro, accel, lat_deg=45.0))
+    with pytest.raises(AlignmentError, match=r"m.csv: the gyros cannot see the Earth rate .*--heading-deg"):
+        replay(log, path=str(tmp_path / "m.csv"))
+    assert replay(log, heading=0.0).info["alignment"] == "levelling + given heading"

@@ -95,3 +95,51 @@ def test_chamber_profile_rejects_bad_input(kwargs):
     args = dict(duration=3600.0) | kwargs
     with pytest.raises(ValueError, match="must be"):
         chamber_profile(args.pop("duration"), **args)
+
+
+def _exact_decimal(y, u0, slope, dt, tau):
+    """The first-order lag's end value y e + (u0 - s tau)(1 - e) + s dt = y + (u0 - y) m + s tau (w - m), with
+    w = dt / tau and m = 1 - exp(-w), in 60-digit decimal arithmetic; m and w - m from their Taylor series
+    when w < 0.1 (no cancellation at any tau)."""
+    from decimal import Decimal, localcontext
+    with localcontext() as ctx:
+        ctx.prec = 60
+        y, u0, s, dt, tau = (Decimal(repr(float(v))) for v in (y, u0, slope, dt, tau))
+        w = dt / tau
+        if w < Decimal("0.1"):
+            rest, term, k = Decimal(0), w, 1  # w - m = sum_{k>=2} -(-w)^k / k!
+            while True:
+                k += 1
+                term = -term * w / k
+                if abs(term) < Decimal("1e-70") * abs(w * w):
+                    break
+                rest -= term
+            m = w - rest
+        else:
+            m = 1 - (-w).exp()
+            rest = w - m
+        return float(y + (u0 - y) * m + s * tau * rest)
+
+
+@pytest.mark.parametrize("tau", [0.02, 3600.0, 1e6, 3.0e5, 1e9, 1e12, 1e16, 1e100, 2.6e300])
+def test_exact_steps_match_the_closed_form_at_any_time_constant(tau):
+    """The ambient stepping from 20 to 500 degC in one 0.005 s step with 3 degC self-heating: the core's step
+    equals the closed form (60-digit decimal) within its stated error, 1e-12 degC + 2 x 2^-26 x 480 degC
+    (thermal.h sarins_first_order_step), at every time constant; before the series branch, tau = 2.6e300 s
+    moved the sensor by the whole 480 degC (1 - exp(-dt/tau) rounds to 0)."""
+    from sarins_fmu.core import thermal as core_thermal
+    h, amb, heat, temp0 = np.array([0.005]), np.array([20.0, 500.0]), np.array([3.0]), np.array([36.5])
+    got = core_thermal.exact_steps(h, amb, heat, np.array([tau]), temp0)[0, 0]
+    want = _exact_decimal(36.5, 23.0, 480.0 / 0.005, 0.005, tau)
+    assert abs(got - want) <= 1e-12 + 2.0 * 2.0**-26 * 480.0, (got, want)
+    if tau > 0.005 * 2.0**26:  # the series branch: to rounding
+        assert abs(got - want) <= 1e-13, (got, want)
+
+
+@pytest.mark.parametrize("tau", [1e6, 1e12, 2.6e300])
+def test_die_temperatures_match_the_closed_form_at_any_time_constant(tau):
+    from sarins_fmu.core import thermal as core_thermal
+    die = np.array([36.0])
+    out = core_thermal.die_temperatures(np.array([36.0]), np.array([[516.0]]), 1.0, np.array([tau]), die)
+    want = _exact_decimal(36.0, 36.0, 480.0, 1.0, tau)
+    assert abs(out[0, 0] - want) <= 1e-12 + 2.0 * 2.0**-26 * 480.0, (out, want)

@@ -2,7 +2,7 @@
  * The FMI-version-independent work (instance, logging, values, checks, FMU state blob) is in glue_core.c,
  * shared with the FMI 3.0 glue (fmi3_glue.c); this file maps the fmi2* calls onto it.
  *
- * Contract (the one fmus/native/core.c keeps for the Python-hosted FMUs):
+ * Contract:
  * - the state machine of FMI 2.0 section 4.2.4: a call out of order returns fmi2Error with a logged
  *   message and puts the instance in the error state, which only fmi2Reset, fmi2FreeInstance or fmi2SetFMUstate
  *   to a state saved earlier (recovery, as FMI 2.0.x allows) leave;

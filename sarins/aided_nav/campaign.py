@@ -6,7 +6,10 @@ Tasks (each one campaign task, stored as it finishes, resumable):
 * ``run-<seed>``: one aided run (tactical IMU, 1 Hz GNSS with white errors, ZUPT at the stops,
   GNSS outages of 30, 60 and 120 s), :func:`sarins_fmu.experiments.aided_nav.monte_carlo_run`;
 * ``zupt-<seed>``: the IMU-statistics ZUPT detector on a drive with three stops and GNSS-free
-  navigation with its ZUPTs against the truth's, :func:`sarins_fmu.experiments.aided_nav.zupt_run`.
+  navigation with its ZUPTs against the truth's, :func:`sarins_fmu.experiments.aided_nav.zupt_run`;
+* ``kfgins``: our filter against KF-GINS on the same data, when its binary is given (``--kfgins`` or
+  ``$SARINS_KFGINS``), :func:`sarins_fmu.experiments.aided_nav.kfgins_run`; without one the report says
+  the comparison was skipped and why.
 
 The report (:mod:`sarins.aided_nav.report`) takes the consistency (mean NEES against its 95 % χ²
 band) and the outage table (RMS over the runs of the horizontal error at each outage's end against
@@ -20,11 +23,13 @@ from pathlib import Path
 
 HELP = "aided navigation: GNSS/INS error-state Kalman filter along a drive, NEES and GNSS-outage Monte Carlo"
 
-# profile -> settings: Monte Carlo runs, cruise length (s), output decimation (IMU steps per row), ZUPT-detector runs
+# profile -> settings: Monte Carlo runs, cruise length (s), output decimation (IMU steps per row), ZUPT-detector runs,
+# length of the KF-GINS comparison's drive (min; the paper profile's is the one of docs/aided-navigation.md)
 PROFILES = {
-    "quick": {"runs": 10, "cruise": 400.0, "out_every": 20, "zupt_runs": 4},
-    "paper": {"runs": 100, "cruise": 400.0, "out_every": 10, "zupt_runs": 20},
+    "quick": {"runs": 10, "cruise": 400.0, "out_every": 20, "zupt_runs": 4, "kfgins_minutes": 5.0},
+    "paper": {"runs": 100, "cruise": 400.0, "out_every": 10, "zupt_runs": 20, "kfgins_minutes": 30.0},
 }
+KFGINS_REPEATS = 3  # runs of each filter in the KF-GINS comparison; the fastest times are reported
 ZUPT_KEYS = ("stop_windows", "misses", "moving_windows", "false_stationary", "samples", "zupt_truth", "zupt_imu")
 
 
@@ -37,6 +42,9 @@ def add_arguments(parser) -> None:
                         help="runs of the ZUPT-detector study (default: the profile's, quick 4, paper 20; 0: none)")
     parser.add_argument("--seed", type=seed_value, default=0,
                         help="first random seed: run k uses seed + k (default 0)")
+    parser.add_argument("--kfgins", default=None, metavar="PATH",
+                        help="KF-GINS binary for the comparison with a peer filter (default $SARINS_KFGINS; without "
+                             "one the report says the comparison was skipped)")
 
 
 def _runs(text: str, low: int = 2) -> int:
@@ -59,9 +67,12 @@ def run_schema(n: int, m: int) -> dict:
             "outage_error": Field((m,)), "outage_sigma": Field((m,)), "cpu_s": Field()}
 
 
-def build_tasks(profile: str, runs: int | None = None, seed: int = 0, zupt_runs: int | None = None) -> list:
-    """The campaign's tasks for ``profile``: the trajectory, ``runs`` Monte Carlo runs (seeds seed ..) and
-    ``zupt_runs`` runs of the ZUPT detector (seeds seed ..)."""
+def build_tasks(profile: str, runs: int | None = None, seed: int = 0, zupt_runs: int | None = None,
+                kfgins: str | None = None) -> list:
+    """The campaign's tasks for ``profile``: the trajectory, ``runs`` Monte Carlo runs (seeds seed ..),
+    ``zupt_runs`` runs of the ZUPT detector (seeds seed ..) and, with ``kfgins`` (the path of an
+    executable KF-GINS binary), the comparison with KF-GINS (seed ``seed``; its record holds the
+    binary's SHA-256, not its path)."""
     from sarins.campaign import Field, Task
     from sarins_fmu.experiments import aided_nav
 
@@ -85,22 +96,39 @@ def build_tasks(profile: str, runs: int | None = None, seed: int = 0, zupt_runs:
                    **{k: Field() for k in ("delay_s", "gamma", "error_truth_m", "error_imu_m", "cpu_s")}}
     tasks += [Task(f"zupt-{k:04d}", aided_nav.zupt_run, {"seed": seed + k}, schema=zupt_schema)
               for k in range(zupt_runs)]
+    if kfgins is not None:
+        tasks.append(Task("kfgins", aided_nav.kfgins_run, {"binary": kfgins, "minutes": p["kfgins_minutes"], "seed": seed,
+                                                           "repeats": KFGINS_REPEATS},
+                          volatile=("binary",), identity={"kfgins_sha256": _sha256(kfgins)},
+                          schema={"comparison": Field(kind="U"), "failure": Field(kind="U")}))
     return tasks
+
+
+def _sha256(path: str) -> str:
+    import hashlib
+
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def run(args) -> int:
     from sarins.campaign import run_campaign
+    from sarins_fmu.experiments.kfgins_compare import find_binary
 
     from .report import write_report
 
     out = Path(args.out)
-    tasks = build_tasks(args.profile, args.runs, args.seed, args.zupt_runs)
+    binary, why = find_binary(args.kfgins)
+    tasks = build_tasks(args.profile, args.runs, args.seed, args.zupt_runs, kfgins=binary)
     start, cpu0 = time.perf_counter(), time.process_time()
     results = run_campaign(tasks, out / "runs", workers=args.workers, scheduler=args.scheduler,
                            progress=not args.no_progress, description="aided-nav")
     wall = time.perf_counter() - start
     report = write_report(results, out, profile=args.profile, wall_time=wall, workers=args.workers,
-                          computed=len(results.computed), parent_cpu=time.process_time() - cpu0)
+                          computed=len(results.computed), parent_cpu=time.process_time() - cpu0, kfgins_skipped=why)
     print(f"sarins campaign aided-nav: {len(tasks)} tasks ({len(results.computed)} computed now) in {wall:.0f} s; "
           f"report {report}")
     return 0

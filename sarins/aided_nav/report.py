@@ -146,6 +146,35 @@ def _zupt_lines(z: dict | None) -> list:
             f"| IMU detector | {z['rms_error_imu_m']:.3f} | {z['mean_zupt_imu']:.0f} |", ""]
 
 
+def kfgins_summary(results: dict, skipped: str | None = None) -> dict:
+    """The KF-GINS comparison (the ``kfgins`` task's JSON: see
+    :func:`sarins_fmu.experiments.kfgins_compare.compare`), or {"skipped": reason} when the task did not run
+    (``skipped``: why, from the campaign) or KF-GINS failed in it."""
+    task = results.get("kfgins")
+    if task is None:
+        return {"skipped": skipped or "no KF-GINS binary was given"}
+    if str(task["failure"]):
+        return {"skipped": f"KF-GINS failed: {task['failure']}"}
+    return json.loads(str(task["comparison"]))
+
+
+def _kfgins_lines(k: dict) -> list:
+    from sarins_fmu.experiments.kfgins_compare import markdown
+
+    head = ["## Against KF-GINS on the same data", ""]
+    if "skipped" in k:
+        return head + [f"KF-GINS comparison skipped: {k['skipped'].rstrip('.')}.", ""]
+    return head + [
+        f"[KF-GINS](https://github.com/i2Nav-WHU/KF-GINS), a peer GNSS/INS filter built outside the project, and "
+        f"ours on the same data (`sarins_fmu.experiments.kfgins_compare`): a {k['duration_s']:.0f} s drive with "
+        f"stops, turns and climbs, IMU `{k['imu']}` at {k['imu_rate_hz']} Hz, {k['gnss_fixes']} GNSS position fixes "
+        f"({k['gnss']}, {k['gnss_rate_hz']:g} Hz), seed {k['seed']}; ours with GNSS positions only, as KF-GINS. "
+        f"RMS errors against the truth at {k['compared_rows']} output times. Run times: the fastest of "
+        f"{k['repeats']} runs, ours `navigate` alone, KF-GINS its process (reading its text files, writing its "
+        f"results); the two alternate, so a load on the machine (header) weighs on both.", "",
+        markdown(k).rstrip(), ""]
+
+
 def _shade_outages(ax) -> None:
     for start, end in OUTAGES:
         ax.axvspan(start, end, color="0.85", lw=0)
@@ -223,24 +252,27 @@ def _plots(results: dict, runs: list, nees: dict, out: Path) -> list:
     return names
 
 
-def summarise(results: dict) -> dict:
-    """Every number of the report from the results (the report prints these)."""
+def summarise(results: dict, kfgins_skipped: str | None = None) -> dict:
+    """Every number of the report from the results (the report prints these); ``kfgins_skipped``: why
+    the KF-GINS comparison did not run, when it did not."""
     runs = _runs(results)
     nees = nees_summary(runs)
     return {"runs": len(runs), "nees": {k: v for k, v in nees.items() if k != "mean"},
             "outages": outage_summary(runs), "errors": error_summary(runs), "zupt_detection": zupt_summary(results),
+            "kfgins": kfgins_summary(results, kfgins_skipped),
             "cpu_s_per_run": float(np.mean([r["cpu_s"] for r in runs]))}
 
 
 def write_report(results: dict, out_dir, *, profile: str, wall_time: float, workers=None, computed: int | None = None,
-                 parent_cpu: float | None = None) -> Path:
-    """Write report.md, summary.json and the PNG figures; returns the report path."""
+                 parent_cpu: float | None = None, kfgins_skipped: str | None = None) -> Path:
+    """Write report.md, summary.json and the PNG figures; returns the report path.  ``kfgins_skipped``: why
+    the KF-GINS comparison did not run (printed in its section), when it did not."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     runs = _runs(results)
     if len(runs) < 2:
         raise ValueError("the aided-nav report needs at least 2 runs")
-    summary = summarise(results)
+    summary = summarise(results, kfgins_skipped)
     load = os.getloadavg()
     summary.update({"profile": profile, "computed": computed, "wall_time_s": wall_time, "workers": workers,
                     "campaign_process_cpu_s": parent_cpu, "load_average_1_5_15": list(load)})
@@ -293,7 +325,7 @@ def write_report(results: dict, out_dir, *, profile: str, wall_time: float, work
               f"| velocity (m/s) | {e['velocity_mps']:.4f} | {e['velocity_sigma_mps']:.4f} |",
               f"| tilt (deg) | {e['tilt_deg']:.5f} | {e['tilt_sigma_deg']:.5f} |",
               f"| heading (deg) | {e['heading_deg']:.4f} | {e['heading_sigma_deg']:.4f} |",
-              ""] + _zupt_lines(summary["zupt_detection"]) + ["## Figures", "",
+              ""] + _zupt_lines(summary["zupt_detection"]) + _kfgins_lines(summary["kfgins"]) + ["## Figures", "",
               "Trajectory; position, velocity and attitude errors of run 0 with the filter's ±3σ envelope; mean "
               "NEES with its band; RMS horizontal error against the predicted σ_h (grey: GNSS outages).", ""]
     lines += [f"![{f}]({f})" for f in figures] + [""]

@@ -74,7 +74,8 @@ def register(sub) -> None:
     g.add_argument("--trajectory", metavar="FILE", default=None,
                    help="trajectory file (JSON: start and segments); runs the aided INS instead of the static run")
     g.add_argument("--aiding", default="gnss,zupt", metavar="LIST",
-                   help="comma-separated aiding: gnss, zupt, odometer, nhc, or none (default gnss,zupt)")
+                   help="comma-separated aiding: gnss, zupt, odometer, nhc, zaru (zero angular rate at the stops), or none "
+                        "(default gnss,zupt)")
     g.add_argument("--gnss-outage", action="append", default=[], metavar="START:END",
                    help="GNSS outage window, s from the start of the trajectory (repeatable)")
     g.add_argument("--gnss", default="sps", metavar="PRESET", help="GNSS receiver preset: sps, sbas, rtk (default sps)")
@@ -84,7 +85,13 @@ def register(sub) -> None:
     g.add_argument("--imu-rate-hz", type=finite, default=100.0, help="IMU output rate, Hz (default 100)")
     g.add_argument("--imu-noise", default="tactical", metavar="GRADE",
                    help="IMU noise grade of the aided run: ideal, tactical, mems (default tactical)")
+    g.add_argument("--imu-stream", choices=("numpy", "core"), default=None,
+                   help="where the IMU's errors are drawn: numpy (default) or core (the C core's stream, as the "
+                        "TrajectoryIMU FMU and the vehicle_gnss system draw them)")
     g.add_argument("--zupt-std", type=finite, default=0.01, help="zero-velocity update std, m/s (default 0.01)")
+    g.add_argument("--zaru-std", type=finite, default=None,
+                   help="zero-angular-rate update std per IMU step, rad/s (default: the gyro's white rate noise "
+                        "arw / sqrt(h) of --imu-noise at --imu-rate-hz)")
     g.add_argument("--zupt-detect", choices=("truth", "imu"), default=None,
                    help="where ZUPTs come from: truth (the trajectory's stops, default) or imu (a chi-square test on "
                         "the IMU's increments, sarins_fmu.zero_velocity)")
@@ -103,7 +110,8 @@ _STATIC_ONLY = {"lat_deg": "--lat-deg", "align_hours": "--align-hours", "nav_hou
                 "write_log": "--write-log"}
 _AIDED_ONLY = {"aiding": "--aiding", "gnss_outage": "--gnss-outage", "gnss": "--gnss", "gnss_rate_hz": "--gnss-rate-hz",
                "gnss_pos_std": "--gnss-pos-std", "imu_rate_hz": "--imu-rate-hz", "imu_noise": "--imu-noise",
-               "zupt_std": "--zupt-std", "zupt_detect": "--zupt-detect", "zupt_window": "--zupt-window",
+               "imu_stream": "--imu-stream", "zupt_std": "--zupt-std", "zaru_std": "--zaru-std",
+               "zupt_detect": "--zupt-detect", "zupt_window": "--zupt-window",
                "zupt_alpha": "--zupt-alpha", "vibration": "--vibration"}
 
 
@@ -142,6 +150,10 @@ def run_aided(args) -> int:
         raise UsageError(f"--gnss-pos-std must not be negative, got {args.gnss_pos_std:g}")
     if not args.zupt_std > 0:
         raise UsageError(f"--zupt-std must be positive, got {args.zupt_std:g}")
+    if args.zaru_std is not None and not args.zaru_std > 0:
+        raise UsageError(f"--zaru-std must be positive, got {args.zaru_std:g}")
+    if args.zaru_std is not None and "zaru" not in aiding:
+        raise UsageError("--zaru-std needs zaru in --aiding")
     detect, vibration, detector = _zupt_detection(args, aiding)
     outages = [_outage(t) for t in args.gnss_outage]
     if outages and "gnss" not in aiding:
@@ -168,11 +180,13 @@ def run_aided(args) -> int:
         raise UsageError(f"--trajectory {args.trajectory}: {exc}") from None
     t0 = time.perf_counter()
     result = aided.navigate(truth, noise=aided.IMU_NOISE[args.imu_noise], gnss=receiver if "gnss" in aiding else None,
-                            aiding=aiding, outages=outages, settings=aided.FilterSettings(zupt_std=args.zupt_std),
-                            seed=args.seed, zupt_detect=detect, vibration=vibration, detector=detector)
+                            aiding=aiding, outages=outages, settings=aided.FilterSettings(zupt_std=args.zupt_std, zaru_std=args.zaru_std),
+                            seed=args.seed, zupt_detect=detect, vibration=vibration, detector=detector,
+                            imu_stream=args.imu_stream or "numpy")
     out = aided.summary(result, outages)
     out.update({"wall_seconds": time.perf_counter() - t0, "seed": args.seed, "aiding": aiding, "gnss": args.gnss,
-                "imu_noise": args.imu_noise, "imu_rate_hz": args.imu_rate_hz, "gnss_rate_hz": args.gnss_rate_hz,
+                "imu_noise": args.imu_noise, "imu_stream": args.imu_stream or "numpy",
+                "imu_rate_hz": args.imu_rate_hz, "gnss_rate_hz": args.gnss_rate_hz,
                 "zupt_detect": detect, "vibration": args.vibration or ("car" if detect == "imu" else "none")})
     if args.json:
         print(json.dumps(out, allow_nan=False))
@@ -191,8 +205,8 @@ def _zupt_detection(args, aiding):
     if detect == "truth":
         refuse_unless(args, {"zupt_window": "--zupt-window", "zupt_alpha": "--zupt-alpha"}, False,
                       "applies with --zupt-detect imu only")
-    if detect == "imu" and "zupt" not in aiding:
-        raise UsageError("--zupt-detect imu needs zupt in --aiding")
+    if detect == "imu" and "zupt" not in aiding and "zaru" not in aiding:
+        raise UsageError("--zupt-detect imu needs zupt or zaru in --aiding")
     noise = aided.IMU_NOISE[args.imu_noise]
     if detect == "imu" and not (noise.vrw > 0 and noise.arw > 0):
         raise UsageError(f"--zupt-detect imu needs an IMU with noise (--imu-noise {args.imu_noise} has none to test "

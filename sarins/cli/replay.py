@@ -4,7 +4,7 @@
 
     sarins replay run.csv [--align-hours 4] [--compensator model.npz]
                           [--identify {hot,cold,MODEL.json} [--no-compensate]] [--json]
-    sarins replay unit1.csv.gz --axes frd --lat-deg 51.08 --heading-deg 0 --align-hours 0.5 --json
+    sarins replay unit1.csv.gz --axes frd --lat-deg 51.08 --heading-deg 0 --json
 
 The log formats are in docs/imu-log.md (the project's CSV or NPZ, a vendor CSV
 with units in its header, gzip, i2Nav text, ROS bags; ``--axes``, ``--lat-deg``,
@@ -41,7 +41,9 @@ def register(sub) -> None:
                        description="Static alignment on the start of a recorded IMU log, then free navigation "
                                    "over the rest; optionally through a trained IMU compensator first.")
     p.add_argument("log", help="IMU log: CSV (.gz), NPZ, i2Nav text or a ROS bag (docs/imu-log.md)")
-    p.add_argument("--align-hours", type=finite, default=4.0, help="alignment at the start of the log, h (default 4)")
+    p.add_argument("--align-hours", type=finite, default=None,
+                   help="alignment at the start of the log, h (default 4 to gyrocompass; with --heading-deg 1/6, "
+                        "at most half the log)")
     p.add_argument("--heading-deg", type=finite, default=None,
                    help="heading of the static start, deg clockwise from north: level with the accelerometers and "
                         "take this heading (needed when the gyros cannot see the Earth rate)")
@@ -67,7 +69,7 @@ def run(args) -> int:
     from sarins_fmu.identify.modelfile import ModelFileError
     from sarins_fmu.imu_log import read_log
 
-    if args.align_hours <= 0:
+    if args.align_hours is not None and args.align_hours <= 0:
         raise UsageError(f"--align-hours must be positive, got {args.align_hours:g}")
     if args.no_compensate and args.identify is None:
         raise UsageError("--no-compensate needs --identify")

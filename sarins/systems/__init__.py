@@ -165,8 +165,79 @@ def vehicle_rins_online(fmu_dir: Path | str = "resources", *, hours: float = 1.2
                   step_size=base.step_size)
 
 
+# vehicle_gnss's default drive (120 s at 100 Hz) and GNSS outage
+GNSS_DRIVE = {"start": {"lat_deg": 32.0, "lon_deg": 118.8, "height": 20.0, "heading_deg": 0.0},
+              "segments": [{"kind": "stop", "duration": 10}, {"kind": "accelerate", "to_speed": 12, "accel": 1.0},
+                           {"kind": "turn", "rate_dps": 6, "angle_deg": 90}, {"kind": "cruise", "duration": 50},
+                           {"kind": "turn", "radius": 150, "angle_deg": -90},
+                           {"kind": "accelerate", "to_speed": 0, "accel": 1.5}, {"kind": "stop", "duration": 10}]}
+GNSS_OUTAGES = ((60.0, 80.0),)
+TRUTH_TO_RECEIVER = ["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll", "omega_ib_x", "omega_ib_y",
+                     "omega_ib_z", "truth_time"]
+IMU_TO_AIDED = [f"{q}_{a}" for q in ("dtheta", "dv") for a in "xyz"] + ["increment_end_time"]
+RECEIVER_TO_AIDED = ["fix_valid", "fix_lat", "fix_lon", "fix_height", "fix_v_e", "fix_v_n", "fix_v_u", "fix_count",
+                     "fix_time", "fix_horizon"]
+AIDED_SETTINGS = ["step", "arw", "vrw", "gyro_rw", "accel_rw", "pos0_std", "vel0_std", "tilt0_std", "heading0_std",
+                  "gyro_bias0_std", "accel_bias0_std", "lever_x", "lever_y", "lever_z", "latency", "zupt_std",
+                  "cov_every", "nhc_std", "odo_std", "zaru_std"]  # aided._config's order (eskf.h)
+RECEIVER_SETTINGS = ["lever_x", "lever_y", "lever_z", "pos_white_e", "pos_white_n", "pos_white_u", "pos_gm_e",
+                     "pos_gm_n", "pos_gm_u", "pos_gm_tau", "vel_white_e", "vel_white_n", "vel_white_u", "vel_gm_e",
+                     "vel_gm_n", "vel_gm_u", "vel_gm_tau"]  # GNSSConfig.array's order (gnss.h)
+
+
+def vehicle_gnss(fmu_dir: Path | str = "resources", *, trajectory=None, seed: int = 0, gnss="sps",
+                 gnss_rate_hz: float = 1.0, imu_noise: str = "tactical", imu_rate_hz: float = 100.0,
+                 outages=GNSS_OUTAGES) -> System:
+    """TrajectoryIMU -> GNSSReceiver -> AidedINS, TrajectoryIMU -> AidedINS: the aided run of
+    ``sarins navigate --trajectory FILE --aiding gnss`` as a system.
+
+    ``trajectory``: a :class:`sarins_fmu.trajectory.Trajectory`, a dict or a JSON file (default
+    ``GNSS_DRIVE``, 120 s); ``gnss``: a preset name or a GNSSConfig; ``outages``: windows [start, end) s.
+    The parameters are those ``aided.navigate`` runs with (``FilterSettings()``, seed ``seed``; the filter's
+    initial state drawn as navigate draws it); the IMU's errors are the core's stream
+    (``aided.corrupt(stream='core')``).  Every link carries a time tag (truth_time, increment_end_time,
+    fix_time, fix_horizon), so the rows at each ``nav_time`` are the same under Gauss-Seidel and Jacobi
+    (Jacobi two steps later).  Communication step = the IMU step.
+    """
+    import numpy as np
+
+    from sarins_fmu import aided, gnss as gnss_mod, trajectory as tr
+
+    if trajectory is None or isinstance(trajectory, dict):
+        trajectory = tr.Trajectory.from_dict(trajectory or GNSS_DRIVE)
+    elif not isinstance(trajectory, tr.Trajectory):
+        trajectory = tr.load_trajectory(trajectory)
+    receiver = gnss_mod.preset(gnss, rate_hz=gnss_rate_hz) if isinstance(gnss, str) else gnss
+    noise, settings, step = aided.IMU_NOISE[imu_noise], aided.FilterSettings(), 1.0 / imu_rate_hz
+    truth = tr.generate(trajectory, step)
+    fmu_dir = Path(fmu_dir)
+    table = trajectory.table(step)
+    motion = {"segments": "; ".join(" ".join(repr(float(x)) for x in row) for row in table), "step": step,
+              "seed": int(seed), **dict(zip(["lat0", "lon0", "height0", "speed0", "yaw0", "pitch0"],
+                                            trajectory.start.array().tolist())),
+              **dict(zip(["arw", "vrw", "gyro_bias_std", "accel_bias_std", "gyro_rw", "accel_rw"],
+                         noise.array().tolist()))}
+    rx = {"rate_hz": float(receiver.rate_hz), "seed": int(seed), "outages": ";".join(f"{float(a)!r}:{float(b)!r}" for a, b in
+                                                                                    np.asarray(outages, float)),
+          **dict(zip(RECEIVER_SETTINGS, receiver.array().tolist()))}
+    nav0 = aided._initial_state(truth, settings, np.random.default_rng([seed, 3018]))
+    ins = {**dict(zip(AIDED_SETTINGS, aided._config(noise, settings, receiver, step).tolist())),
+           **{f"{n}0": float(v) for n, v in zip(["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll"],
+                                                nav0)},
+           **{f"gnss_{k}_std_{a}": float(v) for k, std in (("pos", receiver.pos_std()), ("vel", receiver.vel_std()))
+              for a, v in zip("enu", std)}, "use_velocity": 1, "zaru": 0}  # GNSS aiding only: no ZARU
+    components = [Component("motion", fmu_dir / "TrajectoryIMU.fmu", motion),
+                  Component("receiver", fmu_dir / "GNSSReceiver.fmu", rx),
+                  Component("ins", fmu_dir / "AidedINS.fmu", ins)]
+    connections = [Connection("motion", v, "receiver", v) for v in TRUTH_TO_RECEIVER]
+    connections += [Connection("motion", v, "ins", v) for v in IMU_TO_AIDED]
+    connections += [Connection("receiver", v, "ins", v) for v in RECEIVER_TO_AIDED]
+    return System(name="vehicle_gnss", components=components, connections=connections, start_time=0.0,
+                  stop_time=truth.n_steps * step, step_size=step)
+
+
 SYSTEMS = {"standard_static": standard_static, "standard_static_identified": standard_static_identified,
-           "vehicle_rins": vehicle_rins, "vehicle_rins_online": vehicle_rins_online}
+           "vehicle_rins": vehicle_rins, "vehicle_rins_online": vehicle_rins_online, "vehicle_gnss": vehicle_gnss}
 
 
 def write_systems(fmu_dir: Path | str) -> list[Path]:

@@ -1,6 +1,6 @@
-"""ctypes binding of the aided-navigation kernels: trajectory truth (``traj.h``), the 3-D strapdown
-mechanization (``nav3.h``), the GNSS receiver (``gnss.h``) and the error-state Kalman filter
-(``eskf.h``)."""
+"""ctypes binding of the aided-navigation kernels: trajectory truth (``traj.h``), the aided IMU's errors
+(``aided_imu.h``), the 3-D strapdown mechanization (``nav3.h``), the GNSS receiver (``gnss.h``) and the
+error-state Kalman filter (``eskf.h``)."""
 
 from __future__ import annotations
 
@@ -19,6 +19,7 @@ NAV_ROW = 9  # output row of nav3.h
 _traj_run = function("sarins_traj_run", ctypes.c_int, _I64, _P, _P, _F64, _I64, _I64, _P, _P, _P)
 _nav3_steps = function("sarins_nav3_steps", ctypes.c_int, _I64, _P, _P, _P, _P, _P, _F64, _P)
 _quat_to_rotvec = function("sarins_quat_to_rotvec", None, _P, _P)
+_aided_imu_run = function("sarins_aided_imu_run", ctypes.c_int, _P, _F64, ctypes.c_uint64, _I64, _P, _P, _P, _P, _P)
 
 
 def traj_run(segments, start, step: float, substeps: int):
@@ -36,6 +37,21 @@ def traj_run(segments, start, step: float, substeps: int):
         raise ValueError("the trajectory leaves the valid range (negative speed, |pitch| >= 89 deg, "
                          "|latitude| >= 89.9 deg) or has a non-finite value")
     return truth, dtheta, dv
+
+
+def aided_imu_run(config, step: float, seed: int, dtheta_true, dv_true):
+    """``sarins_aided_imu_run``: the ideal increments (K, 3) rad and m/s with the IMU errors of config (6)
+    (arw, vrw, gyro_bias_std, accel_bias_std, gyro_rw, accel_rw, SI) over steps of ``step`` s, seeded;
+    returns dtheta, dv (K, 3) and the biases over each step (K, 6: gyro rad/s, accelerometer m/s^2)."""
+    config = _arrays.read(config, (6,), "IMU noise settings")
+    dtheta_true = _arrays.read(dtheta_true, (np.shape(dtheta_true)[0], 3), "dtheta")
+    k = dtheta_true.shape[0]
+    dv_true = _arrays.read(dv_true, (k, 3), "dv")
+    dtheta, dv, bias = np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 6))
+    if _aided_imu_run(config.ctypes.data, float(step), int(seed) % 2**64, k, dtheta_true.ctypes.data,
+                      dv_true.ctypes.data, dtheta.ctypes.data, dv.ctypes.data, bias.ctypes.data) != 0:
+        raise ValueError("IMU noise settings must be finite and >= 0 and the step positive")
+    return dtheta, dv, bias
 
 
 def nav3_steps(q, v, pos, dtheta, dv, step: float) -> np.ndarray:
@@ -93,12 +109,15 @@ class GnssState:
         return out
 
 
-ESKF_CONFIG = 19  # settings of eskf.h
-ESKF_ROW = 9 + 6 + 225
+ESKF_CONFIG = 20  # settings of eskf.h
+ESKF_ROW = 9 + 6 + 225  # an output row with P
+ESKF_ROW_DIAG = 9 + 6 + 15  # an output row with P's diagonal only
+ESKF_AID = 10  # columns of the aid row (eskf.h SARINS_ESKF_AID)
 ESKF_GNSS = 11
 _eskf_size = function("sarins_eskf_size", _I64)
 _eskf_init = function("sarins_eskf_init", ctypes.c_int, _P, _P, _P, ctypes.c_char_p, ctypes.c_size_t)
-_eskf_run = function("sarins_eskf_run", ctypes.c_int, _P, _I64, _P, _P, _P, _I64, _P, _P, ctypes.c_int, _I64, _P)
+_eskf_run = function("sarins_eskf_run", ctypes.c_int, _P, _I64, _P, _P, _P, _I64, _P, _P, ctypes.c_int, _I64,
+                     ctypes.c_int, _P)
 
 
 class EskfState:
@@ -112,19 +131,21 @@ class EskfState:
         if _eskf_init(self.buffer.ctypes.data, config.ctypes.data, nav0.ctypes.data, msg, 256) != 0:
             raise ValueError(msg.value.decode())
 
-    def run(self, dtheta, dv, aid, gnss, vel_std, use_vel: bool, out_every: int) -> np.ndarray:
-        """``sarins_eskf_run`` over K steps (aid (K, 9): ZUPT flag, measured velocity at a stop (3), odometer
-        flag, odometer speed, NHC flag, measured lateral and vertical body velocity); returns the
-        (K // out_every, 240) rows (nav 9, b_g 3, b_a 3, P 225)."""
+    def run(self, dtheta, dv, aid, gnss, vel_std, use_vel: bool, out_every: int, full_cov: bool = True) -> np.ndarray:
+        """``sarins_eskf_run`` over K steps (aid (K, 10): ZUPT flag, measured velocity at a stop (3), odometer
+        flag, odometer speed, NHC flag, measured lateral and vertical body velocity, ZARU flag); returns the
+        (K // out_every, 240) rows (nav 9, b_g 3, b_a 3, P 225), or with ``full_cov`` False the
+        (K // out_every, 30) rows with P's diagonal (15) in place of P."""
         dtheta = _arrays.read(dtheta, (np.shape(dtheta)[0], 3), "dtheta")
         k = dtheta.shape[0]
         dv = _arrays.read(dv, (k, 3), "dv")
-        aid = _arrays.read(aid, (k, 9), "per-step aiding")
+        aid = _arrays.read(aid, (k, ESKF_AID), "per-step aiding")
         gnss = _arrays.read(np.reshape(gnss, (-1, ESKF_GNSS)), (np.size(gnss) // ESKF_GNSS, ESKF_GNSS), "fixes")
         vel_std = _arrays.read(vel_std, (3,), "velocity std")
-        out = np.empty((k // out_every, ESKF_ROW))
+        out = np.empty((k // out_every, ESKF_ROW if full_cov else ESKF_ROW_DIAG))
         if _eskf_run(self.buffer.ctypes.data, k, dtheta.ctypes.data, dv.ctypes.data, aid.ctypes.data, gnss.shape[0],
-                     gnss.ctypes.data, vel_std.ctypes.data, int(bool(use_vel)), int(out_every), out.ctypes.data) != 0:
+                     gnss.ctypes.data, vel_std.ctypes.data, int(bool(use_vel)), int(out_every), int(bool(full_cov)),
+                     out.ctypes.data) != 0:
             raise ValueError("filter inputs not finite, fixes not in step order, or a velocity std not positive")
         return out
 

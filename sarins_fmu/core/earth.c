@@ -19,7 +19,11 @@ void sarins_earth_constants(double *out)
 
 void sarins_earth_radii(double lat, double *r_meridian, double *r_prime_vertical)
 {
-    double s = sm_sin(lat);
+    sarins_earth_radii_sin(sm_sin(lat), r_meridian, r_prime_vertical);
+}
+
+void sarins_earth_radii_sin(double s, double *r_meridian, double *r_prime_vertical)
+{
     double s2 = s * s;
     /* w = sqrt(1 - e^2 sin^2 L) */
     double w = sm_sqrt(1.0 - SARINS_EARTH_E2 * s2);
@@ -30,7 +34,11 @@ void sarins_earth_radii(double lat, double *r_meridian, double *r_prime_vertical
 
 double sarins_earth_gravity(double lat, double height)
 {
-    double s = sm_sin(lat);
+    return sarins_earth_gravity_sin(sm_sin(lat), height);
+}
+
+double sarins_earth_gravity_sin(double s, double height)
+{
     double s2 = s * s;
     /* g0 = gamma_e (1 + k sin^2 L) / sqrt(1 - e^2 sin^2 L) */
     double g0 = SARINS_EARTH_GAMMA_E * (1.0 + SARINS_EARTH_K_SOMIGLIANA * s2) / sm_sqrt(1.0 - SARINS_EARTH_E2 * s2);

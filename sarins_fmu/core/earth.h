@@ -41,6 +41,11 @@ void sarins_earth_radii(double lat, double *r_meridian, double *r_prime_vertical
  * second-order free-air correction (TR8350.2 eq. 4-3). */
 double sarins_earth_gravity(double lat, double height);
 
+/* The same two from sin_lat = sm_sin(lat) (bit for bit the values above; for a caller that has the
+ * sine already, e.g. from sm_sincos). */
+void sarins_earth_radii_sin(double sin_lat, double *r_meridian, double *r_prime_vertical);
+double sarins_earth_gravity_sin(double sin_lat, double height);
+
 /* Element-wise over n points (the Python binding's vectorised calls). */
 void sarins_earth_radii_n(int64_t n, const double *lat, double *r_meridian, double *r_prime_vertical);
 void sarins_earth_gravity_n(int64_t n, const double *lat, const double *height, double *gravity);

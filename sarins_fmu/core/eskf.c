@@ -35,8 +35,9 @@ int sarins_eskf_init(sarins_eskf *s, const double *config, const double *nav0, c
             return 1;
         }
     if (!(config[SARINS_ESKF_ZUPT_STD] > 0.0) || !(config[SARINS_ESKF_NHC_STD] > 0.0) ||
-        !(config[SARINS_ESKF_ODO_STD] > 0.0) || config[SARINS_ESKF_LATENCY] < 0.0) {
-        sarins_say(msg, size, "the ZUPT, NHC and odometer stds must be positive and the latency not negative");
+        !(config[SARINS_ESKF_ODO_STD] > 0.0) || !(config[SARINS_ESKF_ZARU_STD] > 0.0) ||
+        config[SARINS_ESKF_LATENCY] < 0.0) {
+        sarins_say(msg, size, "the ZUPT, ZARU, NHC and odometer stds must be positive and the latency not negative");
         return 1;
     }
     if (!(config[SARINS_ESKF_COV_EVERY] >= 1.0 && config[SARINS_ESKF_COV_EVERY] <= 1000.0 &&
@@ -109,39 +110,93 @@ static void dynamics(const sarins_eskf *s, double *f)
     f[IDX(8, 3)] = sl / (cl * rnh);
 }
 
+/* Scratch matrices of propagate_cov: N rows padded to W columns (the padding held at 0), so a row's
+ * loop has a length the compiler vectorizes without a remainder (lane by lane, the same operations). */
+#define W 16
+typedef struct {
+    double r[N][W];
+} mat_w;
+
+/* c = a b (N x N in rows of W), skipping the zero entries of a: for a finite b the same as sarins_matmul
+ * bit for bit (each c_ij still sums a_ik b_kj over ascending k from +0.0, and adding an exact zero
+ * product never changes such a sum); F and Phi are sparse (zero bias rows, few nonzeros elsewhere). */
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && defined(__GLIBC__) && defined(__has_attribute)
+#if __has_attribute(target_clones)
+#define ESKF_CLONES __attribute__((target_clones("avx2", "default")))
+#endif
+#endif
+#ifndef ESKF_CLONES
+#define ESKF_CLONES
+#endif
+ESKF_CLONES static void mul_skip_zeros(const mat_w *a, const mat_w *b, mat_w *c)
+{
+    for (int i = 0; i < N; i++) {
+        int ks[N], n = 0; /* the columns of a's row i that are not 0, ascending */
+        for (int k = 0; k < N; k++) { /* without a branch: the pattern changes along the row */
+            ks[n] = k;
+            n += a->r[i][k] != 0.0;
+        }
+        double lo[8] = {0.0}, hi[8] = {0.0}; /* columns 0-7 and 8-15: sums that stay in registers */
+        for (int t = 0; t < n; t++) {
+            double aik = a->r[i][ks[t]];
+            const double *bk = b->r[ks[t]];
+            for (int l = 0; l < 8; l++)
+                lo[l] += aik * bk[l];
+            for (int l = 0; l < 8; l++)
+                hi[l] += aik * bk[8 + l];
+        }
+        for (int l = 0; l < 8; l++) {
+            c->r[i][l] = lo[l];
+            c->r[i][8 + l] = hi[l];
+        }
+    }
+}
+
 static void propagate_cov(sarins_eskf *s, double t)
 {
-    double *a = s->phi_acc, *b = s->tmp;
-    double f[N * N], phi[N * N];
+    double f[N * N];
+    mat_w a, a2, phi, m1, m2;
     dynamics(s, f);
-    for (int i = 0; i < N * N; i++)
-        a[i] = f[i] * t;
-    sarins_matmul(N, a, a, b); /* (F T)^2 */
+    for (int i = 0; i < N; i++) {
+        for (int j = 0; j < N; j++) {
+            a.r[i][j] = f[IDX(i, j)] * t;
+            m2.r[i][j] = s->p[IDX(i, j)];
+        }
+        for (int j = N; j < W; j++)
+            a.r[i][j] = m2.r[i][j] = 0.0;
+    }
+    mul_skip_zeros(&a, &a, &a2); /* (F T)^2 */
+    for (int i = 0; i < N; i++)
+        for (int j = 0; j < W; j++)
+            phi.r[i][j] = (i == j ? 1.0 : 0.0) + a.r[i][j] + 0.5 * a2.r[i][j];
+    /* P = Phi P Phi' + Q, as Phi (Phi P)': the transpose of Phi P Phi' with the same products in the same
+     * order (P is written transposed, which the symmetrization below does not see) */
+    mul_skip_zeros(&phi, &m2, &m1); /* Phi P */
     for (int i = 0; i < N; i++)
         for (int j = 0; j < N; j++)
-            phi[IDX(i, j)] = (i == j ? 1.0 : 0.0) + a[IDX(i, j)] + 0.5 * b[IDX(i, j)];
-    /* P = Phi P Phi' + Q */
-    sarins_matmul(N, phi, s->p, a);
-    sarins_matmul_bt(N, a, phi, s->p);
+            m2.r[j][i] = m1.r[i][j];
+    mul_skip_zeros(&phi, &m2, &m1);
     const double *c = s->config;
     double q[5] = {0.0, c[SARINS_ESKF_VRW], c[SARINS_ESKF_ARW], c[SARINS_ESKF_GYRO_RW], c[SARINS_ESKF_ACCEL_RW]};
-    for (int i = 0; i < N; i++)
+    for (int i = 0; i < N; i++) {
+        for (int j = 0; j < N; j++)
+            s->p[IDX(i, j)] = m1.r[i][j];
         s->p[IDX(i, i)] += q[i / 3] * q[i / 3] * t;
+    }
     sarins_symmetrize(N, s->p);
 }
 
 void sarins_eskf_predict(sarins_eskf *s, const double *dtheta, const double *dv)
 {
-    double h = s->config[SARINS_ESKF_STEP], dt[3], dvc[3], m[9];
+    double h = s->config[SARINS_ESKF_STEP], dt[3], dvc[3], dvn[3];
     for (int i = 0; i < 3; i++) {
         dt[i] = dtheta[i] - s->bg[i] * h;
         dvc[i] = dv[i] - s->ba[i] * h;
         s->w_ib[i] = dt[i] / h;
     }
-    sarins_quat_to_mat(s->q, m);
-    for (int i = 0; i < 3; i++) /* specific force in n at the start of the step */
-        s->f_n[i] = (m[3 * i] * dvc[0] + m[3 * i + 1] * dvc[1] + m[3 * i + 2] * dvc[2]) / h;
-    sarins_nav3_step(s->q, s->v, s->pos, dt, dvc, h);
+    sarins_nav3_step_dvn(s->q, s->v, s->pos, dt, dvc, h, dvn);
+    for (int i = 0; i < 3; i++) /* specific force in n at the start of the step: mat_nb,k-1 dv_c / h */
+        s->f_n[i] = dvn[i] / h;
     s->steps += 1;
     s->since_cov += 1;
     if ((double)s->since_cov >= s->config[SARINS_ESKF_COV_EVERY]) {
@@ -282,6 +337,29 @@ void sarins_eskf_zupt(sarins_eskf *s, const double *v_meas)
     feedback(s);
 }
 
+void sarins_eskf_zaru(sarins_eskf *s, const double *dtheta)
+{
+    double h = s->config[SARINS_ESKF_STEP], r = s->config[SARINS_ESKF_ZARU_STD] * s->config[SARINS_ESKF_ZARU_STD];
+    double m[9], sl, cl, hrow[N];
+    sarins_quat_to_mat(s->q, m);
+    sm_sincos(s->pos[0], &sl, &cl);
+    double w_ie[3] = {0.0, SARINS_EARTH_RATE * cl, SARINS_EARTH_RATE * sl};
+    double wx[9] = {0.0, -w_ie[2], w_ie[1], w_ie[2], 0.0, -w_ie[0], -w_ie[1], w_ie[0], 0.0};
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < N; j++)
+            hrow[j] = 0.0;
+        double pred = 0.0; /* (mat_bn omega_ie^n)_i, row i of mat_bn = column i of mat_nb */
+        for (int j = 0; j < 3; j++) {
+            pred += m[3 * j + i] * w_ie[j];
+            hrow[6 + j] = m[i] * wx[j] + m[3 + i] * wx[3 + j] + m[6 + i] * wx[6 + j]; /* (mat_bn [w_ie x])_ij */
+        }
+        hrow[9 + i] = 1.0; /* w_ib carries +db_g (the bias block: true = estimate + db) */
+        double w = (dtheta[i] - s->bg[i] * h) / h;
+        scalar_update(s, hrow, w - pred, r);
+    }
+    feedback(s);
+}
+
 void sarins_eskf_body_velocity(sarins_eskf *s, const double *meas, const int *use, const double *std)
 {
     double m[9], hrow[N];
@@ -304,26 +382,32 @@ void sarins_eskf_body_velocity(sarins_eskf *s, const double *meas, const int *us
     feedback(s);
 }
 
-static void write_row(const sarins_eskf *s, double *row)
+/* an output row: nav (9), b_g, b_a, then P (full_cov) or its diagonal */
+static void write_row(const sarins_eskf *s, int full_cov, double *row)
 {
     sarins_nav3_row(s->q, s->v, s->pos, row);
     for (int i = 0; i < 3; i++) {
         row[9 + i] = s->bg[i];
         row[12 + i] = s->ba[i];
     }
-    for (int i = 0; i < N * N; i++)
-        row[15 + i] = s->p[i];
+    if (full_cov)
+        for (int i = 0; i < N * N; i++)
+            row[15 + i] = s->p[i];
+    else
+        for (int i = 0; i < N; i++)
+            row[15 + i] = s->p[IDX(i, i)];
 }
 
 int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const double *dv, const double *aid, int64_t m,
-                    const double *gnss, const double *vel_std, int use_vel, int64_t out_every, double *out)
+                    const double *gnss, const double *vel_std, int use_vel, int64_t out_every, int full_cov, double *out)
 {
+    int64_t width = full_cov ? SARINS_ESKF_ROW : SARINS_ESKF_ROW_DIAG;
     if (out_every < 1 || k < 0 || m < 0)
         return 1;
     for (int64_t i = 0; i < 3 * k; i++)
         if (!isfinite(dtheta[i]) || !isfinite(dv[i]))
             return 1;
-    for (int64_t i = 0; i < 9 * k; i++)
+    for (int64_t i = 0; i < SARINS_ESKF_AID * k; i++)
         if (!isfinite(aid[i]))
             return 1;
     for (int64_t j = 0; j < m * SARINS_ESKF_GNSS; j++)
@@ -340,9 +424,11 @@ int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const doubl
         g++;
     for (int64_t i = 0; i < k; i++) {
         sarins_eskf_predict(s, dtheta + 3 * i, dv + 3 * i);
-        const double *a = aid + 9 * i;
+        const double *a = aid + SARINS_ESKF_AID * i;
         if (a[0] != 0.0)
             sarins_eskf_zupt(s, a + 1);
+        if (a[9] != 0.0)
+            sarins_eskf_zaru(s, dtheta + 3 * i);
         if (a[4] != 0.0 || a[6] != 0.0) {
             double meas[3] = {a[7], a[5], a[8]};
             int use[3] = {a[6] != 0.0, a[4] != 0.0, a[6] != 0.0};
@@ -358,7 +444,7 @@ int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const doubl
             sarins_eskf_gnss(s, r + 2, r + 5, std, use_vel);
         }
         if ((i + 1) % out_every == 0)
-            write_row(s, out + SARINS_ESKF_ROW * ((i + 1) / out_every - 1));
+            write_row(s, full_cov, out + width * ((i + 1) / out_every - 1));
     }
     return 0;
 }

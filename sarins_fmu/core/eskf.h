@@ -3,11 +3,14 @@
  *
  * The INS is nav3.h's mechanization on the increments compensated with the estimated biases,
  *     dtheta_c = dtheta - b_g h,   dv_c = dv - b_a h.
- * Error state (ENU, metres and radians), true = computed - error:
+ * Error state (ENU, metres and radians), true = computed - error for dr, dv and phi:
  *     x = [dr (E N U, m), dv (E N U, m/s), phi (E N U, rad), db_g (body, rad/s), db_a (body, m/s^2)]
- * with mat_nb,computed = (I - [phi x]) mat_nb,true.  Continuous error model (Titterton & Weston 2004,
- * ch. 12; Groves 2013, ch. 14, local-navigation-frame form; R = sqrt(R_M R_N) + h for the gravity
- * gradient):
+ * with mat_nb,computed = (I - [phi x]) mat_nb,true; the bias blocks are the corrections the estimates
+ * lack, true = estimate + db (b_g,true = b_g + db_g, b_a,true = b_a + db_a): the compensated increments
+ * then carry -db (dtheta_c / h = w_ib,true - db_g + noise), which is what the dynamics below
+ * (phi' = ... - mat_nb db_g), the GNSS velocity row (-mat_nb [l x]) and the feedback b += db use.
+ * Continuous error model (Titterton & Weston 2004, ch. 12; Groves 2013, ch. 14, local-navigation-frame
+ * form; R = sqrt(R_M R_N) + h for the gravity gradient):
  *     dr'  = dv
  *     dv'  = f^n x phi - (2 omega_ie^n + omega_en^n) x dv + mat_nb db_a + (0, 0, 2 g / R dr_U)
  *     phi' = -omega_in^n x phi + d omega_en^n(dv) - mat_nb db_g
@@ -30,6 +33,26 @@
  * GNSS velocity:  z = v_ins(t - L) + mat_nb (omega_nb^b x l) - v_gnss,
  *     H = [0, I, [(mat_nb (omega_nb^b x l)) x], -mat_nb [l x], 0]
  * ZUPT:  z = v_ins - v_meas (v_meas: zero plus the stop's jitter),  H = [0, I, 0, 0, 0].
+ * ZARU (zero angular rate at a stop): the body stands still on the Earth, so its true rate is the Earth's,
+ *     w_ib,true = mat_bn,true omega_ie^n,   omega_ie^n = (0, Omega cos L, Omega sin L)  (ENU).
+ * The measured rate is the step's compensated increment over h, w_ib = (dtheta - b_g h) / h (the bias as it
+ * stands when the update runs: a ZUPT fed back before it counts), and with the gyro error model
+ * dtheta = dtheta_true + b_g,true h + arw sqrt(h) n and b_g,true = b_g + db_g:
+ *     w_ib = w_ib,true + db_g + n_w,   n_w white with std arw / sqrt(h) per step.
+ * The predicted rate uses the computed attitude, mat_bn = mat_bn,true (I - [phi x])' = mat_bn,true (I + [phi x]):
+ *     mat_bn omega_ie^n = mat_bn,true omega_ie^n + mat_bn [phi x] omega_ie^n
+ *                       = mat_bn,true omega_ie^n - mat_bn [omega_ie^n x] phi.
+ * So  z = w_ib - mat_bn omega_ie^n = mat_bn [omega_ie^n x] phi + db_g + n_w,
+ *     H = [0, 0, mat_bn [omega_ie^n x], I, 0]  (row i: row i of mat_bn [omega_ie^n x], e_i),
+ * three scalar updates with std config ZARU_STD (rad/s).  (omega_ie^n at the computed latitude: its
+ * position derivative, Omega / R per metre ~ 1e-11 rad/s/m, is left out.)  One update per stationary
+ * step with the step's own rate, not one with the mean rate of the stop: for a constant bias both carry
+ * the same information (N updates of variance r = arw^2 / h, or one of r / N: information N h / arw^2
+ * = T / arw^2 over a stop of T s, whatever h), and per step needs no accumulator in the struct and follows
+ * a bias estimate that moves during the stop.  ZARU_STD = arw / sqrt(h) is the gyro's own white rate noise
+ * per step (the vehicle's rate jitter at a stop adds to it).  The same gyro noise drives phi (the ARW in
+ * Q); the filter treats the two as independent: phi enters z only through |omega_ie| ~ 7e-5 rad/s, so
+ * the neglected correlation is of relative size Omega h.
  * Body-frame velocity (odometer: forward axis y, measured speed; non-holonomic constraint: axes x
  * and z, measured 0 plus the vehicle's jitter), v^b = mat_bn v^n, for each axis i used:
  *     z_i = (mat_bn v^n)_i - meas_i,   H_i = [0, (mat_bn)_i, -(mat_bn [v^n x])_i, 0, 0]
@@ -49,10 +72,13 @@ enum {
     SARINS_ESKF_POS0_STD, SARINS_ESKF_VEL0_STD, SARINS_ESKF_TILT0_STD, SARINS_ESKF_HEADING0_STD,
     SARINS_ESKF_GYRO_BIAS0_STD, SARINS_ESKF_ACCEL_BIAS0_STD, SARINS_ESKF_LEVER_X, SARINS_ESKF_LEVER_Y,
     SARINS_ESKF_LEVER_Z, SARINS_ESKF_LATENCY, SARINS_ESKF_ZUPT_STD, SARINS_ESKF_COV_EVERY, SARINS_ESKF_NHC_STD,
-    SARINS_ESKF_ODO_STD, SARINS_ESKF_CONFIG
+    SARINS_ESKF_ODO_STD, SARINS_ESKF_ZARU_STD, SARINS_ESKF_CONFIG
 };
-/* output row: nav row (9: lat, lon, h, v E N U, yaw, pitch, roll), b_g (3), b_a (3), P (15 x 15) */
+/* output row: nav row (9: lat, lon, h, v E N U, yaw, pitch, roll), b_g (3), b_a (3), P (15 x 15); the
+ * short row has P's diagonal (15) in place of P */
 #define SARINS_ESKF_ROW (9 + 6 + SARINS_ESKF_N * SARINS_ESKF_N)
+#define SARINS_ESKF_ROW_DIAG (9 + 6 + SARINS_ESKF_N)
+#define SARINS_ESKF_AID 10 /* aid row of sarins_eskf_run (columns below) */
 #define SARINS_ESKF_GNSS 11 /* fix row of sarins_eskf_run: step index, valid, lat, lon (rad), h (m),
                                v E N U (m/s), position std E N U (m) */
 
@@ -65,8 +91,6 @@ typedef struct {
     double w_ib[3];            /* last compensated angular rate, body rad/s */
     double f_n[3];             /* last specific force, nav m/s^2 (for F) */
     int64_t steps, since_cov;
-    double phi_acc[SARINS_ESKF_N * SARINS_ESKF_N]; /* scratch (no allocation) */
-    double tmp[SARINS_ESKF_N * SARINS_ESKF_N];
 } sarins_eskf;
 
 /* Initialise from config and the start nav row (9); 0, or 1 with a reason in msg. */
@@ -84,20 +108,25 @@ double sarins_eskf_gnss(sarins_eskf *s, const double *pos, const double *vel, co
  * jitter; three scalar updates with std config ZUPT_STD) and feedback. */
 void sarins_eskf_zupt(sarins_eskf *s, const double *v_meas);
 
+/* Zero-angular-rate update at a stop from the step's raw angle increment dtheta (3, body rad: the one
+ * sarins_eskf_predict just integrated), compensated with the current gyro bias estimate; three scalar
+ * updates with std config ZARU_STD (rad/s), then feedback. */
+void sarins_eskf_zaru(sarins_eskf *s, const double *dtheta);
+
 /* Body-frame velocity update on the axes with use[i] != 0 (meas (3) m/s, std (3) m/s), then feedback. */
 void sarins_eskf_body_velocity(sarins_eskf *s, const double *meas, const int *use, const double *std);
 
-/* K steps: predict with dtheta, dv (K, 3); after step k, by the row aid[k] of aid (K, 9) = [zupt flag,
- * zupt measured v E N U, odometer flag, odometer speed (m/s), NHC flag, NHC measured body v_x, v_z
- * (m/s: zero plus the vehicle's jitter)]: a ZUPT, then an odometer and / or NHC update (std config
- * ODO_STD, NHC_STD); then the fixes
+/* K steps: predict with dtheta, dv (K, 3); after step k, by the row aid[k] of aid (K, SARINS_ESKF_AID)
+ * = [zupt flag, zupt measured v E N U, odometer flag, odometer speed (m/s), NHC flag, NHC measured body
+ * v_x, v_z (m/s: zero plus the vehicle's jitter), zaru flag]: a ZUPT, then a ZARU (from the step's
+ * dtheta), then an odometer and / or NHC update (std config ODO_STD, NHC_STD); then the fixes
  * whose step index (gnss row column 0, the step after which the fix is applied) equals k, in order:
  * rows (m, 11) = step index, valid, lat, lon, h, v E N U, std E N U (position m), and vel_std (3)
- * shared by all fixes.  Writes out rows (SARINS_ESKF_ROW) after every out_every-th step (n_out =
- * K / out_every rows).  Returns 0, or 1 (nothing changed) for a non-finite input or fix rows not in
- * step order. */
+ * shared by all fixes.  Writes out rows after every out_every-th step (n_out = K / out_every rows):
+ * SARINS_ESKF_ROW with full_cov != 0, else SARINS_ESKF_ROW_DIAG (P's diagonal only).  Returns 0, or 1
+ * (nothing changed) for a non-finite input or fix rows not in step order. */
 int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const double *dv, const double *aid, int64_t m,
-                    const double *gnss, const double *vel_std, int use_vel, int64_t out_every, double *out);
+                    const double *gnss, const double *vel_std, int use_vel, int64_t out_every, int full_cov, double *out);
 
 int64_t sarins_eskf_size(void);
 

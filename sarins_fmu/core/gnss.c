@@ -124,9 +124,7 @@ int sarins_gnss_check(const sarins_gnss *s, char *msg, size_t size)
 {
     if (!config_ok(s->config, msg, size))
         return 1;
-    /* an even increment repeats its draws within 2^63 of them; 0 repeats one, which the polar method may
-     * reject for ever */
-    if (!(s->rng.gamma & 1u) || !(s->rng.has_spare == 0 || s->rng.has_spare == 1) || !isfinite(s->rng.spare)) {
+    if (!sarins_rng_valid(&s->rng)) {
         sarins_say(msg, size, "the GNSS random stream is not one the receiver makes");
         return 1;
     }

@@ -9,7 +9,10 @@
 #include "correlated.h"
 #include "dynamics.h"
 #include "imu.h"
+#include "imu_build.h"
 #include "thermal.h"
+
+#define PI 3.14159265358979323846
 
 /* ------------------------------------------------------------ minor loop */
 
@@ -124,14 +127,8 @@ static LANE_INLINE void rot_t_lane(double ax, double ay, double az, double c, do
  * gimbal state ang, rat, acc and the time tau (s) since the interval start per lane.  Lanes from n_valid on
  * hold no value: their cos, sin taken as 1, 0.  first: s is still the zero vector
  * (+0.0 each), taken as literals rather than stored (a store of zeros becomes a memset, a slow rep stos here). */
-static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, const double *restrict ang,
-                                     const double *restrict rat, const double *restrict acc,
-                                     const double *restrict tau, int n_valid, Lanes *restrict v) {
-    Lanes th, thd, c, sn;
-    for (int l = 0; l < LANES; l++) {
-        th[l] = ang[l] + (rat[l] + 0.5 * acc[l] * tau[l]) * tau[l];
-        thd[l] = rat[l] + acc[l] * tau[l];
-    }
+/* sn, c = sin, cos of the first n_valid lanes of th; the other lanes get 0, 1 (th's unused lanes are overwritten). */
+static LANE_INLINE void lanes_sincos(Lanes th, int n_valid, Lanes sn, Lanes c) {
 #if LANES == 4
     for (int l = n_valid; l < LANES; l++) th[l] = 1.0; /* no value: an ordinary argument, result unused */
     sm_sincos4(th, sn, c);
@@ -149,6 +146,17 @@ static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, con
         }
     }
 #endif
+}
+
+static LANE_INLINE void gimbal_lanes(int first, const double *restrict axis, const double *restrict ang,
+                                     const double *restrict rat, const double *restrict acc,
+                                     const double *restrict tau, int n_valid, Lanes *restrict v) {
+    Lanes th, thd, c, sn;
+    for (int l = 0; l < LANES; l++) {
+        th[l] = ang[l] + (rat[l] + 0.5 * acc[l] * tau[l]) * tau[l];
+        thd[l] = rat[l] + acc[l] * tau[l];
+    }
+    lanes_sincos(th, n_valid, sn, c);
     double ax = axis[0], ay = axis[1], az = axis[2];
     for (int l = 0; l < LANES; l++) {
         double s0 = first ? 0.0 : v[6][l], s1 = first ? 0.0 : v[7][l], s2 = first ? 0.0 : v[8][l];
@@ -199,30 +207,6 @@ static LANE_INLINE void truth_lanes(int64_t n_axes, const double *restrict axes,
             gimbal_lanes(1, axes, ang[0], rat[0], acc[0], taus, LANES, v);
         } else {
             gimbal_lanes(0, axes + 3 * j, ang[j], rat[j], acc[j], taus, LANES, v);
-        }
-    }
-    truth_end(v, out);
-}
-
-/* sarins_imu_truth of one interval at LANES times tau (lanes from n_valid on hold no time): gimbal state
- * ang, rat, acc [A]; w_t, f_t [3] lanes (the same in each); out [6] lanes. */
-static LANE_INLINE void truth_steps(int64_t n_axes, const double *restrict axes, const double *restrict ang,
-                                    const double *restrict rat, const double *restrict acc,
-                                    const double *restrict tau, int n_valid, Lanes *restrict w_t,
-                                    Lanes *restrict f_t, Lanes *restrict out) {
-    Lanes v[9];
-    truth_start(n_axes, w_t, f_t, v);
-    for (int64_t j = 0; j < n_axes; j++) {
-        Lanes a, r, c;
-        for (int l = 0; l < LANES; l++) {
-            a[l] = ang[j];
-            r[l] = rat[j];
-            c[l] = acc[j];
-        }
-        if (j == 0) {
-            gimbal_lanes(1, axes, a, r, c, tau, n_valid, v);
-        } else {
-            gimbal_lanes(0, axes + 3 * j, a, r, c, tau, n_valid, v);
         }
     }
     truth_end(v, out);
@@ -302,17 +286,32 @@ static LANE_INLINE void scull_cone(double da0, double da1, double da2, double dv
 }
 
 /* The serial part of a minor step: v += q sv q* (the step's velocity into b(k-1)); q <- q * [c, s p]. */
+/* n = q * (c, s p): one minor step's quaternion update (p the unit rotation axis, c, s the half angle's cos, sin). */
+static LANE_INLINE void q_rotate(double q0, double q1, double q2, double q3, double p0, double p1, double p2,
+                                 double c, double s, double *restrict n) {
+    n[0] = q0 * c - s * (q1 * p0 + q2 * p1 + q3 * p2);
+    n[1] = q0 * s * p0 + q1 * c + s * (q2 * p2 - q3 * p1);
+    n[2] = q0 * s * p1 + q2 * c + s * (q3 * p0 - q1 * p2);
+    n[3] = q0 * s * p2 + q3 * c + s * (q1 * p1 - q2 * p0);
+}
+
+/* o = sv rotated by q (sv + 2 q0 (qv x sv) + 2 qv x (qv x sv), the q_step velocity term). */
+static LANE_INLINE void v_rotate(double q0, double q1, double q2, double q3, double s0, double s1, double s2,
+                                 double *restrict o) {
+    double cx = q2 * s2 - q3 * s1, cy = q3 * s0 - q1 * s2, cz = q1 * s1 - q2 * s0;
+    o[0] = s0 + 2.0 * (q0 * cx + q2 * cz - q3 * cy);
+    o[1] = s1 + 2.0 * (q0 * cy + q3 * cx - q1 * cz);
+    o[2] = s2 + 2.0 * (q0 * cz + q1 * cy - q2 * cx);
+}
+
 static LANE_INLINE void q_step(double *restrict q, double *restrict v, const double *restrict sv,
                                const double *restrict p, double c, double s) {
-    double q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3];
-    double cx = q2 * sv[2] - q3 * sv[1], cy = q3 * sv[0] - q1 * sv[2], cz = q1 * sv[1] - q2 * sv[0];
-    v[0] += sv[0] + 2.0 * (q0 * cx + q2 * cz - q3 * cy);
-    v[1] += sv[1] + 2.0 * (q0 * cy + q3 * cx - q1 * cz);
-    v[2] += sv[2] + 2.0 * (q0 * cz + q1 * cy - q2 * cx);
-    q[0] = q0 * c - s * (q1 * p[0] + q2 * p[1] + q3 * p[2]);
-    q[1] = q0 * s * p[0] + q1 * c + s * (q2 * p[2] - q3 * p[1]);
-    q[2] = q0 * s * p[1] + q2 * c + s * (q3 * p[0] - q1 * p[2]);
-    q[3] = q0 * s * p[2] + q3 * c + s * (q1 * p[1] - q2 * p[0]);
+    double o[3];
+    v_rotate(q[0], q[1], q[2], q[3], sv[0], sv[1], sv[2], o);
+    v[0] += o[0];
+    v[1] += o[1];
+    v[2] += o[2];
+    q_rotate(q[0], q[1], q[2], q[3], p[0], p[1], p[2], c, s, q);
 }
 
 /* ---------------------------------------------- one interval, minor steps in lanes */
@@ -321,71 +320,249 @@ static LANE_INLINE void q_step(double *restrict q, double *restrict v, const dou
 #define BLOCK 64
 _Static_assert(BLOCK % LANES == 0, "a block holds whole lane groups");
 
-/* One interval's inputs to the minor loop (pointers to its rows; arguments of interval()). */
+/* A gimbal whose rate and acceleration are both zero (either sign) is still: theta = theta0 + (rate0 + accel
+ * tau / 2) tau and thetadot = rate0 + accel tau are then the same bits at every tau > 0 (each product a zero
+ * whose sign does not depend on tau), so its cos and sin are taken once per interval, at tau = dt. */
+typedef struct {
+    int still;
+    double c, s, thd; /* cos theta, sin theta, thetadot at every minor time when still */
+} Gimbal;
+
+/* One interval's inputs to the minor loop and what is the same at all its minor steps (arguments of
+ * interval()).  Gimbal 0 turns the interval's w_t, f_t and s = +0: the parts of rot_t that do not depend
+ * on the angle (a x v, a . v) are taken once, with rot_t's operations. */
 typedef struct {
     int64_t n_axes;
-    const double *axes, *ang, *rat, *acc, *wk, *fk, *gsf, *gb, *asf, *ab;
+    const double *axes, *ang, *rat, *acc;
     double dt;
     Fixed fx;
+    double v0[9], cr[9], dot[3]; /* w_t, f_t, +0 (3 each); their a x v; their a . v (gimbal 0's axis a) */
+    double opg[3], gbdt[3], opa[3], abdt[3], wdt[3]; /* 1 + gsf, gb dt, 1 + asf, ab dt, dt w (low-rate width) */
+    int quad; /* a quadratic coefficient is not zero; else its term q e|e| / dt is +-0 and the division is left
+                 out (a zero divided by dt > 0 keeps its sign) */
+    Gimbal g[SARINS_IMU_MAX_AXES]; /* gimbals from MAX_AXES on are taken as moving */
 } Minor;
 
 /* What the lane phase carries from one block to the next: the truth t at the last minor time done, that
- * step's increments da, dvm (zero before the first step). */
+ * step's increments d = (da, dvm) (zero before the first step). */
 typedef struct {
-    double t[6], da[3], dvm[3];
+    double t[6], d[6];
 } Carry;
 
-/* The serial phase's inputs of BLOCK minor steps (scull_cone's outputs), one column per step. */
+/* The serial phase's inputs of BLOCK minor steps (scull_cone's outputs), one column per step; qh: the
+ * quaternion before each step, vt: each step's velocity term (filled by the serial phase). */
 typedef struct {
-    double sv[3][BLOCK], p[3][BLOCK], c[BLOCK], s[BLOCK];
+    double sv[3][BLOCK], p[3][BLOCK], c[BLOCK], s[BLOCK], qh[4][BLOCK], vt[3][BLOCK];
 } Block;
 
-/* x [rows] lanes = y shifted one lane up, the carry in lane 0; the carry <- y's lane n_valid - 1. */
-static LANE_INLINE void shift_in(Lanes *restrict y, int rows, int n_valid, double *restrict carry,
-                                 Lanes *restrict x) {
-    for (int a = 0; a < rows; a++) {
-        x[a][0] = carry[a];
-        for (int l = 1; l < LANES; l++) x[a][l] = y[a][l - 1];
-        carry[a] = y[a][n_valid - 1];
+/* The lane phase's intermediate rows over a block: the truth at minor times i0 .. i0 + nb and the increments
+ * da (rows 0-2), dvm (rows 3-5) of minor steps i0 .. i0 + nb (column 0: the carry; columns past nb: lanes that
+ * hold no time, written and unused). */
+typedef struct {
+    double t[6][BLOCK + 1], d[6][BLOCK + 1];
+} Stage;
+
+/* cos, sin of gimbal j's angle and its rate at the LANES times tau (gimbal_lanes' values: lanes from n_valid on
+ * hold no time, their cos, sin taken as 1, 0). */
+static LANE_INLINE void gimbal_angle(const Minor *restrict in, int64_t j, const double *restrict tau, int n_valid,
+                                     double *restrict c, double *restrict sn, double *restrict thd) {
+    if (j < SARINS_IMU_MAX_AXES && in->g[j].still) {
+        for (int l = 0; l < LANES; l++) {
+            c[l] = in->g[j].c;
+            sn[l] = in->g[j].s;
+            thd[l] = in->g[j].thd;
+        }
+        return;
+    }
+    double ang = in->ang[j], rat = in->rat[j], acc = in->acc[j];
+    Lanes th;
+    for (int l = 0; l < LANES; l++) {
+        th[l] = ang + (rat + 0.5 * acc * tau[l]) * tau[l];
+        thd[l] = rat + acc * tau[l];
+    }
+    lanes_sincos(th, n_valid, sn, c);
+}
+
+/* truth_end of v (w, f, s) [9] lanes into columns col .. col + LANES - 1 of st->t */
+static LANE_INLINE void truth_out(Lanes *restrict v, Stage *restrict st, int col) {
+    double *o0 = st->t[0] + col, *o1 = st->t[1] + col, *o2 = st->t[2] + col;
+    double *o3 = st->t[3] + col, *o4 = st->t[4] + col, *o5 = st->t[5] + col;
+    for (int l = 0; l < LANES; l++) {
+        o0[l] = v[0][l] + v[6][l];
+        o1[l] = v[1][l] + v[7][l];
+        o2[l] = v[2][l] + v[8][l];
+        o3[l] = v[3][l];
+        o4[l] = v[4][l];
+        o5[l] = v[5][l];
     }
 }
 
-/* x [3] lanes = the three values of row, each in every lane */
-static LANE_INLINE void broadcast3(const double *restrict row, Lanes *restrict x) {
-    for (int a = 0; a < 3; a++) {
-        for (int l = 0; l < LANES; l++) x[a][l] = row[a];
+/* sarins_imu_truth of the interval at LANES times tau (lanes from n_valid on hold no time) into columns
+ * col .. col + LANES - 1 of st->t.  Gimbal 0 from the interval's constants (Minor), the others as gimbal_lanes
+ * turns them; the same operations on the same values as sarins_imu_truth. */
+static LANE_INLINE void truth_steps(const Minor *restrict in, const double *restrict tau, int n_valid,
+                                    Stage *restrict st, int col) {
+    Lanes v[9], c, sn, thd; /* w, f, s (omega_tb in the current gimbal frame) */
+    const double *a = in->axes, *x0 = in->v0, *cr = in->cr, *dot = in->dot;
+    if (in->n_axes < 1) { /* no gimbal (the binding refuses it): w_t, f_t and s = +0 as they are */
+        for (int r = 0; r < 9; r++) {
+            for (int l = 0; l < LANES; l++) v[r][l] = x0[r];
+        }
+        truth_out(v, st, col);
+        return;
     }
+    gimbal_angle(in, 0, tau, n_valid, c, sn, thd);
+    for (int l = 0; l < LANES; l++) { /* w, f, s: rot_t with a x v and a . v the interval's */
+        double omc = 1.0 - c[l], dw = omc * dot[0], df = omc * dot[1], ds = omc * dot[2];
+        v[0][l] = c[l] * x0[0] - sn[l] * cr[0] + dw * a[0];
+        v[1][l] = c[l] * x0[1] - sn[l] * cr[1] + dw * a[1];
+        v[2][l] = c[l] * x0[2] - sn[l] * cr[2] + dw * a[2];
+        v[3][l] = c[l] * x0[3] - sn[l] * cr[3] + df * a[0];
+        v[4][l] = c[l] * x0[4] - sn[l] * cr[4] + df * a[1];
+        v[5][l] = c[l] * x0[5] - sn[l] * cr[5] + df * a[2];
+        v[6][l] = (c[l] * x0[6] - sn[l] * cr[6] + ds * a[0]) + thd[l] * a[0];
+        v[7][l] = (c[l] * x0[7] - sn[l] * cr[7] + ds * a[1]) + thd[l] * a[1];
+        v[8][l] = (c[l] * x0[8] - sn[l] * cr[8] + ds * a[2]) + thd[l] * a[2];
+    }
+    for (int64_t j = 1; j < in->n_axes; j++) {
+        gimbal_angle(in, j, tau, n_valid, c, sn, thd);
+        double ax = a[3 * j], ay = a[3 * j + 1], az = a[3 * j + 2];
+        for (int l = 0; l < LANES; l++) {
+            rot_t_lane(ax, ay, az, c[l], sn[l], &v[0][l], &v[1][l], &v[2][l]);
+            rot_t_lane(ax, ay, az, c[l], sn[l], &v[3][l], &v[4][l], &v[5][l]);
+            rot_t_lane(ax, ay, az, c[l], sn[l], &v[6][l], &v[7][l], &v[8][l]);
+            v[6][l] += thd[l] * ax;
+            v[7][l] += thd[l] * ay;
+            v[8][l] += thd[l] * az;
+        }
+    }
+    truth_out(v, st, col);
+}
+
+/* minor_terms of one interval for the LANES steps ending at columns col + 1 .. col + LANES of st->t, into the
+ * same columns of st->d; its constants taken from Minor (the same values, the same operations). */
+static LANE_INLINE void step_terms(Stage *restrict st, int col, const Minor *restrict in, int n_valid) {
+    const Fixed *fx = &in->fx;
+    const double *g_sens = fx->g_sens, *g_mis = fx->g_mis, *g_quad = fx->g_quad, *a_mis = fx->a_mis;
+    const double *a_quad = fx->a_quad;
+    double dt = in->dt;
+    Lanes u[3], e[3], g[3], x[3];
+    for (int a = 0; a < 3; a++) {
+        const double *f = st->t[3 + a] + col, *w = st->t[a] + col;
+        for (int l = 0; l < LANES; l++) {
+            u[a][l] = 0.5 * (f[l] + f[l + 1]) * dt;
+            e[a][l] = 0.5 * (w[l] + w[l + 1]) * dt;
+        }
+    }
+    for (int a = 0; a < 3; a++) { /* g-sensitivity G u */
+        for (int l = 0; l < LANES; l++)
+            g[a][l] = g_sens[3 * a] * u[0][l] + g_sens[3 * a + 1] * u[1][l] + g_sens[3 * a + 2] * u[2][l];
+    }
+    if (fx->lowrate) {
+        for (int a = 0; a < 3; a++) {
+            for (int l = 0; l < LANES; l++) {
+                double r = e[a][l] / in->wdt[a];
+                x[a][l] = -(r * r);
+            }
+        }
+        for (int a = 0; a < 3; a++) {
+            for (int l = 0; l < LANES; l++) x[a][l] = l < n_valid ? sm_exp(x[a][l]) : 0.0;
+        }
+        for (int a = 0; a < 3; a++) {
+            for (int l = 0; l < LANES; l++) g[a][l] += fx->g_lowrate[a] * e[a][l] * x[a][l];
+        }
+    }
+    Lanes qg[3], qa[3]; /* q e|e| / dt, q u|u| / dt */
+    for (int a = 0; a < 3; a++) {
+        for (int l = 0; l < LANES; l++) {
+            qg[a][l] = g_quad[a] * e[a][l] * sm_fabs(e[a][l]);
+            qa[a][l] = a_quad[a] * u[a][l] * sm_fabs(u[a][l]);
+        }
+    }
+    if (in->quad) {
+        for (int a = 0; a < 3; a++) {
+            for (int l = 0; l < LANES; l++) {
+                qg[a][l] = qg[a][l] / dt;
+                qa[a][l] = qa[a][l] / dt;
+            }
+        }
+    }
+    const double *opg = in->opg, *gbdt = in->gbdt, *opa = in->opa, *abdt = in->abdt;
+    double *da0 = st->d[0] + col + 1, *da1 = st->d[1] + col + 1, *da2 = st->d[2] + col + 1;
+    double *dv0 = st->d[3] + col + 1, *dv1 = st->d[4] + col + 1, *dv2 = st->d[5] + col + 1;
+    for (int l = 0; l < LANES; l++) {
+        double d0 = e[0][l], d1 = e[1][l], d2 = e[2][l];
+        da0[l] = (d0 * opg[0] + g_mis[1] * d1 + g_mis[2] * d2 + gbdt[0] + qg[0][l]) + g[0][l];
+        da1[l] = (d1 * opg[1] + g_mis[3] * d0 + g_mis[5] * d2 + gbdt[1] + qg[1][l]) + g[1][l];
+        da2[l] = (d2 * opg[2] + g_mis[6] * d0 + g_mis[7] * d1 + gbdt[2] + qg[2][l]) + g[2][l];
+        double u0 = u[0][l], u1 = u[1][l], u2 = u[2][l];
+        dv0[l] = u0 * opa[0] + a_mis[1] * u1 + a_mis[2] * u2 + abdt[0] + qa[0][l];
+        dv1[l] = u1 * opa[1] + a_mis[3] * u0 + a_mis[5] * u2 + abdt[1] + qa[1][l];
+        dv2[l] = u2 * opa[2] + a_mis[6] * u0 + a_mis[7] * u1 + abdt[2] + qa[2][l];
+    }
+}
+
+/* Steps j0 .. j1 - 1 of block b's quaternion chain (q_step's quaternion part): q = (q0, q1, q2, q3) through
+ * them, the quaternion before each step kept in b->qh. */
+static LANE_INLINE void q_steps(Block *restrict b, int j0, int j1, double *restrict q) {
+    double q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3];
+    for (int j = j0; j < j1; j++) {
+        b->qh[0][j] = q0;
+        b->qh[1][j] = q1;
+        b->qh[2][j] = q2;
+        b->qh[3][j] = q3;
+        double n[4];
+        q_rotate(q0, q1, q2, q3, b->p[0][j], b->p[1][j], b->p[2][j], b->c[j], b->s[j], n);
+        q0 = n[0];
+        q1 = n[1];
+        q2 = n[2];
+        q3 = n[3];
+    }
+    q[0] = q0;
+    q[1] = q1;
+    q[2] = q2;
+    q[3] = q3;
 }
 
 /* The lane phase of minor steps i0 + 1 .. i0 + nb (1 <= nb <= BLOCK) of one interval, LANES steps side by
- * side: their truth at the step ends, increments and sculling and coning terms, into out. */
+ * side, in three passes over the block (short loop bodies, whose groups the CPU overlaps): the truth at the
+ * step ends, the increments, the sculling and coning terms, into out.  The truth pass also takes the
+ * previous block's quaternion chain (prev, prev_nb steps; none when prev is NULL) LANES steps a group: a
+ * serial chain of short latency-bound steps beside independent work, which the CPU runs side by side. */
 LANE_CLONES static void minor_block(const Minor *restrict in, int64_t i0, int nb, Carry *restrict carry,
-                                    Block *restrict out) {
-    Lanes wk[3], fk[3], gsf[3], gb[3], asf[3], ab[3];
-    broadcast3(in->wk, wk);
-    broadcast3(in->fk, fk);
-    broadcast3(in->gsf, gsf);
-    broadcast3(in->gb, gb);
-    broadcast3(in->asf, asf);
-    broadcast3(in->ab, ab);
+                                    Block *restrict out, Block *restrict prev, int prev_nb, double *restrict q) {
+    Stage st;
     double dt = in->dt;
+    for (int a = 0; a < 6; a++) {
+        st.t[a][0] = carry->t[a];
+        st.d[a][0] = carry->d[a];
+    }
+    if (prev == NULL) prev_nb = 0;
+    int done = 0; /* steps of prev taken */
     for (int j0 = 0; j0 < nb; j0 += LANES) {
         int n_valid = nb - j0 < LANES ? nb - j0 : LANES;
-        Lanes tau, t0[6], t1[6], da[3], dvm[3], pa[3], pv[3];
+        Lanes tau;
         for (int l = 0; l < LANES; l++) tau[l] = (double)(i0 + j0 + l + 1) * dt;
-        truth_steps(in->n_axes, in->axes, in->ang, in->rat, in->acc, tau, n_valid, wk, fk, t1);
-        shift_in(t1, 6, n_valid, carry->t, t0);
-        minor_terms(t0, t1, dt, n_valid, &in->fx, gsf, gb, asf, ab, da, dvm);
-        shift_in(da, 3, n_valid, carry->da, pa);
-        shift_in(dvm, 3, n_valid, carry->dvm, pv);
-        /* the group's columns of out (indices from pointers: with -fwrapv, j0 + l may not be consecutive) */
+        truth_steps(in, tau, n_valid, &st, j0 + 1);
+        if (done < prev_nb) {
+            int upto = done + LANES < prev_nb ? done + LANES : prev_nb;
+            q_steps(prev, done, upto, q);
+            done = upto;
+        }
+    }
+    if (done < prev_nb) q_steps(prev, done, prev_nb, q);
+    for (int j0 = 0; j0 < nb; j0 += LANES) step_terms(&st, j0, in, nb - j0 < LANES ? nb - j0 : LANES);
+    for (int j0 = 0; j0 < nb; j0 += LANES) {
+        /* the group's columns (indices from pointers: with -fwrapv, j0 + l may not be consecutive) */
+        const double *pa0 = st.d[0] + j0, *pa1 = st.d[1] + j0, *pa2 = st.d[2] + j0;
+        const double *pv0 = st.d[3] + j0, *pv1 = st.d[4] + j0, *pv2 = st.d[5] + j0;
         double *sv0 = out->sv[0] + j0, *sv1 = out->sv[1] + j0, *sv2 = out->sv[2] + j0;
         double *p0 = out->p[0] + j0, *p1 = out->p[1] + j0, *p2 = out->p[2] + j0;
         double *c = out->c + j0, *s = out->s + j0;
         for (int l = 0; l < LANES; l++) {
             double sv[3], p[3];
-            scull_cone(da[0][l], da[1][l], da[2][l], dvm[0][l], dvm[1][l], dvm[2][l], pa[0][l], pa[1][l],
-                       pa[2][l], pv[0][l], pv[1][l], pv[2][l], sv, p, &c[l], &s[l]);
+            scull_cone(pa0[l + 1], pa1[l + 1], pa2[l + 1], pv0[l + 1], pv1[l + 1], pv2[l + 1], pa0[l], pa1[l],
+                       pa2[l], pv0[l], pv1[l], pv2[l], sv, p, &c[l], &s[l]);
             sv0[l] = sv[0]; /* written out, as in interval_lanes */
             sv1[l] = sv[1];
             sv2[l] = sv[2];
@@ -394,18 +571,83 @@ LANE_CLONES static void minor_block(const Minor *restrict in, int64_t i0, int nb
             p2[l] = p[2];
         }
     }
+    for (int a = 0; a < 6; a++) {
+        carry->t[a] = st.t[a][nb];
+        carry->d[a] = st.d[a][nb];
+    }
 }
 
-/* The serial phase of nb minor steps: q, v through the block's terms. */
-static void serial_block(const Block *restrict b, int nb, double *restrict q, double *restrict v) {
-    for (int j = 0; j < nb; j++) {
-        double sv[3] = {b->sv[0][j], b->sv[1][j], b->sv[2][j]}, p[3] = {b->p[0][j], b->p[1][j], b->p[2][j]};
-        q_step(q, v, sv, p, b->c[j], b->s[j]);
+/* The velocity terms of steps j0 .. j1 - 1 of the block: q_step's, from the quaternion before each step (qh)
+ * and its sv. */
+static LANE_INLINE void v_range(Block *restrict b, int j0, int j1) {
+    const double *Q0 = b->qh[0], *Q1 = b->qh[1], *Q2 = b->qh[2], *Q3 = b->qh[3];
+    const double *S0 = b->sv[0], *S1 = b->sv[1], *S2 = b->sv[2];
+    double *o0 = b->vt[0], *o1 = b->vt[1], *o2 = b->vt[2];
+    for (int j = j0; j < j1; j++) {
+        double o[3];
+        v_rotate(Q0[j], Q1[j], Q2[j], Q3[j], S0[j], S1[j], S2[j], o);
+        o0[j] = o[0];
+        o1[j] = o[1];
+        o2[j] = o[2];
+    }
+}
+
+/* The velocity terms of nb steps of the block, LANES steps side by side. */
+LANE_CLONES static void v_terms(Block *restrict b, int nb) {
+    int j = 0;
+    for (; j + LANES <= nb; j += LANES) v_range(b, j, j + LANES);
+    v_range(b, j, nb);
+}
+
+/* The velocity part of the serial phase of nb minor steps (their quaternions before each step in qh): the
+ * velocity terms (v_terms), summed into v in order. */
+static void velocity_block(Block *restrict b, int nb, double *restrict v) {
+    v_terms(b, nb);
+    for (int a = 0; a < 3; a++) {
+        double x = v[a];
+        for (int j = 0; j < nb; j++) x += b->vt[a][j];
+        v[a] = x;
+    }
+}
+
+/* Minor's gimbal and per-interval terms (see Minor). */
+static void minor_setup(Minor *in, const double *w_t, const double *f_t, const double *gsf, const double *gb,
+                        const double *asf, const double *ab) {
+    const double *a = in->axes, *g_quad = in->fx.g_quad, *a_quad = in->fx.a_quad;
+    double dt = in->dt;
+    for (int i = 0; i < 3; i++) {
+        in->v0[i] = w_t[i];
+        in->v0[3 + i] = f_t[i];
+        in->v0[6 + i] = 0.0;
+        in->opg[i] = 1.0 + gsf[i];
+        in->gbdt[i] = gb[i] * dt;
+        in->opa[i] = 1.0 + asf[i];
+        in->abdt[i] = ab[i] * dt;
+        in->wdt[i] = dt * in->fx.g_width[i];
+    }
+    for (int r = 0; r < 3; r++) { /* rot_t's a x v and a . v */
+        const double *x = in->v0 + 3 * r;
+        in->cr[3 * r] = a[1] * x[2] - a[2] * x[1];
+        in->cr[3 * r + 1] = a[2] * x[0] - a[0] * x[2];
+        in->cr[3 * r + 2] = a[0] * x[1] - a[1] * x[0];
+        in->dot[r] = a[0] * x[0] + a[1] * x[1] + a[2] * x[2];
+    }
+    in->quad = 0;
+    for (int i = 0; i < 3; i++) in->quad |= g_quad[i] != 0.0 || a_quad[i] != 0.0;
+    for (int64_t j = 0; j < in->n_axes && j < SARINS_IMU_MAX_AXES; j++) {
+        Gimbal *g = &in->g[j];
+        g->still = in->rat[j] == 0.0 && in->acc[j] == 0.0;
+        if (g->still) {
+            double th = in->ang[j] + (in->rat[j] + 0.5 * in->acc[j] * dt) * dt;
+            g->thd = in->rat[j] + in->acc[j] * dt;
+            sm_sincos(th, &g->s, &g->c);
+        }
     }
 }
 
 /* Minor loop of output interval k; writes dtheta[k], dv[k].  Blocks of BLOCK minor steps: the lane phase
- * (minor_block), then the serial one (serial_block); the quaternion q_{b(k-1) b(m)} and the velocity
+ * (minor_block, which also takes the previous block's quaternion chain), then the velocity sums of the
+ * previous block (velocity_block); the quaternion q_{b(k-1) b(m)} and the velocity
  * increment in b(k-1) are the only state the steps pass on. */
 static void interval(int64_t k, int64_t n_axes, const double *axes, const double *angle0, const double *rate0,
                      const double *accel, const double *w_t, const double *f_t, double h, int64_t n_sub,
@@ -413,17 +655,31 @@ static void interval(int64_t k, int64_t n_axes, const double *axes, const double
                      const double *g_lowrate, const double *g_width, const double *g_sens, const double *a_sf,
                      const double *a_mis, const double *a_bias, const double *a_quad, double *dtheta,
                      double *dv) {
-    Minor in = {n_axes, axes, angle0 + k * n_axes, rate0 + k * n_axes, accel + k * n_axes, w_t + 3 * k,
-                f_t + 3 * k, g_sf + 3 * k, g_bias + 3 * k, a_sf + 3 * k, a_bias + 3 * k, h / (double)n_sub,
-                fixed_terms(g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad)};
-    Carry carry = {{0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
-    sarins_imu_truth(n_axes, axes, in.ang, in.rat, in.acc, 0.0, in.wk, in.fk, carry.t);
+    Minor in;
+    in.n_axes = n_axes;
+    in.axes = axes;
+    in.ang = angle0 + k * n_axes;
+    in.rat = rate0 + k * n_axes;
+    in.acc = accel + k * n_axes;
+    in.dt = h / (double)n_sub;
+    in.fx = fixed_terms(g_mis, g_quad, g_lowrate, g_width, g_sens, a_mis, a_quad);
+    minor_setup(&in, w_t + 3 * k, f_t + 3 * k, g_sf + 3 * k, g_bias + 3 * k, a_sf + 3 * k, a_bias + 3 * k);
+    Carry carry = {{0.0}, {0.0}};
+    sarins_imu_truth(n_axes, axes, in.ang, in.rat, in.acc, 0.0, w_t + 3 * k, f_t + 3 * k, carry.t);
     double q[4] = {1.0, 0.0, 0.0, 0.0}, v[3] = {0.0, 0.0, 0.0};
-    Block block;
+    Block blocks[2], *prev = NULL; /* the block filled before this one, its quaternion chain still to take */
+    int prev_nb = 0;
     for (int64_t i0 = 0; i0 < n_sub; i0 += BLOCK) {
         int nb = n_sub - i0 < BLOCK ? (int)(n_sub - i0) : BLOCK;
-        minor_block(&in, i0, nb, &carry, &block);
-        serial_block(&block, nb, q, v);
+        Block *cur = &blocks[(i0 / BLOCK) & 1];
+        minor_block(&in, i0, nb, &carry, cur, prev, prev_nb, q);
+        if (prev != NULL) velocity_block(prev, prev_nb, v);
+        prev = cur;
+        prev_nb = nb;
+    }
+    if (prev != NULL) { /* the last block's chain (none when n_sub is 0) */
+        q_steps(prev, 0, prev_nb, q);
+        velocity_block(prev, prev_nb, v);
     }
     finish(q, v, dtheta + 3 * k, dv + 3 * k);
 }
@@ -587,9 +843,8 @@ void sarins_imu_axial_thermal_terms(int64_t n_steps, double temp0, const double 
     for (int64_t k = 0; k < n_steps; k++) {
         double now = temps[k * t_stride];
         double grad0 = prev - state[0];
-        if (tau_b > 0.0) { /* T linear over the interval (slope s): T_b <- e T_b + (T0 - s tau)(1 - e) + s h */
-            double slope = (now - prev) / h;
-            state[0] = e_b * state[0] + (prev - slope * tau_b) * (1.0 - e_b) + slope * h;
+        if (tau_b > 0.0) { /* the input T, linear over the interval */
+            state[0] = sarins_first_order_step(state[0], prev, (now - prev) / h, h, tau_b, e_b);
         } else {
             state[0] = now;
         }
@@ -606,7 +861,7 @@ void sarins_imu_axial_thermal_terms(int64_t n_steps, double temp0, const double 
 
 typedef struct {
     double *consts, *clock, *sensor_par, *state, *coef, *triad, *mats, *axes, *base, *rng, *corr_par, *corr_state,
-        *phi, *q, *x_flicker, *dyn_par, *dyn_state;
+        *phi, *q, *x_flicker, *dyn_par, *dyn_state, *periodic;
     int64_t n_axes, n_flicker;
     SarinsRng streams[SARINS_IMU_N_STREAMS]; /* the RNG rows unpacked (imu_view), kept equal to them */
     int have_streams;
@@ -618,7 +873,7 @@ static int has_shape(const int64_t *table, int64_t i, int64_t rows, int64_t cols
     return table[3 * i + 1] == rows && table[3 * i + 2] == cols && (rows == 0 || table[3 * i] != 0);
 }
 
-/* The IMU arrays of table rows 0..16 with their shapes checked; 0 when they fit. */
+/* The IMU arrays of table rows 0..17 with their shapes checked; 0 when they fit. */
 static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
     v->have_streams = 0;
     if (table == NULL || rows < SARINS_IMU_N_ARRAYS) return SARINS_IMU_BAD_TABLE;
@@ -634,7 +889,8 @@ static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
           && v->n_flicker >= 0 && has_shape(table, SARINS_IMU_PHI, v->n_flicker, 1)
           && has_shape(table, SARINS_IMU_Q, v->n_flicker, 6) && has_shape(table, SARINS_IMU_X_FLICKER, v->n_flicker, 6)
           && has_shape(table, SARINS_IMU_DYN_PAR, SARINS_DYN_PAR_ROWS, 6)
-          && has_shape(table, SARINS_IMU_DYN_STATE, SARINS_DYN_STATE_ROWS, 6)))
+          && has_shape(table, SARINS_IMU_DYN_STATE, SARINS_DYN_STATE_ROWS, 6)
+          && has_shape(table, SARINS_IMU_PERIODIC, 3, 6)))
         return SARINS_IMU_BAD_TABLE;
     v->consts = table_array(table, SARINS_IMU_CONSTS);
     v->clock = table_array(table, SARINS_IMU_CLOCK);
@@ -653,12 +909,19 @@ static int imu_shapes(const int64_t *table, int64_t rows, ImuView *v) {
     v->x_flicker = table_array(table, SARINS_IMU_X_FLICKER);
     v->dyn_par = table_array(table, SARINS_IMU_DYN_PAR);
     v->dyn_state = table_array(table, SARINS_IMU_DYN_STATE);
+    v->periodic = table_array(table, SARINS_IMU_PERIODIC);
     /* consts: t0, h, drift_dtdt, die_lag, correlated_active, n_sub, (spare), (spare), the five parameters of
      * sarins_imu_axial_thermal_terms (block and relaxation times >= 0, width > 0) */
     if (!(v->consts[1] > 0.0 && v->consts[5] >= 1.0 && v->consts[5] <= (double)SARINS_IMU_MAX_SUB
           && v->consts[5] == sm_nearbyint(v->consts[5]) && v->consts[9] >= 0.0 && v->consts[11] > 0.0
           && v->consts[12] >= 0.0))
         return SARINS_IMU_BAD_TABLE;
+    /* periodic: amplitudes >= 0, frequencies in [0, n_sub / (2 h)], phases finite (a handed-back state too) */
+    for (int j = 0; j < 6; j++) {
+        double a = v->periodic[j], f = v->periodic[6 + j], phase = v->periodic[12 + j];
+        if (!(a >= 0.0 && a < INFINITY && f >= 0.0 && f * v->consts[1] <= 0.5 * v->consts[5] && isfinite(phase)))
+            return SARINS_IMU_BAD_TABLE;
+    }
     return SARINS_IMU_OK;
 }
 
@@ -761,7 +1024,27 @@ int sarins_imu_dynamics(const int64_t *table, int64_t rows, int64_t n_steps, con
     return SARINS_IMU_OK;
 }
 
+/* The periodic disturbance's exact integral over K intervals from the clock's (periodic row of imu.h) added to
+ * dtheta (gyro columns 0-2) and dv (accel 3-5). */
+static void periodic_view(const ImuView *v, int64_t n_steps, double *dtheta, double *dv) {
+    const double *amp = v->periodic, *freq = v->periodic + 6, *phase = v->periodic + 12;
+    double h = v->consts[1], k0 = v->clock[0];
+    for (int j = 0; j < 6; j++) {
+        if (amp[j] == 0.0) continue;
+        double *out = j < 3 ? dtheta + j : dv + (j - 3);
+        /* integral of a sin(2 pi f t + phi) over [k h, (k + 1) h] = (a / (pi f)) sin(pi f h) sin(2 pi f (k + 1/2) h
+           + phi); the cycles f h (k + 1/2) reduced to [0, 1) before the 2 pi */
+        double fh = freq[j] * h;
+        double gain = amp[j] * sm_sin(PI * fh) / (PI * freq[j]);
+        for (int64_t k = 0; k < n_steps; k++) {
+            double cycles = fh * (k0 + (double)k + 0.5);
+            out[3 * k] += gain * sm_sin(2.0 * PI * (cycles - sm_floor(cycles)) + phase[j]);
+        }
+    }
+}
+
 static int white_noise_view(ImuView *v, int64_t n_steps, double *dtheta, double *dv) {
+    periodic_view(v, n_steps, dtheta, dv);
     SarinsRng rng;
     if (!load_stream(v, SARINS_IMU_STREAM_WHITE, &rng)) return SARINS_IMU_BAD_TABLE;
     double sqrt_h = sm_sqrt(v->consts[1]);
@@ -853,6 +1136,9 @@ int sarins_imu_seed(const int64_t *table, int64_t rows, uint64_t seed) {
         }
         store_stream(&v, s, &r);
     }
+    SarinsRng r; /* the periodic terms' phases, uniform on [0, 2 pi): a stream of their own, drawn here only */
+    sarins_rng_stream(&r, seed, SARINS_IMU_STREAM_PERIODIC);
+    for (int j = 0; j < 6; j++) v.periodic[12 + j] = 2.0 * PI * sarins_rng_uniform(&r);
     sarins_imu_turn_on(seed, v.corr_par + 42, v.corr_par + 36);
     return SARINS_IMU_OK;
 }
@@ -993,7 +1279,7 @@ static int fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double
     }
     /* ambient linear over the step: its value at the end */
     double amb_end = chosen[3 * na] + chosen[3 * na + 1] * h;
-    if (!(isfinite(amb_end) && amb_end >= -273.15)) return 1;
+    if (!(amb_end >= -273.15 && amb_end <= SARINS_IMU_AMBIENT_MAX)) return 1; /* imu_build.h */
     /* every check passed: from here on the step happens */
     if (!fixed) keep(held, current, count, tag);
     double motion[3][SARINS_IMU_MAX_AXES];

@@ -25,9 +25,19 @@
  *
  * The IMU's state (sarins_fmu/imu_step.py docstring) reaches C as an array
  * table: int64 rows (address, rows, columns), one per float64 array, rows 0
- * to 16 in the order SARINS_IMU_CONSTS .. SARINS_IMU_DYN_STATE.  Every random
+ * to 17 in the order SARINS_IMU_CONSTS .. SARINS_IMU_PERIODIC.  Every random
  * number is drawn here, inside the step, from the streams of rng.h whose
  * states the table holds; sarins_imu_seed starts them from the IMU seed.
+ *
+ * Periodic disturbance (SARINS_IMU_PERIODIC (3, 6): amplitude a (rad/s,
+ * m/s^2), frequency f (Hz, 0 < f <= n_sub / (2 h) when a > 0) and phase phi
+ * (rad, drawn at seeding) of gyro x y z, accel x y z): the sensor's output
+ * rate carries a sin(2 pi f t + phi), t the time since the IMU's start; its
+ * exact integral over each output interval [k h, (k + 1) h],
+ *     (a / (pi f)) sin(pi f h) sin(2 pi f (k + 1/2) h + phi),
+ * is added to the increments after the output dynamics (so the Allan
+ * variance of the rate is a^2 sin^4(pi f tau) / (pi f tau)^2 exactly at
+ * every tau = m h).
  */
 #ifndef SARINS_IMU_H
 #define SARINS_IMU_H
@@ -40,7 +50,7 @@ enum {
     SARINS_IMU_CONSTS, SARINS_IMU_CLOCK, SARINS_IMU_SENSOR_PAR, SARINS_IMU_STATE, SARINS_IMU_COEF,
     SARINS_IMU_TRIAD, SARINS_IMU_MATS, SARINS_IMU_AXES, SARINS_IMU_BASE, SARINS_IMU_RNG, SARINS_IMU_CORR_PAR,
     SARINS_IMU_CORR_STATE, SARINS_IMU_PHI, SARINS_IMU_Q, SARINS_IMU_X_FLICKER, SARINS_IMU_DYN_PAR, SARINS_IMU_DYN_STATE,
-    SARINS_IMU_N_ARRAYS
+    SARINS_IMU_PERIODIC, SARINS_IMU_N_ARRAYS
 };
 
 /* The IMU's random streams (rng.h), one per purpose, all from the IMU seed;
@@ -55,11 +65,15 @@ enum {
  *            correlated terms are on;
  *   RRW      6 per interval (rate random walk, when not zero and on);
  *   TURN_ON  6 at seeding (the turn-on bias);
- *   AGEING   3 per ageing step (sarins_imu_aged_poly), drawn at construction. */
+ *   AGEING   3 per ageing step (sarins_imu_aged_poly), drawn at construction;
+ *   PERIODIC 6 uniform at seeding (the periodic terms' phases, gyro x y z,
+ *            accel x y z, drawn whatever the amplitudes); not kept in the
+ *            table (no later draw), so it is not a row of SARINS_IMU_RNG. */
 enum {
     SARINS_IMU_STREAM_WHITE, SARINS_IMU_STREAM_GM, SARINS_IMU_STREAM_FLICKER, SARINS_IMU_STREAM_RRW,
     SARINS_IMU_STREAM_TURN_ON, SARINS_IMU_STREAM_AGEING, SARINS_IMU_N_STREAMS
 };
+#define SARINS_IMU_STREAM_PERIODIC SARINS_IMU_N_STREAMS /* stream id 6: seeding only (above) */
 
 /* return codes of the table functions */
 #define SARINS_IMU_OK 0
@@ -167,9 +181,11 @@ int sarins_imu_advance(const int64_t *table, int64_t rows, int64_t n_steps, cons
 int sarins_imu_dynamics(const int64_t *table, int64_t rows, int64_t n_steps, const double *temps, double *dtheta,
                         double *dv);
 
-/* Add the angle / velocity random walk (exact variance rw^2 h, from the
- * WHITE stream) to K intervals' dtheta, dv (K, 3) and move the clock on by K
- * intervals. */
+/* Add the output terms that do not pass through the output dynamics to K
+ * intervals' dtheta, dv (K, 3): the periodic disturbance (its exact integral
+ * over each interval, see SARINS_IMU_PERIODIC above; nothing when every
+ * amplitude is 0) and the angle / velocity random walk (exact variance
+ * rw^2 h, from the WHITE stream); then move the clock on by K intervals. */
 int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, double *dtheta, double *dv);
 
 /* K intervals on the calling thread: sarins_imu_advance, the minor loop over
@@ -190,8 +206,9 @@ int sarins_imu_one_interval(const int64_t *table, int64_t rows, const double *an
  * every stream at its start, then the draws made at power-up: the
  * Gauss-Markov states' stationary start (state row 1 = N(0, gm_std^2)), the
  * flicker terms' (x_flicker = N(0, q^2)), the turn-on bias (corr_par row 6
- * = N(0, std^2) with corr_par row 7 the std).  The other states are the
- * caller's (reset before this call). */
+ * = N(0, std^2) with corr_par row 7 the std), the periodic terms' phases
+ * (periodic row 2, uniform on [0, 2 pi) from the PERIODIC stream).  The
+ * other states are the caller's (reset before this call). */
 int sarins_imu_seed(const int64_t *table, int64_t rows, uint64_t seed);
 
 /* The turn-on bias an IMU with seed draws at power-up: out[j] = std[j] w_j,
@@ -206,7 +223,7 @@ void sarins_imu_aged_poly(uint64_t seed, int64_t n, const double *t, const doubl
                           double tau, double *out);
 
 /* The IMUThermal FMU's step (fmus/c/imu_thermal/model.c): table
- * rows 0-16 the IMU state, 17 the io row, 18 the held motion set, 19 the
+ * rows 0-17 the IMU state, 18 the io row, 19 the held motion set, 20 the
  * held vehicle set; buf[n] the FMU's Real values; t, h the communication
  * point and step (s).  Returns 0 when it did the step, 1 when it changed
  * nothing (the caller then finds and reports the reason). */

@@ -44,6 +44,7 @@ _ERRORS = {1: "the IMU state table does not fit the layout of sarins_fmu.imu_ste
               "state in it is not one"}
 MAX_SUB = 2 ** 30  # minor steps per output interval (SARINS_IMU_MAX_SUB in imu.h)
 STREAMS = ("white", "gm", "flicker", "rrw", "turn_on", "ageing")  # stream ids 0.. (SARINS_IMU_STREAM_* in imu.h)
+PERIODIC_STREAM = len(STREAMS)  # id of the periodic phases' stream, drawn at seeding only (not a table row)
 _POOLS: dict[tuple, ThreadPoolExecutor] = {}
 _POOLS_LOCK = threading.Lock()
 
@@ -221,7 +222,8 @@ def one_interval(table, angle0, rate0, accel, amb_end: float):
 
 def seed(table, value: int) -> None:
     """Start the random streams of the IMU ``table`` from the seed ``value`` (``sarins_imu_seed``): the streams
-    at their start, the Gauss-Markov and flicker states' stationary start, the turn-on bias."""
+    at their start, the Gauss-Markov and flicker states' stationary start, the turn-on bias, the periodic
+    terms' phases."""
     table = _arrays.table(table)
     _check(_seed(table.ctypes.data, table.shape[0], check_seed(value)))
 
@@ -255,7 +257,15 @@ _start = function("sarins_imu_start", _INT, _P, _I64, _F64, _INT, _U64)
 _flicker_count = function("sarins_imu_flicker_count", _I64, _F64, _F64)
 _flicker_taus = function("sarins_imu_flicker_taus", None, _F64, _F64, _I64, _P)
 _check_params = function("sarins_imu_check_params", _I64, _P, ctypes.POINTER(ctypes.c_char_p))
-_check_rate_params = function("sarins_imu_check_rate_params", _I64, _P, _F64, ctypes.POINTER(ctypes.c_char_p))
+_check_rate_params = function("sarins_imu_check_rate_params", _I64, _P, _F64, ctypes.POINTER(_F64),
+                              ctypes.POINTER(ctypes.c_char_p))
+_param_bound = function("sarins_imu_param_bound", _INT, _P, _F64, _I64, ctypes.POINTER(_F64),
+                        ctypes.POINTER(ctypes.c_char_p))
+_max_rate = function("sarins_imu_max_rate", _F64, _F64)
+LOWER_BOUND = "at least: "  # a check's rule that gives a lower bound (SARINS_IMU_LOWER_BOUND in imu_build.h)
+AMBIENT_MAX = 500.0  # degC: the highest ambient the IMU accepts (SARINS_IMU_AMBIENT_MAX in imu_build.h)
+_check_periodic_params = function("sarins_imu_check_periodic_params", _I64, _P, _F64,
+                                  ctypes.POINTER(ctypes.c_char_p))
 _param_name = function("sarins_imu_param_name", ctypes.c_char_p, _I64)
 _preset_name = function("sarins_imu_preset_name", ctypes.c_char_p, _I64)
 _preset_params = function("sarins_imu_preset_params", _INT, ctypes.c_char_p, _P)
@@ -299,11 +309,48 @@ def check_params(par) -> str | None:
 
 
 def check_rate_params(par, internal_rate: float) -> str | None:
-    """None when the parameters bounded by the minor-loop rate internal_rate (Hz) hold, else "<name> <rule>"."""
+    """None when the bounds the core derives at the minor-loop rate internal_rate (Hz) hold
+    (``sarins_imu_param_bound``), else "<name> = <value> is outside [-bound, bound] ...: <rule>"."""
+    par = _arrays.read(par, (N_PARAMS,), "par")
+    reason, bound = ctypes.c_char_p(), ctypes.c_double()
+    bad = _check_rate_params(par.ctypes.data, float(internal_rate), ctypes.byref(bound), ctypes.byref(reason))
+    if bad < 0:
+        return None
+    b, rule = bound.value, reason.value.decode()
+    if rule.startswith(LOWER_BOUND):  # a lower bound (imu_build.h SARINS_IMU_LOWER_BOUND)
+        return (f"{_param_name(bad).decode()} = {float(par[bad])!r} is below {b!r} at internal_rate "
+                f"{float(internal_rate)!r} Hz: {rule[len(LOWER_BOUND):]}")
+    return (f"{_param_name(bad).decode()} = {float(par[bad])!r} is outside [{-b!r}, {b!r}] at internal_rate "
+            f"{float(internal_rate)!r} Hz: {rule}")
+
+
+def param_bound(par, internal_rate: float, index: int) -> float | None:
+    """The bound the core derives on |par[index]| at the minor-loop rate internal_rate (Hz), the other
+    parameters as in ``par`` (``sarins_imu_param_bound``), in the parameter's unit; None when it has none."""
+    par = _arrays.read(par, (N_PARAMS,), "par")
+    reason, bound = ctypes.c_char_p(), ctypes.c_double()
+    if not 0 <= int(index) < N_PARAMS:
+        raise ValueError(f"no IMU parameter {index}")
+    found = _param_bound(par.ctypes.data, float(internal_rate), int(index), ctypes.byref(bound), ctypes.byref(reason))
+    return bound.value if found else None
+
+
+def max_rate(internal_rate: float) -> float:
+    """The largest body rate per axis (rad/s) the model supports at the minor-loop rate internal_rate (Hz):
+    pi/8 rad per minor step, at most 100 rad/s (``sarins_imu_max_rate``)."""
+    return _max_rate(float(internal_rate))
+
+
+def check_periodic_params(par, internal_rate: float) -> str | None:
+    """None when the periodic terms' frequencies are at most internal_rate / 2 (Hz), else "<name> = <value>
+    Hz <rule> (internal_rate <value> Hz)"."""
     par = _arrays.read(par, (N_PARAMS,), "par")
     reason = ctypes.c_char_p()
-    bad = _check_rate_params(par.ctypes.data, float(internal_rate), ctypes.byref(reason))
-    return None if bad < 0 else f"{_param_name(bad).decode()} {reason.value.decode()}"
+    bad = _check_periodic_params(par.ctypes.data, float(internal_rate), ctypes.byref(reason))
+    if bad < 0:
+        return None
+    return (f"{_param_name(bad).decode()} = {float(par[bad])!r} Hz {reason.value.decode()} (internal_rate "
+            f"{float(internal_rate)!r} Hz)")
 
 
 def flicker_count(tau_min: float, tau_max: float) -> int:
@@ -330,6 +377,8 @@ def build(table, par, t0: float, h: float, n_sub: int, age: float, value: int) -
     n_sub = _arrays.count(n_sub, "n_sub (minor steps per interval)")
     if problem is None and float(h) > 0.0:
         problem = check_rate_params(par, n_sub / float(h))
+    if problem is None and float(h) > 0.0:
+        problem = check_periodic_params(par, n_sub / float(h))
     if problem is not None:
         raise ValueError(f"IMU parameter {problem}")
     _check(_build(table.ctypes.data, table.shape[0], par.ctypes.data, float(t0), float(h), n_sub, float(age),

@@ -2,6 +2,7 @@
  * construction (sarins_fmu/imu.py IMU._allocate, imu_correlated.CorrelatedErrors) term by term. */
 #include "smath.h"
 
+#include <float.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
@@ -18,6 +19,9 @@
 #define TP(gyro_x, t, i) ((gyro_x) + (t)*TRIAD_STRIDE + (i))
 /* sensor j's (gyro x y z, accel x y z) thermal parameter whose gyro x index is first */
 #define SP(first, j) ((first) + 3 * (j))
+/* sensor j's periodic amplitude and frequency (imu_params.h: per triad amplitude x y z, frequency x y z) */
+#define PERIODIC_AMPLITUDE(j) (SARINS_IMU_P_GYRO_PERIODIC_AMPLITUDE_X + 6 * ((j) / 3) + (j) % 3)
+#define PERIODIC_FREQUENCY(j) (SARINS_IMU_P_GYRO_PERIODIC_FREQUENCY_X + 6 * ((j) / 3) + (j) % 3)
 
 static const int MISALIGNMENT[6][2] = {{0, 1}, {0, 2}, {1, 0}, {1, 2}, {2, 0}, {2, 1}}; /* xy xz yx yz zx zy */
 static const int LOWRATE_GAIN[3] = {SARINS_IMU_P_LOWRATE_GAIN_X, SARINS_IMU_P_LOWRATE_GAIN_Y,
@@ -90,6 +94,10 @@ int64_t sarins_imu_check_params(const double *par, const char **reason) {
         {SARINS_IMU_P_AXIAL_BLOCK_TIME_CONSTANT, 1, 1, NON_NEGATIVE, "must be non-negative"},
         {SARINS_IMU_P_AXIAL_HYSTERESIS_WIDTH, 1, 1, POSITIVE, "must be positive"},
         {SARINS_IMU_P_AXIAL_HYSTERESIS_RELAX_TIME, 1, 1, NON_NEGATIVE, "must be non-negative"},
+        {SARINS_IMU_P_GYRO_PERIODIC_AMPLITUDE_X, 3, 1, NON_NEGATIVE, "must be non-negative"},
+        {SARINS_IMU_P_ACCEL_PERIODIC_AMPLITUDE_X, 3, 1, NON_NEGATIVE, "must be non-negative"},
+        {SARINS_IMU_P_GYRO_PERIODIC_FREQUENCY_X, 3, 1, NON_NEGATIVE, "must be non-negative"},
+        {SARINS_IMU_P_ACCEL_PERIODIC_FREQUENCY_X, 3, 1, NON_NEGATIVE, "must be non-negative"},
     };
     for (size_t r = 0; r < sizeof RULES / sizeof RULES[0]; r++) {
         int64_t bad = first_bad(par, RULES[r].first, RULES[r].count, RULES[r].stride, RULES[r].rule);
@@ -111,6 +119,13 @@ int64_t sarins_imu_check_params(const double *par, const char **reason) {
         *reason = "must be at least flicker_tau_max / 2^52 (a flicker band of at most 15.7 decades)";
         return SARINS_IMU_P_FLICKER_TAU_MIN;
     }
+    /* a periodic term with an amplitude needs a frequency (0 Hz would be a constant bias: that is bias) */
+    for (int j = 0; j < 6; j++) {
+        if (par[PERIODIC_AMPLITUDE(j)] > 0.0 && !(par[PERIODIC_FREQUENCY(j)] > 0.0)) {
+            *reason = "must be positive where the periodic amplitude is not zero";
+            return PERIODIC_FREQUENCY(j);
+        }
+    }
     /* a sensor's self-heating rise above the ambient (degC), within the limit the IMUThermal FMU already
      * applied (now checked here once, for the library too: a rise of 1e308 degC made the first step NaN) */
     for (int j = 0; j < 6; j++) {
@@ -123,13 +138,225 @@ int64_t sarins_imu_check_params(const double *par, const char **reason) {
     return -1;
 }
 
-int64_t sarins_imu_check_rate_params(const double *par, double internal_rate, const char **reason) {
-    double limit = 0.5 * PI * internal_rate; /* rad/s: a quarter turn per minor step (imu_build.h) */
+double sarins_imu_max_rate(double internal_rate) {
+    return sm_fmin(PI / 8.0 * internal_rate, SARINS_IMU_GYRO_FULL_SCALE);
+}
+
+/* ------------------------------------------------ derived bounds (imu_build.h sarins_imu_param_bound) */
+
+#define MAX_TERMS 24
+#define LOWER_BOUND SARINS_IMU_LOWER_BOUND
+#define SQRT3 1.7320508075688772
+
+/* A sum of error terms sum_k scale_k |par[index_k]| that must stay within capacity. */
+typedef struct {
+    double capacity;
+    int n;
+    int index[MAX_TERMS];
+    double scale[MAX_TERMS];
+    const char *reason;
+} Sum;
+
+static void term(Sum *s, int index, double scale) {
+    s->index[s->n] = index;
+    s->scale[s->n] = scale;
+    s->n++;
+}
+
+/* The largest temperature rate of sensor j (degC/s): a change of at most TEMP_SPAN, at the rate of the
+ * first-order model, (target - T) / tau <= SPAN / tau, and over at least one minor step (the die follows
+ * the reported temperature, so its rate is no larger). */
+static double temp_rate(const double *par, double internal_rate, int j) {
+    double tau = par[SP(SARINS_IMU_P_TIME_CONSTANT_GYRO_X, j)];
+    return SARINS_IMU_TEMP_SPAN / sm_fmax(tau, 1.0 / internal_rate);
+}
+
+/* sigma multiple of the flicker terms' sum: SIGMAS x F x the unit std sqrt(ln(tau_1 / tau_0) / pi) of each of
+ * the F terms (imu_build.c, the flicker terms) */
+static double flicker_scale(const double *par) {
+    double lo = par[SARINS_IMU_P_FLICKER_TAU_MIN], hi = par[SARINS_IMU_P_FLICKER_TAU_MAX];
+    int64_t n = sarins_imu_flicker_count(lo, hi);
+    if (n < 2) return SARINS_IMU_SIGMAS * 49.0; /* an invalid band (refused by sarins_imu_check_params) */
+    double step = (sm_log10(hi) - sm_log10(lo)) / (double)(n - 1);
+    return SARINS_IMU_SIGMAS * (double)n * sm_sqrt(step * sm_log(10.0) / PI);
+}
+
+/* The rules of the sign and additive sums of sensor j, naming its time constant (dT/dt_max) */
+#define SIGN_RULE(what, sensor, lowrate)                                                                       \
+    "the sensed " what " does not flip its sign (and stays within 2 x the true " what "): |sf| + |sf_tc| 975 "  \
+    "degC + |sf_dtdt| dT/dt_max + |misalignment row| + " lowrate "|quadratic| full scale <= 1 (imu.h step 3), "  \
+    "dT/dt_max = 1773.15 degC / max(time_constant_" sensor ", 1 / internal_rate)"
+#define GYRO_ADD_RULE(sensor)                                                                                  \
+    "a minor step's rotation stays below pi rad: the gyro's additive terms at 975 degC from 25, |T| <= 1000 "   \
+    "degC, dT/dt_max = 1773.15 degC / max(time_constant_" sensor ", 1 / internal_rate) and 8 sigma <= 3 pi/4 x " \
+    "internal_rate (imu_build.h)"
+#define ACCEL_ADD_RULE(sensor)                                                                                 \
+    "the accelerometer's additive terms at 975 degC from 25, dT/dt_max = 1773.15 degC / max(time_constant_"     \
+    sensor ", 1 / internal_rate) and 8 sigma <= 1e6 x full scale (100 g)"
+static const char *const SIGN_REASON[6] = {
+    SIGN_RULE("rate", "gyro_x", "|lowrate_gain| + "), SIGN_RULE("rate", "gyro_y", "|lowrate_gain| + "),
+    SIGN_RULE("rate", "gyro_z", "|lowrate_gain| + "), SIGN_RULE("force", "accel_x", ""),
+    SIGN_RULE("force", "accel_y", ""),                SIGN_RULE("force", "accel_z", "")};
+static const char *const ADD_REASON[6] = {GYRO_ADD_RULE("gyro_x"),   GYRO_ADD_RULE("gyro_y"),
+                                          GYRO_ADD_RULE("gyro_z"),   ACCEL_ADD_RULE("accel_x"),
+                                          ACCEL_ADD_RULE("accel_y"), ACCEL_ADD_RULE("accel_z")};
+
+/* The sums of sensor j (gyro x y z, accel x y z): sign, additive, white noise, rate hysteresis and its
+ * temperature coefficient; n written to *count. */
+static int sensor_sums(const double *par, double f, int j, Sum *out) {
+    int t = j / 3, i = j % 3;
+    double full = t == 0 ? sarins_imu_max_rate(f) : SARINS_IMU_ACCEL_FULL_SCALE;
+    double e = SARINS_IMU_TEMP_EXCURSION, rate = temp_rate(par, f, j);
+    int mis = t == 0 ? SARINS_IMU_P_GYRO_MISALIGNMENT_XY : SARINS_IMU_P_ACCEL_MISALIGNMENT_XY;
+    int n = 0;
+    Sum *s = &out[n++];
+    *s = (Sum){1.0, 0, {0}, {0}, SIGN_REASON[j]};
+    term(s, TP(SARINS_IMU_P_GYRO_SCALE_FACTOR_X, t, i), 1.0);
+    term(s, TP(SARINS_IMU_P_GYRO_SCALE_FACTOR_TC_X, t, i), e);
+    term(s, TP(SARINS_IMU_P_GYRO_SCALE_FACTOR_DTDT_X, t, i), rate);
+    for (int k = 0; k < 6; k++) {
+        if (MISALIGNMENT[k][0] == i) term(s, mis + k, 1.0);
+    }
+    if (t == 0) term(s, LOWRATE_GAIN[i], 1.0);
+    term(s, TP(SARINS_IMU_P_GYRO_QUADRATIC_X, t, i), full);
+    if (t == 0) {
+        s = &out[n++];
+        *s = (Sum){0.5 * PI * f, 0, {0}, {0}, "must be at most pi/2 rad per minor step in magnitude "
+                   "(|bias| <= pi/2 x internal_rate)"};
+        term(s, TP(SARINS_IMU_P_GYRO_BIAS_X, t, i), 1.0);
+    }
+    s = &out[n++];
+    *s = (Sum){t == 0 ? 0.75 * PI * f : SARINS_IMU_OUTPUT_MARGIN * full, 0, {0}, {0}, ADD_REASON[j]};
+    static const int UNIT[] = {SARINS_IMU_P_GYRO_BIAS_X, SARINS_IMU_P_GYRO_HYSTERESIS_X};
+    static const int SIGMA[] = {SARINS_IMU_P_GYRO_BIAS_INSTABILITY_X, SARINS_IMU_P_GYRO_TURN_ON_BIAS_X};
+    for (int k = 0; k < 2; k++) term(s, TP(UNIT[k], t, i), 1.0);
+    for (int k = 0; k < 2; k++) term(s, TP(SIGMA[k], t, i), SARINS_IMU_SIGMAS);
+    term(s, TP(SARINS_IMU_P_GYRO_BIAS_TC1_X, t, i), e);
+    term(s, TP(SARINS_IMU_P_GYRO_BIAS_TC2_X, t, i), e * e);
+    term(s, TP(SARINS_IMU_P_GYRO_BIAS_DTDT_X, t, i), rate);
+    term(s, TP(SARINS_IMU_P_GYRO_FLICKER_X, t, i), flicker_scale(par));
+    term(s, TP(SARINS_IMU_P_GYRO_RATE_RANDOM_WALK_X, t, i), SARINS_IMU_SIGMAS * sm_sqrt(SARINS_IMU_RRW_TIME));
+    term(s, PERIODIC_AMPLITUDE(j), 1.0); /* |A sin(2 pi f t + phi)| <= A */
+    if (t == 0) {
+        for (int c = 0; c < 3; c++) term(s, SARINS_IMU_P_G_SENSITIVITY_XX + 3 * i + c, SARINS_IMU_ACCEL_FULL_SCALE);
+    }
+    if (j == 2) { /* eps(T) = (a T + b) T + c and the azimuth gyro's thermal terms */
+        double ta = SARINS_IMU_TEMP_ABS;
+        const double powers[3] = {ta * ta, ta, 1.0};
+        for (int k = 0; k < 3; k++) {
+            term(s, DRIFT[k], powers[k]);
+            term(s, AGING[k], SARINS_IMU_SIGMAS * powers[k]);
+        }
+        term(s, SARINS_IMU_P_AXIAL_DRIFT_DTDT, rate);
+        term(s, SARINS_IMU_P_AXIAL_DRIFT_GRAD, SARINS_IMU_TEMP_SPAN);
+        term(s, SARINS_IMU_P_AXIAL_HYSTERESIS, 1.0);
+    }
+    s = &out[n++];
+    *s = (Sum){SARINS_IMU_OUTPUT_MARGIN * full, 0, {0}, {0}, "one output sample's noise std, random_walk "
+               "sqrt(internal_rate), <= 1e6 x full scale"};
+    term(s, TP(SARINS_IMU_P_GYRO_RANDOM_WALK_X, t, i), sm_sqrt(f));
+    s = &out[n++]; /* before the amplitude, whose scale holds it */
+    *s = (Sum){SARINS_IMU_OUTPUT_MARGIN, 0, {0}, {0}, "the rate hysteresis gain changes by at most 1e6 over the "
+               "temperatures: |rate_hysteresis_tc| 975 degC <= 1e6 (dynamics.h)"};
+    term(s, TP(SARINS_IMU_P_GYRO_RATE_HYSTERESIS_TC_X, t, i), e);
+    double tc = par[TP(SARINS_IMU_P_GYRO_RATE_HYSTERESIS_TC_X, t, i)];
+    s = &out[n++];
+    *s = (Sum){SARINS_IMU_OUTPUT_MARGIN * full, 0, {0}, {0}, "the rate hysteresis at 975 degC from 25, |c| "
+               "(1 + |rate_hysteresis_tc| 975 degC), <= 1e6 x full scale (dynamics.h)"};
+    term(s, TP(SARINS_IMU_P_GYRO_RATE_HYSTERESIS_X, t, i), 1.0 + sm_fabs(tc) * e);
+    if (t == 1) { /* accelerometer i's lever arm: the size effect at the largest measured rate */
+        s = &out[n++];
+        *s = (Sum){SARINS_IMU_OUTPUT_MARGIN * full, 0, {0}, {0}, "the size effect at pi rad per minor step on "
+                   "each axis, |r| (3 pi^2 + 2 sqrt(3) pi) internal_rate^2, <= 1e6 x full scale (dynamics.h)"};
+        for (int c = 0; c < 3; c++)
+            term(s, SARINS_IMU_P_ACCEL_LEVER_ARM_XX + 3 * i + c, (3.0 * PI * PI + 2.0 * SQRT3 * PI) * f * f);
+    }
+    /* the sensor's thermal and die time constants: slope x tau in the exact steps (thermal.h) finite */
+    static const int TIMES[2] = {SARINS_IMU_P_TIME_CONSTANT_GYRO_X, SARINS_IMU_P_DIE_TIME_CONSTANT_GYRO_X};
+    for (int k = 0; k < 2; k++) {
+        s = &out[n++];
+        *s = (Sum){0.25 * DBL_MAX, 0, {0}, {0}, "the exact thermal step's slope x time constant stays finite: "
+                   "1773.15 degC x internal_rate x tau <= DBL_MAX / 4 (thermal.h)"};
+        term(s, SP(TIMES[k], j), SARINS_IMU_TEMP_SPAN * f);
+    }
+    return n;
+}
+
+#define MAX_SUMS (6 * 9 + 1)
+
+/* Every sum of the parameter vector at the minor-loop rate f; their count. */
+static int all_sums(const double *par, double f, Sum *sums) {
+    int n = 0;
+    for (int j = 0; j < 6; j++) n += sensor_sums(par, f, j, sums + n);
+    Sum *s = &sums[n++];
+    *s = (Sum){0.25 * DBL_MAX, 0, {0}, {0}, "the exact thermal step's slope x time constant stays finite: "
+               "1773.15 degC x internal_rate x tau <= DBL_MAX / 4 (thermal.h)"};
+    term(s, SARINS_IMU_P_AXIAL_BLOCK_TIME_CONSTANT, SARINS_IMU_TEMP_SPAN * f);
+    return n;
+}
+
+/* The bound of term k of sum s: (capacity - the other terms) / its scale, at least 0. */
+static double term_bound(const Sum *s, const double *par, int k) {
+    double others = 0.0;
+    for (int m = 0; m < s->n; m++) {
+        if (m != k) others += s->scale[m] * sm_fabs(par[s->index[m]]);
+    }
+    double room = (s->capacity - others) / s->scale[k];
+    return room > 0.0 ? room : 0.0;
+}
+
+int sarins_imu_param_bound(const double *par, double internal_rate, int64_t i, double *bound, const char **reason) {
+    Sum sums[MAX_SUMS];
+    int n = all_sums(par, internal_rate, sums), found = 0;
+    for (int r = 0; r < n; r++) {
+        for (int k = 0; k < sums[r].n; k++) {
+            if (sums[r].index[k] != i) continue;
+            double b = term_bound(&sums[r], par, k);
+            if (!found || b < *bound) {
+                *bound = b;
+                *reason = sums[r].reason;
+            }
+            found = 1;
+        }
+    }
+    return found;
+}
+
+int64_t sarins_imu_check_rate_params(const double *par, double internal_rate, double *bound, const char **reason) {
+    /* a lower bound: the low-rate term divides the minor increment e by dt w (imu.c minor_terms); dt w must be
+       a normal double, else e / (dt w) is 0/0 (NaN) for e = 0 (measured: lowrate_width 5e-324 at 200 Hz) */
     for (int i = 0; i < 3; i++) {
-        int k = SARINS_IMU_P_GYRO_BIAS_X + i;
-        if (!(sm_fabs(par[k]) <= limit)) {
-            *reason = "must be at most pi/2 rad per minor step in magnitude (|bias| <= pi/2 x internal_rate)";
-            return k;
+        if (!(par[LOWRATE_WIDTH[i]] / internal_rate >= DBL_MIN)) {
+            *bound = DBL_MIN * internal_rate;
+            *reason = LOWER_BOUND "the minor step dt = 1 / internal_rate times lowrate_width must be a normal "
+                      "double (>= DBL_MIN), else e / (dt w) in the low-rate term is 0/0 (imu.c minor_terms)";
+            return LOWRATE_WIDTH[i];
+        }
+    }
+    Sum sums[MAX_SUMS];
+    int n = all_sums(par, internal_rate, sums);
+    for (int r = 0; r < n; r++) {
+        /* the largest term: over the capacity exactly when the sum is (to rounding) */
+        const Sum *s = &sums[r];
+        int top = 0;
+        for (int k = 1; k < s->n; k++) {
+            if (s->scale[k] * sm_fabs(par[s->index[k]]) > s->scale[top] * sm_fabs(par[s->index[top]])) top = k;
+        }
+        double b = term_bound(s, par, top);
+        if (!(sm_fabs(par[s->index[top]]) <= b)) {
+            *bound = b;
+            *reason = s->reason;
+            return s->index[top];
+        }
+    }
+    return -1;
+}
+
+int64_t sarins_imu_check_periodic_params(const double *par, double internal_rate, const char **reason) {
+    for (int j = 0; j < 6; j++) { /* f <= internal_rate / 2 */
+        if (!(par[PERIODIC_FREQUENCY(j)] <= 0.5 * internal_rate)) {
+            *reason = "must be at most the Nyquist frequency of the minor loop, internal_rate / 2";
+            return PERIODIC_FREQUENCY(j);
         }
     }
     return -1;
@@ -143,7 +370,7 @@ static double *row_array(const int64_t *table, int64_t i, int64_t rows, int64_t 
 
 typedef struct {
     double *consts, *clock, *sensor_par, *state, *coef, *triad, *mats, *corr_par, *corr_state, *phi, *q, *x_flicker,
-        *dyn_par, *dyn_state;
+        *dyn_par, *dyn_state, *periodic;
 } Arrays;
 
 static int arrays_of(const int64_t *table, int64_t rows, int64_t n_flicker, Arrays *a) {
@@ -162,8 +389,9 @@ static int arrays_of(const int64_t *table, int64_t rows, int64_t n_flicker, Arra
     a->x_flicker = row_array(table, SARINS_IMU_X_FLICKER, n_flicker, 6);
     a->dyn_par = row_array(table, SARINS_IMU_DYN_PAR, SARINS_DYN_PAR_ROWS, 6);
     a->dyn_state = row_array(table, SARINS_IMU_DYN_STATE, SARINS_DYN_STATE_ROWS, 6);
+    a->periodic = row_array(table, SARINS_IMU_PERIODIC, 3, 6);
     double *all[] = {a->consts, a->clock, a->sensor_par, a->state, a->coef, a->triad, a->mats, a->corr_par,
-                     a->corr_state, a->phi, a->q, a->x_flicker, a->dyn_par, a->dyn_state};
+                     a->corr_state, a->phi, a->q, a->x_flicker, a->dyn_par, a->dyn_state, a->periodic};
     for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
         if (all[i] == NULL) return 0;
     }
@@ -181,9 +409,12 @@ static int any_set(const double *par, int first, int count, int stride) {
 int sarins_imu_build(const int64_t *table, int64_t rows, const double *par, double t0, double h, int64_t n_sub,
                      double age, uint64_t seed) {
     const char *reason;
+    double bound;
     if (par == NULL || sarins_imu_check_params(par, &reason) >= 0) return SARINS_IMU_BAD_TABLE;
     if (!(h > 0.0 && h < INFINITY && n_sub >= 1 && n_sub <= SARINS_IMU_MAX_SUB && isfinite(t0) && age >= 0.0 && age < INFINITY))
         return SARINS_IMU_BAD_TABLE;
+    if (sarins_imu_check_rate_params(par, (double)n_sub / h, &bound, &reason) >= 0) return SARINS_IMU_BAD_TABLE;
+    if (sarins_imu_check_periodic_params(par, (double)n_sub / h, &reason) >= 0) return SARINS_IMU_BAD_TABLE;
     int64_t n_flicker = sarins_imu_flicker_count(par[SARINS_IMU_P_FLICKER_TAU_MIN], par[SARINS_IMU_P_FLICKER_TAU_MAX]);
     Arrays a;
     if (!arrays_of(table, rows, n_flicker, &a)) return SARINS_IMU_BAD_TABLE;
@@ -282,11 +513,16 @@ int sarins_imu_build(const int64_t *table, int64_t rows, const double *par, doub
     for (int i = 0; i < 3; i++) {
         for (int c = 0; c < 3; c++) a.dyn_par[6 * (5 + c) + 3 + i] = par[SARINS_IMU_P_ACCEL_LEVER_ARM_XX + 3 * i + c];
     }
+    /* periodic: amplitude, frequency (row 2, the phase, is drawn at seeding) */
+    for (int j = 0; j < 6; j++) {
+        a.periodic[j] = par[PERIODIC_AMPLITUDE(j)];
+        a.periodic[6 + j] = par[PERIODIC_FREQUENCY(j)];
+    }
     return SARINS_IMU_OK;
 }
 
 int sarins_imu_start(const int64_t *table, int64_t rows, double ambient0, int hot, uint64_t seed) {
-    if (table == NULL || rows < SARINS_IMU_N_ARRAYS || !(isfinite(ambient0) && ambient0 >= -273.15))
+    if (table == NULL || rows < SARINS_IMU_N_ARRAYS || !(ambient0 >= -273.15 && ambient0 <= SARINS_IMU_AMBIENT_MAX))
         return SARINS_IMU_BAD_TABLE;
     Arrays a;
     if (!arrays_of(table, rows, table[3 * SARINS_IMU_PHI + 1], &a)) return SARINS_IMU_BAD_TABLE;

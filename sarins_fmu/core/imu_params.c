@@ -203,7 +203,19 @@ static const char *const NAMES[SARINS_IMU_N_PARAMS] = {
     "die_time_constant_accel_y",
     "self_heating_accel_z",
     "time_constant_accel_z",
-    "die_time_constant_accel_z"
+    "die_time_constant_accel_z",
+    "gyro_periodic_amplitude_x",
+    "gyro_periodic_amplitude_y",
+    "gyro_periodic_amplitude_z",
+    "gyro_periodic_frequency_x",
+    "gyro_periodic_frequency_y",
+    "gyro_periodic_frequency_z",
+    "accel_periodic_amplitude_x",
+    "accel_periodic_amplitude_y",
+    "accel_periodic_amplitude_z",
+    "accel_periodic_frequency_x",
+    "accel_periodic_frequency_y",
+    "accel_periodic_frequency_z"
 };
 
 static const struct {
@@ -406,6 +418,18 @@ static const struct {
         0.0,
         15.4,
         16100.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
         0.0
      }},
     {"nav-rlg",
@@ -604,6 +628,18 @@ static const struct {
         0.0,
         15.4,
         16100.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
         0.0
      }},
     {"mems",
@@ -802,7 +838,19 @@ static const struct {
         130.0,
         5.7,
         600.0,
-        140.0
+        140.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0
      }}
 };
 

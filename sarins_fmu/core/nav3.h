@@ -26,6 +26,11 @@
 /* One step in place. */
 void sarins_nav3_step(double *q, double *v, double *pos, const double *dtheta, const double *dv, double h);
 
+/* The same step, also giving dv_n (3) = mat_nb,k-1 dv (m/s, ENU: the specific-force increment resolved
+ * at the start of the step, as the velocity update uses it). */
+void sarins_nav3_step_dvn(double *q, double *v, double *pos, const double *dtheta, const double *dv, double h,
+                          double *dv_n);
+
 /* K steps in place; writes out (K, 9) after each step.  Within the call the position sums are
  * compensated (Kahan), so rounding does not accumulate over the K steps.  Returns 0, or 1 (nothing changed) when an
  * increment is not finite or h is not positive. */

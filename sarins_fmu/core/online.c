@@ -118,8 +118,9 @@ int sarins_online_check(const sarins_online *u, char *msg, size_t size)
         return sarins_fail(&r, SARINS_ONLINE_BAD, "updater thresholds not positive and finite");
     if (u->stopped != 0 && u->stopped != 1)
         return sarins_fail(&r, SARINS_ONLINE_BAD, "updater stop flag not 0 or 1");
-    if (u->n_updates < 0 || u->n_resets < 0)
-        return sarins_fail(&r, SARINS_ONLINE_BAD, "updater event counts negative");
+    if (u->n_updates < 0 || u->n_resets < 0 || u->n_updates > SARINS_ONLINE_MAX_COUNT
+        || u->n_resets > SARINS_ONLINE_MAX_COUNT)
+        return sarins_fail(&r, SARINS_ONLINE_BAD, "updater event counts not 0 .. 2^53");
     if (!event_ok(&u->last) || !event_ok(&u->last_update))
         return sarins_fail(&r, SARINS_ONLINE_BAD, "updater event record not finite or not valid");
     return SARINS_ONLINE_OK;

@@ -25,6 +25,7 @@
 #define SARINS_ONLINE_OK 0
 #define SARINS_ONLINE_BAD 1
 #define SARINS_ONLINE_TIME_TOL 1e-9 /* s: a stop this much shorter than time_threshold still counts */
+#define SARINS_ONLINE_MAX_COUNT ((int64_t)1 << 53) /* event counts a state may hold (whole float64 values) */
 
 /* A finished stop. */
 typedef struct {

@@ -185,8 +185,8 @@ int sarins_rls_check(const sarins_rls *s, char *msg, size_t size)
     }
     if (!isfinite(s->time))
         return sarins_fail(&r, SARINS_RLS_BAD, "RLS time not finite");
-    if (s->n_updates < 0)
-        return sarins_fail(&r, SARINS_RLS_BAD, "RLS update count negative");
+    if (s->n_updates < 0 || s->n_updates > ((int64_t)1 << 53))
+        return sarins_fail(&r, SARINS_RLS_BAD, "RLS update count not 0 .. 2^53");
     return sarins_rls_check_settings(s->forgetting_factor, s->time_scale, msg, size);
 }
 

@@ -85,6 +85,12 @@ static inline double sarins_rng_normal(SarinsRng *r) {
 }
 
 /* The stream n of seed s, at its start (no draw made). */
+/* 1 when r is a state a stream can be in (a state check after a deserialisation): an even increment
+ * repeats its draws within 2^63 of them, 0 repeats one, which the polar method may reject for ever. */
+static inline int sarins_rng_valid(const SarinsRng *r) {
+    return (r->gamma & 1u) && (r->has_spare == 0 || r->has_spare == 1) && isfinite(r->spare);
+}
+
 void sarins_rng_stream(SarinsRng *r, uint64_t seed, uint64_t stream);
 
 /* State <-> SARINS_RNG_WORDS float64 words (stream: the id recorded in the

@@ -33,8 +33,9 @@ void sarins_rotvec_to_quat(const double *phi, double *q)
         s = 0.5 - theta2 / 48.0;
         c = 1.0 - theta2 / 8.0;
     } else {
-        s = sm_sin(0.5 * theta) / theta;
-        c = sm_cos(0.5 * theta);
+        double sh;
+        sm_sincos(0.5 * theta, &sh, &c); /* one range reduction; the bits of sm_sin, sm_cos */
+        s = sh / theta;
     }
     q[0] = c;
     q[1] = s * phi[0];
@@ -66,9 +67,10 @@ void sarins_quat_to_mat(const double *q, double *mat)
 
 void sarins_euler_to_mat(double yaw, double pitch, double roll, double *mat)
 {
-    double cy = sm_cos(yaw), sy = sm_sin(yaw);
-    double cp = sm_cos(pitch), sp = sm_sin(pitch);
-    double cr = sm_cos(roll), sr = sm_sin(roll);
+    double cy, sy, cp, sp, cr, sr; /* one range reduction per angle; the bits of sm_sin, sm_cos */
+    sm_sincos(yaw, &sy, &cy);
+    sm_sincos(pitch, &sp, &cp);
+    sm_sincos(roll, &sr, &cr);
     /* Rz(yaw) Rx(pitch) Ry(roll), written out */
     mat[0] = cy * cr - sy * sp * sr;
     mat[1] = -sy * cp;

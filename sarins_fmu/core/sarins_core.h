@@ -39,6 +39,7 @@ int sarins_core_abi(void);
 #include "schedule.h"
 #include "ambient.h"
 #include "traj.h"
+#include "aided_imu.h"
 #include "nav3.h"
 #include "gnss.h"
 #include "eskf.h"

@@ -39,7 +39,9 @@
 #include <stdint.h>
 #include <math.h> /* isfinite, isnan, isinf, signbit, NAN, INFINITY, HUGE_VAL only */
 
-#if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD != 0 && FLT_EVAL_METHOD != -1
+/* 16 (ISO/IEC TS 18661-3): only _Float16 is widened, to float; float and double as with 0 (gcc in GNU mode
+   with -march=native on a CPU with AVX512-FP16). */
+#if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD != 0 && FLT_EVAL_METHOD != -1 && FLT_EVAL_METHOD != 16
 #error "sarins core: needs double expressions evaluated in double (FLT_EVAL_METHOD 0); on 32-bit x86 add -msse2 -mfpmath=sse"
 #endif
 

@@ -7,10 +7,9 @@
 #include "thermal.h"
 
 double sarins_thermal_exact_step(double x, double amb0, double amb1, double dt, double heat, double tau) {
-    /* s = ambient slope; T <- e T + (amb0 + dT - s tau)(1 - e) + s dt, e = exp(-dt/tau) */
+    /* the input amb + dT, linear over the step at the ambient's slope */
     double slope = dt > 0 ? (amb1 - amb0) / dt : 0.0;
-    double decay = sm_exp(-dt / tau);
-    return decay * x + (amb0 + heat - slope * tau) * (1.0 - decay) + slope * dt;
+    return sarins_first_order_step(x, amb0 + heat, slope, dt, tau, sm_exp(-dt / tau));
 }
 
 void sarins_thermal_exact_steps(int64_t n_steps, const double *h, const double *amb, int64_t n_sensors,
@@ -50,10 +49,8 @@ void sarins_die_temperatures(int64_t n_steps, int64_t n_sensors, const double *r
         for (int64_t k = 0; k < n_steps; k++) {
             double rep = reported[k * n_sensors + j];
             if (tau[j] > 0.0) {
-                /* T_rep linear over the interval (slope s): T_die <- e T_die + (T_rep0 - s tau)(1 - e) + s h */
-                double slope = (rep - prev) / h;
-                double decay = sm_exp(-h / tau[j]);
-                die[j] = decay * die[j] + (prev - slope * tau[j]) * (1.0 - decay) + slope * h;
+                /* the input T_rep, linear over the interval */
+                die[j] = sarins_first_order_step(die[j], prev, (rep - prev) / h, h, tau[j], sm_exp(-h / tau[j]));
             } else {
                 die[j] = rep;
             }

@@ -14,6 +14,24 @@
 
 #include <stdint.h>
 
+#define SARINS_FIRST_ORDER_SERIES 1.4901161193847656e-08 /* 2^-26: dt / tau below it takes the series */
+
+/* The exact end value of a first-order lag dy/dt = (u(t) - y) / tau over a step of length dt >= 0 (s) with
+ * the input linear from u0 at slope (unit/s), decay = exp(-dt / tau) given:
+ *     y <- decay y + (u0 - slope tau)(1 - decay) + slope dt.
+ * That form's rounding error is about eps |slope| tau (1 - decay carries a relative error eps / w, w = dt / tau,
+ * times slope tau): at most 2^-26 |slope dt| while w >= 2^-26 (1.5e-8 of the input's change over the step), but
+ * unbounded beyond (at tau = 1e300 s a 480 degC ambient step moved the sensor by 480 degC).  For w < 2^-26 the
+ * value comes from its series, y + (u0 - y)(w - w^2 / 2) + slope dt w (1/2 - w / 6) (the terms left out are
+ * below eps); the form above is kept elsewhere so that every result before this branch is the same bits. */
+static inline double sarins_first_order_step(double y, double u0, double slope, double dt, double tau, double decay)
+{
+    double w = dt / tau;
+    if (w < SARINS_FIRST_ORDER_SERIES)
+        return y + (u0 - y) * (w - 0.5 * w * w) + slope * dt * w * (0.5 - w / 6.0);
+    return decay * y + (u0 - slope * tau) * (1.0 - decay) + slope * dt;
+}
+
 /* One exact step of length dt >= 0 (s) from temperature x (degC), ambient
  * linear from amb0 to amb1 (degC), self-heating heat (degC), time constant
  * tau (s); returns the temperature at the step end (degC). */

@@ -109,72 +109,139 @@ static void truth_row(const double *seg0, const double *rates, double tau, const
     imu_truth(&k, pos, row + 9, row + 12, dpos);
 }
 
-int sarins_traj_run(int64_t n_seg, const double *seg, const double *start, double h, int64_t substeps,
-                    int64_t k_total, double *truth, double *dtheta, double *dv)
+/* Checks of the segment table and start (as sarins_traj_run states them); the total number of steps in
+ * *total.  1 when they hold. */
+static int segments_ok(int64_t n_seg, const double *seg, const double *start, double h, int64_t substeps,
+                       int64_t *total)
 {
-    if (n_seg < 1 || substeps < 1 || !(h > 0.0) || !isfinite(h) || k_total < 1)
-        return SARINS_TRAJ_BAD;
-    int64_t total = 0;
+    if (n_seg < 1 || substeps < 1 || !(h > 0.0) || !isfinite(h))
+        return 0;
+    *total = 0;
     for (int64_t j = 0; j < n_seg; j++) {
         const double *r = seg + SARINS_TRAJ_SEG * j;
         if (!(r[0] >= 0.0 && r[0] <= 1e15 && sm_floor(r[0]) == r[0]) || !isfinite(r[1]) || !isfinite(r[2]) ||
             !isfinite(r[3]))
-            return SARINS_TRAJ_BAD;
-        total += (int64_t)r[0];
+            return 0;
+        *total += (int64_t)r[0];
     }
     for (int i = 0; i < SARINS_TRAJ_START; i++)
         if (!isfinite(start[i]))
-            return SARINS_TRAJ_BAD;
-    if (total != k_total)
-        return SARINS_TRAJ_BAD;
-    double state0[3] = {start[SARINS_TRAJ_SPEED], start[SARINS_TRAJ_YAW], start[SARINS_TRAJ_PITCH]};
-    double pos[3] = {start[SARINS_TRAJ_LAT], start[SARINS_TRAJ_LON], start[SARINS_TRAJ_HEIGHT]};
-    double dt = h / (double)substeps;
-    double pos_c[3] = {0.0, 0.0, 0.0}; /* Kahan compensation of pos */
-    int64_t row = 0;
-    for (int64_t j = 0; j < n_seg; j++) {
-        const double *r = seg + SARINS_TRAJ_SEG * j;
+            return 0;
+    return 1;
+}
+
+/* Move past finished segments: state0 advanced by each finished segment's rates over its duration
+ * (speed, |pitch| checked), stopping at the last segment.  SARINS_TRAJ_BAD when the speed turns negative
+ * or |pitch| reaches 89 deg. */
+static int settle(sarins_traj *s, const double *seg)
+{
+    for (;;) {
+        const double *r = seg + SARINS_TRAJ_SEG * s->seg;
         int64_t n = (int64_t)r[0];
-        const double rates[3] = {r[1], r[2], r[3]};
-        for (int64_t i = 0; i < n; i++, row++) {
-            double tau0 = (double)i * h;
-            truth_row(state0, rates, tau0, pos, truth + SARINS_TRAJ_ROW * row);
-            double y[10] = {0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-            for (int64_t m = 0; m < substeps; m++) {
-                double t = tau0 + (double)m * dt, k1[10], k2[10], k3[10], k4[10], yt[10];
-                /* classical RK4: y += dt (k1 + 2 k2 + 2 k3 + k4) / 6 */
-                deriv(state0, rates, t, pos, y, k1);
-                for (int c = 0; c < 10; c++) yt[c] = y[c] + 0.5 * dt * k1[c];
-                deriv(state0, rates, t + 0.5 * dt, pos, yt, k2);
-                for (int c = 0; c < 10; c++) yt[c] = y[c] + 0.5 * dt * k2[c];
-                deriv(state0, rates, t + 0.5 * dt, pos, yt, k3);
-                for (int c = 0; c < 10; c++) yt[c] = y[c] + dt * k3[c];
-                deriv(state0, rates, t + dt, pos, yt, k4);
-                for (int c = 0; c < 10; c++) y[c] += dt * (k1[c] + 2.0 * k2[c] + 2.0 * k3[c] + k4[c]) / 6.0;
-            }
-            double qn = sm_sqrt(y[3] * y[3] + y[4] * y[4] + y[5] * y[5] + y[6] * y[6]);
-            double q[4] = {y[3] / qn, y[4] / qn, y[5] / qn, y[6] / qn};
-            sarins_quat_to_rotvec(q, dtheta + 3 * row);
-            for (int c = 0; c < 3; c++) {
-                dv[3 * row + c] = y[7 + c];
-                /* pos += y, compensated (Kahan) so that rounding does not accumulate over the steps */
-                double add = y[c] - pos_c[c], sum = pos[c] + add;
-                pos_c[c] = (sum - pos[c]) - add;
-                pos[c] = sum;
-            }
-            if (!isfinite(pos[0]) || sm_fabs(pos[0]) >= 89.9 * DEG)
-                return SARINS_TRAJ_BAD;
-        }
-        double tau_end = (double)n * h;
-        if (j == n_seg - 1)
-            truth_row(state0, rates, tau_end, pos, truth + SARINS_TRAJ_ROW * row);
-        state0[0] += r[1] * tau_end;
-        state0[1] += r[2] * tau_end;
-        state0[2] += r[3] * tau_end;
-        if (state0[0] < -1e-9 || sm_fabs(state0[2]) >= 89.0 * DEG)
+        if (s->i < n)
+            return SARINS_TRAJ_OK;
+        double tau_end = (double)n * s->step;
+        double end[3] = {s->state0[0] + r[1] * tau_end, s->state0[1] + r[2] * tau_end, s->state0[2] + r[3] * tau_end};
+        if (end[0] < -1e-9 || sm_fabs(end[2]) >= 89.0 * DEG)
             return SARINS_TRAJ_BAD;
-        if (state0[0] < 1e-12)
-            state0[0] = 0.0;
+        if (s->seg == s->n_seg - 1)
+            return SARINS_TRAJ_OK; /* done: the last row is on the last segment at its end */
+        if (end[0] < 1e-12)
+            end[0] = 0.0;
+        for (int c = 0; c < 3; c++)
+            s->state0[c] = end[c];
+        s->seg += 1;
+        s->i = 0;
     }
+}
+
+int sarins_traj_begin(sarins_traj *s, int64_t n_seg, const double *seg, const double *start, double h,
+                      int64_t substeps)
+{
+    int64_t total;
+    if (!segments_ok(n_seg, seg, start, h, substeps, &total))
+        return SARINS_TRAJ_BAD;
+    s->state0[0] = start[SARINS_TRAJ_SPEED];
+    s->state0[1] = start[SARINS_TRAJ_YAW];
+    s->state0[2] = start[SARINS_TRAJ_PITCH];
+    s->pos[0] = start[SARINS_TRAJ_LAT];
+    s->pos[1] = start[SARINS_TRAJ_LON];
+    s->pos[2] = start[SARINS_TRAJ_HEIGHT];
+    s->pos_c[0] = s->pos_c[1] = s->pos_c[2] = 0.0;
+    s->step = h;
+    s->substeps = substeps;
+    s->seg = 0;
+    s->i = 0;
+    s->n_seg = n_seg;
+    return settle(s, seg);
+}
+
+int sarins_traj_done(const sarins_traj *s, const double *seg)
+{
+    return s->seg == s->n_seg - 1 && s->i >= (int64_t)seg[SARINS_TRAJ_SEG * s->seg];
+}
+
+void sarins_traj_row(const sarins_traj *s, const double *seg, double *row)
+{
+    const double *r = seg + SARINS_TRAJ_SEG * s->seg;
+    const double rates[3] = {r[1], r[2], r[3]};
+    truth_row(s->state0, rates, (double)s->i * s->step, s->pos, row);
+}
+
+int sarins_traj_step(sarins_traj *s, const double *seg, double *dtheta, double *dv)
+{
+    if (sarins_traj_done(s, seg))
+        return SARINS_TRAJ_BAD;
+    const double *r = seg + SARINS_TRAJ_SEG * s->seg;
+    const double rates[3] = {r[1], r[2], r[3]};
+    const double h = s->step, dt = h / (double)s->substeps, tau0 = (double)s->i * h;
+    double y[10] = {0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    for (int64_t m = 0; m < s->substeps; m++) {
+        double t = tau0 + (double)m * dt, k1[10], k2[10], k3[10], k4[10], yt[10];
+        /* classical RK4: y += dt (k1 + 2 k2 + 2 k3 + k4) / 6 */
+        deriv(s->state0, rates, t, s->pos, y, k1);
+        for (int c = 0; c < 10; c++) yt[c] = y[c] + 0.5 * dt * k1[c];
+        deriv(s->state0, rates, t + 0.5 * dt, s->pos, yt, k2);
+        for (int c = 0; c < 10; c++) yt[c] = y[c] + 0.5 * dt * k2[c];
+        deriv(s->state0, rates, t + 0.5 * dt, s->pos, yt, k3);
+        for (int c = 0; c < 10; c++) yt[c] = y[c] + dt * k3[c];
+        deriv(s->state0, rates, t + dt, s->pos, yt, k4);
+        for (int c = 0; c < 10; c++) y[c] += dt * (k1[c] + 2.0 * k2[c] + 2.0 * k3[c] + k4[c]) / 6.0;
+    }
+    double qn = sm_sqrt(y[3] * y[3] + y[4] * y[4] + y[5] * y[5] + y[6] * y[6]);
+    double q[4] = {y[3] / qn, y[4] / qn, y[5] / qn, y[6] / qn};
+    sarins_quat_to_rotvec(q, dtheta);
+    sarins_traj next = *s;
+    for (int c = 0; c < 3; c++) {
+        dv[c] = y[7 + c];
+        /* pos += y, compensated (Kahan) so that rounding does not accumulate over the steps */
+        double add = y[c] - next.pos_c[c], sum = next.pos[c] + add;
+        next.pos_c[c] = (sum - next.pos[c]) - add;
+        next.pos[c] = sum;
+    }
+    if (!isfinite(next.pos[0]) || sm_fabs(next.pos[0]) >= 89.9 * DEG)
+        return SARINS_TRAJ_BAD;
+    next.i += 1;
+    if (settle(&next, seg) != SARINS_TRAJ_OK)
+        return SARINS_TRAJ_BAD;
+    *s = next;
+    return SARINS_TRAJ_OK;
+}
+
+int sarins_traj_run(int64_t n_seg, const double *seg, const double *start, double h, int64_t substeps,
+                    int64_t k_total, double *truth, double *dtheta, double *dv)
+{
+    int64_t total;
+    if (k_total < 1 || !segments_ok(n_seg, seg, start, h, substeps, &total) || total != k_total)
+        return SARINS_TRAJ_BAD;
+    sarins_traj s;
+    if (sarins_traj_begin(&s, n_seg, seg, start, h, substeps) != SARINS_TRAJ_OK)
+        return SARINS_TRAJ_BAD;
+    for (int64_t row = 0; row < k_total; row++) {
+        sarins_traj_row(&s, seg, truth + SARINS_TRAJ_ROW * row);
+        if (sarins_traj_step(&s, seg, dtheta + 3 * row, dv + 3 * row) != SARINS_TRAJ_OK)
+            return SARINS_TRAJ_BAD;
+    }
+    sarins_traj_row(&s, seg, truth + SARINS_TRAJ_ROW * k_total);
     return SARINS_TRAJ_OK;
 }

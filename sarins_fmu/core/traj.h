@@ -45,6 +45,34 @@ enum { SARINS_TRAJ_LAT, SARINS_TRAJ_LON, SARINS_TRAJ_HEIGHT, SARINS_TRAJ_SPEED, 
 int sarins_traj_run(int64_t n_seg, const double *seg, const double *start, double h, int64_t substeps,
                     int64_t k_total, double *truth, double *dtheta, double *dv);
 
+/* The same run one step at a time (the TrajectoryIMU FMU): the state between steps, plain data. */
+typedef struct {
+    double state0[3]; /* speed (m/s), yaw, pitch (rad) at the start of the current segment */
+    double pos[3];    /* lat, lon (rad), h (m) at the start of the next step */
+    double pos_c[3];  /* Kahan compensation of pos */
+    double step;      /* h, s */
+    int64_t substeps; /* RK4 sub-intervals per step */
+    int64_t seg;      /* current segment */
+    int64_t i;        /* steps done in it */
+    int64_t n_seg;    /* segments */
+} sarins_traj;
+
+/* Start a stepwise run of n_seg segments seg (n_seg, 4) (checked as sarins_traj_run checks them, except the
+ * total) from start (6).  SARINS_TRAJ_OK or SARINS_TRAJ_BAD. */
+int sarins_traj_begin(sarins_traj *s, int64_t n_seg, const double *seg, const double *start, double h,
+                      int64_t substeps);
+
+/* The truth row (15) at the start of the next step (t = k h): sarins_traj_run's row k. */
+void sarins_traj_row(const sarins_traj *s, const double *seg, double *row);
+
+/* One step of the segments s was begun with: dtheta, dv (3 each) over it, s advanced to its end.  Returns
+ * SARINS_TRAJ_OK, or SARINS_TRAJ_BAD (s unchanged but for a partly written dtheta, dv) when the segments
+ * are used up or the motion leaves the range sarins_traj_run checks. */
+int sarins_traj_step(sarins_traj *s, const double *seg, double *dtheta, double *dv);
+
+/* 1 when every segment's steps are done. */
+int sarins_traj_done(const sarins_traj *s, const double *seg);
+
 /* Rotation vector of a unit quaternion [w x y z] (the shorter rotation). */
 void sarins_quat_to_rotvec(const double *q, double *phi);
 

@@ -1,6 +1,9 @@
 """The aided-navigation campaign's experiments: one drive, Monte Carlo runs of the 15-state
 error-state Kalman filter (:func:`sarins_fmu.aided.navigate`) with GNSS and GNSS outages.
 
+Also the comparison with KF-GINS, a peer filter, on one drive (:func:`kfgins_run`, the work of
+:mod:`sarins_fmu.experiments.kfgins_compare`).
+
 The drive (:func:`drive`): 20 s stop, accelerate to 12 m/s, 90° turn, cruise, -90° turn, brake,
 10 s stop, at latitude 32° N, IMU at 100 Hz.  GNSS at 1 Hz with white errors (the filter's model:
 the receiver presets' Gauss-Markov errors would make it over-confident, docs/aided-navigation.md),
@@ -134,3 +137,23 @@ def zupt_run(seed: int, imu: str = ZUPT_IMU, window: float = ZUPT_WINDOW, alpha:
             "delay_s": float(np.mean(delays)), "samples": n, "gamma": found.gamma,
             "error_truth_m": float(r_truth.horizontal_error()[-1]), "error_imu_m": float(r_imu.horizontal_error()[-1]),
             "zupt_truth": r_truth.zupt_steps, "zupt_imu": r_imu.zupt_steps, "cpu_s": time.process_time() - t0}
+
+
+def kfgins_run(binary: str, minutes: float, seed: int = 0, repeats: int = 3) -> dict:
+    """Our filter and KF-GINS (``binary``) on the same data: :func:`sarins_fmu.experiments.kfgins_compare.compare`
+    on its drive of about ``minutes`` (tactical IMU, 1 Hz GNSS with white errors, ``seed``), each filter run
+    ``repeats`` times (the fastest times kept).
+
+    Returns comparison: the comparison's JSON text ('' when KF-GINS failed); failure: '' or one line saying
+    how KF-GINS failed (its exit status and the end of its output, or why it could not start).
+    """
+    import json
+    import subprocess
+
+    from . import kfgins_compare
+
+    try:
+        r = kfgins_compare.compare(binary, minutes, seed=seed, repeats=repeats)
+    except (OSError, RuntimeError, ValueError, subprocess.SubprocessError) as exc:
+        return {"comparison": "", "failure": " ".join(f"{type(exc).__name__}: {exc}".split())[:300]}
+    return {"comparison": json.dumps(r), "failure": ""}

@@ -44,10 +44,25 @@ def compensate(log: ImuLog, compensator) -> tuple[np.ndarray, np.ndarray]:
     return np.ascontiguousarray(y[:, :3] * h), np.ascontiguousarray(y[:, 3:] * h)
 
 
-def replay(log: ImuLog, *, align_hours: float = 4.0, coarse_seconds: float = 300.0,
+GYROCOMPASS_ALIGN_HOURS = 4.0  # seed 000's alignment (the RBF models are trained on it)
+LEVEL_ALIGN_SECONDS = 600.0  # hypothetical default: 10 min of static data to level and to estimate the gyro bias
+
+
+def default_align_hours(log: ImuLog, heading: float | None) -> float:
+    """The alignment when none is given, h: 4 h of gyrocompassing, or, with a ``heading``
+    (levelling), 10 min, at most half the log, in whole samples of the log."""
+    if heading is None:
+        return GYROCOMPASS_ALIGN_HOURS
+    n = min(round(LEVEL_ALIGN_SECONDS / log.step), len(log.time) // 2)
+    return max(n, 1) * log.step / HOUR
+
+
+def replay(log: ImuLog, *, align_hours: float | None = None, coarse_seconds: float = 300.0,
            compensator=None, identifier=None, compensate_drift: bool = True, heading: float | None = None,
            path=None) -> StaticRunResult:
     """Align on the first ``align_hours`` of the log and navigate over the rest.
+
+    ``align_hours`` None takes :func:`default_align_hours` (4 h to gyrocompass, 10 min to level).
 
     The alignment (:mod:`sarins_fmu.experiments.replay_align`): gyrocompassing (coarse in the
     inertial frame, then the zero-velocity Kalman filter) when the gyros can see the Earth rate and
@@ -79,13 +94,16 @@ def replay(log: ImuLog, *, align_hours: float = 4.0, coarse_seconds: float = 300
     if log.lat is None:
         raise AlignmentError(f"{path}: the log does not state the latitude of its static start; give it with "
                              "--lat-deg")
-    n_align = _alignment_samples(log, align_hours, coarse_seconds, path)
+    given = align_hours is not None
+    if not given:
+        align_hours = default_align_hours(log, heading)
+    if heading is None and not given and len(log.time) <= round(align_hours * HOUR / log.step):
+        _refuse_unseen(log, path)  # a short log: say first what is missing (a heading), then the length
+    n_align = _alignment_samples(log, align_hours, coarse_seconds if heading is None else 0.0, path, given)
     window = _window(log, n_align)
     seen = align.sight(window, log.lat)
     if heading is None and not seen.can_see:
-        raise AlignmentError(f"{path}: the gyros cannot see the Earth rate ({seen.reason()}), so they cannot find "
-                             "the heading; give it with --heading-deg (the replay then levels with the "
-                             "accelerometers)")
+        raise _unseen(seen, path)
     if heading is not None and identifier is not None:
         raise AlignmentError(f"{path}: --identify needs the gyrocompass alignment (the drift model was trained on "
                              "it); leave out --heading-deg")
@@ -111,6 +129,21 @@ def replay(log: ImuLog, *, align_hours: float = 4.0, coarse_seconds: float = 300
                           gyro_horizontal_rate_dph=seen.horizontal_rate / DPH_TO_RPS,
                           earth_horizontal_rate_dph=seen.earth_rate / DPH_TO_RPS, warnings=notes)
     return StaticRunResult(**result)
+
+
+def _refuse_unseen(log: ImuLog, path) -> None:
+    """Refuse naming --heading-deg when the gyros of a log shorter than the default alignment cannot see
+    the Earth rate over the whole log."""
+    seen = align.sight(_window(log, len(log.time)), log.lat)
+    if not seen.can_see:
+        raise _unseen(seen, path)
+
+
+def _unseen(seen, path) -> AlignmentError:
+    """The refusal of a log whose gyros cannot see the Earth rate: it names --heading-deg."""
+    return AlignmentError(f"{path}: the gyros cannot see the Earth rate ({seen.reason()}), so they cannot find "
+                          "the heading; give it with --heading-deg (the replay then levels with the "
+                          "accelerometers)")
 
 
 def _window(log: ImuLog, n_align: int) -> np.ndarray:
@@ -198,7 +231,8 @@ def _result(log, nav, err, n_align, compensator, gyro_comp, accel_comp) -> dict:
               "accel_comp": np.asarray(accel_comp).tolist()})
 
 
-def _alignment_samples(log: ImuLog, align_hours: float, coarse_seconds: float = 300.0, path="the log") -> int:
+def _alignment_samples(log: ImuLog, align_hours: float, coarse_seconds: float = 300.0, path="the log",
+                       given: bool = True) -> int:
     h = log.step
     if not (math.isfinite(align_hours) and align_hours > 0):
         raise ValueError(f"--align-hours must be a positive time, got {align_hours} h")
@@ -206,12 +240,13 @@ def _alignment_samples(log: ImuLog, align_hours: float, coarse_seconds: float = 
     if abs(n_align * h - align_hours * HOUR) > 1e-6 * h:
         raise ValueError(f"--align-hours {align_hours:g} h is not a whole number of the log's {h:g} s samples "
                          f"({path})")
-    if n_align * h < coarse_seconds + 2 * h:
+    if coarse_seconds and n_align * h < coarse_seconds + 2 * h:
         raise ValueError(f"--align-hours {align_hours:g} h ({n_align * h:g} s) must exceed the {coarse_seconds:g} s "
                          f"coarse alignment plus two of the log's {h:g} s samples ({path})")
     if len(log.time) <= n_align:
         raise ValueError(f"the log ({len(log.time) * h / HOUR:.4g} h, {path}) is not longer than the "
-                         f"{align_hours:g} h alignment (--align-hours)")
+                         f"{align_hours:g} h alignment (--align-hours"
+                         + ("" if given else "; without it 4 h to gyrocompass, or 10 min with --heading-deg") + ")")
     return n_align
 
 

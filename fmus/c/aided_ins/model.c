@@ -1,10 +1,11 @@
 /* AidedINS FMU (native): strapdown INS + 15-state error-state Kalman filter aided by GNSS fixes.
  *
  * The declaration (variables, descriptions, the timing contract) is fmus/aided_ins_slave.py; the filter is
- * the C core's (sarins_fmu/core/eskf.h: sarins_eskf_predict, sarins_eskf_gnss), the kernels
- * sarins_fmu.aided.navigate runs in process (aiding gnss): fed the same increments and the fixes at the
- * steps after which navigate applies them, the outputs equal its rows bit for bit.  doStep(t, h) integrates
- * the increments of [t, t + h], then applies a new valid fix.  Units: rad, m, m/s, rad/s, m/s^2, s.
+ * the C core's (sarins_fmu/core/eskf.h: sarins_eskf_predict, sarins_eskf_zaru, sarins_eskf_gnss), the kernels
+ * sarins_fmu.aided.navigate runs in process (aiding gnss and zaru): fed the same increments, the same stop
+ * flags and the fixes at the steps after which navigate applies them, the outputs equal its rows bit for bit.
+ * doStep(t, h) integrates the increments of [t, t + h], applies a ZARU when the input zaru is 1 (the vehicle
+ * stood still over the interval), then a new valid fix.  Units: rad, m, m/s, rad/s, m/s^2, s.
  */
 #include "smath.h"
 
@@ -18,19 +19,32 @@
 #include "variables.h"
 
 #define STEP_TOL 1e-9 /* relative: the communication step equals the filter's step */
+#define NO_TAG -1.0e9  /* s: increment_end_time unconnected (fmus.slave_support.NO_TAG): untagged mode */
+#define MAX_INC 4      /* time-tagged mode: intervals that may wait */
+#define MAX_FIX 8      /* time-tagged mode: fixes that may wait */
+#define FIX_ROW 8      /* valid (0/1), fix_time (s), lat, lon (rad), h (m), v E N U (m/s) */
+#define INC_ROW 7      /* dtheta (3, rad), dv (3, m/s), zaru flag (0/1) of one interval */
 
 /* What changes during a run (plain data: the FMU state copies it). */
 typedef struct {
     sarins_eskf eskf;
     int64_t last_count; /* fix_count input of the last applied / seen fix */
     int64_t used;       /* valid fixes applied */
+    /* time-tagged mode: interval i ends at start + (i + 1) h */
+    double inc[MAX_INC][INC_ROW]; /* waiting increments and stop flags (ring) of intervals done .. done + n_inc - 1 */
+    int64_t inc_first, n_inc; /* ring position and length */
+    int64_t done;             /* intervals integrated */
+    double fix[MAX_FIX][FIX_ROW]; /* waiting fixes (ring), in time order */
+    int64_t fix_first, n_fix;
 } ai_state;
 
 /* 1 when st can be run, else 0 with the reason in msg. */
 static int ai_state_ok(const ai_state *st, char *msg, size_t size)
 {
     int ok = st->last_count >= 0 && st->used >= 0 && st->eskf.steps >= 0 && st->eskf.since_cov >= 0
-             && st->eskf.config[SARINS_ESKF_STEP] > 0.0;
+             && st->eskf.config[SARINS_ESKF_STEP] > 0.0 && st->inc_first >= 0 && st->inc_first < MAX_INC
+             && st->n_inc >= 0 && st->n_inc <= MAX_INC && st->fix_first >= 0 && st->fix_first < MAX_FIX
+             && st->n_fix >= 0 && st->n_fix <= MAX_FIX && st->done >= 0;
     if (!ok)
         snprintf(msg, size, "AidedINS state: a count or the step is out of range");
     return ok;
@@ -70,15 +84,15 @@ static int ai_initialize(sarins_ctx *c)
         r[SARINS_R_pos0_std], r[SARINS_R_vel0_std], r[SARINS_R_tilt0_std], r[SARINS_R_heading0_std],
         r[SARINS_R_gyro_bias0_std], r[SARINS_R_accel_bias0_std], r[SARINS_R_lever_x], r[SARINS_R_lever_y],
         r[SARINS_R_lever_z], r[SARINS_R_latency], r[SARINS_R_zupt_std], r[SARINS_R_cov_every], r[SARINS_R_nhc_std],
-        r[SARINS_R_odo_std]};
+        r[SARINS_R_odo_std], r[SARINS_R_zaru_std]};
     static const char *const names[SARINS_ESKF_CONFIG] = {
         "step", "arw", "vrw", "gyro_rw", "accel_rw", "pos0_std", "vel0_std", "tilt0_std", "heading0_std",
         "gyro_bias0_std", "accel_bias0_std", "lever_x", "lever_y", "lever_z", "latency", "zupt_std", "cov_every",
-        "nhc_std", "odo_std"};
+        "nhc_std", "odo_std", "zaru_std"};
     for (int i = 0; i < SARINS_ESKF_CONFIG; i++) {
         int lever = i >= SARINS_ESKF_LEVER_X && i <= SARINS_ESKF_LEVER_Z;
         int positive = i == SARINS_ESKF_STEP || i == SARINS_ESKF_ZUPT_STD || i == SARINS_ESKF_NHC_STD
-                       || i == SARINS_ESKF_ODO_STD;
+                       || i == SARINS_ESKF_ODO_STD || i == SARINS_ESKF_ZARU_STD;
         int whole = i == SARINS_ESKF_COV_EVERY;
         if (!isfinite(config[i]) || (positive && !(config[i] > 0.0)) || (!lever && config[i] < 0.0)
             || (whole && !(config[i] >= 1.0 && config[i] <= 1000.0 && sm_floor(config[i]) == config[i]))) {
@@ -118,6 +132,132 @@ static int ai_initialize(sarins_ctx *c)
         return SARINS_ERROR;
     }
     publish(c, st);
+    c->r[SARINS_R_nav_time] = c->start_time;
+    return SARINS_OK;
+}
+
+static const double *std_of(const sarins_ctx *c, double *std)
+{
+    const double *r = c->r;
+    const int slots[6] = {SARINS_R_gnss_pos_std_e, SARINS_R_gnss_pos_std_n, SARINS_R_gnss_pos_std_u,
+                          SARINS_R_gnss_vel_std_e, SARINS_R_gnss_vel_std_n, SARINS_R_gnss_vel_std_u};
+    for (int i = 0; i < 6; i++)
+        std[i] = r[slots[i]];
+    return std;
+}
+
+/* The index of the interval after which navigate applies a fix valid at time (aided.fix_rows):
+ * ceil((time - start + latency) / h - 1e-9) - 1. */
+static double fix_index(const sarins_ctx *c, const ai_state *st, double time)
+{
+    const double *cf = st->eskf.config;
+    return sm_ceil((time - c->start_time + cf[SARINS_ESKF_LATENCY]) / cf[SARINS_ESKF_STEP] - 1e-9) - 1.0;
+}
+
+/* The input zaru: 1 (apply a ZARU after the interval's integration) or 0; -1 with the error logged. */
+static int zaru_flag(sarins_ctx *c, double t)
+{
+    int flag = c->i[SARINS_I_zaru];
+    if (flag != 0 && flag != 1) {
+        sarins_log(c, SARINS_ERROR, "ValueError: input zaru = %d at t = %.17g s must be 0 or 1", flag, t);
+        return -1;
+    }
+    return flag;
+}
+
+/* Time-tagged mode (model.h's do_step, the declaration's contract): queue the inputs, integrate what is due. */
+static int tagged_step(sarins_ctx *c, ai_state *st, double t)
+{
+    const double *r = c->r;
+    double h = st->eskf.config[SARINS_ESKF_STEP];
+    double tag = r[SARINS_R_increment_end_time];
+    double index = sm_floor((tag - c->start_time) / h + 0.5), point = c->start_time + index * h;
+    if (!(isfinite(tag) && index >= 0.0 && index < 9007199254740992.0)
+        || sm_fabs(tag - point) > STEP_TOL * (sm_fabs(point) + h)) {
+        sarins_log(c, SARINS_ERROR, "ValueError: increment_end_time %.17g s is not a communication point", tag);
+        return SARINS_ERROR;
+    }
+    int64_t received = st->done + st->n_inc; /* intervals received: the next one ends at start + (received + 1) h */
+    int64_t m = (int64_t)index;
+    if (m == received + 1) {
+        if (st->n_inc == MAX_INC) {
+            sarins_log(c, SARINS_ERROR, "ValueError: more than %d intervals wait for fix_horizon at t = %.17g s "
+                       "(is the receiver's fix_horizon connected?)", MAX_INC, t);
+            return SARINS_ERROR;
+        }
+        double *slot = st->inc[(st->inc_first + st->n_inc) % MAX_INC];
+        const int in[6] = {SARINS_R_dtheta_x, SARINS_R_dtheta_y, SARINS_R_dtheta_z, SARINS_R_dv_x, SARINS_R_dv_y,
+                           SARINS_R_dv_z};
+        for (int i = 0; i < 6; i++) {
+            slot[i] = r[in[i]];
+            if (!isfinite(slot[i])) {
+                sarins_log(c, SARINS_ERROR, "ValueError: an increment input at t = %.17g s is not finite", t);
+                return SARINS_ERROR;
+            }
+        }
+        int flag = zaru_flag(c, t);
+        if (flag < 0)
+            return SARINS_ERROR;
+        slot[6] = (double)flag;
+        st->n_inc += 1;
+    } else if (m != received) {
+        sarins_log(c, SARINS_ERROR, "ValueError: increment_end_time %.17g s: the interval ending at %.17g s was "
+                   "expected", tag, c->start_time + (double)(received + 1) * h);
+        return SARINS_ERROR;
+    }
+    int64_t count = c->i[SARINS_I_fix_count];
+    if (count > st->last_count) {
+        if (st->n_fix == MAX_FIX) {
+            sarins_log(c, SARINS_ERROR, "ValueError: more than %d fixes wait at t = %.17g s", MAX_FIX, t);
+            return SARINS_ERROR;
+        }
+        double row[FIX_ROW] = {c->i[SARINS_I_fix_valid] != 0, r[SARINS_R_fix_time], r[SARINS_R_fix_lat],
+                               r[SARINS_R_fix_lon], r[SARINS_R_fix_height], r[SARINS_R_fix_v_e], r[SARINS_R_fix_v_n],
+                               r[SARINS_R_fix_v_u]};
+        for (int i = 1; i < FIX_ROW; i++)
+            if (!isfinite(row[i])) {
+                sarins_log(c, SARINS_ERROR, "ValueError: a fix input at t = %.17g s is not finite", t);
+                return SARINS_ERROR;
+            }
+        if (fix_index(c, st, row[1]) < (double)st->done) {
+            sarins_log(c, SARINS_ERROR, "ValueError: the fix valid at %.17g s came after its interval was integrated "
+                       "(fix_horizon said it was in)", row[1]);
+            return SARINS_ERROR;
+        }
+        memcpy(st->fix[(st->fix_first + st->n_fix) % MAX_FIX], row, sizeof row);
+        st->n_fix += 1;
+        st->last_count = count;
+    }
+    double horizon = r[SARINS_R_fix_horizon], latency = st->eskf.config[SARINS_ESKF_LATENCY];
+    if (isnan(horizon)) {
+        sarins_log(c, SARINS_ERROR, "ValueError: fix_horizon at t = %.17g s is not a number", t);
+        return SARINS_ERROR;
+    }
+    double std[6];
+    std_of(c, std);
+    while (st->n_inc > 0) {
+        double end = c->start_time + (double)(st->done + 1) * h; /* of the interval to integrate */
+        if (!(horizon >= end - latency - STEP_TOL * (sm_fabs(end) + h)))
+            break; /* a fix applied after it may still come */
+        const double *inc = st->inc[st->inc_first];
+        sarins_eskf_predict(&st->eskf, inc, inc + 3);
+        if (inc[6] != 0.0)
+            sarins_eskf_zaru(&st->eskf, inc);
+        while (st->n_fix > 0 && fix_index(c, st, st->fix[st->fix_first][1]) <= (double)st->done) {
+            const double *f = st->fix[st->fix_first];
+            if (f[0] != 0.0) {
+                sarins_eskf_gnss(&st->eskf, f + 2, f + 5, std, c->i[SARINS_I_use_velocity]);
+                st->used += 1;
+            }
+            st->fix_first = (st->fix_first + 1) % MAX_FIX;
+            st->n_fix -= 1;
+        }
+        st->inc_first = (st->inc_first + 1) % MAX_INC;
+        st->n_inc -= 1;
+        st->done += 1;
+    }
+    publish(c, st);
+    c->r[SARINS_R_nav_time] = c->start_time + (double)st->done * h;
     return SARINS_OK;
 }
 
@@ -135,6 +275,8 @@ static int ai_do_step(sarins_ctx *c, double t, double h)
                    step);
         return SARINS_ERROR;
     }
+    if (c->r[SARINS_R_increment_end_time] != NO_TAG)
+        return tagged_step(c, st, t);
     const double *r = c->r;
     double dtheta[3] = {r[SARINS_R_dtheta_x], r[SARINS_R_dtheta_y], r[SARINS_R_dtheta_z]};
     double dv[3] = {r[SARINS_R_dv_x], r[SARINS_R_dv_y], r[SARINS_R_dv_z]};
@@ -145,6 +287,9 @@ static int ai_do_step(sarins_ctx *c, double t, double h)
             sarins_log(c, SARINS_ERROR, "ValueError: an increment input at t = %.17g s is not finite", t);
             return SARINS_ERROR;
         }
+    int zaru = zaru_flag(c, t);
+    if (zaru < 0)
+        return SARINS_ERROR;
     int64_t count = c->i[SARINS_I_fix_count];
     int fresh = count > st->last_count && c->i[SARINS_I_fix_valid] != 0;
     if (fresh)
@@ -154,6 +299,8 @@ static int ai_do_step(sarins_ctx *c, double t, double h)
                 return SARINS_ERROR;
             }
     sarins_eskf_predict(&st->eskf, dtheta, dv);
+    if (zaru)
+        sarins_eskf_zaru(&st->eskf, dtheta);
     if (fresh) {
         double std[6] = {r[SARINS_R_gnss_pos_std_e], r[SARINS_R_gnss_pos_std_n], r[SARINS_R_gnss_pos_std_u],
                          r[SARINS_R_gnss_vel_std_e], r[SARINS_R_gnss_vel_std_n], r[SARINS_R_gnss_vel_std_u]};
@@ -163,6 +310,7 @@ static int ai_do_step(sarins_ctx *c, double t, double h)
     if (count > st->last_count)
         st->last_count = count;
     publish(c, st);
+    c->r[SARINS_R_nav_time] = t + h;
     return SARINS_OK;
 }
 
@@ -189,14 +337,20 @@ static int ai_check_state(const sarins_ctx *c, int running)
              && sarins_state_finite(c, "eskf.ba", e->ba, 3)
              && sarins_state_finite(c, "eskf.p", e->p, SARINS_ESKF_N * SARINS_ESKF_N)
              && sarins_state_finite(c, "eskf.x", e->x, SARINS_ESKF_N)
-             && sarins_state_finite(c, "eskf.w_ib", e->w_ib, 3) && sarins_state_finite(c, "eskf.f_n", e->f_n, 3);
+             && sarins_state_finite(c, "eskf.w_ib", e->w_ib, 3) && sarins_state_finite(c, "eskf.f_n", e->f_n, 3)
+             && sarins_state_int(c, "inc_first", st->inc_first, 0, MAX_INC - 1)
+             && sarins_state_int(c, "n_inc", st->n_inc, 0, MAX_INC) && sarins_state_int(c, "done", st->done, 0, big)
+             && sarins_state_int(c, "fix_first", st->fix_first, 0, MAX_FIX - 1)
+             && sarins_state_int(c, "n_fix", st->n_fix, 0, MAX_FIX)
+             && sarins_state_finite(c, "inc", &st->inc[0][0], INC_ROW * MAX_INC)
+             && sarins_state_finite(c, "fix", &st->fix[0][0], FIX_ROW * MAX_FIX);
     return ok ? SARINS_OK : SARINS_ERROR;
 }
 
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(ai_state),
-    .state_version = 1,
+    .state_version = 3,
     .initialize = ai_initialize,
     .do_step = ai_do_step,
     .release = ai_release,

@@ -200,7 +200,7 @@ static void publish(sarins_ctx *c, const dmu_state *s, double compensation, doub
         r[SARINS_R_last_update_temp] = s->upd.last_update.temperature;
         r[SARINS_R_last_update_drift] = s->upd.last_update.drift;
     }
-    if (s->upd.n_updates + s->upd.n_resets > 0) {
+    if (s->upd.n_updates > 0 || s->upd.n_resets > 0) {
         const sarins_online_event *e = &s->upd.last;
         r[SARINS_R_last_stop_time] = e->time;
         r[SARINS_R_last_stop_duration] = e->duration;

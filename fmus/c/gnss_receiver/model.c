@@ -20,6 +20,7 @@
 
 #define MAX_OUTAGES 16
 #define GRID_TOL 1e-9 /* relative: a fix interval within this of a whole number of steps is one */
+#define NO_TAG -1.0e9  /* s: truth_time unconnected (fmus.slave_support.NO_TAG): the truth is at t */
 
 /* What changes during a run, and the parsed parameters it runs with (plain data: the FMU state copies it). */
 typedef struct {
@@ -29,6 +30,7 @@ typedef struct {
     int64_t k;                          /* steps done: the next doStep starts at start + k h */
     int64_t every;                      /* steps per fix, fixed by the first doStep (0 before) */
     double step;                        /* s, the communication step, fixed by the first doStep */
+    int64_t truth_next;                 /* time-tagged truth: index of the next communication point to take */
 } gr_state;
 
 /* 1 when st can be run (counts and sizes in range), else 0 with the reason in msg. */
@@ -37,7 +39,7 @@ static int gr_state_ok(const gr_state *st, char *msg, size_t size)
     const char *why = NULL;
     if (st->n_outages < 0 || st->n_outages > MAX_OUTAGES)
         why = "outage count out of range";
-    else if (st->k < 0 || st->every < 0 || st->gnss.epochs < 0)
+    else if (st->k < 0 || st->every < 0 || st->gnss.epochs < 0 || st->truth_next < 0)
         why = "step or epoch count out of range";
     else if (st->every > 0 && !(st->step > 0.0))
         why = "step out of range";
@@ -88,6 +90,7 @@ static void publish_empty(sarins_ctx *c)
     r[SARINS_R_fix_time] = c->start_time;
     c->i[SARINS_I_fix_valid] = 0;
     c->i[SARINS_I_fix_count] = 0;
+    r[SARINS_R_fix_horizon] = NO_TAG;
 }
 
 static int gr_initialize(sarins_ctx *c)
@@ -178,7 +181,29 @@ static int gr_do_step(sarins_ctx *c, double t, double h)
         sarins_log(c, SARINS_ERROR, "ValueError: time %.17g s is not the next communication point %.17g s", t, epoch);
         return SARINS_ERROR;
     }
-    if (st->k > 0 && st->k % st->every == 0) {
+    int64_t m = st->k; /* the communication point whose truth the inputs are */
+    int take = 1;
+    double tag = c->r[SARINS_R_truth_time];
+    if (tag != NO_TAG) {
+        double index = sm_floor((tag - c->start_time) / st->step + 0.5);
+        double point = c->start_time + index * st->step;
+        if (!(isfinite(tag) && index >= 0.0 && index < 9007199254740992.0)
+            || sm_fabs(tag - point) > GRID_TOL * (sm_fabs(point) + st->step)) {
+            sarins_log(c, SARINS_ERROR, "ValueError: truth_time %.17g s is not a communication point", tag);
+            return SARINS_ERROR;
+        }
+        m = (int64_t)index;
+        /* the next point in order; the first may be point 1 (Gauss-Seidel: point 0, no epoch, is never seen) */
+        take = m == st->truth_next || (st->truth_next == 0 && m == 1);
+        if (!take && m != st->truth_next - 1) {
+            sarins_log(c, SARINS_ERROR, "ValueError: truth_time %.17g s: the truth of %.17g s was expected next", tag,
+                       c->start_time + (double)st->truth_next * st->step);
+            return SARINS_ERROR;
+        }
+        if (take)
+            epoch = c->start_time + (double)m * st->step;
+    }
+    if (take && m > 0 && m % st->every == 0) {
         const double *r = c->r;
         double truth[9] = {r[SARINS_R_lat], r[SARINS_R_lon], r[SARINS_R_height], r[SARINS_R_v_e], r[SARINS_R_v_n],
                            r[SARINS_R_v_u], r[SARINS_R_yaw], r[SARINS_R_pitch], r[SARINS_R_roll]};
@@ -199,6 +224,10 @@ static int gr_do_step(sarins_ctx *c, double t, double h)
         w[SARINS_R_fix_time] = epoch;
         c->i[SARINS_I_fix_count] += 1;
     }
+    if (take) {
+        c->r[SARINS_R_fix_horizon] = c->start_time + (double)m * st->step;
+        st->truth_next = m + 1;
+    }
     st->k += 1;
     return SARINS_OK;
 }
@@ -215,7 +244,7 @@ static int gr_check_state(const sarins_ctx *c, int running)
     const gr_state *st = c->state;
     const long long big = 1LL << 53;
     int ok = sarins_state_int(c, "n_outages", st->n_outages, 0, MAX_OUTAGES)
-             && sarins_state_int(c, "k", st->k, 0, big) && sarins_state_int(c, "every", st->every, 0, big)
+             && sarins_state_int(c, "k", st->k, 0, big) && sarins_state_int(c, "truth_next", st->truth_next, 0, big) && sarins_state_int(c, "every", st->every, 0, big)
              && sarins_state_int(c, "gnss.epochs", st->gnss.epochs, 0, big)
              && sarins_state_finite(c, "gnss.b", st->gnss.b, 6)
              && sarins_state_finite(c, "gnss.config", st->gnss.config, SARINS_GNSS_CONFIG)
@@ -234,7 +263,7 @@ static int gr_check_state(const sarins_ctx *c, int running)
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(gr_state),
-    .state_version = 1,
+    .state_version = 2,
     .initialize = gr_initialize,
     .do_step = gr_do_step,
     .release = gr_release,

@@ -37,6 +37,8 @@
 #define LAT_LIMIT (89.9 * PI / 180.0) /* rad: fmus.slave_support.LAT_LIMIT */
 #define SELF_HEATING_LIMIT SARINS_IMU_SELF_HEATING_LIMIT /* degC: the core's bound (imu_build.h) */
 #define ABSOLUTE_ZERO (-273.15)       /* degC */
+#define AMBIENT_RANGE "ambient temperature must be finite, above absolute zero and at most 500 degC " \
+                      "(SARINS_IMU_AMBIENT_MAX)"
 #define INT32_LIMIT 2147483647
 #define MAX_GIMBALS 3
 #define TABLE_ROWS (SARINS_IMU_N_ARRAYS + 3) /* the IMU arrays, the io row, the two held sets */
@@ -149,12 +151,34 @@ static int model_params(const sarins_ctx *c, double *par)
     }
     const char *reason = NULL;
     int64_t bad = sarins_imu_check_params(par, &reason);
-    if (bad < 0)
-        bad = sarins_imu_check_rate_params(par, c->r[SARINS_R_internal_rate], &reason);
     if (bad >= 0) {
         sarins_log(c, SARINS_ERROR, "parameter %s = %.17g%s: IMU parameter %s %s", sarins_imu_param_name(bad),
                    par[bad], set[bad] ? "" : " (of the preset, with the coefficients that were set)",
                    sarins_imu_param_name(bad), reason);
+        return SARINS_ERROR;
+    }
+    double bound = 0.0;
+    bad = sarins_imu_check_rate_params(par, c->r[SARINS_R_internal_rate], &bound, &reason);
+    size_t lower = strlen(SARINS_IMU_LOWER_BOUND);
+    if (bad >= 0 && strncmp(reason, SARINS_IMU_LOWER_BOUND, lower) == 0) {
+        sarins_log(c, SARINS_ERROR, "parameter %s = %.17g%s is below %.17g at internal_rate %.17g Hz: %s",
+                   sarins_imu_param_name(bad), par[bad],
+                   set[bad] ? "" : " (of the preset, with the coefficients that were set)", bound,
+                   c->r[SARINS_R_internal_rate], reason + lower);
+        return SARINS_ERROR;
+    }
+    if (bad >= 0) { /* the bound derived in the core (imu_build.h sarins_imu_param_bound) */
+        sarins_log(c, SARINS_ERROR, "parameter %s = %.17g%s is outside [%.17g, %.17g] at internal_rate %.17g Hz: %s",
+                   sarins_imu_param_name(bad), par[bad],
+                   set[bad] ? "" : " (of the preset, with the coefficients that were set)", -bound, bound,
+                   c->r[SARINS_R_internal_rate], reason);
+        return SARINS_ERROR;
+    }
+    bad = sarins_imu_check_periodic_params(par, c->r[SARINS_R_internal_rate], &reason);
+    if (bad >= 0) {
+        sarins_log(c, SARINS_ERROR, "parameter %s = %.17g Hz: IMU parameter %s %s (internal_rate %.17g Hz)",
+                   sarins_imu_param_name(bad), par[bad], sarins_imu_param_name(bad), reason,
+                   c->r[SARINS_R_internal_rate]);
         return SARINS_ERROR;
     }
     return SARINS_OK;
@@ -248,7 +272,7 @@ static void layout(imu_work *w, int64_t n_axes, int64_t n_flicker)
     static const int64_t shapes[SARINS_IMU_N_ARRAYS][2] = {
         {SARINS_IMU_N_CONSTS, 1}, {2, 1}, {4, 6}, {3, 6}, {10, 3}, {7, 3}, {9, 3}, {0, 3}, {2, 3}, {SARINS_IMU_N_STREAMS,
         SARINS_RNG_WORDS}, {8, 6}, {3, 6}, {0, 1}, {0, 6}, {0, 6}, {SARINS_DYN_PAR_ROWS, 6},
-        {SARINS_DYN_STATE_ROWS, 6}};
+        {SARINS_DYN_STATE_ROWS, 6}, {3, 6}};
     size_t used = 0;
     for (int i = 0; i < SARINS_IMU_N_ARRAYS; i++) {
         int flicker = i >= SARINS_IMU_PHI && i <= SARINS_IMU_X_FLICKER; /* the rows of the flicker terms */
@@ -328,8 +352,8 @@ static int imu_initialize(sarins_ctx *c)
     if (status != SARINS_OK)
         return status;
     double ambient = c->r[SARINS_R_ambient_temp];
-    if (!(isfinite(ambient) && ambient >= ABSOLUTE_ZERO)) {
-        sarins_log(c, SARINS_ERROR, "ValueError: ambient temperature must be finite and above absolute zero (degC)");
+    if (!(ambient >= ABSOLUTE_ZERO && ambient <= SARINS_IMU_AMBIENT_MAX)) {
+        sarins_log(c, SARINS_ERROR, "ValueError: " AMBIENT_RANGE);
         return SARINS_ERROR;
     }
     double motion[3 * MAX_GIMBALS + 2], vehicle[SARINS_IMU_VEHICLE_SET];
@@ -463,8 +487,8 @@ static int explain(const sarins_ctx *c, const imu_work *w, double t, double h)
     }
     const double *chosen = from_held ? w->held + 2 : motion;
     double amb_end = chosen[3 * w->n_gimbals] + chosen[3 * w->n_gimbals + 1] * h;
-    if (!(isfinite(amb_end) && amb_end >= ABSOLUTE_ZERO))
-        return step_error(c, "ambient temperature must be finite and above absolute zero (degC)");
+    if (!(amb_end >= ABSOLUTE_ZERO && amb_end <= SARINS_IMU_AMBIENT_MAX))
+        return step_error(c, AMBIENT_RANGE);
     return step_error(c, "the IMU step refused its inputs");
 }
 
@@ -501,8 +525,8 @@ static int start(sarins_ctx *c, imu_work *w, double t, double h)
         chosen = from_held ? w->held + 2 : motion;
     }
     double ambient0 = chosen[3 * w->n_gimbals];
-    if (!(ambient0 >= ABSOLUTE_ZERO))
-        return step_error(c, "ambient temperature must be finite and above absolute zero (degC)");
+    if (!(ambient0 >= ABSOLUTE_ZERO && ambient0 <= SARINS_IMU_AMBIENT_MAX))
+        return step_error(c, AMBIENT_RANGE);
     uint64_t seed = (uint64_t)c->i[SARINS_I_seed];
     if (sarins_imu_build(w->table, TABLE_ROWS, w->par, 0.0, interval, (int64_t)sm_nearbyint(n_sub),
                          c->r[SARINS_R_aging_days] * SARINS_IMU_DAY, seed) != SARINS_IMU_OK
@@ -583,7 +607,7 @@ static int imu_check_state(const sarins_ctx *c, int running)
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(imu_state),
-    .state_version = 1,
+    .state_version = 2, /* 2: the periodic row (imu.h SARINS_IMU_PERIODIC) in the work state */
     .check_state = imu_check_state,
     .initialize = imu_initialize,
     .do_step = imu_do_step,

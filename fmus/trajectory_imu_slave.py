@@ -1,0 +1,73 @@
+"""TrajectoryIMU FMU: a vehicle trajectory from segments and the aided runs' IMU along it (the C core's
+traj.h + aided_imu.h).
+
+The declaration of the native TrajectoryIMU FMU: its variables, descriptions, start values and the timing
+contract.  ``fmus/native_fmu.py`` writes the model description and the C variable table from it;
+``fmus/c/trajectory_imu/model.c`` computes it (the kernels :func:`sarins_fmu.trajectory.generate` and
+:func:`sarins_fmu.aided.corrupt` run in process, one step at a time).
+"""
+
+from pythonfmu import Fmi2Slave
+
+from fmus.slave_support import OUTPUT, PARAMETER, declare, default_experiment
+
+NAV = (("lat", "rad; deg", "latitude"), ("lon", "rad; deg", "longitude"), ("height", "m", "height"),
+       ("v_e", "m/s", "east velocity"), ("v_n", "m/s", "north velocity"), ("v_u", "m/s", "up velocity"),
+       ("yaw", "rad; deg", "yaw (CCW from north)"), ("pitch", "rad; deg", "pitch"), ("roll", "rad; deg", "roll"))
+NOISE = (("arw", "rad/s0.5", "angle random walk"), ("vrw", "m/s/s0.5", "velocity random walk"),
+         ("gyro_bias_std", "rad/s", "std of the per-seed constant gyro bias"),
+         ("accel_bias_std", "m/s2", "std of the per-seed constant accelerometer bias"),
+         ("gyro_rw", "rad/s/s0.5", "gyro bias random walk"), ("accel_rw", "m/s2/s0.5", "accelerometer bias random walk"))
+
+
+class TrajectoryIMU(Fmi2Slave):
+
+    author = "sarins-fmu"
+    description = (
+        "A vehicle's truth motion from segments (sarins_fmu.trajectory, the C core's traj.h: speed, heading and "
+        "pitch rates constant per segment, roll 0, navigation frame ENU, body right-front-up) and the aided "
+        "runs' IMU along it (sarins_fmu.aided.corrupt, the core's aided_imu.h: white angle and velocity random "
+        "walks, per-seed constant biases, bias random walks, seeded). segments: 'steps accel yaw_rate "
+        "pitch_rate; ...' (a whole number of steps of `step` s, m/s2, rad/s, rad/s; "
+        "sarins_fmu.trajectory.Trajectory.table). Contract (standard FMI timing, time-tagged): after "
+        "doStep(t, h) (h = step) the outputs are the truth at t + h (truth_time = t + h) and the measured "
+        "increments of [t, t + h] (increment_end_time = t + h) with the true biases over it; at initialisation "
+        "the truth at the start time and no increments (both tags = the start time). A step past the last "
+        "segment is an error. State outputs only (no direct feedthrough). FMU state: get, set and serialize; "
+        "no allocation after initialisation.")
+    default_experiment = default_experiment(0.01)  # HOST_DEFAULT_STEPS steps, the default segments as long: runs on a host's defaults
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        declare(self, "string", "segments", PARAMETER,
+                "segment rows 'steps accel yaw_rate pitch_rate' ';'-separated [1]", "1000 0 0 0")
+        declare(self, "real", "step", PARAMETER, "IMU step = communication step [s]", 0.01)
+        declare(self, "integer", "substeps", PARAMETER, "Runge-Kutta sub-intervals per step [1]", 8)
+        for name, unit, text in (("lat0", "rad; deg", "start latitude"), ("lon0", "rad; deg", "start longitude"),
+                                 ("height0", "m", "start height"), ("speed0", "m/s", "start speed"),
+                                 ("yaw0", "rad; deg", "start heading, CCW from north"),
+                                 ("pitch0", "rad; deg", "start pitch")):
+            declare(self, "real", name, PARAMETER, f"{text} [{unit}]", 0.0)
+        for name, unit, text in NOISE:
+            declare(self, "real", name, PARAMETER, f"IMU {text} [{unit}]", 0.0)
+        declare(self, "integer", "seed", PARAMETER, "seed of the IMU errors [1]", 0)
+        for name, unit, text in NAV:
+            declare(self, "real", name, OUTPUT, f"true {text} at truth_time [{unit}]", 0.0)
+        for ax in "xyz":
+            declare(self, "real", f"omega_ib_{ax}", OUTPUT,
+                    f"true body rate wrt inertial space at truth_time, {ax} axis [rad/s]", 0.0)
+        declare(self, "real", "truth_time", OUTPUT, "time tag of the truth outputs [s]", 0.0)
+        for q, unit in (("dtheta", "rad"), ("dv", "m/s")):
+            for ax in "xyz":
+                declare(self, "real", f"{q}_{ax}", OUTPUT,
+                        f"measured {q} increment of the interval ending at increment_end_time, body {ax} [{unit}]",
+                        0.0)
+        declare(self, "real", "increment_end_time", OUTPUT, "time tag: end of the increments' interval [s]", 0.0)
+        for q, unit in (("bias_g", "rad/s"), ("bias_a", "m/s2")):
+            for ax in "xyz":
+                declare(self, "real", f"true_{q}_{ax}", OUTPUT,
+                        f"true {q.replace('_', ' ')} over the increments' interval, body {ax} [{unit}]", 0.0)
+
+    def do_step(self, current_time, step_size):
+        raise NotImplementedError("the TrajectoryIMU FMU is native: fmus/c/trajectory_imu/model.c computes it (this "
+                                  "class only declares its variables)")

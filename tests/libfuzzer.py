@@ -1,0 +1,34 @@
+"""Running a libFuzzer harness from a test: clang (or a skip with the install line), the time budget from the
+environment, and the run itself, which fails the test on any finding and returns the run's execution count."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+
+def clang_or_skip() -> str:
+    clang = shutil.which("clang")
+    if clang is None:
+        pytest.skip("clang (with libFuzzer) not installed (Debian: apt-get install clang)")
+    return clang
+
+
+def budget(default: int, variable: str = "SARINS_FUZZ_SECONDS") -> int:
+    """Seconds of fuzzing: ``variable`` if set (.ci/run gives 60), else ``default``."""
+    return int(os.environ.get(variable, str(default)))
+
+
+def run(exe: Path, corpus: Path, seconds: int, *flags: str, env: dict | None = None) -> str:
+    """``exe -max_total_time=seconds flags corpus`` in the corpus's parent folder (crash files land there);
+    asserts exit 0 and returns libFuzzer's ``stat::number_of_executed_units`` line."""
+    proc = subprocess.run([str(exe), f"-max_total_time={seconds}", "-print_final_stats=1", *flags, str(corpus)],
+                          capture_output=True, text=True, env=env, timeout=seconds + 900, cwd=corpus.parent)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    runs = [line for line in proc.stderr.splitlines() if "stat::number_of_executed_units" in line]
+    assert runs, proc.stderr[-2000:]
+    return runs[0]

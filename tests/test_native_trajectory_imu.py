@@ -1,0 +1,144 @@
+"""The native TrajectoryIMU FMU (fmus/c/trajectory_imu/model.c over the core's traj.h + aided_imu.h).
+
+After doStep(t_k, h) its outputs are the truth row k + 1 of sarins_fmu.trajectory.generate and the measured
+increments of step k of aided.corrupt(..., stream='core') bit for bit; the core stream's errors have the
+stated statistics; an FMU state taken mid-run repeats the rest; bad parameters are refused naming them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fmu_driver import Slave, check_parameter_error
+from fmus.native_fmu import build_native_fmu
+from sarins_fmu import aided
+from sarins_fmu import trajectory as tr
+
+STEP = 0.01
+SEED = 7
+SEGMENTS = ({"kind": "stop", "duration": 1}, {"kind": "accelerate", "to_speed": 8, "accel": 2.0},
+            {"kind": "turn", "rate_dps": 15, "angle_deg": 45}, {"kind": "climb", "to_pitch_deg": 2, "duration": 1},
+            {"kind": "cruise", "duration": 1})
+START = tr.Start(lat_deg=35.0, lon_deg=118.0, height=20.0, heading_deg=-30.0)
+NOISE = aided.IMU_NOISE["tactical"]
+NAV = ["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll"]
+OUT = NAV + [f"omega_ib_{a}" for a in "xyz"] + ["truth_time"] + [f"{q}_{a}" for q in ("dtheta", "dv") for a in "xyz"] \
+    + ["increment_end_time"] + [f"true_bias_{q}_{a}" for q in "ga" for a in "xyz"]
+
+
+def parameters(trajectory, noise, seed, step) -> dict:
+    """The FMU's start values for a trajectory, an IMU noise grade and a seed (as sarins.systems writes them)."""
+    start = trajectory.start.array()
+    table = trajectory.table(step)
+    params = {"segments": "; ".join(" ".join(repr(float(x)) for x in row) for row in table), "step": step}
+    params.update(dict(zip(["lat0", "lon0", "height0", "speed0", "yaw0", "pitch0"], start.tolist())))
+    params.update(dict(zip(["arw", "vrw", "gyro_bias_std", "accel_bias_std", "gyro_rw", "accel_rw"],
+                           noise.array().tolist())))
+    params["seed"] = seed
+    return params
+
+
+@pytest.fixture(scope="module")
+def fmu(tmp_path_factory):
+    return build_native_fmu("TrajectoryIMU", "trajectory_imu_slave.py", tmp_path_factory.mktemp("ti"), win64=False,
+                            aarch64=False)
+
+
+@pytest.fixture(scope="module")
+def expected():
+    trajectory = tr.Trajectory(START, SEGMENTS)
+    truth = tr.generate(trajectory, STEP)
+    dtheta, dv, bg, ba = aided.corrupt(truth, NOISE, SEED, stream="core")
+    k = truth.n_steps
+    t = np.arange(1, k + 1) * STEP
+    rows = np.column_stack([truth.nav_rows()[1:], truth.omega_ib_b[1:], t, dtheta, dv, t, bg, ba])
+    return parameters(trajectory, NOISE, SEED, STEP), rows
+
+
+def _run(fmu, params, n, state_at=None):
+    slave = Slave(fmu, "ti")
+    try:
+        slave.set(**params)
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+        first = slave.get(*OUT)
+        out, again = [], []
+        for k in range(n):
+            if k == state_at:
+                state = slave.fmu.getFMUstate()
+            slave.fmu.doStep(k * STEP, STEP)
+            out.append(slave.get(*OUT))
+        if state_at is not None:
+            slave.fmu.setFMUstate(state)
+            for k in range(state_at, n):
+                slave.fmu.doStep(k * STEP, STEP)
+                again.append(slave.get(*OUT))
+        return np.array(first), np.array(out), np.array(again)
+    finally:
+        slave.free()
+
+
+def test_fmu_equals_generate_and_corrupt_bit_for_bit(fmu, expected):
+    params, rows = expected
+    first, got, again = _run(fmu, params, len(rows), state_at=150)
+    np.testing.assert_array_equal(got, rows)
+    np.testing.assert_array_equal(again, rows[150:])
+    truth = tr.generate(tr.Trajectory(START, SEGMENTS), STEP)
+    np.testing.assert_array_equal(first[:12], np.concatenate([truth.nav_rows()[0], truth.omega_ib_b[0]]))
+    assert first[12] == first[19] == 0.0  # both tags at the start time: no increments yet
+
+
+def test_a_step_past_the_end_is_refused(fmu, expected):
+    params, rows = expected
+    slave = Slave(fmu, "end")
+    try:
+        slave.set(**params)
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+        for k in range(len(rows)):
+            slave.fmu.doStep(k * STEP, STEP)
+        with pytest.raises(Exception, match="status 3"):
+            slave.fmu.doStep(len(rows) * STEP, STEP)
+        assert any("past the trajectory's end" in text for _, _, text in slave.log)
+    finally:
+        slave.free()
+
+
+def test_core_stream_statistics():
+    """White parts: std arw sqrt(h), vrw sqrt(h); constant biases: std bias_std; random walk: the bias
+    change over the run has std rw sqrt(T).  Each sample std within 5 sigma of its chi-square law."""
+    noise = aided.ImuNoise(arw=2e-4, vrw=3e-3, gyro_bias_std=1e-5, accel_bias_std=2e-3, gyro_rw=1e-6, accel_rw=1e-5)
+    truth = tr.generate(tr.Trajectory(START, ({"kind": "stop", "duration": 20},)), STEP)
+    k = truth.n_steps
+    dtheta, dv, bg, ba = aided.corrupt(truth, noise, 3, stream="core")
+    white_g = (dtheta - truth.dtheta - bg * STEP).ravel()
+    white_a = (dv - truth.dv - ba * STEP).ravel()
+    for values, sigma in ((white_g, noise.arw * math.sqrt(STEP)), (white_a, noise.vrw * math.sqrt(STEP))):
+        n = values.size
+        assert abs(np.std(values) / sigma - 1) < 5 / math.sqrt(2 * n)
+        assert abs(np.mean(values)) < 5 * sigma / math.sqrt(n)
+    seeds = range(400)
+    b0 = np.array([np.concatenate(aided.corrupt(truth, noise, s, stream="core")[2:])[[0, k]] for s in seeds])
+    for j, sigma in ((0, noise.gyro_bias_std), (1, noise.accel_bias_std)):
+        values = b0[:, j].ravel()
+        assert abs(np.std(values) / sigma - 1) < 5 / math.sqrt(2 * values.size)
+    walk = np.diff(bg, axis=0).ravel()  # the gyro bias step per IMU step: rw sqrt(h)
+    assert abs(np.std(walk) / (noise.gyro_rw * math.sqrt(STEP)) - 1) < 5 / math.sqrt(2 * walk.size)
+
+
+@pytest.mark.parametrize("params, text", [
+    ({"segments": ""}, "segments"),
+    ({"segments": "10 0 0"}, "segments"),
+    ({"segments": "1.5 0 0 0"}, "segments"),
+    ({"step": 0.0}, "step"),
+    ({"substeps": 0}, "substeps"),
+    ({"arw": -1.0}, "arw"),
+    ({"lat0": 1.6}, "lat0"),
+    ({"speed0": -1.0}, "speed0"),
+    ({"seed": -1}, "seed"),
+])
+def test_bad_parameters_are_refused(fmu, params, text):
+    check_parameter_error(fmu, params, text)
