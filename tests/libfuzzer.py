@@ -4,6 +4,7 @@ environment, and the run itself, which fails the test on any finding and returns
 from __future__ import annotations
 
 import os
+import resource
 import shutil
 import subprocess
 from pathlib import Path
@@ -23,10 +24,23 @@ def budget(default: int, variable: str = "SARINS_FUZZ_SECONDS") -> int:
     return int(os.environ.get(variable, str(default)))
 
 
-def run(exe: Path, corpus: Path, seconds: int, *flags: str, env: dict | None = None) -> str:
+def rss_limit(headroom_mb: int = 2048) -> str:
+    """libFuzzer's ``-rss_limit_mb`` for a harness started from this process.
+
+    libFuzzer reads its RSS as the peak RSS of getrusage, and Linux keeps that peak across fork and exec: a
+    fuzzer started from a pytest worker that once held 2 GB starts "at" 2 GB and, with libFuzzer's 2048 MB
+    default, reports out-of-memory on its first inputs.  The limit is therefore this process's peak plus
+    ``headroom_mb`` for the harness itself."""
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss // 1024  # Linux: KiB
+    return f"-rss_limit_mb={peak_mb + headroom_mb}"
+
+
+def run(exe: Path, corpus: Path, seconds: int, *flags: str, env: dict | None = None,
+        headroom_mb: int = 2048) -> str:
     """``exe -max_total_time=seconds flags corpus`` in the corpus's parent folder (crash files land there);
     asserts exit 0 and returns libFuzzer's ``stat::number_of_executed_units`` line."""
-    proc = subprocess.run([str(exe), f"-max_total_time={seconds}", "-print_final_stats=1", *flags, str(corpus)],
+    proc = subprocess.run([str(exe), f"-max_total_time={seconds}", "-print_final_stats=1", rss_limit(headroom_mb),
+                           *flags, str(corpus)],
                           capture_output=True, text=True, env=env, timeout=seconds + 900, cwd=corpus.parent)
     assert proc.returncode == 0, proc.stderr[-3000:]
     runs = [line for line in proc.stderr.splitlines() if "stat::number_of_executed_units" in line]

@@ -459,9 +459,11 @@ def test_the_fuzz_harness_builds_and_runs_clean_on_the_model_files(tmp_path):
     of every kind (the timed run is the slow test below)."""
     import subprocess
 
+    import libfuzzer
+
     exe, corpus = _netfile_fuzzer(tmp_path)
-    run = subprocess.run([str(exe), "-runs=5000", "-max_len=65536", "-seed=1", str(corpus)], capture_output=True,
-                         text=True, timeout=600)
+    run = subprocess.run([str(exe), "-runs=5000", "-max_len=65536", "-seed=1", libfuzzer.rss_limit(), str(corpus)],
+                         capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
 
 
