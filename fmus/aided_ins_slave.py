@@ -1,10 +1,11 @@
-"""AidedINS FMU: a strapdown INS with a 15-state error-state Kalman filter aided by GNSS fixes and
-zero-angular-rate updates at stops (the C core's nav3.h + eskf.h).
+"""AidedINS FMU: a strapdown INS with a 15-state error-state Kalman filter aided by GNSS fixes, zero-velocity
+and zero-angular-rate updates at stops, a wheel odometer and the non-holonomic constraint (the C core's
+nav3.h + eskf.h).
 
 The declaration of the native AidedINS FMU: its variables, descriptions, start values and the timing
 contract.  ``fmus/native_fmu.py`` writes the model description and the C variable table from it;
-``fmus/c/aided_ins/model.c`` computes it (``sarins_eskf_predict``, ``sarins_eskf_zaru`` and ``sarins_eskf_gnss``, the kernels
-:func:`sarins_fmu.aided.navigate` runs in process).
+``fmus/c/aided_ins/model.c`` computes it (``sarins_eskf_predict``, ``sarins_eskf_aid`` and ``sarins_eskf_gnss``, the
+kernels :func:`sarins_fmu.aided.navigate` runs in process).
 """
 
 from pythonfmu import Fmi2Slave
@@ -23,8 +24,9 @@ SETTINGS = (("arw", "rad/s0.5", "angle random walk"), ("vrw", "m/s/s0.5", "veloc
             ("lever_x", "m", "GNSS antenna lever arm, body right"), ("lever_y", "m", "lever arm, body front"),
             ("lever_z", "m", "lever arm, body up"),
             ("latency", "s", "age of a fix when it is applied (the co-simulation delay plus the receiver's)"),
-            ("zupt_std", "m/s", "ZUPT std (unused here)"), ("cov_every", "1", "steps per covariance propagation"),
-            ("nhc_std", "m/s", "NHC std (unused here)"), ("odo_std", "m/s", "odometer std (unused here)"),
+            ("zupt_std", "m/s", "zero-velocity update std per axis"),
+            ("cov_every", "1", "steps per covariance propagation"),
+            ("nhc_std", "m/s", "non-holonomic constraint std, body x and z"), ("odo_std", "m/s", "odometer std"),
             ("zaru_std", "rad/s", "zero-angular-rate update std per step (the gyro's white rate noise arw / sqrt(step); "
                                   "navigate's default)"))
 NAV = (("lat", "rad; deg", "latitude"), ("lon", "rad; deg", "longitude"), ("height", "m", "height"),
@@ -38,15 +40,20 @@ class AidedINS(Fmi2Slave):
     description = (
         "A strapdown INS (nav3.h, ENU, body right-front-up) with a closed-loop 15-state error-state Kalman filter "
         "(eskf.h: position, velocity, attitude errors, gyro and accel biases) aided by GNSS position and velocity "
-        "fixes and zero-angular-rate updates at stops. Contract: doStep(t, h) integrates the increments "
+        "fixes, zero-velocity (ZUPT) and zero-angular-rate (ZARU) updates at stops, a wheel odometer and the "
+        "non-holonomic constraint (NHC). Contract: doStep(t, h) integrates the increments "
         "dtheta_*/dv_* (body rad, m/s) of [t, t + h] "
-        "(h = step, fixed), then, when the input zaru is 1 (the vehicle stood still over the interval), a "
-        "zero-angular-rate update (the step's compensated rate against the Earth rate, std zaru_std), then, when "
-        "the input fix_count grew since the last step and fix_valid is 1, applies the fix (fix_lat .. fix_v_u) "
+        "(h = step, fixed), then applies the interval's aiding in this order: when zupt is 1 a ZUPT against "
+        "zupt_v_* (std zupt_std); when zaru is 1 a ZARU (the step's compensated rate against the Earth rate, std "
+        "zaru_std); when odo_valid and / or nhc is 1 one body-velocity update, forward (body y) against odo_speed "
+        "(std odo_std) and / or body x, z against nhc_v_x, nhc_v_z (std nhc_std); a flag other than 0 or 1, or a "
+        "non-finite value read under a set flag, is an error. Then, when "
+        "the input fix_count grew since the last step and fix_valid is 1, it applies the fix (fix_lat .. fix_v_u) "
         "taken back by latency s; the outputs describe t + h: navigation, the "
         "bias estimates and the filter's standard deviations (sqrt of P's diagonal). Time-tagged (increment_end_time "
         "connected, e.g. from TrajectoryIMU, with fix_time and fix_horizon from GNSSReceiver): the increments are "
-        "those of the interval ending at increment_end_time (zaru with them), each taken once and in order (a "
+        "those of the interval ending at increment_end_time (the aiding inputs with them), each taken once and in "
+        "order (a "
         "repeated tag waits); "
         "an interval ending at T is integrated once every fix valid up to T - latency is in (fix_horizon), "
         "then the fixes navigate applies after it (available time fix_time + latency within the interval) are "
@@ -84,6 +91,24 @@ class AidedINS(Fmi2Slave):
         declare(self, "integer", "fix_count", INPUT, "fixes given so far: a new fix when it grew [1]", 0)
         declare(self, "integer", "zaru", INPUT,
                 "1: the vehicle stood still over the increments' interval: apply a zero-angular-rate update [1]", 0)
+        declare(self, "integer", "zupt", INPUT,
+                "1: the vehicle stood still over the increments' interval: apply a zero-velocity update with the "
+                "measured velocity zupt_v_* (std zupt_std) [1]", 0)
+        for ax, text in zip("enu", ("east", "north", "up")):
+            declare(self, "real", f"zupt_v_{ax}", INPUT,
+                    f"velocity measured at the stop, {text} (zero plus the stop's jitter; read when zupt is 1) [m/s]",
+                    0.0)
+        declare(self, "integer", "odo_valid", INPUT,
+                "1: odo_speed is a new odometer reading at the interval's end: apply it (std odo_std) [1]", 0)
+        declare(self, "real", "odo_speed", INPUT,
+                "odometer speed, forward along body y (read when odo_valid is 1) [m/s]", 0.0)
+        declare(self, "integer", "nhc", INPUT,
+                "1: the vehicle moves on its wheels: apply the non-holonomic constraint with nhc_v_x, nhc_v_z "
+                "(std nhc_std) [1]", 0)
+        for ax, text in (("x", "right"), ("z", "up")):
+            declare(self, "real", f"nhc_v_{ax}", INPUT,
+                    f"body {ax} ({text}) velocity the constraint measures (zero plus the vehicle's jitter; read when "
+                    f"nhc is 1) [m/s]", 0.0)
         declare(self, "real", "increment_end_time", INPUT,
                 "time tag: end of the increments' interval; -1e9: the increments are of [t, t + h] [s]", NO_TAG)
         declare(self, "real", "fix_time", INPUT, "validity time of the fix (time-tagged mode) [s]", 0.0)

@@ -382,6 +382,22 @@ void sarins_eskf_body_velocity(sarins_eskf *s, const double *meas, const int *us
     feedback(s);
 }
 
+void sarins_eskf_aid(sarins_eskf *s, const double *dtheta, const double *a)
+{
+    if (a[0] != 0.0)
+        sarins_eskf_zupt(s, a + 1);
+    if (a[9] != 0.0)
+        sarins_eskf_zaru(s, dtheta);
+    if (a[4] != 0.0 || a[6] != 0.0) {
+        /* body x: NHC, y: odometer (forward), z: NHC */
+        double meas[3] = {a[7], a[5], a[8]};
+        int use[3] = {a[6] != 0.0, a[4] != 0.0, a[6] != 0.0};
+        double nhc = s->config[SARINS_ESKF_NHC_STD];
+        double std[3] = {nhc, s->config[SARINS_ESKF_ODO_STD], nhc};
+        sarins_eskf_body_velocity(s, meas, use, std);
+    }
+}
+
 /* an output row: nav (9), b_g, b_a, then P (full_cov) or its diagonal */
 static void write_row(const sarins_eskf *s, int full_cov, double *row)
 {
@@ -424,18 +440,7 @@ int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const doubl
         g++;
     for (int64_t i = 0; i < k; i++) {
         sarins_eskf_predict(s, dtheta + 3 * i, dv + 3 * i);
-        const double *a = aid + SARINS_ESKF_AID * i;
-        if (a[0] != 0.0)
-            sarins_eskf_zupt(s, a + 1);
-        if (a[9] != 0.0)
-            sarins_eskf_zaru(s, dtheta + 3 * i);
-        if (a[4] != 0.0 || a[6] != 0.0) {
-            double meas[3] = {a[7], a[5], a[8]};
-            int use[3] = {a[6] != 0.0, a[4] != 0.0, a[6] != 0.0};
-            double nhc = s->config[SARINS_ESKF_NHC_STD];
-            double std[3] = {nhc, s->config[SARINS_ESKF_ODO_STD], nhc};
-            sarins_eskf_body_velocity(s, meas, use, std);
-        }
+        sarins_eskf_aid(s, dtheta + 3 * i, aid + SARINS_ESKF_AID * i);
         for (; g < m && gnss[g * SARINS_ESKF_GNSS] <= (double)i; g++) {
             const double *r = gnss + g * SARINS_ESKF_GNSS;
             if (r[0] < (double)i || r[1] == 0.0)

@@ -116,10 +116,16 @@ void sarins_eskf_zaru(sarins_eskf *s, const double *dtheta);
 /* Body-frame velocity update on the axes with use[i] != 0 (meas (3) m/s, std (3) m/s), then feedback. */
 void sarins_eskf_body_velocity(sarins_eskf *s, const double *meas, const int *use, const double *std);
 
-/* K steps: predict with dtheta, dv (K, 3); after step k, by the row aid[k] of aid (K, SARINS_ESKF_AID)
- * = [zupt flag, zupt measured v E N U, odometer flag, odometer speed (m/s), NHC flag, NHC measured body
- * v_x, v_z (m/s: zero plus the vehicle's jitter), zaru flag]: a ZUPT, then a ZARU (from the step's
- * dtheta), then an odometer and / or NHC update (std config ODO_STD, NHC_STD); then the fixes
+/* The per-step aiding after one sarins_eskf_predict(s, dtheta, dv), by one aid row a (SARINS_ESKF_AID)
+ * = [zupt flag, zupt measured v E N U (m/s), odometer flag, odometer speed (m/s, forward body y), NHC flag,
+ * NHC measured body v_x, v_z (m/s: zero plus the vehicle's jitter), zaru flag] (a flag is applied when
+ * != 0; a value is read only when its flag is set): a ZUPT, then a ZARU (from the step's raw dtheta (3,
+ * body rad)), then one body-velocity update on the odometer's and / or the NHC's axes (std config
+ * ODO_STD, NHC_STD).  Each applied update feeds back.  The inputs must be finite. */
+void sarins_eskf_aid(sarins_eskf *s, const double *dtheta, const double *a);
+
+/* K steps: predict with dtheta, dv (K, 3); after step k, sarins_eskf_aid with the row aid[k] of aid
+ * (K, SARINS_ESKF_AID) (columns above); then the fixes
  * whose step index (gnss row column 0, the step after which the fix is applied) equals k, in order:
  * rows (m, 11) = step index, valid, lat, lon, h, v E N U, std E N U (position m), and vel_std (3)
  * shared by all fixes.  Writes out rows after every out_every-th step (n_out = K / out_every rows):

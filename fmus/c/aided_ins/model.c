@@ -1,11 +1,13 @@
-/* AidedINS FMU (native): strapdown INS + 15-state error-state Kalman filter aided by GNSS fixes.
+/* AidedINS FMU (native): strapdown INS + 15-state error-state Kalman filter aided by GNSS fixes, zero-velocity
+ * and zero-angular-rate updates at stops, a wheel odometer and the non-holonomic constraint.
  *
  * The declaration (variables, descriptions, the timing contract) is fmus/aided_ins_slave.py; the filter is
- * the C core's (sarins_fmu/core/eskf.h: sarins_eskf_predict, sarins_eskf_zaru, sarins_eskf_gnss), the kernels
- * sarins_fmu.aided.navigate runs in process (aiding gnss and zaru): fed the same increments, the same stop
- * flags and the fixes at the steps after which navigate applies them, the outputs equal its rows bit for bit.
- * doStep(t, h) integrates the increments of [t, t + h], applies a ZARU when the input zaru is 1 (the vehicle
- * stood still over the interval), then a new valid fix.  Units: rad, m, m/s, rad/s, m/s^2, s.
+ * the C core's (sarins_fmu/core/eskf.h: sarins_eskf_predict, sarins_eskf_aid, sarins_eskf_gnss), the kernels
+ * sarins_fmu.aided.navigate runs in process (sarins_eskf_run, every aiding): fed the same increments, the same
+ * per-step aiding rows and the fixes at the steps after which navigate applies them, the outputs equal its
+ * rows bit for bit.  doStep(t, h) integrates the increments of [t, t + h], applies the interval's aiding row
+ * (eskf.h's order: ZUPT, ZARU, odometer and / or NHC) built from the inputs zupt, zupt_v_*, zaru, odo_valid,
+ * odo_speed, nhc, nhc_v_*, then a new valid fix.  Units: rad, m, m/s, rad/s, m/s^2, s.
  */
 #include "smath.h"
 
@@ -23,7 +25,7 @@
 #define MAX_INC 4      /* time-tagged mode: intervals that may wait */
 #define MAX_FIX 8      /* time-tagged mode: fixes that may wait */
 #define FIX_ROW 8      /* valid (0/1), fix_time (s), lat, lon (rad), h (m), v E N U (m/s) */
-#define INC_ROW 7      /* dtheta (3, rad), dv (3, m/s), zaru flag (0/1) of one interval */
+#define INC_ROW (6 + SARINS_ESKF_AID) /* dtheta (3, rad), dv (3, m/s), aiding row (eskf.h) of one interval */
 
 /* What changes during a run (plain data: the FMU state copies it). */
 typedef struct {
@@ -31,7 +33,7 @@ typedef struct {
     int64_t last_count; /* fix_count input of the last applied / seen fix */
     int64_t used;       /* valid fixes applied */
     /* time-tagged mode: interval i ends at start + (i + 1) h */
-    double inc[MAX_INC][INC_ROW]; /* waiting increments and stop flags (ring) of intervals done .. done + n_inc - 1 */
+    double inc[MAX_INC][INC_ROW]; /* waiting increments and aiding rows (ring) of intervals done .. done + n_inc - 1 */
     int64_t inc_first, n_inc; /* ring position and length */
     int64_t done;             /* intervals integrated */
     double fix[MAX_FIX][FIX_ROW]; /* waiting fixes (ring), in time order */
@@ -154,15 +156,53 @@ static double fix_index(const sarins_ctx *c, const ai_state *st, double time)
     return sm_ceil((time - c->start_time + cf[SARINS_ESKF_LATENCY]) / cf[SARINS_ESKF_STEP] - 1e-9) - 1.0;
 }
 
-/* The input zaru: 1 (apply a ZARU after the interval's integration) or 0; -1 with the error logged. */
-static int zaru_flag(sarins_ctx *c, double t)
+/* One aiding input: a flag (0/1) and the measured values (m/s) the core reads when it is 1, at their
+ * columns of the aiding row (eskf.h sarins_eskf_aid). */
+typedef struct {
+    const char *flag_name;
+    int flag_slot, flag_column;
+    int n;
+    const char *names[3];
+    int slots[3], columns[3];
+} aid_input;
+
+static const aid_input AID_INPUTS[] = {
+    {"zupt", SARINS_I_zupt, 0, 3, {"zupt_v_e", "zupt_v_n", "zupt_v_u"},
+     {SARINS_R_zupt_v_e, SARINS_R_zupt_v_n, SARINS_R_zupt_v_u}, {1, 2, 3}},
+    {"odo_valid", SARINS_I_odo_valid, 4, 1, {"odo_speed", NULL, NULL}, {SARINS_R_odo_speed, 0, 0}, {5, 0, 0}},
+    {"nhc", SARINS_I_nhc, 6, 2, {"nhc_v_x", "nhc_v_z", NULL}, {SARINS_R_nhc_v_x, SARINS_R_nhc_v_z, 0}, {7, 8, 0}},
+    {"zaru", SARINS_I_zaru, 9, 0, {NULL, NULL, NULL}, {0, 0, 0}, {0, 0, 0}},
+};
+
+/* The interval's aiding row (SARINS_ESKF_AID, eskf.h sarins_eskf_aid) from the inputs: each flag 0 or 1,
+ * the values of a set flag finite (those of a clear flag are not read: 0 in the row).  0, or -1 with the
+ * error logged. */
+static int aid_row(sarins_ctx *c, double t, double *aid)
 {
-    int flag = c->i[SARINS_I_zaru];
-    if (flag != 0 && flag != 1) {
-        sarins_log(c, SARINS_ERROR, "ValueError: input zaru = %d at t = %.17g s must be 0 or 1", flag, t);
-        return -1;
+    for (int j = 0; j < SARINS_ESKF_AID; j++)
+        aid[j] = 0.0;
+    for (size_t k = 0; k < sizeof AID_INPUTS / sizeof AID_INPUTS[0]; k++) {
+        const aid_input *a = &AID_INPUTS[k];
+        int flag = c->i[a->flag_slot];
+        if (flag != 0 && flag != 1) {
+            sarins_log(c, SARINS_ERROR, "ValueError: input %s = %d at t = %.17g s must be 0 or 1", a->flag_name, flag,
+                       t);
+            return -1;
+        }
+        if (!flag)
+            continue;
+        aid[a->flag_column] = 1.0;
+        for (int j = 0; j < a->n; j++) {
+            double v = c->r[a->slots[j]];
+            if (!isfinite(v)) {
+                sarins_log(c, SARINS_ERROR, "ValueError: input %s = %.17g at t = %.17g s is not finite (%s is 1)",
+                           a->names[j], v, t, a->flag_name);
+                return -1;
+            }
+            aid[a->columns[j]] = v;
+        }
     }
-    return flag;
+    return 0;
 }
 
 /* Time-tagged mode (model.h's do_step, the declaration's contract): queue the inputs, integrate what is due. */
@@ -195,10 +235,8 @@ static int tagged_step(sarins_ctx *c, ai_state *st, double t)
                 return SARINS_ERROR;
             }
         }
-        int flag = zaru_flag(c, t);
-        if (flag < 0)
+        if (aid_row(c, t, slot + 6) < 0)
             return SARINS_ERROR;
-        slot[6] = (double)flag;
         st->n_inc += 1;
     } else if (m != received) {
         sarins_log(c, SARINS_ERROR, "ValueError: increment_end_time %.17g s: the interval ending at %.17g s was "
@@ -241,8 +279,7 @@ static int tagged_step(sarins_ctx *c, ai_state *st, double t)
             break; /* a fix applied after it may still come */
         const double *inc = st->inc[st->inc_first];
         sarins_eskf_predict(&st->eskf, inc, inc + 3);
-        if (inc[6] != 0.0)
-            sarins_eskf_zaru(&st->eskf, inc);
+        sarins_eskf_aid(&st->eskf, inc, inc + 6);
         while (st->n_fix > 0 && fix_index(c, st, st->fix[st->fix_first][1]) <= (double)st->done) {
             const double *f = st->fix[st->fix_first];
             if (f[0] != 0.0) {
@@ -287,8 +324,8 @@ static int ai_do_step(sarins_ctx *c, double t, double h)
             sarins_log(c, SARINS_ERROR, "ValueError: an increment input at t = %.17g s is not finite", t);
             return SARINS_ERROR;
         }
-    int zaru = zaru_flag(c, t);
-    if (zaru < 0)
+    double aid[SARINS_ESKF_AID];
+    if (aid_row(c, t, aid) < 0)
         return SARINS_ERROR;
     int64_t count = c->i[SARINS_I_fix_count];
     int fresh = count > st->last_count && c->i[SARINS_I_fix_valid] != 0;
@@ -299,8 +336,7 @@ static int ai_do_step(sarins_ctx *c, double t, double h)
                 return SARINS_ERROR;
             }
     sarins_eskf_predict(&st->eskf, dtheta, dv);
-    if (zaru)
-        sarins_eskf_zaru(&st->eskf, dtheta);
+    sarins_eskf_aid(&st->eskf, dtheta, aid);
     if (fresh) {
         double std[6] = {r[SARINS_R_gnss_pos_std_e], r[SARINS_R_gnss_pos_std_n], r[SARINS_R_gnss_pos_std_u],
                          r[SARINS_R_gnss_vel_std_e], r[SARINS_R_gnss_vel_std_n], r[SARINS_R_gnss_vel_std_u]};
@@ -344,13 +380,16 @@ static int ai_check_state(const sarins_ctx *c, int running)
              && sarins_state_int(c, "n_fix", st->n_fix, 0, MAX_FIX)
              && sarins_state_finite(c, "inc", &st->inc[0][0], INC_ROW * MAX_INC)
              && sarins_state_finite(c, "fix", &st->fix[0][0], FIX_ROW * MAX_FIX);
+    for (int i = 0; ok && i < MAX_INC; i++) /* the aiding flags aid_row writes */
+        for (size_t k = 0; ok && k < sizeof AID_INPUTS / sizeof AID_INPUTS[0]; k++)
+            ok = sarins_state_real(c, "inc (an aiding flag)", st->inc[i][6 + AID_INPUTS[k].flag_column], 0.0, 1.0);
     return ok ? SARINS_OK : SARINS_ERROR;
 }
 
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(ai_state),
-    .state_version = 3,
+    .state_version = 4, /* 4: the ring's rows carry the aiding row (ZUPT, odometer, NHC, ZARU) */
     .initialize = ai_initialize,
     .do_step = ai_do_step,
     .release = ai_release,
