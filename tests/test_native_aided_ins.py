@@ -1,17 +1,19 @@
 """The native AidedINS FMU (fmus/c/aided_ins/model.c over the C core's eskf.h).
 
-Fed the increments of sarins_fmu.aided.corrupt and each GNSS fix at the step after which navigate applies
-it (its own schedule, aided.fix_rows), the outputs (navigation, bias estimates, the filter's sigmas) equal
-navigate(aiding=('gnss',)) at every step bit for bit, and with the input zaru set at the trajectory's stop
-steps navigate(aiding=('gnss', 'zaru')), through FMPy and through the C host with an empty
-environment (no allocation after initialisation); an FMU state taken mid-run repeats the rest, also
-deserialized into another instance; bad parameters are refused naming them.
+Fed the increments of sarins_fmu.aided.corrupt, each GNSS fix at the step after which navigate applies
+it (its own schedule, aided.fix_rows) and navigate's per-step aiding rows (aided.per_step_aiding: ZUPT,
+odometer, NHC, ZARU) as its inputs, the outputs (navigation, bias estimates, the filter's sigmas) equal
+navigate's rows at every step bit for bit, for each aiding alone and all together, untagged and
+time-tagged, FMI 2.0 and 3.0, and through the C host with an empty environment (no allocation after
+initialisation); an FMU state taken mid-run repeats the rest, also deserialized into another instance;
+bad parameters and bad aiding inputs are refused naming them.
 """
 
 from __future__ import annotations
 
 import subprocess
 import zipfile
+from typing import NamedTuple
 
 import numpy as np
 import pytest
@@ -34,29 +36,50 @@ NAV = ["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll"]
 OUT = NAV + [f"bias_{q}_{a}" for q in "ga" for a in "xyz"] + [f"sigma_{q}_{a}" for q in ("pos", "vel", "att")
                                                             for a in "enu"]
 INPUTS = [f"{q}_{a}" for q in ("dtheta", "dv") for a in "xyz"] + [f"fix_{n}" for n in NAV[:6]]
+# the aiding inputs and their columns of the core's aiding row (eskf.h sarins_eskf_aid)
+AID_INT = {"zupt": 0, "odo_valid": 4, "nhc": 6, "zaru": 9}
+AID_REAL = {"zupt_v_e": 1, "zupt_v_n": 2, "zupt_v_u": 3, "odo_speed": 5, "nhc_v_x": 7, "nhc_v_z": 8}
 SETTING_NAMES = ["step", "arw", "vrw", "gyro_rw", "accel_rw", "pos0_std", "vel0_std", "tilt0_std", "heading0_std",
                  "gyro_bias0_std", "accel_bias0_std", "lever_x", "lever_y", "lever_z", "latency", "zupt_std",
                  "cov_every", "nhc_std", "odo_std", "zaru_std"]
 
 
-def make_case(aiding):
-    """(params, per-step inputs (K, 12), per-step flags (K, 3) fix valid / fix new / zaru, expected (K, 24))."""
+class Case(NamedTuple):
+    """An aided run's FMU inputs and navigate's rows: params; inputs (K, 12) increments and fix values;
+    flags (K, 2) fix valid / fix new; expected (K, 24) navigation, bias estimates, sigmas; aid (K, 10)
+    navigate's per-step aiding rows; fixes (m, 11) its fix rows (aided.fix_rows); fix_time (m,) their
+    validity times, s."""
+
+    params: dict
+    inputs: np.ndarray
+    flags: np.ndarray
+    expected: np.ndarray | None
+    aid: np.ndarray
+    fixes: np.ndarray
+    fix_time: np.ndarray
+
+
+def make_case(aiding) -> Case:
     truth = tr.generate(tr.Trajectory(tr.Start(lat_deg=35.0, heading_deg=-30.0), SEGMENTS), STEP)
+    odometer = aided.OdometerConfig() if "odometer" in aiding else None
     result = aided.navigate(truth, noise=NOISE, gnss=GNSS, aiding=aiding, outages=OUTAGES, settings=SETTINGS,
-                            seed=SEED)
+                            seed=SEED, odometer=odometer)
     dtheta, dv, _, _ = aided.corrupt(truth, NOISE, SEED)
-    nav0 = aided._initial_state(truth, SETTINGS, np.random.default_rng([SEED, 3018]))
-    params = dict(zip(SETTING_NAMES, aided._config(NOISE, SETTINGS, GNSS, STEP).tolist()))
+    rng = np.random.default_rng([SEED, 3018])  # navigate's: the initial errors, then the aiding's jitter
+    nav0 = aided._initial_state(truth, SETTINGS, rng)
+    aid = aided.per_step_aiding(truth, aiding, SETTINGS, odometer, rng, SEED)
+    params = dict(zip(SETTING_NAMES, aided._config(NOISE, SETTINGS, GNSS, STEP, odometer).tolist()))
     params.update({f"{n}0": float(v) for n, v in zip(NAV, nav0)})
     params.update({f"gnss_{k}_std_{a}": float(v) for k, std in (("pos", GNSS.pos_std()), ("vel", GNSS.vel_std()))
                    for a, v in zip("enu", std)})
-    rows = aided.fix_rows(gnss.simulate(truth, GNSS, SEED, OUTAGES), GNSS, STEP)
+    fixes = gnss.simulate(truth, GNSS, SEED, OUTAGES)
+    rows, fix_time = aided.fix_rows(fixes, GNSS, STEP), fixes.time
+    if "gnss" not in aiding:
+        rows, fix_time = rows[:0], fix_time[:0]
     k = truth.n_steps
     inputs = np.zeros((k, 12))
     inputs[:, :3], inputs[:, 3:6] = dtheta, dv
-    flags = np.zeros((k, 3), int)
-    if "zaru" in aiding:
-        flags[:, 2] = truth.stationary()
+    flags = np.zeros((k, 2), int)
     for row in rows:
         i = int(row[0])
         if i < k:
@@ -64,8 +87,9 @@ def make_case(aiding):
             flags[i, :2] = (int(row[1]), 1)
     sigma = np.sqrt(np.diagonal(result.cov, axis1=1, axis2=2)[:, :9])
     expected = np.column_stack([result.nav, result.bias_g, result.bias_a, sigma])
-    assert 0 < (flags[:, 1] & ~flags[:, 0]).sum() < flags[:, 1].sum()  # the outage drops some fixes
-    return params, inputs, flags, expected
+    if "gnss" in aiding:
+        assert 0 < (flags[:, 1] & ~flags[:, 0]).sum() < flags[:, 1].sum()  # the outage drops some fixes
+    return Case(params, inputs, flags, expected, aid, rows, fix_time)
 
 
 @pytest.fixture(scope="module")
@@ -74,11 +98,31 @@ def case():
 
 
 @pytest.fixture(scope="module")
-def zaru_case():
+def zaru_case(case):
     """GNSS and ZARU at the first second's stop (50 steps)."""
     c = make_case(("gnss", "zaru"))
-    assert c[2][:, 2].sum() == 50 and not np.array_equal(c[3], make_case(("gnss",))[3])
+    assert c.aid[:, 9].sum() == 50 and not np.array_equal(c.expected, case.expected)
     return c
+
+
+AIDINGS = {"zupt": ("zupt",), "odometer": ("odometer",), "nhc": ("nhc",),
+           "all": ("gnss", "zupt", "odometer", "nhc", "zaru")}
+
+
+@pytest.fixture(scope="module")
+def aid_cases(case):
+    """ZUPT at the first second's stop (50 steps), the odometer at 10 Hz (100 readings), NHC while moving (450 steps), each
+    alone (no GNSS), and all five aidings together; each run differs from the GNSS-only run and from the
+    pure INS (navigate(aiding=()))."""
+    cases = {name: make_case(aiding) for name, aiding in AIDINGS.items()}
+    pure = make_case(())
+    counts = {name: (c.aid[:, 0].sum(), c.aid[:, 4].sum(), c.aid[:, 6].sum(), c.aid[:, 9].sum())
+              for name, c in cases.items()}
+    assert counts == {"zupt": (50, 0, 0, 0), "odometer": (0, 100, 0, 0), "nhc": (0, 0, 450, 0),
+                      "all": (50, 100, 450, 50)}
+    for c in cases.values():
+        assert not np.array_equal(c.expected, pure.expected) and not np.array_equal(c.expected, case.expected)
+    return cases
 
 
 @pytest.fixture(scope="module")
@@ -86,25 +130,61 @@ def fmu(fmu_dir):
     return fmu_dir / "AidedINS.fmu"  # the session build (tests/conftest.py)
 
 
-def _run(fmu, case, state_at=None):
-    params, inputs, flags, _ = case
+def step_inputs(case, k):
+    """Interval k's inputs: Reals (INPUTS then AID_REAL) and Integers (fix_valid, fix_count, then AID_INT)."""
+    reals = [*case.inputs[k], *case.aid[k, list(AID_REAL.values())]]
+    ints = [int(case.flags[k, 0]), int(case.flags[:k + 1, 1].sum()), *case.aid[k, list(AID_INT.values())].astype(int)]
+    return reals, [int(i) for i in ints]
+
+
+def tagged_inputs(case, k, lag):
+    """Time-tagged mode, doStep k of K + lag: interval k's increments and aiding (tag (k + 1) h; past the
+    run the last tag again, which waits), the fix navigate applies after interval k (fix_time, fix_count
+    growing), and fix_horizon (k + 1 - lag) h - latency: intervals up to k - lag are integrated, the next
+    ``lag`` wait in the ring.  Returns {name: value}."""
+    n = len(case.inputs)
+    values = {"increment_end_time": min(k + 1, n) * STEP,
+              "fix_horizon": (k + 1 - lag) * STEP - case.params["latency"]}
+    if k < n:
+        reals, ints = step_inputs(case, k)
+        values.update(zip(INPUTS[:6] + list(AID_REAL), reals[:6] + reals[12:]))
+        values.update(zip(AID_INT, ints[2:]))
+    given = case.fixes[:, 0] <= min(k, n - 1)
+    values["fix_count"] = int(given.sum())
+    due = np.flatnonzero(case.fixes[:, 0] == k)
+    if k < n and len(due):
+        j = int(due[0])
+        assert len(due) == 1
+        values.update(zip(INPUTS[6:], case.fixes[j, 2:8].tolist()))
+        values.update(fix_valid=int(case.fixes[j, 1]), fix_time=float(case.fix_time[j]))
+    return values
+
+
+def _run(fmu, case, state_at=None, lag=None):
+    """The FMU through FMPy, one doStep per interval (``lag`` None: untagged; else time-tagged with ``lag``
+    intervals waiting, lag more doSteps at the end).  Returns the rows after every doStep and fixes_used
+    (time-tagged: the rows and their nav_time), or with ``state_at`` the rows after doStep state_at on,
+    those again from the FMU state taken there, and those of another instance given the serialized state."""
+    params = case.params
     slave = Slave(fmu, "ai")
-    counts = np.cumsum(flags[:, 1])
+    n = len(case.inputs) + (lag or 0)
 
     def steps(s, start, end, out):
         for k in range(start, end):
-            s.fmu.setReal([s.vr[n] for n in INPUTS], list(inputs[k]))
-            s.fmu.setInteger([s.vr["fix_valid"], s.vr["fix_count"], s.vr["zaru"]],
-                             [int(flags[k, 0]), int(counts[k]), int(flags[k, 2])])
+            if lag is None:
+                reals, ints = step_inputs(case, k)
+                s.fmu.setReal([s.vr[n] for n in INPUTS + list(AID_REAL)], reals)
+                s.fmu.setInteger([s.vr[n] for n in ["fix_valid", "fix_count", *AID_INT]], ints)
+            else:
+                s.set(**tagged_inputs(case, k, lag))
             s.fmu.doStep(k * STEP, STEP)
-            out.append(s.get(*OUT))
+            out.append(s.get(*OUT) + ([] if lag is None else s.get("nav_time")))
 
     try:
         slave.set(**params)
         slave.fmu.enterInitializationMode()
         slave.fmu.exitInitializationMode()
         out = []
-        n = len(inputs)
         steps(slave, 0, state_at or n, out)
         if state_at is None:
             return np.array(out), slave.fmu.getInteger([slave.vr["fixes_used"]])[0]
@@ -128,9 +208,9 @@ def _run(fmu, case, state_at=None):
 
 def test_fmu_equals_navigate_bit_for_bit(fmu, case):
     got, used = _run(fmu, case)
-    assert np.array_equal(got, case[3])
-    assert used == case[2][:, 0].sum() > 10
-    assert got[-1, OUT.index("sigma_pos_e")] < case[0]["gnss_pos_std_e"]  # the fixes bound the position
+    assert np.array_equal(got, case.expected)
+    assert used == case.flags[:, 0].sum() > 10
+    assert got[-1, OUT.index("sigma_pos_e")] < case.params["gnss_pos_std_e"]  # the fixes bound the position
 
 
 def test_state_round_trip_repeats_the_rest(fmu, case):
@@ -140,8 +220,8 @@ def test_state_round_trip_repeats_the_rest(fmu, case):
 
 def test_fmu_with_zaru_equals_navigate_bit_for_bit(fmu, zaru_case):
     got, used = _run(fmu, zaru_case)
-    assert np.array_equal(got, zaru_case[3])
-    assert used == zaru_case[2][:, 0].sum() > 10
+    assert np.array_equal(got, zaru_case.expected)
+    assert used == zaru_case.flags[:, 0].sum() > 10
 
 
 def test_state_round_trip_in_a_stop_with_zaru(fmu, zaru_case):
@@ -149,18 +229,120 @@ def test_state_round_trip_in_a_stop_with_zaru(fmu, zaru_case):
     assert again == out[30:] and there == out[30:]
 
 
-def test_bad_zaru_input_is_refused(fmu, case):
+@pytest.mark.parametrize("name", list(AIDINGS))
+def test_fmu_with_each_aiding_equals_navigate_bit_for_bit(fmu, aid_cases, name):
+    c = aid_cases[name]
+    got, used = _run(fmu, c)
+    assert np.array_equal(got, c.expected)
+    assert used == c.flags[:, 0].sum() and (used > 10) == (name == "all")
+
+
+@pytest.mark.parametrize("name, lag", [("gnss", 0), ("gnss", 2), ("all", 0), ("all", 2)])
+def test_time_tagged_mode_equals_navigate_bit_for_bit(fmu, case, aid_cases, name, lag):
+    """Time-tagged: the rows at each nav_time equal navigate's, also with two intervals (their increments
+    and aiding rows) waiting in the ring for fix_horizon."""
+    c = case if name == "gnss" else aid_cases[name]
+    got, used = _run(fmu, c, lag=lag)
+    got = np.array(got)
+    k = np.arange(len(got))
+    np.testing.assert_array_equal(got[:, -1], np.maximum(k + 1 - lag, 0) * STEP)
+    assert np.array_equal(got[lag:, :-1], c.expected)
+    assert used == c.flags[:, 0].sum() > 10
+
+
+@pytest.mark.parametrize("lag", [None, 2])
+@pytest.mark.parametrize("state_at", [40, 305])
+def test_state_round_trip_with_every_aiding(fmu, aid_cases, state_at, lag):
+    """An FMU state taken in the stop (ZUPT, ZARU) or while moving (NHC; an odometer reading at interval 304,
+    waiting in the ring when time-tagged) repeats the rest, in the same and in another instance."""
+    c = aid_cases["all"]
+    assert c.aid[state_at - 1, [0, 9]].all() if state_at == 40 else c.aid[304, [4, 6]].all()
+    out, again, there = _run(fmu, c, state_at=state_at, lag=lag)
+    assert again == out[state_at:] and there == out[state_at:]
+    whole = _run(fmu, c, lag=lag)[0]
+    assert [list(r) for r in whole] == [list(r) for r in out]
+
+
+def _refused(fmu, case, values, lag=None):
+    """doStep 0 with the inputs of interval 0 and ``values`` on top: the FMI error status and the log."""
     from fmpy.fmi1 import FMICallException
 
-    slave = Slave(fmu, "bad_zaru")
+    slave = Slave(fmu, "bad_aid")
     try:
-        slave.set(**case[0])
+        slave.set(**case.params)
         slave.fmu.enterInitializationMode()
         slave.fmu.exitInitializationMode()
-        slave.fmu.setInteger([slave.vr["zaru"]], [2])
+        slave.set(**{**(tagged_inputs(case, 0, lag) if lag is not None else {}), **values})
         with pytest.raises(FMICallException, match="status 3"):
             slave.fmu.doStep(0.0, STEP)
-        assert any("input zaru = 2" in m for status, _, m in slave.log if status == 3), slave.log
+        return [m for status, _, m in slave.log if status == 3]
+    finally:
+        slave.free()
+
+
+@pytest.mark.parametrize("lag", [None, 0])
+@pytest.mark.parametrize("values, text", [
+    ({"zaru": 2}, "input zaru = 2 at t = 0 s must be 0 or 1"),
+    ({"zupt": -1}, "input zupt = -1 at t = 0 s must be 0 or 1"),
+    ({"odo_valid": 3}, "input odo_valid = 3 at t = 0 s must be 0 or 1"),
+    ({"nhc": 2}, "input nhc = 2 at t = 0 s must be 0 or 1"),
+    ({"zupt": 1, "zupt_v_n": float("nan")}, "input zupt_v_n = nan at t = 0 s is not finite (zupt is 1)"),
+    ({"odo_valid": 1, "odo_speed": float("inf")}, "input odo_speed = inf at t = 0 s is not finite (odo_valid is 1)"),
+    ({"nhc": 1, "nhc_v_z": float("nan")}, "input nhc_v_z = nan at t = 0 s is not finite (nhc is 1)"),
+])
+def test_bad_aiding_input_is_refused(fmu, case, values, text, lag):
+    errors = _refused(fmu, case, values, lag)
+    assert any(text in m for m in errors), errors
+
+
+FLAG_OF = {"zupt_v_e": "zupt", "zupt_v_n": "zupt", "zupt_v_u": "zupt", "odo_speed": "odo_valid", "nhc_v_x": "nhc",
+           "nhc_v_z": "nhc"}
+
+
+@pytest.mark.parametrize("lag", [None, 0])
+def test_a_value_under_a_clear_flag_is_not_read(fmu, aid_cases, lag):
+    """NaN in zupt_v_*, odo_speed and nhc_v_* whenever their flag is 0: not read, the run equals navigate's."""
+    c = aid_cases["all"]
+    slave = Slave(fmu, "clear_flags")
+    try:
+        slave.set(**c.params)
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+        got, cleared = [], 0
+        for k in range(len(c.inputs)):
+            if lag is None:
+                reals, ints = step_inputs(c, k)
+                slave.fmu.setReal([slave.vr[n] for n in INPUTS], reals[:12])
+                values = {**dict(zip(AID_REAL, reals[12:])), **dict(zip(["fix_valid", "fix_count", *AID_INT], ints))}
+            else:
+                values = tagged_inputs(c, k, lag)
+            for name, flag in FLAG_OF.items():
+                if not values[flag]:
+                    values[name] = float("nan")
+                    cleared += 1
+            slave.set(**values)
+            slave.fmu.doStep(k * STEP, STEP)
+            got.append(slave.get(*OUT))
+        assert np.array_equal(np.array(got), c.expected) and cleared > 1000
+    finally:
+        slave.free()
+
+
+def test_state_of_the_previous_version_is_refused(fmu, case):
+    """A serialized state of state version 3 (the ring without the aiding columns) is refused naming why."""
+    from fmpy.fmi1 import FMICallException
+
+    slave = Slave(fmu, "old_state")
+    try:
+        slave.set(**case.params)
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+        blob = bytearray(slave.fmu.serializeFMUstate(slave.fmu.getFMUstate()))
+        assert int.from_bytes(blob[12:16], "little") == 4
+        blob[12:16] = (3).to_bytes(4, "little")
+        with pytest.raises(FMICallException, match="status 3"):
+            slave.fmu.deSerializeFMUstate(bytes(blob))
+        assert any("state version differs" in m for status, _, m in slave.log if status == 3), slave.log
     finally:
         slave.free()
 
@@ -171,7 +353,7 @@ def test_c_host_empty_environment_no_allocation(fmu, case, tmp_path):
     from fmus.native_fmu import fmi_headers_dir
     from test_native_fmus import COUNTER_SRC, HOST_SRC, _cc
 
-    params, inputs, flags, _ = case
+    params, inputs = case.params, case.inputs
     host = tmp_path / "host"
     subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
                     str(HOST_SRC), "-ldl", "-o", str(host)], check=True)
@@ -199,7 +381,7 @@ def test_c_host_empty_environment_no_allocation(fmu, case, tmp_path):
                 if p and p[0] == tag}
 
     out, again = rows("OUT"), rows("AGAIN")
-    no_fix = (params, inputs, np.zeros_like(flags), None)
+    no_fix = case._replace(flags=np.zeros_like(case.flags), expected=None)
     pure, used = _run(fmu, no_fix)
     assert used == 0
     assert [out[k] for k in range(1, len(inputs) + 1)] == pure.view(np.uint64).tolist()
@@ -220,32 +402,39 @@ def test_bad_parameters_are_refused(fmu, params, text):
     check_parameter_error(fmu, params, text)
 
 
-@pytest.mark.parametrize("name", ["case", "zaru_case"])
-def test_fmi3_variant_equals_navigate(name, request, tmp_path):
-    from fmpy import extract
-    from fmpy.fmi3 import FMU3Slave
+@pytest.fixture(scope="module")
+def fmu3(tmp_path_factory):
+    """The FMI 3.0 AidedINS (linux x86-64), validated by FMPy."""
     from fmpy.validation import validate_fmu
 
-    params, inputs, flags, expected = request.getfixturevalue(name)
-    path = build_native_fmu("AidedINS", "aided_ins_slave.py", tmp_path, fmi=3, win64=False, aarch64=False)
+    path = build_native_fmu("AidedINS", "aided_ins_slave.py", tmp_path_factory.mktemp("fmi3"), fmi=3, win64=False,
+                            aarch64=False)
     assert validate_fmu(str(path)) == []
-    md = read_model_description(str(path))
+    return path
+
+
+@pytest.mark.parametrize("name", ["gnss", "zaru", *AIDINGS])
+def test_fmi3_variant_equals_navigate(fmu3, case, zaru_case, aid_cases, name):
+    from fmpy import extract
+    from fmpy.fmi3 import FMU3Slave
+
+    c = {"gnss": case, "zaru": zaru_case, **aid_cases}[name]
+    md = read_model_description(str(fmu3))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    fmu = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(path)), modelIdentifier="AidedINS", instanceName="ai3")
+    fmu = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(fmu3)), modelIdentifier="AidedINS", instanceName="ai3")
     fmu.instantiate()
     try:
-        fmu.setFloat64([vr[k] for k in params], list(params.values()))
+        fmu.setFloat64([vr[k] for k in c.params], list(c.params.values()))
         fmu.enterInitializationMode(startTime=0.0)
         fmu.exitInitializationMode()
-        counts = np.cumsum(flags[:, 1])
         got = []
-        for k, row in enumerate(inputs):
-            fmu.setFloat64([vr[n] for n in INPUTS], list(row))
-            fmu.setInt32([vr["fix_valid"], vr["fix_count"], vr["zaru"]], [int(flags[k, 0]), int(counts[k]),
-                                                                        int(flags[k, 2])])
+        for k in range(len(c.inputs)):
+            reals, ints = step_inputs(c, k)
+            fmu.setFloat64([vr[n] for n in INPUTS + list(AID_REAL)], reals)
+            fmu.setInt32([vr[n] for n in ["fix_valid", "fix_count", *AID_INT]], ints)
             fmu.doStep(k * STEP, STEP)
             got.append(fmu.getFloat64([vr[n] for n in OUT]))
-        assert np.array_equal(np.array(got), expected)
+        assert np.array_equal(np.array(got), c.expected)
         fmu.terminate()
     finally:
         fmu.freeInstance()
