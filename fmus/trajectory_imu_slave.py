@@ -1,15 +1,17 @@
-"""TrajectoryIMU FMU: a vehicle trajectory from segments and the aided runs' IMU along it (the C core's
-traj.h + aided_imu.h).
+"""TrajectoryIMU FMU: a vehicle trajectory from segments, the aided runs' IMU and optionally a wheel odometer
+along it (the C core's traj.h + aided_imu.h + odo.h).
 
 The declaration of the native TrajectoryIMU FMU: its variables, descriptions, start values and the timing
 contract.  ``fmus/native_fmu.py`` writes the model description and the C variable table from it;
 ``fmus/c/trajectory_imu/model.c`` computes it (the kernels :func:`sarins_fmu.trajectory.generate` and
-:func:`sarins_fmu.aided.corrupt` run in process, one step at a time).
+:func:`sarins_fmu.aided.corrupt` run in process, one step at a time, and the odometer readings of
+:func:`sarins_fmu.aided.per_step_aiding`).
 """
 
 from pythonfmu import Fmi2Slave
 
 from fmus.slave_support import OUTPUT, PARAMETER, declare, default_experiment
+from sarins_fmu.aided import OdometerConfig
 
 NAV = (("lat", "rad; deg", "latitude"), ("lon", "rad; deg", "longitude"), ("height", "m", "height"),
        ("v_e", "m/s", "east velocity"), ("v_n", "m/s", "north velocity"), ("v_u", "m/s", "up velocity"),
@@ -32,7 +34,11 @@ class TrajectoryIMU(Fmi2Slave):
         "sarins_fmu.trajectory.Trajectory.table). Contract (standard FMI timing, time-tagged): after "
         "doStep(t, h) (h = step) the outputs are the truth at t + h (truth_time = t + h) and the measured "
         "increments of [t, t + h] (increment_end_time = t + h) with the true biases over it; at initialisation "
-        "the truth at the start time and no increments (both tags = the start time). A step past the last "
+        "the truth at the start time and no increments (both tags = the start time). With odo_rate_hz > 0 a wheel "
+        "odometer (the core's odo.h: scale-factor error, white noise, quantisation, seeded by odo_seed) reads the "
+        "forward (body y) speed at t + h after every (1 / (odo_rate_hz h))-th step (a whole number): odo_valid = 1 "
+        "and odo_speed for that step, odo_valid = 0 otherwise (odo_speed holds), tagged by increment_end_time "
+        "like the increments. A step past the last "
         "segment is an error. State outputs only (no direct feedthrough). FMU state: get, set and serialize; "
         "no allocation after initialisation.")
     default_experiment = default_experiment(0.01)  # HOST_DEFAULT_STEPS steps, the default segments as long: runs on a host's defaults
@@ -51,6 +57,14 @@ class TrajectoryIMU(Fmi2Slave):
         for name, unit, text in NOISE:
             declare(self, "real", name, PARAMETER, f"IMU {text} [{unit}]", 0.0)
         declare(self, "integer", "seed", PARAMETER, "seed of the IMU errors [1]", 0)
+        odo = OdometerConfig()
+        declare(self, "real", "odo_rate_hz", PARAMETER,
+                "odometer reading rate; 0: no odometer; 1 / (odo_rate_hz step) must be a whole number [Hz]", 0.0)
+        declare(self, "real", "odo_scale_factor", PARAMETER, "odometer scale-factor error, |value| < 0.5 [1]",
+                odo.scale_factor)
+        declare(self, "real", "odo_noise_std", PARAMETER, "odometer white-noise std [m/s]", odo.noise_std)
+        declare(self, "real", "odo_resolution", PARAMETER, "odometer speed resolution; 0: none [m/s]", odo.resolution)
+        declare(self, "integer", "odo_seed", PARAMETER, "seed of the odometer's errors [1]", 0)
         for name, unit, text in NAV:
             declare(self, "real", name, OUTPUT, f"true {text} at truth_time [{unit}]", 0.0)
         for ax in "xyz":
@@ -67,6 +81,9 @@ class TrajectoryIMU(Fmi2Slave):
             for ax in "xyz":
                 declare(self, "real", f"true_{q}_{ax}", OUTPUT,
                         f"true {q.replace('_', ' ')} over the increments' interval, body {ax} [{unit}]", 0.0)
+        declare(self, "integer", "odo_valid", OUTPUT,
+                "1: odo_speed is a new odometer reading at increment_end_time, 0: none this step [1]", 0)
+        declare(self, "real", "odo_speed", OUTPUT, "odometer speed, forward along body y, at its reading [m/s]", 0.0)
 
     def do_step(self, current_time, step_size):
         raise NotImplementedError("the TrajectoryIMU FMU is native: fmus/c/trajectory_imu/model.c computes it (this "

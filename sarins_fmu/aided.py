@@ -268,9 +268,9 @@ def fix_rows(fixes, config, step: float) -> np.ndarray:
 
 
 def body_speed(truth) -> np.ndarray:
-    """(K+1,) true forward speed (body y), m/s."""
-    mat = euler_to_mat(truth.attitude[:, 0], truth.attitude[:, 1], truth.attitude[:, 2])
-    return np.einsum("ni,ni->n", mat[:, :, 1], truth.velocity_n)
+    """(K+1,) true forward speed (body y), m/s: (mat_bn v^n)_y, the core's ``sarins_odo_forward_speed`` (the
+    TrajectoryIMU FMU's odometer computes it the same way)."""
+    return _core.odo_forward_speed(truth.velocity_n, truth.attitude)
 
 
 def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed: int, stops=None) -> np.ndarray:

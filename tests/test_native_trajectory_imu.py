@@ -1,8 +1,9 @@
 """The native TrajectoryIMU FMU (fmus/c/trajectory_imu/model.c over the core's traj.h + aided_imu.h).
 
 After doStep(t_k, h) its outputs are the truth row k + 1 of sarins_fmu.trajectory.generate and the measured
-increments of step k of aided.corrupt(..., stream='core') bit for bit; the core stream's errors have the
-stated statistics; an FMU state taken mid-run repeats the rest; bad parameters are refused naming them.
+increments of step k of aided.corrupt(..., stream='core') bit for bit, and its odometer's readings those
+navigate's odometer aiding applies (aided.per_step_aiding); the core stream's errors have the stated
+statistics; an FMU state taken mid-run repeats the rest; bad parameters are refused naming them.
 """
 
 from __future__ import annotations
@@ -139,6 +140,55 @@ def test_core_stream_statistics():
     ({"lat0": 1.6}, "lat0"),
     ({"speed0": -1.0}, "speed0"),
     ({"seed": -1}, "seed"),
+    ({"odo_rate_hz": -1.0}, "odo_rate_hz"),
+    ({"odo_rate_hz": 30.0}, "odo_rate_hz = 30: 1 / (odo_rate_hz step) = 3.33"),
+    ({"odo_rate_hz": 200.0}, "odo_rate_hz"),
+    ({"odo_noise_std": -0.1}, "odo_noise_std"),
+    ({"odo_scale_factor": 0.5}, "odo_scale_factor"),
+    ({"odo_seed": -1}, "odo_seed"),
 ])
 def test_bad_parameters_are_refused(fmu, params, text):
     check_parameter_error(fmu, params, text)
+
+
+@pytest.mark.parametrize("rate_hz", [10.0, 100.0])
+def test_odometer_equals_navigates_readings_bit_for_bit(fmu, expected, rate_hz):
+    """odo_valid after the steps per_step_aiding gives a reading to, odo_speed its reading (seed odo_seed), the
+    rest of the outputs unchanged; an FMU state taken between readings repeats the rest."""
+    trajectory = tr.Trajectory(START, SEGMENTS)
+    truth = tr.generate(trajectory, STEP)
+    odometer = aided.OdometerConfig(rate_hz=rate_hz, scale_factor=0.01)
+    aid = aided.per_step_aiding(truth, ("odometer",), aided.FilterSettings(), odometer, None, 11)
+    params, rows = expected
+    params = {**params, "odo_rate_hz": rate_hz, "odo_scale_factor": 0.01, "odo_noise_std": odometer.noise_std,
+              "odo_resolution": odometer.resolution, "odo_seed": 11}
+    slave = Slave(fmu, "odo")
+    try:
+        slave.set(**params)
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+        assert slave.fmu.getInteger([slave.vr["odo_valid"]]) == [0]
+        got, flags, speeds, again = [], [], [], []
+        for k in range(len(rows)):
+            if k == 153:
+                state = slave.fmu.getFMUstate()
+            slave.fmu.doStep(k * STEP, STEP)
+            got.append(slave.get(*OUT))
+            flags.append(slave.fmu.getInteger([slave.vr["odo_valid"]])[0])
+            speeds.append(slave.get("odo_speed")[0])
+        slave.fmu.setFMUstate(state)
+        for k in range(153, len(rows)):
+            slave.fmu.doStep(k * STEP, STEP)
+            again.append(slave.get("odo_speed")[0])
+    finally:
+        slave.free()
+    np.testing.assert_array_equal(got, rows)
+    flags, speeds = np.array(flags), np.array(speeds)
+    np.testing.assert_array_equal(flags, aid[:, 4])
+    assert flags.sum() == len(rows) // round(1 / (rate_hz * STEP)) > 10
+    np.testing.assert_array_equal(speeds[flags == 1], aid[flags == 1, 5])
+    np.testing.assert_array_equal(again, speeds[153:])
+    last = 0.0
+    for flag, speed in zip(flags, speeds):  # between readings odo_speed holds the last one
+        last = speed if flag else last
+        assert speed == last

@@ -175,6 +175,10 @@ GNSS_OUTAGES = ((60.0, 80.0),)
 TRUTH_TO_RECEIVER = ["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll", "omega_ib_x", "omega_ib_y",
                      "omega_ib_z", "truth_time"]
 IMU_TO_AIDED = [f"{q}_{a}" for q in ("dtheta", "dv") for a in "xyz"] + ["increment_end_time"]
+ODOMETER_TO_AIDED = ["odo_valid", "odo_speed"]  # TrajectoryIMU -> AidedINS, tagged with the increments
+UNUSED_AIDING = {"zaru": 0, "zupt": 0, "zupt_v_e": 0.0, "zupt_v_n": 0.0, "zupt_v_u": 0.0, "nhc": 0, "nhc_v_x": 0.0,
+                 "nhc_v_z": 0.0}  # AidedINS inputs these systems leave off (their values are read under a flag only)
+ODOMETER_SETTINGS = ["odo_scale_factor", "odo_noise_std", "odo_resolution"]  # aided.OdometerConfig's (odo.h)
 RECEIVER_TO_AIDED = ["fix_valid", "fix_lat", "fix_lon", "fix_height", "fix_v_e", "fix_v_n", "fix_v_u", "fix_count",
                      "fix_time", "fix_horizon"]
 AIDED_SETTINGS = ["step", "arw", "vrw", "gyro_rw", "accel_rw", "pos0_std", "vel0_std", "tilt0_std", "heading0_std",
@@ -187,9 +191,11 @@ RECEIVER_SETTINGS = ["lever_x", "lever_y", "lever_z", "pos_white_e", "pos_white_
 
 def vehicle_gnss(fmu_dir: Path | str = "resources", *, trajectory=None, seed: int = 0, gnss="sps",
                  gnss_rate_hz: float = 1.0, imu_noise: str = "tactical", imu_rate_hz: float = 100.0,
-                 outages=GNSS_OUTAGES) -> System:
+                 outages=GNSS_OUTAGES, odometer=None) -> System:
     """TrajectoryIMU -> GNSSReceiver -> AidedINS, TrajectoryIMU -> AidedINS: the aided run of
-    ``sarins navigate --trajectory FILE --aiding gnss`` as a system.
+    ``sarins navigate --trajectory FILE --aiding gnss`` as a system; with ``odometer`` (an
+    :class:`sarins_fmu.aided.OdometerConfig`) TrajectoryIMU's odometer feeds AidedINS too: the run of
+    ``--aiding gnss,odometer`` (odometer seed ``seed``, as navigate draws it).
 
     ``trajectory``: a :class:`sarins_fmu.trajectory.Trajectory`, a dict or a JSON file (default
     ``GNSS_DRIVE``, 120 s); ``gnss``: a preset name or a GNSSConfig; ``outages``: windows [start, end) s.
@@ -197,7 +203,8 @@ def vehicle_gnss(fmu_dir: Path | str = "resources", *, trajectory=None, seed: in
     initial state drawn as navigate draws it); the IMU's errors are the core's stream
     (``aided.corrupt(stream='core')``).  Every link carries a time tag (truth_time, increment_end_time,
     fix_time, fix_horizon), so the rows at each ``nav_time`` are the same under Gauss-Seidel and Jacobi
-    (Jacobi two steps later).  Communication step = the IMU step.
+    (Jacobi two steps later).  Communication step = the IMU step.  The odometer's readings travel with the
+    increments (same FMU, same tag).
     """
     import numpy as np
 
@@ -221,23 +228,40 @@ def vehicle_gnss(fmu_dir: Path | str = "resources", *, trajectory=None, seed: in
                                                                                     np.asarray(outages, float)),
           **dict(zip(RECEIVER_SETTINGS, receiver.array().tolist()))}
     nav0 = aided._initial_state(truth, settings, np.random.default_rng([seed, 3018]))
-    ins = {**dict(zip(AIDED_SETTINGS, aided._config(noise, settings, receiver, step).tolist())),
+    if odometer is not None:
+        motion.update({"odo_rate_hz": float(odometer.rate_hz), "odo_seed": int(seed),
+                       **dict(zip(ODOMETER_SETTINGS, [float(odometer.scale_factor), float(odometer.noise_std),
+                                                      float(odometer.resolution)]))})
+    ins = {**dict(zip(AIDED_SETTINGS, aided._config(noise, settings, receiver, step, odometer).tolist())),
            **{f"{n}0": float(v) for n, v in zip(["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll"],
                                                 nav0)},
            **{f"gnss_{k}_std_{a}": float(v) for k, std in (("pos", receiver.pos_std()), ("vel", receiver.vel_std()))
-              for a, v in zip("enu", std)}, "use_velocity": 1, "zaru": 0}  # GNSS aiding only: no ZARU
+              for a, v in zip("enu", std)}, "use_velocity": 1, **UNUSED_AIDING,
+           **({} if odometer is not None else {"odo_valid": 0, "odo_speed": 0.0})}
     components = [Component("motion", fmu_dir / "TrajectoryIMU.fmu", motion),
                   Component("receiver", fmu_dir / "GNSSReceiver.fmu", rx),
                   Component("ins", fmu_dir / "AidedINS.fmu", ins)]
     connections = [Connection("motion", v, "receiver", v) for v in TRUTH_TO_RECEIVER]
     connections += [Connection("motion", v, "ins", v) for v in IMU_TO_AIDED]
     connections += [Connection("receiver", v, "ins", v) for v in RECEIVER_TO_AIDED]
-    return System(name="vehicle_gnss", components=components, connections=connections, start_time=0.0,
-                  stop_time=truth.n_steps * step, step_size=step)
+    if odometer is not None:
+        connections += [Connection("motion", v, "ins", v) for v in ODOMETER_TO_AIDED]
+    return System(name="vehicle_gnss" if odometer is None else "vehicle_gnss_odometer", components=components,
+                  connections=connections, start_time=0.0, stop_time=truth.n_steps * step, step_size=step)
+
+
+def vehicle_gnss_odometer(fmu_dir: Path | str = "resources", **kwargs) -> System:
+    """:func:`vehicle_gnss` with the default wheel odometer (``aided.OdometerConfig()``: 10 Hz) from
+    TrajectoryIMU into AidedINS: ``sarins navigate --trajectory FILE --aiding gnss,odometer`` as a system
+    (``kwargs`` go to :func:`vehicle_gnss`)."""
+    from sarins_fmu.aided import OdometerConfig
+
+    return vehicle_gnss(fmu_dir, **{"odometer": OdometerConfig(), **kwargs})
 
 
 SYSTEMS = {"standard_static": standard_static, "standard_static_identified": standard_static_identified,
-           "vehicle_rins": vehicle_rins, "vehicle_rins_online": vehicle_rins_online, "vehicle_gnss": vehicle_gnss}
+           "vehicle_rins": vehicle_rins, "vehicle_rins_online": vehicle_rins_online, "vehicle_gnss": vehicle_gnss,
+           "vehicle_gnss_odometer": vehicle_gnss_odometer}
 
 
 def write_systems(fmu_dir: Path | str) -> list[Path]:

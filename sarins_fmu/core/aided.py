@@ -154,6 +154,18 @@ ODO_CONFIG = 3
 _odo_size = function("sarins_odo_size", _I64)
 _odo_init = function("sarins_odo_init", ctypes.c_int, _P, _P, ctypes.c_uint64, ctypes.c_char_p, ctypes.c_size_t)
 _odo_speeds = function("sarins_odo_speeds", ctypes.c_int, _P, _I64, _P, _P)
+_odo_forward_speed_n = function("sarins_odo_forward_speed_n", None, _I64, _P, _P, _P)
+
+
+def odo_forward_speed(velocity_n, attitude) -> np.ndarray:
+    """``sarins_odo_forward_speed_n``: forward (body y) speeds (n,) m/s of velocities (n, 3) ENU m/s seen from
+    attitudes (n, 3) yaw, pitch, roll rad: (mat_bn v^n)_y, the odometer's true speed."""
+    velocity_n = _arrays.read(velocity_n, (np.shape(velocity_n)[0], 3), "velocity")
+    n = velocity_n.shape[0]
+    attitude = _arrays.read(attitude, (n, 3), "attitude")
+    out = np.empty(n)
+    _odo_forward_speed_n(n, velocity_n.ctypes.data, attitude.ctypes.data, out.ctypes.data)
+    return out
 
 
 class OdoState:

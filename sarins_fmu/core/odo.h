@@ -28,6 +28,18 @@ int sarins_odo_init(sarins_odo *s, const double *config, uint64_t seed, char *ms
 /* n measurements of the true speeds speed (n) into out (n); 1 (nothing drawn) for a non-finite speed. */
 int sarins_odo_speeds(sarins_odo *s, int64_t n, const double *speed, double *out);
 
+/* Forward speed (m/s, body y) of a velocity v_n (3, ENU m/s) seen from the attitude ypr (3: yaw, pitch, roll,
+ * rad; rotations.h mat_nb = Rz(yaw) Rx(pitch) Ry(roll)):
+ *     s = (mat_bn v^n)_y = sum_i (mat_nb)_iy v^n_i  (the odometer's true speed, summed in the order i = E, N, U). */
+double sarins_odo_forward_speed(const double *v_n, const double *ypr);
+
+/* The same over n rows: v_n (n, 3), ypr (n, 3), out (n). */
+void sarins_odo_forward_speed_n(int64_t n, const double *v_n, const double *ypr, double *out);
+
+/* 0 when s is a state sarins_odo_init makes (settings in range, its random stream valid), else 1 with a
+ * reason in msg. */
+int sarins_odo_check(const sarins_odo *s, char *msg, size_t size);
+
 int64_t sarins_odo_size(void);
 
 #endif

@@ -4,7 +4,10 @@
  * motion is the C core's traj.h (sarins_traj_begin/_row/_step, the kernel of sarins_traj_run that
  * sarins_fmu.trajectory.generate runs in process) and the IMU errors its aided_imu.h (the stream
  * sarins_fmu.aided.corrupt draws), so after doStep(t_k, h) the outputs are the truth row k + 1 and the
- * measured increments of step k of the in-process run bit for bit.  Units: rad, m, m/s, rad/s, s.
+ * measured increments of step k of the in-process run bit for bit.  With odo_rate_hz > 0 a wheel odometer
+ * (odo.h, seed odo_seed) reads the forward speed of truth row k + 1 after every (1 / (odo_rate_hz h))-th step,
+ * the readings sarins_fmu.aided.per_step_aiding draws for navigate's odometer aiding.
+ * Units: rad, m, m/s, rad/s, s.
  */
 #include "smath.h"
 
@@ -14,6 +17,7 @@
 
 #include "aided_imu.h"
 #include "model.h"
+#include "odo.h"
 #include "traj.h"
 #include "variables.h"
 
@@ -25,6 +29,8 @@ typedef struct {
     sarins_traj traj;     /* the motion at the next grid point */
     sarins_aided_imu imu; /* the IMU's errors */
     int64_t k;            /* steps done */
+    sarins_odo odo;       /* the odometer's errors */
+    int64_t odo_every;    /* steps per odometer reading; 0: no odometer */
 } ti_state;
 
 /* What the parameters give (built at initialisation, not part of the FMU state). */
@@ -92,9 +98,9 @@ static int parse_segments(sarins_ctx *c, ti_work *w)
     return SARINS_OK;
 }
 
-static void publish(sarins_ctx *c, const ti_work *w, const ti_state *st, double time)
+/* The truth at the next grid point into the outputs (and row, SARINS_TRAJ_ROW). */
+static void publish(sarins_ctx *c, const ti_work *w, const ti_state *st, double time, double *row)
 {
-    double row[SARINS_TRAJ_ROW];
     sarins_traj_row(&st->traj, w->seg, row);
     double *r = c->r;
     const int slots[12] = {SARINS_R_lat, SARINS_R_lon, SARINS_R_height, SARINS_R_v_e, SARINS_R_v_n, SARINS_R_v_u,
@@ -144,6 +150,25 @@ static int ti_initialize(sarins_ctx *c)
             sarins_log(c, SARINS_ERROR, "parameter %s = %.17g must be finite and >= 0", noise_names[i], noise[i]);
             return SARINS_ERROR;
         }
+    double odo_rate = r[SARINS_R_odo_rate_hz], odo_every = 0.0;
+    if (!(isfinite(odo_rate) && odo_rate >= 0.0)) {
+        sarins_log(c, SARINS_ERROR, "parameter odo_rate_hz = %.17g must be finite and >= 0 (0: no odometer)",
+                   odo_rate);
+        return SARINS_ERROR;
+    }
+    if (odo_rate > 0.0) { /* a reading every 1 / (rate h) steps: a whole number >= 1 */
+        odo_every = sm_floor(1.0 / (odo_rate * step) + 0.5);
+        if (!(odo_every >= 1.0 && odo_every < 9007199254740992.0
+              && sm_fabs(1.0 / (odo_rate * step) - odo_every) <= TAG_TOL * odo_every)) {
+            sarins_log(c, SARINS_ERROR, "parameter odo_rate_hz = %.17g: 1 / (odo_rate_hz step) = %.17g must be a "
+                       "whole number >= 1 (steps per reading)", odo_rate, 1.0 / (odo_rate * step));
+            return SARINS_ERROR;
+        }
+    }
+    if (c->i[SARINS_I_odo_seed] < 0) {
+        sarins_log(c, SARINS_ERROR, "parameter odo_seed = %d must be >= 0", c->i[SARINS_I_odo_seed]);
+        return SARINS_ERROR;
+    }
     ti_work *w = calloc(1, sizeof *w);
     if (w == NULL) {
         sarins_log(c, SARINS_ERROR, "out of memory for the trajectory's segments");
@@ -167,8 +192,17 @@ static int ti_initialize(sarins_ctx *c)
         free(w);
         return SARINS_ERROR;
     }
+    double odo[SARINS_ODO_CONFIG] = {r[SARINS_R_odo_scale_factor], r[SARINS_R_odo_noise_std],
+                                     r[SARINS_R_odo_resolution]};
+    if (sarins_odo_init(&st->odo, odo, (uint64_t)c->i[SARINS_I_odo_seed], msg, sizeof msg)) {
+        sarins_log(c, SARINS_ERROR, "parameters (odo_scale_factor, odo_noise_std, odo_resolution): %s", msg);
+        free(w);
+        return SARINS_ERROR;
+    }
+    st->odo_every = (int64_t)odo_every;
     c->work = w;
-    publish(c, w, st, c->start_time);
+    double row[SARINS_TRAJ_ROW];
+    publish(c, w, st, c->start_time, row);
     double *out = c->r;
     const int zero[12] = {SARINS_R_dtheta_x, SARINS_R_dtheta_y, SARINS_R_dtheta_z, SARINS_R_dv_x, SARINS_R_dv_y,
                           SARINS_R_dv_z, SARINS_R_true_bias_g_x, SARINS_R_true_bias_g_y, SARINS_R_true_bias_g_z,
@@ -176,6 +210,8 @@ static int ti_initialize(sarins_ctx *c)
     for (int i = 0; i < 12; i++)
         out[zero[i]] = 0.0;
     out[SARINS_R_increment_end_time] = c->start_time;
+    out[SARINS_R_odo_speed] = 0.0;
+    c->i[SARINS_I_odo_valid] = 0;
     return SARINS_OK;
 }
 
@@ -211,12 +247,27 @@ static int ti_do_step(sarins_ctx *c, double t, double h)
                    "(negative speed, |pitch| >= 89 deg or |latitude| >= 89.9 deg)", t);
         return SARINS_ERROR;
     }
+    double speed = 0.0, reading = 0.0, row[SARINS_TRAJ_ROW];
+    int odo_due = st->odo_every > 0 && (st->k + 1) % st->odo_every == 0;
+    if (odo_due) { /* the forward speed at the step's end */
+        sarins_traj_row(&next, w->seg, row);
+        speed = sarins_odo_forward_speed(row + 3, row + 6);
+        sarins_odo probe = st->odo;
+        if (sarins_odo_speeds(&probe, 1, &speed, &reading)) {
+            sarins_log(c, SARINS_ERROR, "ValueError: the forward speed at %.17g s is not finite", t + h);
+            return SARINS_ERROR;
+        }
+        st->odo = probe;
+    }
     st->traj = next;
     sarins_aided_imu_step(&st->imu, dtheta_true, dv_true, dtheta, dv, bias);
     st->k += 1;
     double time = c->start_time + (double)st->k * step;
-    publish(c, w, st, time);
+    publish(c, w, st, time, row);
     double *r = c->r;
+    c->i[SARINS_I_odo_valid] = odo_due;
+    if (odo_due)
+        r[SARINS_R_odo_speed] = reading;
     const int inc[6] = {SARINS_R_dtheta_x, SARINS_R_dtheta_y, SARINS_R_dtheta_z, SARINS_R_dv_x, SARINS_R_dv_y,
                         SARINS_R_dv_z};
     const int bs[6] = {SARINS_R_true_bias_g_x, SARINS_R_true_bias_g_y, SARINS_R_true_bias_g_z,
@@ -256,13 +307,18 @@ static int ti_check_state(const sarins_ctx *c, int running)
         sarins_log(c, SARINS_ERROR, "the state's IMU step differs from the trajectory's");
         ok = 0;
     }
+    ok = ok && sarins_state_int(c, "odo_every", st->odo_every, 0, big);
+    if (ok && sarins_odo_check(&st->odo, msg, sizeof msg)) {
+        sarins_log(c, SARINS_ERROR, "the state's %s", msg);
+        ok = 0;
+    }
     return ok ? SARINS_OK : SARINS_ERROR;
 }
 
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(ti_state),
-    .state_version = 1,
+    .state_version = 2, /* 2: the odometer (odo, odo_every) */
     .initialize = ti_initialize,
     .do_step = ti_do_step,
     .release = ti_release,
