@@ -60,7 +60,7 @@ RANGES = {
     "AidedINS": {
         "step": [0.0, -1.0], "arw": [-1.0], "cov_every": [0.0, 2.5], "zupt_std": [0.0], "lat0": [2.0],
         "gnss_pos_std_e": [0.0], "gnss_vel_std_u": [-1.0], "use_velocity": [2, -1], "latency": [-1.0],
-        "zaru_std": [0.0, -1.0],
+        "zaru_std": [0.0, -1.0], "nhc_std": [0.0], "odo_std": [0.0],
     },
     "VehicleMotion": {
         "legs": ["", "fly 3", "drive -5 10"], "lat0": [2.0], "lead_time": [-1.0], "grid": [0.0],
@@ -78,7 +78,8 @@ RANGES = {
     "TrajectoryIMU": {
         "segments": ["", "1 0 0", "1.5 0 0 0", "1 0 0 0 0", "0 0 0 0"], "step": [0.0, -1.0, 2.0],
         "substeps": [0, 1001], "lat0": [1.6], "pitch0": [1.56], "speed0": [-1.0], "arw": [-1.0], "gyro_rw": [-1.0],
-        "seed": [-1],
+        "seed": [-1], "odo_rate_hz": [-1.0, 30.0], "odo_scale_factor": [0.5], "odo_noise_std": [-1.0],
+        "odo_resolution": [-1.0], "odo_seed": [-1],
     },
 }
 

@@ -39,7 +39,7 @@ def expected():
 @pytest.fixture(scope="module")
 def expected_odometer(expected):
     """navigate(aiding=('gnss', 'odometer')): other rows than GNSS alone, the filter's horizontal sigma at the
-    outage's worst below 0.8 times GNSS alone's (1.06 m against 1.47 m)."""
+    outage's worst below 0.8 times GNSS alone's (1.06 m against 1.48 m)."""
     rows = navigate_rows(("gnss", "odometer"))
     outage = (rows[0] > OUTAGES[0][0]) & (rows[0] <= OUTAGES[0][1])
     assert not np.array_equal(rows[1], expected[1])
