@@ -100,9 +100,9 @@ def run_campaign(tasks, out_dir, *, workers: int | None = None, scheduler: str |
     options : campaign options that change results without being task
         arguments; part of every task's record
     notice : callable receiving one-line notices (stale or corrupt files)
-    keep : False returns {task id: path of its stored result} instead, each result checked as usual but
-        dropped once stored or checked: the caller loads them (:func:`sarins.results.load_result`) one at
-        a time, and never holds every large result at once
+    keep : False returns {task id: path of its stored result} instead: a stored result is checked as usual
+        and dropped, a fresh one is stored and not read back; the caller loads them
+        (:func:`sarins.results.load_result`) one at a time and never holds every large result at once
     """
     tasks = list(tasks)
     ids = [t.id for t in tasks]
@@ -138,8 +138,9 @@ def run_campaign(tasks, out_dir, *, workers: int | None = None, scheduler: str |
                         result = task.fn(**task.kwargs)
                     except Exception as exc:
                         raise TaskFailed(f"task {task.id} failed: {type(exc).__name__}: {exc}") from exc
-                    results[task.id] = _store(out_dir, task, result, records[task.id], keep)
+                    path = _store(out_dir, task, result, records[task.id])
                     del result  # the stored copy stands for it: not two of a large result while the next runs
+                    results[task.id] = load_result(path) if keep else path  # what a resume would see
                     bar.update(1)
             elif todo:
                 _run_parallel(todo, out_dir, workers, scheduler, bar, records, results, keep)
@@ -154,7 +155,8 @@ def _ordered(results: CampaignResults, ids) -> CampaignResults:
     return out
 
 
-def _store(out_dir, task, result, record, keep: bool = True):
+def _store(out_dir, task, result, record) -> Path:
+    """Check a fresh result against its task's schema and store it; the stored file's path."""
     if not isinstance(result, dict):
         raise TypeError(f"task {task.id} returned {type(result).__name__}, not a dict")
     if task.schema is not None:
@@ -164,10 +166,7 @@ def _store(out_dir, task, result, record, keep: bool = True):
             raise TaskFailed(f"task {task.id} returned a result its declared schema does not allow: {exc}") from None
     path = result_path(out_dir, task.id)
     save_result(path, result, record)
-    if not keep:
-        return path
-    stored = load_result(path)  # what a resume would see
-    return stored
+    return path
 
 
 def _run_parallel(todo, out_dir, workers, scheduler, bar, records, results, keep=True):
@@ -181,8 +180,9 @@ def _run_parallel(todo, out_dir, workers, scheduler, bar, records, results, keep
                 result = future.result()
             except Exception as exc:
                 raise TaskFailed(f"task {task.id} failed: {type(exc).__name__}: {exc}") from exc
-            results[task.id] = _store(out_dir, task, result, records[task.id], keep)
+            path = _store(out_dir, task, result, records[task.id])
             del result
+            results[task.id] = load_result(path) if keep else path  # what a resume would see
             bar.update(1)
         interrupted = False
     finally:
