@@ -836,6 +836,14 @@ def test_dataset_in_chunks_is_the_whole_recordings_bit_for_bit():
         mems_calibration.dataset(rec, SHORT, rows=0)
 
 
+def test_in_process_recording_does_not_depend_on_its_chunk():
+    a = mems_calibration.record_in_process("heldout", SHORT, seed=4)
+    b = mems_calibration.record_in_process("heldout", SHORT, seed=4, chunk=333)
+    assert set(a) == set(b) and len(a["time"]) > 3 * 333
+    for key in a:
+        np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
 def test_evaluation_in_chunks_from_disk_equals_the_whole_sets(tmp_path, monkeypatch):
     """evaluate_sets a chunk at a time, on sets in memory and read back from disk: the statistics and the
     figure rows of the whole arrays in one piece, bit for bit (the recurrent state carried over chunks)."""

@@ -374,11 +374,11 @@ def record_in_process(kind: str, prof: Profile, *, seed: int = 3, model: imu.Imu
     sensor = imu.IMU(model, base, turntable.RATE_TABLE_AXES,
                      output_interval=step, internal_rate=prof.internal_rate, seed=seed, thermal_start="hot")
     sensor.reset(ambient0=float(ambient[0]))
-    acc = (rate[1:] - rate[:-1]) / step
-    a0, r0 = angle[:-1], rate[:-1]
     dtheta, dv, temps = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 6))  # filled chunk by chunk
     for k in range(0, n, chunk):
-        part = sensor.step(a0[k:k + chunk], r0[k:k + chunk], acc[k:k + chunk], ambient=ambient[k + 1:k + 1 + chunk])
+        end = min(k + chunk, n)
+        acc = (rate[k + 1:end + 1] - rate[k:end]) / step
+        part = sensor.step(angle[k:end], rate[k:end], acc, ambient=ambient[k + 1:end + 1])
         for whole, rows in zip((dtheta, dv, temps), part):
             whole[k:k + len(rows)] = rows
     return dict(time=time, angle=angle, rate=rate, ambient=ambient, dtheta=dtheta, dv=dv, temps=temps)
