@@ -360,6 +360,24 @@ class GRNNCompensator(_NetworkResidual):
                 "y_train": net.y_train_, "sigma": np.float64(net.settings.sigma)}
 
 
+class _Standardised:
+    """The inputs standardised as :meth:`RecurrentCompensator._z` does, (x - mean) / scale, computed on the
+    rows sliced out only: the recurrent fit converts its training windows a stream at a time
+    (:func:`.recurrent.train`) without a float64 copy of the whole series."""
+
+    def __init__(self, x: np.ndarray, mean: np.ndarray, scale: np.ndarray):
+        self.x, self.mean, self.scale = x, mean, scale
+
+    @property
+    def shape(self) -> tuple:
+        return self.x.shape
+
+    def __getitem__(self, rows) -> np.ndarray:
+        z = self.x[rows] - self.mean
+        z /= self.scale
+        return z
+
+
 class RecurrentCompensator(_Residual):
     """LSTM or GRU, ``layers`` (1 or 3) stacked layers of ``hidden`` units (seed 003: 60, MSE, NAdam, 4000 steps).
 
@@ -395,7 +413,8 @@ class RecurrentCompensator(_Residual):
         self.input_mean = x.mean(axis=0)
         scale = x.std(axis=0)
         self.input_scale = np.where(scale > 0, scale, 1.0)
-        self.weights, self.losses = recurrent.train(self.cell, self._z(x), z_out, **self.options)
+        self.weights, self.losses = recurrent.train(self.cell, _Standardised(x, self.input_mean, self.input_scale),
+                                                    z_out, **self.options)
 
     def _z(self, x):
         z = x - self.input_mean
