@@ -85,7 +85,7 @@ def _notice(text: str) -> None:
 
 def run_campaign(tasks, out_dir, *, workers: int | None = None, scheduler: str | None = None,
                  progress: bool = True, description: str = "campaign", options: dict | None = None,
-                 notice: Callable[[str], None] = _notice) -> CampaignResults:
+                 notice: Callable[[str], None] = _notice, keep: bool = True) -> CampaignResults:
     """Run the tasks without a valid stored result; return {task id: result} for all.
 
     Parameters
@@ -100,6 +100,9 @@ def run_campaign(tasks, out_dir, *, workers: int | None = None, scheduler: str |
     options : campaign options that change results without being task
         arguments; part of every task's record
     notice : callable receiving one-line notices (stale or corrupt files)
+    keep : False returns {task id: path of its stored result} instead: a stored result is checked as usual
+        and dropped, a fresh one is stored and not read back; the caller loads them
+        (:func:`sarins.results.load_result`) one at a time and never holds every large result at once
     """
     tasks = list(tasks)
     ids = [t.id for t in tasks]
@@ -118,7 +121,9 @@ def run_campaign(tasks, out_dir, *, workers: int | None = None, scheduler: str |
                 raise StoredResultError(f"{path}: the stored result of task {task.id} is {kind}, which the campaign "
                                         "neither reads nor replaces; remove it or choose another output folder")
             try:
-                results[task.id] = load_valid(path, records[task.id], task.finite, task.schema)
+                stored = load_valid(path, records[task.id], task.finite, task.schema)
+                results[task.id] = stored if keep else path  # (keep=False: checked, then dropped)
+                del stored
             except FileNotFoundError:
                 todo.append(task)
             except StoredResultError as exc:
@@ -133,11 +138,12 @@ def run_campaign(tasks, out_dir, *, workers: int | None = None, scheduler: str |
                         result = task.fn(**task.kwargs)
                     except Exception as exc:
                         raise TaskFailed(f"task {task.id} failed: {type(exc).__name__}: {exc}") from exc
-                    results[task.id] = _store(out_dir, task, result, records[task.id])
+                    path = _store(out_dir, task, result, records[task.id])
                     del result  # the stored copy stands for it: not two of a large result while the next runs
+                    results[task.id] = load_result(path) if keep else path  # what a resume would see
                     bar.update(1)
             elif todo:
-                _run_parallel(todo, out_dir, workers, scheduler, bar, records, results)
+                _run_parallel(todo, out_dir, workers, scheduler, bar, records, results, keep)
         finally:
             bar.close()
     return _ordered(results, ids)
@@ -149,7 +155,8 @@ def _ordered(results: CampaignResults, ids) -> CampaignResults:
     return out
 
 
-def _store(out_dir, task, result, record) -> dict:
+def _store(out_dir, task, result, record) -> Path:
+    """Check a fresh result against its task's schema and store it; the stored file's path."""
     if not isinstance(result, dict):
         raise TypeError(f"task {task.id} returned {type(result).__name__}, not a dict")
     if task.schema is not None:
@@ -159,11 +166,10 @@ def _store(out_dir, task, result, record) -> dict:
             raise TaskFailed(f"task {task.id} returned a result its declared schema does not allow: {exc}") from None
     path = result_path(out_dir, task.id)
     save_result(path, result, record)
-    stored = load_result(path)  # what a resume would see
-    return stored
+    return path
 
 
-def _run_parallel(todo, out_dir, workers, scheduler, bar, records, results):
+def _run_parallel(todo, out_dir, workers, scheduler, bar, records, results, keep=True):
     pool = make_pool(workers, scheduler)
     interrupted = True
     try:
@@ -174,7 +180,9 @@ def _run_parallel(todo, out_dir, workers, scheduler, bar, records, results):
                 result = future.result()
             except Exception as exc:
                 raise TaskFailed(f"task {task.id} failed: {type(exc).__name__}: {exc}") from exc
-            results[task.id] = _store(out_dir, task, result, records[task.id])
+            path = _store(out_dir, task, result, records[task.id])
+            del result
+            results[task.id] = load_result(path) if keep else path  # what a resume would see
             bar.update(1)
         interrupted = False
     finally:

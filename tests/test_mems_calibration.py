@@ -797,3 +797,109 @@ def test_parallel_fits_and_evaluations_give_the_sequential_numbers():
             for metric, value in par[key][1][name].items():
                 np.testing.assert_array_equal(value, seq[key][1][name][metric])
     assert par["a"][2]["grnn"]["stream_us"] > 0 and seq["a"][2]["grnn"]["stream_us"] is None
+
+
+# ------------------------------------------------------------- memory: chunks
+@pytest.mark.parametrize("rows", [1, 7, 1000, 1 << 16])
+def test_residual_sums_in_chunks_are_the_whole_arrays_statistics_bit_for_bit(rows):
+    from sarins.mems_calibration import analysis
+
+    rng = np.random.default_rng(4)
+    r = rng.standard_normal((3001, 6)) * [1e-3, 1.0, 1e3, 1e-6, 5.0, 7.0] + [1.0, 0.0, -3.0, 1e-3, 0.0, 0.0]
+    floor = np.array([0.3, 0.0, 10.0, 1e-7, 1.0, 0.1])
+    sums = analysis.ResidualSums()
+    for a in range(0, len(r), rows):
+        sums.add(r[a:a + rows])
+    sums.add(r[:0])  # an empty chunk adds nothing
+    got, whole = sums.stats(floor), analysis.residual_stats(r, floor)
+    for key in whole:
+        np.testing.assert_array_equal(got[key], whole[key], err_msg=key)
+    with pytest.raises(ValueError, match="no residual rows"):
+        analysis.ResidualSums().stats(floor)
+    with pytest.raises(ValueError, match="residual rows"):
+        sums.add(r[:3, :4])
+
+
+def test_dataset_in_chunks_is_the_whole_recordings_bit_for_bit():
+    """The data set built a chunk at a time: the truth and inputs of the whole recording, row for row."""
+    rec = mems_calibration.record_in_process("dynamic", SHORT, seed=2)
+    X = mems_calibration.measured_of(rec)
+    Y = np.column_stack(mems_calibration.truth_of(rec, SHORT.internal_rate))
+    keep = rec["time"][1:] > SHORT.warmup + 1e-9
+    assert 0 < keep.sum() < len(keep)
+    for rows in (7, 1000, len(keep) + 5):
+        data = mems_calibration.dataset(rec, SHORT, rows=rows)
+        np.testing.assert_array_equal(data.X, X[keep])
+        np.testing.assert_array_equal(data.Y, Y[keep])
+        np.testing.assert_array_equal(data.time, rec["time"][1:][keep])
+    with pytest.raises(ValueError, match="rows"):
+        mems_calibration.dataset(rec, SHORT, rows=0)
+
+
+def test_in_process_recording_does_not_depend_on_its_chunk():
+    a = mems_calibration.record_in_process("heldout", SHORT, seed=4)
+    b = mems_calibration.record_in_process("heldout", SHORT, seed=4, chunk=333)
+    assert set(a) == set(b) and len(a["time"]) > 3 * 333
+    for key in a:
+        np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+def test_evaluation_in_chunks_from_disk_equals_the_whole_sets(tmp_path, monkeypatch):
+    """evaluate_sets a chunk at a time, on sets in memory and read back from disk: the statistics and the
+    figure rows of the whole arrays in one piece, bit for bit (the recurrent state carried over chunks)."""
+    from sarins.mems_calibration import analysis, campaign, fitting
+    from sarins.mems_calibration.storage import save_set
+
+    X, Y = _toy_series(3000)
+    train = mems_calibration.Dataset(X, Y, np.arange(len(X)) * 0.1)
+    kinds = ["rbf", "lstm", "gru-memoryless"] if recurrent.torch_available() else ["rbf"]
+    models = fitting.fit_models(kinds, train, None, workers=1, rnn_steps=3, grnn_patterns=300, rbf_samples=500)
+    floor = analysis.noise_floor(imu.preset("mems"), 0.1)
+    monkeypatch.setattr(campaign, "EVAL_ROWS", 700)  # 3000 rows: four full chunks and a short one
+    monkeypatch.setattr(campaign, "FIGURE_POINTS", 7)  # every 428th row, across the chunk ends
+    stored = save_set(tmp_path, "a", train)
+    sets = {"memory": train, "disk": stored, "tail": stored.tail(1100)}
+    got = campaign.evaluate_sets(models, sets, floor, threads=2, stream_samples={"disk": 5})
+    for key, data in (("memory", train), ("disk", train), ("tail", train.tail(1100))):
+        residuals, stats, info = got[key]
+        step = campaign.thinning(len(data))
+        assert step > 1
+        whole = {"raw": data.X[:, :6] - data.Y} | {k: m.predict_batch(data.X) - data.Y for k, m in models.items()}
+        for name, r in whole.items():
+            np.testing.assert_array_equal(residuals[name], r[::step], err_msg=f"{key} {name}")
+            for metric, value in analysis.residual_stats(r, floor).items():
+                np.testing.assert_array_equal(stats[name][metric], value, err_msg=f"{key} {name} {metric}")
+        assert all((i["stream_us"] is not None) == (key == "disk") for i in info.values())
+    np.testing.assert_array_equal(stored.tail(1100).time, train.time[-1100:])
+
+
+def test_grnn_in_chunks_of_its_truncation_equals_one_call():
+    from sarins_fmu.identify.grnn import CHUNK_ROWS
+
+    X, Y = _toy_series(4000)
+    model = compensators.make("grnn", max_patterns=200).fit(X, Y)
+    n = 2 * CHUNK_ROWS + 1234
+    Xq = X[np.arange(n) % len(X)] + 1e-4 * np.sin(np.arange(n))[:, None]
+    parts = list(model.predict_batch_chunks(Xq[a:a + CHUNK_ROWS] for a in range(0, n, CHUNK_ROWS)))
+    np.testing.assert_array_equal(np.concatenate(parts), model.predict_batch(Xq))
+    with pytest.raises(ValueError, match="multiples"):
+        list(model.predict_batch_chunks([Xq[:100], Xq[100:200]]))
+
+
+def test_stored_recordings_load_one_at_a_time(tmp_path):
+    from sarins.campaign import Task, run_campaign
+    from campaign_tasks import square
+    from sarins.mems_calibration.storage import StoredRecordings
+
+    tasks = [Task(f"t{k}", square, dict(x=k)) for k in range(3)]
+    kept = run_campaign(tasks, tmp_path, workers=1, progress=False)
+    for _ in range(2):  # computed, then resumed
+        paths = run_campaign(tasks, tmp_path / "lazy", workers=1, progress=False, keep=False)
+        assert all(isinstance(p, Path) and p.is_file() for p in paths.values())
+        recs = StoredRecordings(paths)
+        assert list(recs) == ["t0", "t1", "t2"] and len(recs) == 3
+        for key in kept:
+            assert recs[key] is not recs[key]  # loaded on each access, nothing cached
+            assert set(recs[key]) == set(kept[key])
+            for field, value in kept[key].items():
+                np.testing.assert_array_equal(recs[key][field], value)

@@ -36,6 +36,55 @@ def residual_stats(residual: np.ndarray, floor: np.ndarray) -> dict:
             "sys": np.sqrt(np.maximum(mean_square - np.asarray(floor) ** 2, 0.0))}
 
 
+def _add_rows(total: np.ndarray | None, rows: np.ndarray) -> np.ndarray:
+    """``total + rows[0] + rows[1] + ...`` per column, in row order: numpy's sum over the first axis of a
+    C-ordered (n, 6) array adds the rows one after another, so carrying ``total`` from chunk to chunk gives the
+    whole array's sum bit for bit."""
+    if total is None:
+        return np.add.reduce(rows, axis=0)
+    return np.add.reduce(np.concatenate([total[None], rows]), axis=0)
+
+
+class ResidualSums:
+    """:func:`residual_stats` of (n, 6) residuals fed a chunk of rows at a time, in row order, equal to the
+    whole array's bit for bit (the same sums in the same order, tests/test_mems_calibration.py).
+
+    The std is numpy's two-pass one (the mean first, then the squared deviations from it), so the rows are
+    kept until :meth:`stats` (n x 6 floats; the callers' other temporaries are a chunk long).
+    """
+
+    def __init__(self):
+        self.n = 0
+        self._sum = self._abs = self._square = None
+        self._chunks = []
+
+    def add(self, rows: np.ndarray) -> None:
+        """Rows (m, 6) following those added so far (m may be 0)."""
+        r = np.ascontiguousarray(rows, dtype=float)
+        if r.ndim != 2 or (self._chunks and r.shape[1] != self._chunks[0].shape[1]):
+            raise ValueError(f"residual rows must be (m, {self._chunks[0].shape[1] if self._chunks else 'k'}), "
+                             f"got {r.shape}")
+        if not len(r):
+            return
+        self._sum = _add_rows(self._sum, r)
+        self._abs = _add_rows(self._abs, np.abs(r))
+        self._square = _add_rows(self._square, r * r)
+        self._chunks.append(r)
+        self.n += len(r)
+
+    def stats(self, floor: np.ndarray) -> dict:
+        """:func:`residual_stats` of every row added (at least one)."""
+        if not self.n:
+            raise ValueError("no residual rows were added")
+        mean = self._sum / self.n
+        deviation = None
+        for r in self._chunks:
+            d = r - mean
+            deviation = _add_rows(deviation, np.multiply(d, d, out=d))
+        return {"mean": mean, "std": np.sqrt(deviation / self.n), "mae": self._abs / self.n,
+                "sys": np.sqrt(np.maximum(self._square / self.n - np.asarray(floor) ** 2, 0.0))}
+
+
 def reductions(stats: dict, raw: dict) -> dict:
     """Reduction vs the raw output, % per metric: the mean over the six channels of 1 - x / x_raw
     (x = |mean|, std, mean |r|, systematic rms)."""

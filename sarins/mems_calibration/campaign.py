@@ -146,9 +146,14 @@ def _refuse_unused(args, kinds, ablation_kinds, ablating: bool) -> None:
 
 
 def record_all(profile_name: str, out: Path, *, workers=None, scheduler=None, progress=True, seed=3,
-               ablations=(), engine: str = "cosim") -> dict:
+               ablations=(), engine: str = "cosim"):
     """Build the FMUs and run the recordings as a resumable campaign: the five of the protocol, then the
-    training and held-out runs of each ablation (ids ``dynamic.no-<term>``, ``heldout.no-<term>``)."""
+    training and held-out runs of each ablation (ids ``dynamic.no-<term>``, ``heldout.no-<term>``).
+
+    Returns {id: recording} as a :class:`.storage.StoredRecordings`: each stored recording is loaded when
+    accessed, none is held here (the quick profile's five recordings are 0.7 GB)."""
+    from .storage import StoredRecordings
+
     from fmus.build import build_fmus
     from sarins.campaign import Task, build_artifacts, code_hash, run_campaign
 
@@ -168,8 +173,9 @@ def record_all(profile_name: str, out: Path, *, workers=None, scheduler=None, pr
     tasks = [Task(kind, record_task, dict(kind=kind, **common), volatile=("fmu_dir",)) for kind in mc.KINDS]
     tasks += [Task(f"{kind}.no-{term}", record_task, dict(kind=kind, ablation=term, **common), volatile=("fmu_dir",))
               for term in ablations for kind in ("dynamic", "heldout")]
-    return run_campaign(tasks, out / "recordings", workers=recording_workers(engine, workers, scheduler),
-                        scheduler=scheduler, progress=progress, description="mems-calibration recordings")
+    return StoredRecordings(run_campaign(tasks, out / "recordings", workers=recording_workers(engine, workers, scheduler),
+                                         scheduler=scheduler, progress=progress, description="mems-calibration recordings",
+                                         keep=False))
 
 
 def recording_workers(engine: str, workers, scheduler):
@@ -186,23 +192,80 @@ def evaluate(models: dict, test, floor, *, log=None, stream_samples: int = 300):
 
     Returns (residuals {name: (n', 6)} with 'raw' first, every :func:`thinning`-th row (what the figures
     plot), stats {name: dict} (of every row),
-    info {name: n_parameters, fit_s, predict_s (whole test set, batch; wall time, the evaluations of
-    :func:`evaluate_sets` running side by side), stream_us (per sample, one at a time as in the compensator
+    info {name: n_parameters, fit_s, predict_s (whole test set, batch, chunk by chunk; wall time, the evaluations
+    of :func:`evaluate_sets` running side by side), stream_us (per sample, one at a time as in the compensator
     FMU)}).
     """
     return evaluate_sets(models, {"test": test}, floor, log=log, stream_samples={"test": stream_samples})["test"]
 
 
+# rows evaluated at once: the GRNN's own chunks (its truncation unchanged), a few MB of temporaries per thread
+EVAL_ROWS = 1 << 17
+
+
+def _residual_chunks(data, predict=None):
+    """(residual chunk, prediction seconds) over ``data`` :data:`EVAL_ROWS` rows at a time, in order:
+    ``predict`` (a model's :meth:`predict_batch_chunks`) minus the targets, or the raw output X[:, :6] - Y
+    when None.  The seconds count the prediction only (not the reading of the rows)."""
+    import numpy as np
+
+    targets, reading = [], [0.0]
+
+    def inputs():
+        chunks = data.chunks(EVAL_ROWS)
+        while True:
+            t0 = time.perf_counter()
+            try:
+                X, Y = next(chunks)
+            except StopIteration:
+                return
+            reading[0] += time.perf_counter() - t0
+            targets.append(Y)
+            yield X
+
+    if predict is None:
+        for X in inputs():
+            yield X[:, :6] - targets.pop(0), 0.0
+        return
+    outputs = predict(inputs())
+    while True:
+        t0, read0 = time.perf_counter(), reading[0]
+        try:
+            out = next(outputs)
+        except StopIteration:
+            return
+        seconds = time.perf_counter() - t0 - (reading[0] - read0)
+        yield np.subtract(out, targets.pop(0), out=out), seconds
+
+
+def _residual_summary(data, floor, predict=None):
+    """(every :func:`thinning`-th residual row, :func:`.analysis.residual_stats` of every row, prediction
+    seconds) of one model on one data set, chunk by chunk (:class:`.analysis.ResidualSums`: the whole
+    array's statistics bit for bit)."""
+    import numpy as np
+
+    from . import analysis
+
+    step = thinning(len(data))
+    sums, thinned, seconds, start = analysis.ResidualSums(), [], 0.0, 0
+    for residual, dt in _residual_chunks(data, predict):
+        thinned.append(residual[(-start) % step::step].copy())
+        sums.add(residual)
+        seconds += dt
+        start += len(residual)
+    return np.concatenate(thinned) if thinned else np.empty((0, 6)), sums.stats(floor), seconds
+
+
 def evaluate_sets(models: dict, sets: dict, floor, *, log=None, stream_samples=None, threads=None) -> dict:
-    """:func:`evaluate` of every model on every dataset of ``sets`` ({name: Dataset}), the (model, dataset)
-    evaluations on ``threads`` threads (default ``SARINS_THREADS`` or every core; the C core releases the
-    GIL), longest first; ``stream_samples`` {set name: rows of the one-at-a-time timing} (default 0).
-    Returns {set name: (residuals, stats, info)} as :func:`evaluate`; the numbers do not depend on threads."""
+    """:func:`evaluate` of every model on every dataset of ``sets`` ({name: Dataset, or a
+    :class:`.storage.StoredSet` read from disk}), the (model, dataset) evaluations on ``threads`` threads
+    (default ``SARINS_THREADS`` or every core; the C core releases the GIL), longest first, each
+    :data:`EVAL_ROWS` rows at a time; ``stream_samples`` {set name: rows of the one-at-a-time timing}
+    (default 0).  Returns {set name: (residuals, stats, info)} as :func:`evaluate`; the numbers do not depend
+    on threads, and equal those of the whole sets in one piece bit for bit."""
     from concurrent.futures import ThreadPoolExecutor
 
     from sarins_fmu.core.imu import thread_count
-
-    from . import analysis
 
     stream_samples = stream_samples or {}
     jobs = sorted(((name, key) for key in sets for name in models),
@@ -213,24 +276,22 @@ def evaluate_sets(models: dict, sets: dict, floor, *, log=None, stream_samples=N
         data = sets[key]
         if log:
             log(f"mems-calibration: evaluating {name} on {len(data)} samples ({key})")
-        t0 = time.perf_counter()
-        residual = models[name].predict_batch(data.X) - data.Y
-        seconds = time.perf_counter() - t0
-        return residual[::thinning(len(data))], analysis.residual_stats(residual, floor), seconds
+        return _residual_summary(data, floor, models[name].predict_batch_chunks)
 
     workers = max(1, min(len(jobs), thread_count() if threads is None else int(threads)))
     with ThreadPoolExecutor(workers) as pool:
         done = dict(zip(jobs, pool.map(one, jobs)))
     out = {}
     for key, data in sets.items():
-        raw = data.X[:, :6] - data.Y
-        residuals, stats = {"raw": raw[::thinning(len(data))]}, {"raw": analysis.residual_stats(raw, floor)}
+        raw_rows, raw_stats, _ = _residual_summary(data, floor)
+        residuals, stats = {"raw": raw_rows}, {"raw": raw_stats}
         info = {}
+        n_stream = stream_samples.get(key, 0)
+        head = next(data.chunks(n_stream))[0] if n_stream > 0 and len(data) else ()
         for name, model in models.items():
-            residuals[name], stats[name], predict_s = done[(name, key)]
+            residuals[name], stats[name], predict_s = done.pop((name, key))
             info[name] = dict(n_parameters=int(model.n_parameters), fit_s=float(model.fit_seconds or 0.0),
-                              predict_s=predict_s,
-                              stream_us=_stream_us(model, data.X[:stream_samples.get(key, 0)]))
+                              predict_s=predict_s, stream_us=_stream_us(model, head))
         out[key] = (residuals, stats, info)
     return out
 
@@ -259,38 +320,82 @@ def _stream_us(model, rows) -> float | None:
     return (time.perf_counter() - t0) / len(rows) * 1e6
 
 
-def _take(recs, kind: str) -> dict:
-    """``recs[kind]``, its slot emptied (the caller holds the only reference)."""
-    rec, recs[kind] = recs[kind], None
-    return rec
-
-
 def _reductions(stats: dict) -> dict:
     from . import analysis
 
     return {name: analysis.reductions(s, stats["raw"]) for name, s in stats.items() if name != "raw"}
 
 
-def run_ablations(ablations, recs: dict, full_test, prof, kinds, out: Path, floor, options: dict, *, refit=False,
+def run_ablations(ablations, recs, full_test, prof, kinds, out: Path, floor, options: dict, *, refit=False,
                   log=None) -> dict:
     """Per switched-off term: the models of ``kinds`` fitted again on the training run without it and
-    evaluated on the held-out run without it, and the term's rms on the held-out run."""
+    evaluated on the held-out run without it, and the term's rms on the held-out run (``full_test``: the
+    held-out set with every term, a Dataset or :class:`.storage.StoredSet`)."""
     from sarins_fmu.experiments import mems_calibration as mc
 
     from . import analysis
 
+    from .storage import StoredSet
+
     result = {}
+    if ablations and isinstance(full_test, StoredSet):
+        full_test = full_test.load()
     for term in ablations:
-        pair = {k: recs[f"{k}.no-{term}"] for k in ("dynamic", "heldout")}
-        train, test = mc.dynamic_dataset(pair["dynamic"], pair["heldout"], prof)
-        models, reused, _ = model_set(out / "models" / f"no-{term}", kinds, train, None,
-                                      {"dynamic": pair["dynamic"]}, options, refit=refit, log=log)
+        train_rec = recs[f"dynamic.no-{term}"]
+        train = mc.dataset(train_rec, prof)
+        key = models_key({"dynamic": train_rec}, options)
+        del train_rec
+        models, reused, _ = model_set(out / "models" / f"no-{term}", kinds, train, None, key, options,
+                                      refit=refit, log=log)
+        del train
+        test = mc.dataset(recs[f"heldout.no-{term}"], prof)
         _, stats, info = evaluate(models, test, floor, log=log, stream_samples=0)
         red = _reductions(stats)
         result[term] = dict(reductions=red, order=analysis.ordering(red), reused_models=reused,
                             fit_s={k: i["fit_s"] for k, i in info.items()},
                             term_rms=analysis.term_rms(full_test.X, test.X).tolist())
     return result
+
+
+def build_datasets(recs, prof, folder: Path, options: dict, check_samples=None):
+    """The data sets of the protocol's recordings, each recording loaded once and dropped when used.
+
+    Writes the held-out set, the third power-up's first ``check_samples`` (None: as many as the held-out
+    set) and the training run's tail as long as the held-out set to ``folder``
+    (:func:`.storage.save_set`); returns (training set in memory, {'held-out', 'repowered', 'in-sample':
+    StoredSet}, traditional fit, models key, {'dynamic', 'heldout': programme series for the figure})."""
+    from sarins_fmu.experiments import mems_calibration as mc
+
+    from . import report as rep
+    from .fitting import digest_recording, models_digest
+    from .storage import save_set
+
+    series, stored = {}, {}
+    for kind, name in (("heldout", "held-out"), ("repowered", "repowered")):
+        rec = recs[kind]
+        if kind == "heldout":
+            series[kind] = rep.programme_series(rec)
+        data = mc.dataset(rec, prof)
+        del rec
+        if kind == "repowered":
+            n_check = len(stored["held-out"]) if check_samples is None else min(int(check_samples),
+                                                                                 len(stored["held-out"]))
+            data = data.head(n_check)
+        stored[name] = save_set(folder, name, data)
+        del data
+    digest = models_digest(options)  # the recordings in the order of models_key: dynamic, rates, tumble
+    rec = recs["dynamic"]
+    digest_recording(digest, rec)
+    series["dynamic"] = rep.programme_series(rec)
+    train = mc.dataset(rec, prof)
+    del rec
+    stored["in-sample"] = save_set(folder, "in-sample", train.tail(len(stored["held-out"])))
+    rates = recs["rates"]
+    digest_recording(digest, rates)
+    tumble = recs["tumble"]
+    digest_recording(digest, tumble)
+    fit = mc.traditional_calibration(tumble, rates, prof)
+    return train, stored, fit, digest.hexdigest(), series
 
 
 def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, scheduler=None, progress=True, seed=3,
@@ -303,6 +408,10 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     (``<out>/models/index.json``) is loaded instead of fitted again, unless
     ``refit``; likewise ``<out>/models/no-<term>/`` for each ablation.  ``check_samples``: samples of the
     third power-up evaluated, from its start (None: the held-out length).
+
+    Memory: the recordings stay on disk and are loaded one at a time; the evaluated sets are written to
+    ``<out>/datasets`` and read back a chunk at a time; only the training set is held whole, while the
+    models are fitted (docs/mems-calibration.md, *Memory*).
     """
     from dataclasses import asdict
 
@@ -328,37 +437,31 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
                       ablations=ablations, engine=engine)
     wall["recording campaign (this call; 0 when resumed)"] = time.perf_counter() - t0
     for name in sorted(recs):
-        wall[f"co-simulation {name}"] = float(recs[name].get("wall_s", float("nan")))
+        wall[f"co-simulation {name}"] = _wall_s(recs.paths[name])
     progress_lines.start("datasets", "truth of every sample, the traditional calibration")
     report_dir = Path(report_dir) if report_dir else out
     report_dir.mkdir(parents=True, exist_ok=True)
-    figures = [rep.programme_figure(report_dir / "fig_programmes.png", recs, prof).name]
     options = dict(rnn_steps=rnn_steps, grnn_patterns=grnn_patterns, rbf_samples=rbf_samples)
-    key = models_key({k: recs[k] for k in ("dynamic", "tumble", "rates")}, options)
-    fit = mc.traditional_calibration(recs["tumble"], recs["rates"], prof)
-    # memory: each of the protocol's recordings is dropped once it is a dataset (the ablation's stay)
-    train = mc.dataset(_take(recs, "dynamic"), prof)
-    test = mc.dataset(_take(recs, "heldout"), prof)
-    repowered = mc.dataset(_take(recs, "repowered"), prof)
-    for kind in mc.KINDS:
-        recs[kind] = None
+    train, sets, fit, key, series = build_datasets(recs, prof, out / "datasets", options, check_samples)
+    figures = [rep.programme_figure(report_dir / "fig_programmes.png", series, prof).name]
+    del series
+    test = sets["held-out"]
+    n_train, n_test, n_check = len(train), len(test), len(sets["repowered"])
     floor = analysis.noise_floor(imu.preset("mems"), prof.step)
-    n_check = len(test) if check_samples is None else min(int(check_samples), len(test))
-    repowered = mc.Dataset(repowered.X[:n_check], repowered.Y[:n_check], repowered.time[:n_check])
 
     def log(text):
         progress_lines.note(text.removeprefix("mems-calibration: "))
     progress_lines.start("fitting", f"{len(kinds)} models")
     t0 = time.perf_counter()
     models, reused, fit_load = model_set(out / "models", kinds, train, fit, key, options, refit=refit, log=log)
+    del train  # the evaluation reads the sets from disk
     wall["model fitting (this call)"] = time.perf_counter() - t0
-    progress_lines.start("evaluation", f"{len(models)} models on 3 sets (2 x {len(test)} + {n_check} samples)")
+    progress_lines.start("evaluation", f"{len(models)} models on 3 sets (2 x {n_test} + {n_check} samples)")
     t0 = time.perf_counter()
-    sets = evaluate_sets(models, {"held-out": test, "repowered": repowered, "in-sample": train.tail(len(test))},
-                         floor, log=log, stream_samples={"held-out": 300})
-    residuals, stats, info = sets["held-out"]
-    stats_repowered, stats_in_sample = sets["repowered"][1], sets["in-sample"][1]
-    del sets
+    evaluated = evaluate_sets(models, sets, floor, log=log, stream_samples={"held-out": 300})
+    residuals, stats, info = evaluated["held-out"]
+    stats_repowered, stats_in_sample = evaluated["repowered"][1], evaluated["in-sample"][1]
+    del evaluated
     wall["model evaluation"] = time.perf_counter() - t0
     red = _reductions(stats)
     progress_lines.start("ablation", f"{len(ablations)} terms switched off")
@@ -367,12 +470,12 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     wall["ablation fits and evaluation"] = time.perf_counter() - t0
 
     progress_lines.start("report", "figures, per-step training costs, report.md")
-    step = thinning(len(test))
+    step = thinning(n_test)
     figures += rep.residual_figures(report_dir, test.time[::step], residuals)
     summary = dict(
         profile=profile_name, engine=engine, step=prof.step, cal_step=prof.cal_step, tumble_dwell=prof.tumble_dwell,
         warmup=prof.warmup, programmes={"training": asdict(prof.train), "held-out": asdict(prof.test)},
-        seeds={k: mc.run_seed(k, seed) for k in mc.KINDS}, n_train=len(train), n_test=len(test), n_check=n_check,
+        seeds={k: mc.run_seed(k, seed) for k in mc.KINDS}, n_train=n_train, n_test=n_test, n_check=n_check,
         gyro_fit_rms_dps=fit.gyro_rms_residual * 180 / np.pi, accel_fit_rms_mg=fit.accel_rms_residual / rep.G_MG,
         noise_floor=floor.tolist(), models=info, wall_s=wall, reductions=red, order=analysis.ordering(red),
         reductions_repowered=_reductions(stats_repowered), reductions_in_sample=_reductions(stats_in_sample),
@@ -391,6 +494,14 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     progress_lines.start("done", f"report {summary['report']}")
     write_text(out / "summary.json", json.dumps(summary, indent=1))
     return summary
+
+
+def _wall_s(path: Path) -> float:
+    """The ``wall_s`` a stored recording holds (NaN without one), read without loading its arrays."""
+    import numpy as np
+
+    with np.load(path, allow_pickle=False) as data:
+        return float(data["wall_s"]) if "wall_s" in data.files else float("nan")
 
 
 # in-process recording, CPU s per recorded sample (this machine; co-simulated: about 150 us per master step)

@@ -170,20 +170,32 @@ def step_costs(kinds) -> dict:
                    for on in (True, False)} for cell in recurrent.CELLS}
 
 
-def models_key(recs: dict, options: dict) -> str:
-    """Identity of fitted models: the recordings they were fitted on, the
-    fitting options and the code."""
-    import hashlib
+def models_key(recs, options: dict) -> str:
+    """Identity of fitted models: the recordings they were fitted on ({kind: recording}; a mapping that loads
+    each on access holds one at a time), the fitting options and the code."""
+    digest = models_digest(options)
+    for kind in sorted(recs):
+        digest_recording(digest, recs[kind])
+    return digest.hexdigest()
 
-    import numpy as np
+
+def models_digest(options: dict):
+    """The SHA-256 of :func:`models_key` before the recordings: the options and the code.  Feed it the
+    recordings with :func:`digest_recording` in the order of their kinds' names."""
+    import hashlib
 
     from sarins.campaign import canonical_json, code_hash
 
     digest = hashlib.sha256(canonical_json(options).encode())
     digest.update(code_hash([__file__]).encode())
-    for kind in sorted(recs):
-        for key in sorted(recs[kind]):
-            if key != "wall_s":
-                digest.update(key.encode())
-                digest.update(np.ascontiguousarray(recs[kind][key]).tobytes())
-    return digest.hexdigest()
+    return digest
+
+
+def digest_recording(digest, rec: dict) -> None:
+    """Add one recording's arrays (``wall_s`` aside) to a :func:`models_digest`."""
+    import numpy as np
+
+    for key in sorted(rec):
+        if key != "wall_s":
+            digest.update(key.encode())
+            digest.update(np.ascontiguousarray(rec[key]).tobytes())

@@ -96,9 +96,19 @@ def residual_figure(path: Path, time: np.ndarray, residuals: dict, channel: int,
     return Path(path)
 
 
+def programme_series(rec: dict, max_points: int = 4000) -> dict:
+    """What :func:`programme_figure` plots of one dynamic recording, every k-th point (k = len // max_points):
+    chamber temperature and gimbal rates at ``hours``, the mean sensor temperature at ``sensor_hours``."""
+    t = rec["time"]
+    k = max(1, len(t) // max_points)
+    return dict(hours=t[::k] / 3600.0, ambient=rec["ambient"][::k].copy(), sensor_hours=t[1::k] / 3600.0,
+                sensor_mean=rec["temps"][::k].mean(axis=1), rate_dps=rec["rate"][::k] * RAD_TO_DEG)
+
 
 def programme_figure(path: Path, recs: dict, prof, max_points: int = 4000) -> Path:
-    """The training and held-out programmes: chamber and mean sensor temperature, gimbal rates."""
+    """The training and held-out programmes: chamber and mean sensor temperature, gimbal rates.
+
+    ``recs`` {'dynamic', 'heldout': recording or its :func:`programme_series`}."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -106,15 +116,12 @@ def programme_figure(path: Path, recs: dict, prof, max_points: int = 4000) -> Pa
 
     fig, axes = plt.subplots(2, 2, figsize=(10, 5), sharex="col", sharey="row")
     for col, (kind, title) in enumerate((("dynamic", "training run"), ("heldout", "held-out run"))):
-        rec = recs[kind]
-        t = rec["time"]
-        k = max(1, len(t) // max_points)
-        hours = t[::k] / 3600.0
-        axes[0, col].plot(hours, rec["ambient"][::k], lw=0.8, label="chamber")
-        axes[0, col].plot(t[1::k] / 3600.0, rec["temps"][::k].mean(axis=1), lw=0.8, label="sensors (mean)")
+        series = recs[kind] if "hours" in recs[kind] else programme_series(recs[kind], max_points)
+        axes[0, col].plot(series["hours"], series["ambient"], lw=0.8, label="chamber")
+        axes[0, col].plot(series["sensor_hours"], series["sensor_mean"], lw=0.8, label="sensors (mean)")
         axes[0, col].set_title(title, fontsize=9)
         for j, name in enumerate(("outer", "middle", "inner")):
-            axes[1, col].plot(hours, rec["rate"][::k, j] * RAD_TO_DEG, lw=0.5, label=name)
+            axes[1, col].plot(series["hours"], series["rate_dps"][:, j], lw=0.5, label=name)
         axes[1, col].set_xlabel("time (h)")
     axes[0, 0].set_ylabel("temperature (degC)")
     axes[1, 0].set_ylabel("gimbal rate (deg/s)")

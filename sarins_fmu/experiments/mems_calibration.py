@@ -374,12 +374,14 @@ def record_in_process(kind: str, prof: Profile, *, seed: int = 3, model: imu.Imu
     sensor = imu.IMU(model, base, turntable.RATE_TABLE_AXES,
                      output_interval=step, internal_rate=prof.internal_rate, seed=seed, thermal_start="hot")
     sensor.reset(ambient0=float(ambient[0]))
-    acc = (rate[1:] - rate[:-1]) / step
-    a0, r0 = angle[:-1], rate[:-1]
-    out = [sensor.step(a0[k:k + chunk], r0[k:k + chunk], acc[k:k + chunk], ambient=ambient[k + 1:k + 1 + chunk])
-           for k in range(0, n, chunk)]
-    return dict(time=time, angle=angle, rate=rate, ambient=ambient, dtheta=np.vstack([o[0] for o in out]),
-                dv=np.vstack([o[1] for o in out]), temps=np.vstack([o[2] for o in out]))
+    dtheta, dv, temps = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 6))  # filled chunk by chunk
+    for k in range(0, n, chunk):
+        end = min(k + chunk, n)
+        acc = (rate[k + 1:end + 1] - rate[k:end]) / step
+        part = sensor.step(angle[k:end], rate[k:end], acc, ambient=ambient[k + 1:end + 1])
+        for whole, rows in zip((dtheta, dv, temps), part):
+            whole[k:k + len(rows)] = rows
+    return dict(time=time, angle=angle, rate=rate, ambient=ambient, dtheta=dtheta, dv=dv, temps=temps)
 
 
 def truth_of(rec: dict, internal_rate: float = 200.0, base=None) -> tuple[np.ndarray, np.ndarray]:
@@ -419,20 +421,56 @@ class Dataset:
 
     def tail(self, n: int) -> "Dataset":
         """The last ``n`` samples (contiguous, still in time order)."""
-        n = min(int(n), len(self))
-        return Dataset(self.X[-n:], self.Y[-n:], self.time[-n:])
+        n = max(0, min(int(n), len(self)))
+        return Dataset(self.X[len(self) - n:], self.Y[len(self) - n:], self.time[len(self) - n:])
+
+    def head(self, n: int) -> "Dataset":
+        """The first ``n`` samples."""
+        n = max(0, int(n))
+        return Dataset(self.X[:n], self.Y[:n], self.time[:n])
+
+    def chunks(self, rows: int):
+        """(X, Y) views of consecutive chunks of ``rows`` samples (the last shorter), in order."""
+        for a in range(0, len(self), int(rows)):
+            yield self.X[a:a + int(rows)], self.Y[a:a + int(rows)]
 
 
-def dataset(rec: dict, prof: Profile) -> Dataset:
-    """The samples of a dynamic recording after its warm-up, in time order (the recurrent models need it)."""
-    X = measured_of(rec)
-    w, f = truth_of(rec, prof.internal_rate)
-    Y = np.column_stack([w, f])
-    t_end = rec["time"][1:]
+DATASET_ROWS = 1 << 16  # recorded steps turned into samples at once by :func:`dataset` (bounds its temporaries)
+
+
+def dataset(rec: dict, prof: Profile, *, rows: int = DATASET_ROWS) -> Dataset:
+    """The samples of a dynamic recording after its warm-up, in time order (the recurrent models need it).
+
+    Built ``rows`` recorded steps at a time into the final arrays: the truth of :func:`truth_of` (one error-free
+    IMU stepped chunk after chunk: its state carries over) and the inputs of :func:`measured_of`, the same
+    numbers bit for bit as on the whole recording (tests/test_mems_calibration.py), with temporaries a chunk
+    long instead of a dozen recording-long arrays.
+    """
+    if int(rows) < 1:
+        raise ValueError(f"rows must be at least 1, got {rows}")
+    t = rec["time"]
+    step = float(t[1] - t[0])
+    t_end = t[1:]
     keep = t_end > prof.warmup + 1e-9
-    if not keep.any():
+    n_keep = int(np.count_nonzero(keep))
+    if not n_keep:
         raise ValueError("the dynamic recording ends within its warm-up")
-    return Dataset(X[keep], Y[keep], t_end[keep])
+    ideal = imu.IMU(imu.preset("ideal"), _default_base(), turntable.RATE_TABLE_AXES,
+                    output_interval=step, internal_rate=prof.internal_rate, seed=0)
+    X, Y = np.empty((n_keep, len(INPUT_NAMES))), np.empty((n_keep, len(OUTPUT_NAMES)))
+    angle, rate = rec["angle"], rec["rate"]
+    done = 0
+    for a in range(0, len(t_end), int(rows)):
+        b = min(a + int(rows), len(t_end))
+        acc = (rate[a + 1:b + 1] - rate[a:b]) / step
+        dtheta, dv, _ = ideal.step(angle[a:b], rate[a:b], acc)
+        sel = keep[a:b]
+        m = int(np.count_nonzero(sel))
+        X[done:done + m] = measured_of({"time": t, "dtheta": rec["dtheta"][a:b], "dv": rec["dv"][a:b],
+                                        "temps": rec["temps"][a:b]})[sel]
+        Y[done:done + m] = np.column_stack([dtheta / step, dv / step])[sel]
+        done += m
+    return Dataset(X, Y, t_end[keep])
 
 
 def dynamic_dataset(train_rec: dict, test_rec: dict, prof: Profile) -> tuple[Dataset, Dataset]:

@@ -95,6 +95,15 @@ class Compensator:
         the GRNN (:meth:`GRNNCompensator.predict_batch`: truncated, exact to a stated bound)."""
         return self.predict(X)
 
+    def predict_batch_chunks(self, chunks):
+        """:meth:`predict_batch` of one series given as consecutive chunks of rows (an iterable of (m, 7)
+        arrays), yielded chunk by chunk: the rows :meth:`predict_batch` gives for the whole series, bit for bit
+        (the recurrent state carried from chunk to chunk), with nothing series-long held."""
+        native = self.native()
+        state = native.zero_state()
+        for x in chunks:
+            yield native.run(_check_xy(x), state)
+
     def binary_arrays(self) -> dict:
         """The arrays of the binary model file (layout in ``sarins_fmu/core/netmodel.h``)."""
         return self._binary_arrays()
@@ -211,7 +220,9 @@ class _Residual(Compensator):
         self.target_mean = d.mean(axis=0)
         scale = d.std(axis=0)
         self.target_scale = np.where(scale > 0, scale, 1.0)
-        return (d - self.target_mean) / self.target_scale
+        d -= self.target_mean  # (d - mean) / scale in place: the same numbers, one series-long array fewer
+        d /= self.target_scale
+        return d
 
     def _output(self, x, z_out):
         return x[:, :N_OUT] + z_out * self.target_scale + self.target_mean
@@ -328,10 +339,43 @@ class GRNNCompensator(_NetworkResidual):
                                     lambda rows, blocks: model.run_grnn_blocks(x[rows], blocks), tolerance=tolerance)
         return (y, kept) if return_kept else y
 
+    def predict_batch_chunks(self, chunks, *, tolerance: float = GRNN_TOLERANCE):
+        """:meth:`predict_batch` chunk by chunk (see :meth:`Compensator.predict_batch_chunks`): every chunk but
+        the last a whole number of the truncation's chunks (:data:`.grnn.CHUNK_ROWS` rows), so the rows are
+        those of the whole series bit for bit."""
+        from .grnn import CHUNK_ROWS
+
+        last = None
+        for x in chunks:
+            if last is not None and last % CHUNK_ROWS:
+                raise ValueError(f"GRNN chunks must be whole multiples of {CHUNK_ROWS} rows (but the last), "
+                                 f"got one of {last}")
+            out = self.predict_batch(x, tolerance=tolerance)
+            last = len(out)
+            yield out
+
     def _net_binary_arrays(self):
         net = self.net
         return {"mean": net.scaling_.mean, "scale": net.scaling_.scale, "x_train": net.x_train_,
                 "y_train": net.y_train_, "sigma": np.float64(net.settings.sigma)}
+
+
+class _Standardised:
+    """The inputs standardised as :meth:`RecurrentCompensator._z` does, (x - mean) / scale, computed on the
+    rows sliced out only: the recurrent fit converts its training windows a stream at a time
+    (:func:`.recurrent.train`) without a float64 copy of the whole series."""
+
+    def __init__(self, x: np.ndarray, mean: np.ndarray, scale: np.ndarray):
+        self.x, self.mean, self.scale = x, mean, scale
+
+    @property
+    def shape(self) -> tuple:
+        return self.x.shape
+
+    def __getitem__(self, rows) -> np.ndarray:
+        z = self.x[rows] - self.mean
+        z /= self.scale
+        return z
 
 
 class RecurrentCompensator(_Residual):
@@ -369,10 +413,13 @@ class RecurrentCompensator(_Residual):
         self.input_mean = x.mean(axis=0)
         scale = x.std(axis=0)
         self.input_scale = np.where(scale > 0, scale, 1.0)
-        self.weights, self.losses = recurrent.train(self.cell, self._z(x), z_out, **self.options)
+        self.weights, self.losses = recurrent.train(self.cell, _Standardised(x, self.input_mean, self.input_scale),
+                                                    z_out, **self.options)
 
     def _z(self, x):
-        return (x - self.input_mean) / self.input_scale
+        z = x - self.input_mean
+        z /= self.input_scale  # in place: the same numbers as (x - mean) / scale
+        return z
 
     def predict_reference(self, X) -> np.ndarray:
         """:meth:`predict` by the numpy cells (:meth:`.recurrent.RecurrentWeights.step`, float64, BLAS sums):

@@ -202,6 +202,17 @@ def _from_weights(torch, w: RecurrentWeights):
     return net
 
 
+def _stream_windows(torch, series, streams: int, piece: int, length: int):
+    """(streams, length, d) float32 tensor: stream s holds rows s * piece .. s * piece + length - 1 of
+    ``series`` (an array, or any object with ``shape`` whose row slices are arrays), converted one stream at a
+    time: the values of ``torch.tensor(series, dtype=float32)`` on those rows, without a float64 copy of the
+    whole series."""
+    out = torch.empty((streams, length, series.shape[1]), dtype=torch.float32)
+    for s in range(streams):
+        out[s] = torch.from_numpy(np.ascontiguousarray(series[s * piece:s * piece + length], dtype=float))
+    return out
+
+
 def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, layers: int = 1, steps: int = 4000,
           seq_len: int = 100, streams: int = 32, lr: float = 2e-3, seed: int = 0, threads: int | None = None,
           memory: bool = True):
@@ -210,7 +221,8 @@ def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, layers: 
     Parameters
     ----------
     cell : 'lstm' or 'gru'
-    z : (T, d) inputs; t : (T, m) targets (both standardised)
+    z : (T, d) inputs; t : (T, m) targets (both standardised; arrays, or objects with ``shape`` whose row
+        slices are arrays, e.g. a series standardised on demand)
     hidden, layers : units per recurrent layer and stacked recurrent layers
     steps, seq_len, streams, lr : optimiser sizes
     seed : torch seed (weights initialisation)
@@ -246,8 +258,8 @@ def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, layers: 
     piece = n // streams
     windows = piece // seq_len
     # (streams, windows * seq_len, d): contiguous pieces read side by side
-    zs = torch.tensor(z[:streams * piece].reshape(streams, piece, -1)[:, :windows * seq_len], dtype=torch.float32)
-    ts = torch.tensor(t[:streams * piece].reshape(streams, piece, -1)[:, :windows * seq_len], dtype=torch.float32)
+    zs = _stream_windows(torch, z, streams, piece, windows * seq_len)
+    ts = _stream_windows(torch, t, streams, piece, windows * seq_len)
     losses = np.empty(int(steps))
     state = None
     for k in range(int(steps)):  # one optimisation step per window
