@@ -23,6 +23,8 @@ IGNORED = [
     (["campaign", "axial-rbf", "--out", "{tmp}/c", "--sweep", "quick", "--sweep-only", "--engine", "cosim"],
      "--engine"),
     (["campaign", "axial-rbf", "--out", "{tmp}/c", "--sweep", "quick", "--sweep-only", "--no-live"], "--no-live"),
+    (["campaign", "axial-rbf", "--out", "{tmp}/c", "--sweep", "quick", "--sweep-only", "--calibrate"],
+     "--calibrate"),
     (["campaign", "mems-calibration", "--out", "{tmp}/c", "--ablation-models", "rbf"], "--ablation-models"),
     (["campaign", "mems-calibration", "--out", "{tmp}/c", "--models", "traditional", "--rnn-steps", "5"],
      "--rnn-steps"),

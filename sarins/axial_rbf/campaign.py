@@ -12,7 +12,9 @@ with the table, and the live align -> 12 h -> identify -> compensate ->
 72 h run); phase 4, a labelled sensitivity study (not a claim), scales the
 unit's azimuth-drift terms beyond temperature by k (:data:`SENSITIVITY_SCALES`)
 and redoes the calibration, the compensated hot training runs, the hot_mt
-network and the compensated held-out cold starts for each k.  ``--sweep`` adds the noise-scale x latitude sweep
+network and the compensated held-out cold starts for each k.  ``--calibrate`` fits k to seed 000's
+Table 4 (:mod:`sarins.axial_rbf.calibrate`) and runs the campaign's other claims on the calibrated unit
+(in process, no live runs), reported beside the sourced unit.  ``--sweep`` adds the noise-scale x latitude sweep
 (:mod:`sarins.axial_rbf.sweep`).  The report (Markdown + PNG) is written
 to ``<out>/report``.  Every experiment's result is stored as it finishes
 (``<out>/runs``); rerunning skips them.
@@ -63,6 +65,10 @@ def add_arguments(parser) -> None:
                              "(quick: 2 x 2 points, 3 runs each; full: 6 x 6 points, 20 runs each; default none)")
     parser.add_argument("--sweep-only", action="store_true",
                         help="run only the sweep (needs --sweep quick or full)")
+    parser.add_argument("--calibrate", action="store_true",
+                        help="also fit the factor k on the unit's drift terms beyond temperature to seed 000's "
+                             "Table 4 (median compensated cold-start drift error = 0.000866 deg/h, the band's "
+                             "geometric centre) and validate the calibrated unit on the other claims, in process")
 
 
 def _digest(path: Path) -> str:
@@ -72,7 +78,8 @@ def _digest(path: Path) -> str:
 def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0, out, workers=None,
             scheduler=None, progress: bool = True, truth: str = "simulated", live: bool | None = None,
             sizes=None, nav_hours: float | None = None, sweep: str = "none", sweep_only: bool = False,
-            multitemp: dict | None = None, thermal_scales=None) -> dict:
+            multitemp: dict | None = None, thermal_scales=None, calibrate: bool = False,
+            calibration: dict | None = None) -> dict:
     """Run the campaign; returns the summary dict the report is written from.
 
     sizes : (hot train, hot test, cold train, cold test), default the profile's;
@@ -81,7 +88,12 @@ def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0,
     :mod:`sarins.axial_rbf.sweep` ('none', 'quick', 'full'), ``sweep_only``
     runs nothing else; multitemp : calibration settings (default
     :data:`MULTITEMP`); thermal_scales : the sensitivity study's factors k
-    (default the profile's :data:`SENSITIVITY_SCALES`; empty: no study)."""
+    (default the profile's :data:`SENSITIVITY_SCALES`; empty: no study);
+    calibrate : fit k to seed 000, Table 4 and run the campaign on the
+    calibrated unit too (summary key 'calibrated', :func:`_calibrated`);
+    calibration : keyword arguments of
+    :func:`sarins.axial_rbf.calibrate.calibrate_thermal_scale` (target_dph,
+    rtol, max_trials)."""
     from sarins.campaign import run_campaign
 
     from . import sweep as sweep_mod
@@ -92,6 +104,8 @@ def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0,
         raise ValueError(f"sweep must be one of {SWEEPS}, got {sweep!r}")
     if sweep_only and sweep == "none":
         raise ValueError("--sweep-only needs --sweep quick or --sweep full")
+    if sweep_only and calibrate:
+        raise ValueError("--calibrate does not apply with --sweep-only")
     t_start = time.perf_counter()
     out = Path(out)
     run_dir = out / "runs"
@@ -104,15 +118,51 @@ def execute(*, profile: str = "quick", engine: str | None = None, seed: int = 0,
     if sweep_only:
         return {"profile": profile, "seed": seed, "sweep": swept, "sweep_only": True,
                 "wall_seconds": time.perf_counter() - t_start, "workers": workers, "scheduler": scheduler}
+    multitemp = dict(MULTITEMP, **(multitemp or {}))
     summary = _main(profile=profile, engine=engine, seed=seed, out=out, common=common, truth=truth, live=live,
-                    sizes=sizes, nav_hours=nav_hours, multitemp=dict(MULTITEMP, **(multitemp or {})),
+                    sizes=sizes, nav_hours=nav_hours, multitemp=multitemp,
                     thermal_scales=SENSITIVITY_SCALES[profile] if thermal_scales is None else thermal_scales)
-    summary.update(sweep=swept, sweep_only=False, wall_seconds=time.perf_counter() - t_start)
+    calibrated = None
+    if calibrate:
+        calibrated = _calibrated(summary, out=out, common=common, multitemp=multitemp, sizes=sizes,
+                                 nav_hours=nav_hours, options=calibration or {})
+    summary.update(sweep=swept, sweep_only=False, calibrated=calibrated, wall_seconds=time.perf_counter() - t_start)
     return summary
 
 
-def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, multitemp, thermal_scales) -> dict:
-    """Calibration, training runs, models, held-out runs (see the module docstring)."""
+def _calibrated(summary: dict, *, out, common, multitemp, sizes, nav_hours, options: dict) -> dict:
+    """Fit k to seed 000, Table 4 (:func:`sarins.axial_rbf.calibrate.calibrate_thermal_scale`) and
+    run the campaign on the calibrated unit (thermal scale k: its own multi-temperature calibration,
+    training runs, networks and held-out runs; in process, no live runs, no sensitivity study).
+
+    Returns {'fit': the :class:`ThermalCalibration` as a dict, 'summary': the calibrated unit's
+    campaign summary (the keys of :func:`_main`)}."""
+    from dataclasses import asdict
+
+    from .calibrate import calibrate_thermal_scale
+
+    profile, seed = summary["profile"], summary["seed"]
+    sizes = sizes or PROFILES[profile]
+    nav = _nav(nav_hours)
+    fit = calibrate_thermal_scale(seed=seed, out=out, common=common, multitemp=multitemp, sizes=tuple(sizes),
+                                  nav=nav, **options)
+    sub = _main(profile=profile, engine="inprocess", seed=seed, out=out, common=common, truth=summary["truth"],
+                live=False, sizes=sizes, nav_hours=nav_hours, multitemp=multitemp, thermal_scales=(),
+                thermal_scale=fit.k)
+    return {"fit": asdict(fit), "summary": sub}
+
+
+def _nav(nav_hours) -> float:
+    from sarins_fmu.experiments import axial_rbf as s0
+
+    return s0.NAV_HOURS if nav_hours is None else float(nav_hours)
+
+
+def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, multitemp, thermal_scales,
+          thermal_scale: float = 1.0) -> dict:
+    """Calibration, training runs, models, held-out runs (see the module docstring); thermal_scale:
+    the unit's factor k on its terms beyond temperature (1: the campaign's unit; other values: the
+    calibrated unit of :func:`_calibrated`, its task ids and model folder tagged with k)."""
     from sarins.campaign import Task, build_artifacts, code_hash, run_campaign
 
     from sarins_fmu.experiments import axial_rbf as s0
@@ -122,27 +172,31 @@ def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, 
     live = (profile == "paper") if live is None else live
     n_ht, n_hv, n_ct, n_cv = sizes or PROFILES[profile]
     run_dir = out / "runs"
+    scale = float(thermal_scale)
+    ktag = _ktag(scale)
+    check_cosim = profile == "quick" and scale == 1.0  # the quick profile's co-simulated twin check
     fmu_dir = None
-    if engine == "cosim" or profile == "quick":
+    if engine == "cosim" or check_cosim:
         from fmus.build import DEFAULT_NAMES, build_fmus
 
         # built in a temporary folder and moved into place; rebuilt when the code changes
         fmu_dir = str(build_artifacts(out / "fmus", [f"{n}.fmu" for n in DEFAULT_NAMES], build_fmus,
                                       code_hash())[0].parent)
-    exps = {"hot": s0.generate("hot", n_ht, n_hv, seed), "cold": s0.generate("cold", n_ct, n_cv, seed)}
+    exps = {kind: s0.generate(kind, n_t, n_v, seed, thermal_scale=scale)
+            for kind, n_t, n_v in (("hot", n_ht, n_hv), ("cold", n_ct, n_cv))}
     # phase 0: the multi-temperature calibration (one short task, run here: no pool to start)
-    cal_task = _calibration_task(seed, multitemp, 1.0)
+    cal_task = _calibration_task(seed, multitemp, scale)
     calibration = run_campaign([cal_task], run_dir, description="axial-rbf calibration", workers=1,
                                progress=common["progress"])[cal_task.id]
     table = _table(calibration)
     # phase 1: training runs, raw (engine) and with the table (in process), and Fig. 1's closed-form check
     fig1_task = Task("fig1-closed-form-check", runs.fig1_check_task, {"cases": FIG1_CASES})
     tr = "" if truth == "simulated" else "-ptruth"
-    train_tasks = [Task(f"s{seed}-{e.name}-{engine}{tr}", runs.train_task,
+    train_tasks = [Task(f"s{seed}-{e.name}-{engine}{tr}{ktag}", runs.train_task,
                         {"exp": e.to_dict(), "engine": engine, "fmu_dir": fmu_dir, "paper_truth": truth == "paper"},
                         volatile=("fmu_dir",), finite=("drift_dph", "lat_error_deg"))
                    for k in exps for e in exps[k] if e.role == "train"]
-    mt_tasks = _mt_train_tasks([e for k in exps for e in exps[k] if e.role == "train"], seed, table, 1.0)
+    mt_tasks = _mt_train_tasks([e for k in exps for e in exps[k] if e.role == "train"], seed, table, scale)
     train = run_campaign(train_tasks + mt_tasks + [fig1_task], run_dir, description="axial-rbf training runs",
                          **common)
     fig1_check = train[fig1_task.id]
@@ -150,31 +204,32 @@ def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, 
     mt_rows = {k: [train[t.id] for t in mt_tasks if t.kwargs["exp"]["start"] == k] for k in exps}
     # phase 2: the networks
     target = "drift_dph" if truth == "simulated" else "paper_truth_dph"
-    nets = _train_models(out / "models", {"hot": (rows["hot"], s0.HOT_INPUTS, target),
+    model_dir = out / "models" if scale == 1.0 else out / "models" / f"calibrated-k{scale:g}"
+    nets = _train_models(model_dir, {"hot": (rows["hot"], s0.HOT_INPUTS, target),
                                           "cold": (rows["cold"], s0.COLD_INPUTS, target),
                                           "hot_mt": (mt_rows["hot"], s0.HOT_INPUTS, "residual_drift_dph"),
                                           "cold_mt": (mt_rows["cold"], s0.COLD_INPUTS, "residual_drift_dph")})
-    six = _train_models(out / "models", {f"cold6_{i // PAPER_COLD_ROWS + 1}": (rows["cold"][i:i + PAPER_COLD_ROWS],
+    six = _train_models(model_dir, {f"cold6_{i // PAPER_COLD_ROWS + 1}": (rows["cold"][i:i + PAPER_COLD_ROWS],
                                                                              s0.COLD_INPUTS, target)
                                          for i in range(0, len(rows["cold"]) - PAPER_COLD_ROWS + 1, PAPER_COLD_ROWS)})
-    models = {k: str(out / "models" / f"{k}.json") for k in nets}
+    models = {k: str(model_dir / f"{k}.json") for k in nets}
     digests = {k: _digest(v) for k, v in models.items()}
     tag = hashlib.sha256(json.dumps(digests, sort_keys=True).encode()).hexdigest()[:12]
     # phase 3: held-out experiments
-    nav = s0.NAV_HOURS if nav_hours is None else float(nav_hours)
+    nav = _nav(nav_hours)
     exact = profile == "paper"
-    test_tasks = [Task(f"s{seed}-{e.name}-{engine}-{'live' if live else 'nolive'}-{nav:g}h-{int(exact)}-{tag}",
+    test_tasks = [Task(f"s{seed}-{e.name}-{engine}-{'live' if live else 'nolive'}-{nav:g}h-{int(exact)}{ktag}-{tag}",
                        runs.test_task, {"exp": e.to_dict(), "models": models, "engine": engine, "fmu_dir": fmu_dir,
                                         "live": live, "rerun_all": exact, "nav_hours": nav, "table": table},
                        volatile=("models", "fmu_dir"), identity={"models": digests})
                   for k in exps for e in exps[k] if e.role == "test"]
-    if profile == "quick":
+    if check_cosim:
         probe = exps["hot"][n_ht]
         test_tasks.append(Task(f"s{seed}-cosim-check-{tag}", runs.cosim_check_task,
                                {"exp": probe.to_dict(), "model_file": models["hot"], "fmu_dir": fmu_dir},
                                volatile=("model_file", "fmu_dir"), identity={"model": digests["hot"]}))
     tests = run_campaign(test_tasks, run_dir, description="axial-rbf held-out runs", **common)
-    check = tests.pop(test_tasks[-1].id) if profile == "quick" else None
+    check = tests.pop(test_tasks[-1].id) if check_cosim else None
     tested = {k: [tests[t.id] for t in test_tasks if t.id in tests and t.kwargs["exp"]["start"] == k]
               for k in exps}
     comparison = _comparisons(rows, tested)
@@ -183,7 +238,7 @@ def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, 
     uncompensated = [r for k in exps for r in rows[k] + tested[k]]  # cosim rows have no heading error
     sensitivity = _sensitivity(thermal_scales, seed=seed, out=out, common=common, multitemp=multitemp,
                                sizes=(n_ht, n_hv, n_ct, n_cv), nav=nav)
-    return {"profile": profile, "engine": engine, "seed": seed, "truth": truth, "live": live,
+    return {"profile": profile, "engine": engine, "seed": seed, "truth": truth, "live": live, "thermal_scale": scale,
             "train": rows, "train_mt": mt_rows, "test": tested, "nets": nets, "six": six, "models": models,
             "cosim_check": check, "comparison": comparison, "multitemp": {"settings": multitemp, **calibration},
             "fig1": {"check": fig1_check, "signs": fig1.sign_analysis(uncompensated)}, "sensitivity": sensitivity,
@@ -346,12 +401,13 @@ def run(args) -> int:
 
     if args.sweep_only and args.sweep == "none":
         raise ValueError("--sweep-only needs --sweep quick or --sweep full")
-    refuse_unless(args, {"engine": "--engine", "truth": "--truth", "no_live": "--no-live"}, not args.sweep_only,
+    refuse_unless(args, {"engine": "--engine", "truth": "--truth", "no_live": "--no-live",
+                         "calibrate": "--calibrate"}, not args.sweep_only,
                   "does not apply with --sweep-only (the sweep trains and tests in process, nothing else runs)")
     summary = execute(profile=args.profile, engine=args.engine, seed=args.seed, out=args.out,
                       workers=args.workers, scheduler=args.scheduler, progress=not args.no_progress,
                       truth=args.truth, live=False if args.no_live else None, sweep=args.sweep,
-                      sweep_only=args.sweep_only)
+                      sweep_only=args.sweep_only, calibrate=args.calibrate)
     report = write_report(summary, Path(args.out) / "report")
     print(f"sarins campaign axial-rbf: report written to {report}")
     result = {}
@@ -364,6 +420,11 @@ def run(args) -> int:
         held = sum(p["holds"] for p in points)
         print(f"  sweep ({summary['sweep']['grid']}): 0.0003 deg/h held on {held} of {len(points)} grid points")
         result["sweep_points_holding"] = held
+    if summary.get("calibrated"):
+        fit = summary["calibrated"]["fit"]
+        print(f"  calibrated to {fit['figure']}: k = {fit['k']:g} (median {fit['median_dph']:.6f} deg/h, target "
+              f"{fit['target_dph']:.6f}, {len(fit['trials'])} trials, {fit['wall_seconds']:.0f} s)")
+        result["calibrated_k"] = fit["k"]
     print(f"  wall time {summary['wall_seconds']:.0f} s")
     print(json.dumps(result))
     return 0

@@ -16,7 +16,8 @@ from sarins.comparison import comparison_lines
 
 from sarins_fmu.experiments import axial_rbf as s0
 
-from .report_additions import cold6_section, fig1_section, multitemp_section, sensitivity_section, sweep_section
+from .report_additions import (calibrated_section, cold6_section, fig1_section, multitemp_section, sensitivity_section,
+                               sweep_section)
 
 
 def _md(headers, rows) -> str:
@@ -194,6 +195,9 @@ PAPER_POSITION_NMI = 1.0  # position error after compensation within 1 nmi / 72 
 PAPER_MT_RESIDUAL_DPH = (0.0005, 0.0015)  # drift error left by multi-temperature compensation + hot network
 
 
+TABLE4_CLAIM = 2  # index of the Table 4 claim in comparison_claims (the figure --calibrate fits)
+
+
 def comparison_claims(summary: dict) -> list:
     """Seed 000's headline claims against the held-out experiments (:mod:`sarins.comparison`)."""
     from sarins.comparison import Claim
@@ -295,6 +299,9 @@ def write_report(summary: dict, folder) -> Path:
               "(mt_*: of the compensated re-runs).", "",
               comparison_table(summary["comparison"]), "", verdict(summary["comparison"]), ""]
     lines += multitemp_section(summary) + sensitivity_section(summary, PAPER_MT_RESIDUAL_DPH)
+    if summary.get("calibrated"):
+        lines += calibrated_section(summary, comparison_claims(summary),
+                                    comparison_claims(summary["calibrated"]["summary"]), TABLE4_CLAIM)
     lines += cold6_section(summary) + fig1_section(summary)
     if summary.get("sweep"):
         sweep_lines, sweep_figs = sweep_section(summary["sweep"], folder)
