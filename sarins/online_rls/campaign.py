@@ -79,6 +79,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--engine", choices=("inprocess", "cosim"), default="inprocess",
                         help="run the vehicle test's drives in process or through the FMUs (the vehicle_rins_online "
                              "SSP system under the master; the same numbers, slower); default inprocess")
+    parser.add_argument("--calibrate", action="store_true",
+                        help="also fit one factor on nav-rlg's stop-noise terms so that the median S after FF-RLS of the "
+                             "headline 300-day runs equals seed 002's 0.066 (Table 2), and run the other claims on "
+                             "that calibrated unit (in process; a report section beside the sourced unit's table)")
     parser.add_argument("--seed", type=seed_value, default=0,
                         help="base random seed of the campaign: run k of each study uses seed + k "
                              "(0 .. 2**31-1 minus the runs; default 0)")
@@ -100,11 +104,26 @@ def stop_schema(kwargs: dict, function=None) -> dict:
                                                                           "std_curve_dph")}}
 
 
+def headline_profile(profile: str, unit: str) -> dict:
+    """``profile``'s headline studies on ``unit`` instead of nav-rlg: its nav-rlg stops and indexed
+    stops, its first (headline) 300-day row and its first vehicle row, same run counts (the
+    calibrated unit's campaign, ``--calibrate``)."""
+    if profile not in PROFILES:
+        raise ValueError(f"unknown profile {profile!r}")
+    p = PROFILES[profile]
+    ageing, _, estimate, n_mc, *_ = p["mc"][0]
+    v_ageing, _, n_veh, *_ = p["vehicle"][0]
+    return {"stops": {unit: p["stops"]["nav-rlg"]}, "indexed_stops": {unit: p["indexed_stops"]["nav-rlg"]},
+            "mc": [(ageing, unit, estimate, n_mc)], "vehicle": [(v_ageing, unit, n_veh)],
+            "vehicle_kwargs": p["vehicle_kwargs"]}
+
+
 def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0, engine: str = "inprocess",
-                fmu_dir: str | None = None):
+                fmu_dir: str | None = None, unit: str | None = None):
     """The campaign's tasks for ``profile`` ('quick' or 'paper'); run k of
     each study uses the random seed ``seed + k``; the vehicle tests run with
-    ``engine`` (``'cosim'``: through the FMUs in ``fmu_dir``)."""
+    ``engine`` (``'cosim'``: through the FMUs in ``fmu_dir``).  ``unit``: only the
+    headline studies, on that unit (:func:`headline_profile`)."""
     from sarins.campaign import Task
     from sarins_fmu.experiments import online_rls
     from sarins_fmu.experiments.online_rls_indexed import simulate_indexed_stop
@@ -113,11 +132,13 @@ def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0, eng
 
     if profile not in PROFILES:
         raise ValueError(f"unknown profile {profile!r}")
+    if unit is not None:
+        online_rls.imu_unit(unit)  # a bad unit name fails here, not in a worker
     if engine not in ENGINES:
         raise ValueError(f"--engine must be one of {ENGINES}, got {engine!r}")
     if not (MIN_LAMBDA <= forgetting_factor <= 1.0):
         raise ValueError(f"--lambda must be in [{MIN_LAMBDA}, 1], got {forgetting_factor}")
-    p = PROFILES[profile]
+    p = PROFILES[profile] if unit is None else headline_profile(profile, unit)
     most = max(list(p["stops"].values()) + list(p.get("indexed_stops", {}).values()) + [0])
     most = max([most] + [row[3] for row in p["mc"]] + [row[2] for row in p["vehicle"]])
     if not 0 <= seed <= 2**31 - most:
@@ -173,8 +194,40 @@ def run(args) -> int:
     results = run_campaign(tasks, out / "runs", workers=args.workers, scheduler=args.scheduler,
                            progress=not args.no_progress, description="online-rls")
     computed = len(results.computed)
+    calibrated = None
+    if getattr(args, "calibrate", False):
+        calibrated = calibrate_unit(args.profile, out / "runs", forgetting_factor=args.forgetting_factor,
+                                    seed=args.seed, workers=args.workers, scheduler=args.scheduler,
+                                    progress=not args.no_progress)
     wall = time.perf_counter() - start
     report = write_report(results, out, profile=args.profile, wall_time=wall, workers=args.workers,
-                          forgetting_factor=args.forgetting_factor, computed=computed)
+                          forgetting_factor=args.forgetting_factor, computed=computed, calibrated=calibrated)
     print(f"sarins campaign online-rls: {len(tasks)} runs ({computed} computed now) in {wall:.0f} s; report {report}")
     return 0
+
+
+def calibrate_unit(profile: str, runs_dir, *, forgetting_factor: float = 0.8, seed: int = 0, workers=None,
+                   scheduler=None, progress: bool = False, calibration: dict | None = None) -> dict:
+    """``--calibrate``: fit the noise factor k to seed 002, Table 2
+    (:func:`sarins.online_rls.calibrate.calibrate_noise_scale`, on the profile's headline 300-day
+    runs) and run the headline studies on the calibrated unit (in process; tasks stored in
+    ``runs_dir`` beside the campaign's, their ids naming the unit).  ``calibration``: keyword
+    arguments of the fit (target, rtol, max_trials).
+
+    Returns {'fit': the :class:`NoiseCalibration` as a dict, 'results': {task id: result} of the
+    calibrated unit's studies}."""
+    from dataclasses import asdict
+
+    from sarins.campaign import run_campaign
+
+    from .calibrate import calibrate_noise_scale
+
+    n_runs = PROFILES[profile]["mc"][0][3] if profile in PROFILES else 0
+    if not n_runs:
+        raise ValueError(f"unknown profile {profile!r}")
+    fit = calibrate_noise_scale(n_runs=n_runs, seed=seed, forgetting_factor=forgetting_factor, runs_dir=runs_dir,
+                                workers=workers, scheduler=scheduler, progress=progress, **(calibration or {}))
+    tasks = build_tasks(profile, forgetting_factor, seed, "inprocess", None, unit=fit.unit)
+    results = run_campaign(tasks, runs_dir, workers=workers, scheduler=scheduler, progress=progress,
+                           description="online-rls calibrated unit")
+    return {"fit": asdict(fit), "results": dict(results)}

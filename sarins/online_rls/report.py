@@ -220,31 +220,105 @@ def indexed_stop_lines(results: dict, unit: str = "nav-rlg") -> list:
     return lines
 
 
-def comparison_claims(results: dict) -> list:
-    """Seed 002's headline claims against the headline configurations' runs (:mod:`sarins.comparison`)."""
+FITTED_CLAIM = 2  # index of the claim ``--calibrate`` fits (mean S after FF-RLS): not a test on that unit
+
+
+def comparison_claims(results: dict, unit: str = "nav-rlg") -> list:
+    """Seed 002's headline claims against the headline configurations' runs (:mod:`sarins.comparison`);
+    ``unit``: whose runs (default the headline nav-rlg; the calibrated unit's name for its section)."""
     from sarins.comparison import Claim
 
-    stops = _group(results, HEAD_STOP + "-")
-    mc = _group(results, HEAD_MC + "-")
-    veh = _group(results, HEAD_VEHICLE + "-")
+    stops = _group(results, f"stop-{unit}-")
+    mc = _group(results, f"mc-markov-{unit}-filter-")
+    veh = _group(results, f"veh-markov-{unit}-")
     pct = lambda a, b: 100.0 * (np.asarray(a, float) / np.asarray(b, float) - 1.0)  # noqa: E731
     return [
-        Claim("30-min stop: abs. azimuth-drift error (°/h), nav-rlg", PAPER_STOP_DPH,
-              [abs(r["error_dph"]) for r in stops], paper_text="< 0.002", note="no nav-rlg stops run"),
-        Claim("30-min stop with indexing: abs. azimuth-drift error (°/h), nav-rlg", PAPER_STOP_DPH,
-              [abs(r["error_dph"]) for r in _group(results, HEAD_STOP_INDEXED + "-")], paper_text="< 0.002",
-              note="no indexed nav-rlg stops run"),
+        Claim(f"30-min stop: abs. azimuth-drift error (°/h), {unit}", PAPER_STOP_DPH,
+              [abs(r["error_dph"]) for r in stops], paper_text="< 0.002", note=f"no {unit} stops run"),
+        Claim(f"30-min stop with indexing: abs. azimuth-drift error (°/h), {unit}", PAPER_STOP_DPH,
+              [abs(r["error_dph"]) for r in _group(results, f"stop-indexed-{unit}-")], paper_text="< 0.002",
+              note=f"no indexed {unit} stops run"),
         Claim("mean S after FF-RLS (°/h·°C), Table 2", PAPER_S_FF, [r["s_ff"] for r in mc],
-              note="no nav-rlg Monte Carlo run"),
+              note=f"no {unit} Monte Carlo run"),
         Claim("S after FF-RLS / S without update, Table 2", PAPER_FF_OVER_NONE,
               [r["s_ff"] / r["s_none"] for r in mc], paper_text="< 0.5 (of the means)",
-              note="no nav-rlg Monte Carlo run"),
+              note=f"no {unit} Monte Carlo run"),
         Claim("vehicle CEP, updated vs initial model (%), Table 5", PAPER_CEP_CHANGE_PCT,
-              [pct(r["cep_updated"], r["cep_initial"]) for r in veh], note="no nav-rlg vehicle test run", digits=3),
+              [pct(r["cep_updated"], r["cep_initial"]) for r in veh], note=f"no {unit} vehicle test run", digits=3),
         Claim("vehicle max radial error, updated vs initial (%), Table 5", PAPER_MAX_RADIAL_CHANGE_PCT,
               [pct(r["max_radial_updated"], r["max_radial_initial"]) for r in veh],
-              note="no nav-rlg vehicle test run", digits=3),
+              note=f"no {unit} vehicle test run", digits=3),
     ]
+
+
+def _md_table(heads: list, rows: list) -> list:
+    return ["| " + " | ".join(heads) + " |", "|" + "---|" * len(heads)] + ["| " + " | ".join(r) + " |" for r in rows]
+
+
+def calibrated_section(results: dict, calibrated: dict | None) -> list:
+    """The unit calibrated to seed 002, Table 2 (``--calibrate``), beside the sourced unit: the fitted
+    sizes and the figure fitted to, the search's trials, and every claim of the comparison table on
+    both units, the fitted one marked.  ``results``: the sourced campaign's runs; ``calibrated``:
+    :func:`sarins.online_rls.campaign.calibrate_unit`'s {'fit', 'results'} (None: no section)."""
+    from sarins.comparison import MIN_RUNS
+
+    from .calibrate import noise_sizes
+
+    if not calibrated:
+        return []
+    fit, runs = calibrated["fit"], calibrated["results"]
+    k, unit, target = fit["k"], fit["unit"], fit["target"]
+    base = noise_sizes(1.0)
+    sourced_mc = [r["s_ff"] for r in _group(results, HEAD_MC + "-")]
+    sourced_median = f"{float(np.median(sourced_mc)):.4g}" if sourced_mc else "-"
+    sizes = [["factor k on the four noise terms", "1", f"{k:g}"],
+             ["gyro angle random walk (°/√h)", f"{base['gyro_arw_dpsh']:.3g}", f"{fit['gyro_arw_dpsh']:.4g}"],
+             ["gyro bias instability (°/h)", f"{base['gyro_bias_instability_dph']:.3g}",
+              f"{fit['gyro_bias_instability_dph']:.4g}"],
+             ["accelerometer velocity random walk (µg/√Hz)", f"{base['accel_vrw_ug_rthz']:.3g}",
+              f"{fit['accel_vrw_ug_rthz']:.4g}"],
+             ["accelerometer bias instability (µg)", f"{base['accel_bias_instability_ug']:.3g}",
+              f"{fit['accel_bias_instability_ug']:.4g}"],
+             [f"median S after FF-RLS over {fit['n_runs']} 300-day runs (°/h·°C)", sourced_median,
+              f"{fit['median_s']:.4g} (target {target:.4g}; mean {fit['mean_s']:.4g})"]]
+    lines = ["## Calibrated unit (calibrated to seed 002, Table 2)", "",
+             "Everything above is the sourced unit (nav-rlg). What sets its S after FF-RLS is the noise of the "
+             "stop estimates: with exact stop estimates the sourced ageing alone gives the paper's size. The "
+             "unsourced ageing sizes of a and b only add to S, so no factor on them reaches the paper's value; "
+             "here the unit's four stop-noise terms (gyro angle random walk and bias instability, accelerometer "
+             "velocity random walk and bias instability; the terms the hypothetical premise unit changes) are "
+             "scaled together by one factor k, the stop filter tuned to the scaled unit, and k is fitted by code "
+             f"(`sarins/online_rls/calibrate.py`) to one figure: the median S after FF-RLS over the {fit['n_runs']} "
+             f"headline 300-day runs (markov ageing, simulated stops) equals seed 002's Table 2 value {target:g} "
+             "°/h·°C (the statistic the comparison table sets against it). Search "
+             "(`sarins.calibration_fit.fit_scale`): from k = 1 by factors of 3 until bracketed, then regula falsi "
+             f"(Illinois) on ln k, trial k rounded to 4 digits, tolerance {100 * fit['rtol']:g} % on the median, "
+             "at most 12 trials; every trial the campaign's seeded runs on the scaled unit (k = 1: the sourced "
+             "runs, reused).", "",
+             *_md_table(["size", "sourced unit (nav-rlg)", f"calibrated to {fit['figure']}"], sizes), "",
+             "Trials (k: median S): " + ", ".join(f"{tk:g}: {tv:.4g}" for tk, tv in fit["trials"])
+             + f". {'Converged' if fit['converged'] else '**Not converged**'}: median/target - 1 = "
+               f"{100 * (fit['median_s'] / target - 1):+.2f} % after {len(fit['trials'])} trials "
+               f"({fit['wall_seconds']:.0f} s, stored runs not rerun).", ""]
+    heads = ["claim", "paper value", "sourced unit: ours (median)", "sourced: paper's percentile",
+             "calibrated unit: ours (median)", "calibrated: ours 5-95 %", "calibrated: paper's percentile"]
+    body = []
+    for i, (a, b) in enumerate(zip(comparison_claims(results), comparison_claims(runs, unit))):
+        ca, cb = a.cells(), b.cells()
+        name = ca[0].replace(", nav-rlg", "") + (" -- **fitted to this: not a test**" if i == FITTED_CLAIM else "")
+        body.append([name, ca[1], ca[2], ca[4], cb[2], cb[3], cb[4]])
+    lines += [f"The calibrated unit (`{unit}`): the sourced campaign's headline studies (stops, indexed stops, "
+              "300-day runs, vehicle tests: same seeds, temperatures and days) on the calibrated unit, in process. "
+              "The fitted row is the calibration's own figure; every other row is validation of the calibrated "
+              "unit against the rest of the paper (paper's percentile as in the comparison table above; fewer "
+              f"than {MIN_RUNS} runs: not tested).", "", *_md_table(heads, body), ""]
+    mc = _group(runs, f"mc-markov-{unit}-filter-")
+    if mc:
+        means = {key: float(np.mean([r[key] for r in mc])) for key in ("s_none", "s_rls", "s_ff")}
+        lines += [f"Calibrated unit, 300-day runs: mean S no update / RLS / FF-RLS {means['s_none']:.4f} / "
+                  f"{means['s_rls']:.4f} / {means['s_ff']:.4f} °/h·°C, FF-RLS / no update of the means "
+                  f"{means['s_ff'] / means['s_none']:.2f} (paper: 0.066, < 0.5).", ""]
+    return lines
 
 
 def _plots(results: dict, out: Path) -> list:
@@ -339,8 +413,10 @@ def _fmt(x, nd=4):
 
 
 def write_report(results: dict, out_dir, *, profile: str, wall_time: float, workers=None,
-                 forgetting_factor: float = 0.8, computed: int | None = None) -> Path:
-    """Write report.md, summary.json and the PNG figures; returns the report path."""
+                 forgetting_factor: float = 0.8, computed: int | None = None, calibrated: dict | None = None) -> Path:
+    """Write report.md, summary.json and the PNG figures; returns the report path.  ``calibrated``:
+    the ``--calibrate`` unit (:func:`sarins.online_rls.campaign.calibrate_unit`), a section after the
+    comparison table and its fit in summary.json."""
     from sarins.comparison import comparison_lines
 
     out = Path(out_dir)
@@ -350,7 +426,8 @@ def write_report(results: dict, out_dir, *, profile: str, wall_time: float, work
     engines = sorted({str(results[k].get("engine", "inprocess")) for k in results if k.startswith("veh-")})
     summary = {"profile": profile, "vehicle_engine": engines, "runs": len(results), "computed": computed, "wall_time_s": wall_time,
                "workers": workers,
-               "forgetting_factor": forgetting_factor, "stop_filter": stops, "monte_carlo": mc, "vehicle": veh}
+               "forgetting_factor": forgetting_factor, "stop_filter": stops, "monte_carlo": mc, "vehicle": veh,
+               "calibrated": calibrated["fit"] if calibrated else None}
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     figures = _plots(results, out)
     lines = [f"# Seed 002 campaign ({profile} profile)", "",
@@ -361,6 +438,7 @@ def write_report(results: dict, out_dir, *, profile: str, wall_time: float, work
                 "SSP system)." if engines else "."), "",
              *comparison_lines(comparison_claims(results), profile=profile,
                                title="## The paper against our runs (nav-rlg, the headline unit)"),
+             *calibrated_section(results, calibrated),
              "## Stop Kalman filter: 30-minute azimuth-drift estimate", "",
              "| unit | runs | rms error (°/h) | mean error | max abs error | mean filter 1σ | within 0.002 °/h |",
              "|---|---|---|---|---|---|---|"]

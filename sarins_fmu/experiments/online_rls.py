@@ -56,9 +56,43 @@ def premise_model() -> ImuModel:
     return replace(base, gyro=gyro, accel=accel)
 
 
+NOISE_TAG = "-noise"  # unit name '<preset>-noise<k>': the preset's stop noise x k (noise_scaled)
+
+
+def noise_scaled(model: ImuModel, k: float) -> ImuModel:
+    """``model`` with its stop-noise terms multiplied by ``k``: the gyro's and the accelerometer's
+    white noise (angle / velocity random walk) and Gauss-Markov bias instability, the four terms
+    :func:`premise_model` changes; everything else (drift model, ageing, biases, temperature terms,
+    correlation times) as ``model``.  k = 1 returns ``model`` unchanged."""
+    if not (math.isfinite(k) and k > 0.0):
+        raise ValueError(f"the noise factor must be a positive number, got {k!r}")
+    gyro = replace(model.gyro, random_walk=model.gyro.random_walk * k,
+                   bias_instability=model.gyro.bias_instability * k)
+    accel = replace(model.accel, random_walk=model.accel.random_walk * k,
+                    bias_instability=model.accel.bias_instability * k)
+    return replace(model, gyro=gyro, accel=accel)
+
+
+def noise_unit_name(preset: str, k: float) -> str:
+    """The unit name of ``preset`` with its stop noise x ``k`` (:func:`imu_unit` reads it back)."""
+    noise_scaled(imu_mod.preset(preset), k)  # checks the preset and k
+    return f"{preset}{NOISE_TAG}{k:.6g}"
+
+
 def imu_unit(name: str) -> ImuModel:
-    """'premise' (see :func:`premise_model`) or an IMU preset name."""
-    return premise_model() if name == "premise" else imu_mod.preset(name)
+    """'premise' (see :func:`premise_model`), an IMU preset name, or '<preset>-noise<k>': the
+    preset with its stop-noise terms x k (:func:`noise_scaled`; e.g. 'nav-rlg-noise0.25', the unit
+    of ``sarins campaign online-rls --calibrate``)."""
+    if name == "premise":
+        return premise_model()
+    preset, tag, factor = name.rpartition(NOISE_TAG)
+    if tag and preset:
+        try:
+            k = float(factor)
+        except ValueError:
+            raise ValueError(f"bad noise factor in unit name {name!r}") from None
+        return noise_scaled(imu_mod.preset(preset), k)
+    return imu_mod.preset(name)
 
 
 def model_drift(model: ImuModel, temperature) -> np.ndarray:
