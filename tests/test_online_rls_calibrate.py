@@ -146,7 +146,7 @@ def test_calibrated_section_after_the_sourced_table_with_the_fitted_row_marked()
     assert calibrated_section(sourced, None) == []
 
 
-@pytest.mark.slow  # about 1-2 min with 2 workers on the shared machine
+@pytest.mark.slow  # about 135 s with 2 workers on the shared machine (load 4)
 def test_small_calibration_converges_and_runs_the_claims(tmp_path):
     """The quick profile's 8 headline 300-day runs: the search brackets and converges to 0.066 within 2 %;
     the fitted median is the median of the stored runs of the fitted unit; the calibrated unit's stops,
