@@ -15,7 +15,9 @@ The headline configuration is ``mc-markov-nav-rlg-filter`` (eq. 20 as the
 library's ageing with the nav-rlg preset's sourced magnitude, every stop
 simulated); the others are the sensitivity studies of ``docs/online-rls.md``
 (the hypothetical ``premise`` unit and the ``PAPER_SCALE`` ageing among
-them, never a table's headline).
+them, never a table's headline).  ``--calibrate`` adds the unit calibrated to seed 002, Table 2
+(:func:`calibrate_unit`, :mod:`sarins.online_rls.calibrate`): its tasks carry the unit name
+``nav-rlg-noise<k>`` and run beside the others in the same folder.
 """
 
 from __future__ import annotations
