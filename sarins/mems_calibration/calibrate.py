@@ -65,13 +65,15 @@ class TraditionalCalibration:
     wall_seconds: float
 
 
-def traditional_reductions(scale: float, *, profile_name: str = PROFILE, seed: int = 3) -> dict:
+def traditional_reductions(scale: float, *, profile_name: str = PROFILE, seed: int = 3, prof=None) -> dict:
     """The traditional model's held-out reductions (%: 'mean', 'std', 'mae', 'sys') on the unit with
     :data:`~sarins_fmu.experiments.mems_calibration.CALIBRATED_TERMS` x ``scale``, plus 'n_test'.
 
     Records the tumble, the rate test and the held-out run of ``profile_name`` in process with the
     campaign's seeds (:func:`~sarins_fmu.experiments.mems_calibration.run_seed`), fits eqs (1)-(2) and
-    evaluates them as the campaign does (:func:`sarins.mems_calibration.campaign._residual_summary`)."""
+    evaluates them as the campaign does (:func:`sarins.mems_calibration.campaign._residual_summary`).
+    ``prof``: a :class:`~sarins_fmu.experiments.mems_calibration.Profile` used instead of the named one
+    (a smaller one in the tests)."""
     from sarins_fmu import imu
     from sarins_fmu.experiments import mems_calibration as mc
     from sarins_fmu.identify.compensators import TraditionalCompensator
@@ -79,7 +81,7 @@ def traditional_reductions(scale: float, *, profile_name: str = PROFILE, seed: i
     from . import analysis
     from .campaign import _residual_summary
 
-    prof = mc.profile(profile_name)
+    prof = mc.profile(profile_name) if prof is None else prof
     recs = {kind: mc.record_in_process(kind, prof, seed=mc.run_seed(kind, seed),
                                        model=mc.recording_model(kind, seed, scale=scale))
             for kind in ("tumble", "rates")}
@@ -94,13 +96,14 @@ def traditional_reductions(scale: float, *, profile_name: str = PROFILE, seed: i
 
 
 def calibrate_traditional(*, profile_name: str = PROFILE, seed: int = 3, target_std: float = TABLE3_TRADITIONAL["std"],
-                          rtol: float = RTOL, max_trials: int = MAX_TRIALS, log=None) -> TraditionalCalibration:
+                          rtol: float = RTOL, max_trials: int = MAX_TRIALS, log=None, prof=None) -> TraditionalCalibration:
     """Fit k so that the traditional model's held-out std reduction equals ``target_std`` (%).
 
     f(k) = :func:`traditional_reductions` (k)['std'], searched by :func:`sarins.calibration_fit.fit_scale`
     on 1 / f (f falls with k) over k in (0, MAX_SCALE] (the C core's bound on the gyro scale-factor
     temperature-rate term).  Raises ValueError for a target outside (0, 100) or a non-positive std
-    reduction on the way (no k > 0 gives the target then).  ``log``: optional callable taking a line."""
+    reduction on the way (no k > 0 gives the target then).  ``log``: optional callable taking a line;
+    ``prof``: as :func:`traditional_reductions` (``profile_name`` then only names it in the result)."""
     from sarins_fmu.experiments import mems_calibration as mc
 
     if not 0.0 < float(target_std) < 100.0:
@@ -109,7 +112,7 @@ def calibrate_traditional(*, profile_name: str = PROFILE, seed: int = 3, target_
     seen: dict[float, dict] = {}
 
     def inverse_std(k: float) -> float:
-        red = traditional_reductions(k, profile_name=profile_name, seed=seed)
+        red = traditional_reductions(k, profile_name=profile_name, seed=seed, prof=prof)
         seen[k] = red
         if log:
             log(f"mems-calibration: k = {k:.4g}: traditional std reduction {red['std']:.2f} %, "
