@@ -1,16 +1,15 @@
-"""One-factor calibration search shared by the campaigns' calibrated units.
+"""One factor k fitted so that a campaign quantity f(k) equals a figure of a paper (:func:`fit_scale`).
 
-``sarins campaign axial-rbf --calibrate`` (seed 000, Table 4; :mod:`sarins.axial_rbf.calibrate`) and
-``sarins campaign online-rls --calibrate`` (seed 002, Table 2; :mod:`sarins.online_rls.calibrate`)
-each fit one factor k on a set of unsourced sizes so that one campaign statistic f(k) equals one
-figure of the paper.  :func:`fit_scale` is that search, deterministic when f is: start at k = 1
-(the campaign's own unit, whose value is the sourced comparison table's), step by a fixed factor
-until the target is bracketed, then regula falsi (Illinois variant) on
-g(u) = ln f(e^u) - ln target, u = ln k.  Trial values of k are rounded to :data:`DIGITS`
-significant digits (task ids and unit names carry k).  It stops when |f/target - 1| <= rtol, when
-the bracket's two ends round to the same k, or after ``max_trials`` evaluations, and returns the
-trial closest to the target in log.  f is assumed to grow with k (the bracketing steps up while
-f < target).
+Shared by the calibrated units: ``sarins campaign axial-rbf --calibrate`` (seed 000, Table 4;
+:mod:`sarins.axial_rbf.calibrate`), ``sarins campaign online-rls --calibrate`` (seed 002, Table 2;
+:mod:`sarins.online_rls.calibrate`) and ``sarins campaign mems-calibration --calibrate`` (seed 003,
+Table 3; :mod:`sarins.mems_calibration.calibrate`).  Deterministic: f(k) is a seeded campaign
+computation, so the same call gives the same trials.  Start at k0 (the campaign's unit, k = 1), step by a
+fixed factor until the target is bracketed, then regula falsi (Illinois variant) on
+g(u) = ln f(e^u) - ln target, u = ln k.  Trial values of k are rounded to :data:`DIGITS` significant
+digits (task ids and unit names carry k).  It stops when |f/target - 1| <= rtol, when the bracket's two
+ends round to the same k, or after ``max_trials`` evaluations, and returns the trial closest to the
+target in log.  f is assumed to grow with k (the bracketing steps up while f < target).
 """
 
 from __future__ import annotations

@@ -32,7 +32,7 @@ import math
 import time
 from dataclasses import dataclass
 
-from sarins.calibration_fit import DIGITS, MAX_TRIALS, RTOL, ScaleFit, fit_scale  # noqa: F401 (re-exported)
+from sarins.calibration_fit import DIGITS, K_RANGE, MAX_TRIALS, RTOL, STEP, ScaleFit, fit_scale  # noqa: F401
 
 TABLE4_BAND_DPH = (0.0005, 0.0015)  # seed 000 Table 4: drift error after compensation + hot network, deg/h
 TABLE4_CENTRE_DPH = math.sqrt(TABLE4_BAND_DPH[0] * TABLE4_BAND_DPH[1])  # geometric centre, deg/h

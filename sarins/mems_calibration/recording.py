@@ -67,25 +67,26 @@ def record_cosim(kind: str, prof: Profile, fmu_dir: str | Path, *, seed: int = 3
 
 
 def record_task(kind: str, profile_name: str, fmu_dir: str, seed: int = 3, profile_changes: dict | None = None,
-                ablation: str | None = None, engine: str = "cosim") -> dict:
+                ablation: str | None = None, engine: str = "cosim", scale: float = 1.0) -> dict:
     """Campaign task: one co-simulated recording as a dict of arrays, plus its wall time ``wall_s``.
 
     ``seed`` is the campaign seed: the recording uses its
     :func:`~sarins_fmu.experiments.mems_calibration.run_seed` and
     :func:`~sarins_fmu.experiments.mems_calibration.recording_overrides`
-    (``ablation``: a time-correlated term switched off).  ``engine='inprocess'``: the same recording from
-    the library in this process (:func:`~sarins_fmu.experiments.mems_calibration.record_in_process`, the
-    same numbers; ``fmu_dir`` unused).
+    (``ablation``: a time-correlated term switched off; ``scale``: the factor on the unsourced
+    time-correlated sizes, :data:`~sarins_fmu.experiments.mems_calibration.CALIBRATED_TERMS`).
+    ``engine='inprocess'``: the same recording from the library in this process
+    (:func:`~sarins_fmu.experiments.mems_calibration.record_in_process`, the same numbers; ``fmu_dir`` unused).
     """
     import time as _time
 
     prof = with_profile(profile(profile_name), **(profile_changes or {}))
     t0 = _time.perf_counter()
     if engine == "inprocess":
-        rec = record_in_process(kind, prof, seed=run_seed(kind, seed), model=recording_model(kind, seed, ablation))
+        rec = record_in_process(kind, prof, seed=run_seed(kind, seed), model=recording_model(kind, seed, ablation, scale))
     elif engine == "cosim":
         rec = record_cosim(kind, prof, fmu_dir, seed=run_seed(kind, seed),
-                           model_overrides=recording_overrides(kind, seed, ablation))
+                           model_overrides=recording_overrides(kind, seed, ablation, scale))
     else:
         raise ValueError(f"unknown engine {engine!r}; choose cosim or inprocess")
     rec["wall_s"] = _time.perf_counter() - t0

@@ -268,9 +268,36 @@ def ablation_overrides(term: str) -> dict:
         raise ValueError(f"unknown ablation {term!r}; choose from {', '.join(ABLATIONS)}") from None
 
 
-def recording_overrides(kind: str, seed: int, ablation: str | None = None) -> dict:
+# The mems preset's unsourced sizes of the time-correlated terms eqs (1)-(2) cannot see (docs/imu-presets.md):
+# the temperature-rate coefficients (the gyro bias's one aside: it is sourced), the heating/cooling hysteresis
+# loop heights and the rate-hysteresis heights of the output dynamics.  One factor scales them together: the
+# unit calibrated to seed 003, Table 3 (sarins.mems_calibration.calibrate).  Loop widths, memory times and
+# temperature coefficients of the loops are shapes, not sizes, and stay.
+CALIBRATED_TERMS = tuple(f"{t}_{term}_{a}" for t, term in (
+    ("gyro", "scale_factor_dtdt"), ("accel", "bias_dtdt"), ("accel", "scale_factor_dtdt"),
+    ("gyro", "hysteresis"), ("accel", "hysteresis"), ("gyro", "rate_hysteresis"), ("accel", "rate_hysteresis"))
+    for a in "xyz")
+# largest factor on CALIBRATED_TERMS: the C core's bound on gyro_scale_factor_dtdt (|sf| + |sf_dtdt| dT/dt_max +
+# ... <= 1 at the mems preset's 200 Hz, sarins_imu_param_bound) is reached at 24.4 x the preset's value
+MAX_SCALE = 24.0
+
+
+def scaled_overrides(scale: float) -> dict:
+    """Flat IMU parameters (SI) of the mems preset with :data:`CALIBRATED_TERMS` x ``scale`` (1: {})."""
+    scale = float(scale)
+    if not (math.isfinite(scale) and 0.0 < scale <= MAX_SCALE):
+        raise ValueError(f"scale on the mems preset's unsourced time-correlated sizes must be in (0, {MAX_SCALE}], "
+                         f"got {scale}")
+    if scale == 1.0:
+        return {}
+    flat = imu_params.flatten(imu.preset("mems"))
+    return {name: float(flat[name]) * scale for name in CALIBRATED_TERMS}
+
+
+def recording_overrides(kind: str, seed: int, ablation: str | None = None, scale: float = 1.0) -> dict:
     """IMU parameter overrides of a campaign recording (flat names, SI).
 
+    ``scale``: factor on :data:`CALIBRATED_TERMS` (:func:`scaled_overrides`; 1: the preset's sizes).
     ``ablation``: a term of :data:`ABLATIONS` switched off.  The test runs
     are other power-ups by default (their own turn-on bias, :func:`run_seed`);
     ``kind='same-session'`` gives the overrides of the test programme
@@ -278,7 +305,8 @@ def recording_overrides(kind: str, seed: int, ablation: str | None = None) -> di
     recordings drew (campaign ``seed``) as a constant bias (a sensitivity
     case, not a campaign recording).
     """
-    overrides = {} if ablation is None else ablation_overrides(ablation)
+    overrides = scaled_overrides(scale)
+    overrides.update({} if ablation is None else ablation_overrides(ablation))
     if kind == "same-session":
         model = imu_params.apply_overrides(imu.preset("mems"), overrides)
         on = imu_correlated.turn_on_bias(model, run_seed("dynamic", seed))
@@ -289,9 +317,9 @@ def recording_overrides(kind: str, seed: int, ablation: str | None = None) -> di
     return overrides
 
 
-def recording_model(kind: str, seed: int, ablation: str | None = None) -> imu.ImuModel:
+def recording_model(kind: str, seed: int, ablation: str | None = None, scale: float = 1.0) -> imu.ImuModel:
     """The IMU model of a campaign recording: the mems preset with :func:`recording_overrides`."""
-    return imu_params.apply_overrides(imu.preset("mems"), recording_overrides(kind, seed, ablation))
+    return imu_params.apply_overrides(imu.preset("mems"), recording_overrides(kind, seed, ablation, scale))
 
 
 # ------------------------------------------------------------------ set-ups
