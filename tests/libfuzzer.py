@@ -19,6 +19,14 @@ def clang_or_skip() -> str:
     return clang
 
 
+def build(clang: str, *args: str) -> None:
+    """``clang args``: a skip with clang's reason when it cannot link libFuzzer here, else it must succeed."""
+    proc = subprocess.run([clang, *args], capture_output=True, text=True)
+    if proc.returncode != 0 and "fuzzer" in proc.stderr:
+        pytest.skip(f"clang cannot link libFuzzer here: {proc.stderr[-300:]}")
+    assert proc.returncode == 0, proc.stderr
+
+
 def budget(default: int, variable: str = "SARINS_FUZZ_SECONDS") -> int:
     """Seconds of fuzzing: ``variable`` if set (.ci/run gives 60), else ``default``."""
     return int(os.environ.get(variable, str(default)))

@@ -428,24 +428,18 @@ def test_non_finite_or_non_positive_model_values_are_refused():
 def _netfile_fuzzer(tmp_path):
     """tests/fuzz/fuzz_netfile.c built with libFuzzer, ASan and UBSan, and a corpus of the model files of every
     kind: (executable, corpus), or a skip."""
-    import shutil
-    import subprocess
     from pathlib import Path
 
-    clang = shutil.which("clang")
-    if clang is None:
-        pytest.skip("clang is not installed (libFuzzer)")
+    import libfuzzer
+
+    clang = libfuzzer.clang_or_skip()
     root = Path(__file__).resolve().parents[1]
     core = root / "sarins_fmu" / "core"
     exe = tmp_path / "fuzz"
-    build = subprocess.run([clang, "-std=c11", "-g", "-O1", "-fsanitize=fuzzer,address,undefined",
-                            "-fno-sanitize-recover=undefined", "-DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION",
-                            f"-I{core}", str(root / "tests" / "fuzz" / "fuzz_netfile.c"),
-                            *(str(core / f) for f in ("netfile.c", "netmodel.c", "nets.c", "smath.c")), "-o", str(exe)],
-                           capture_output=True, text=True)
-    if build.returncode != 0 and "fuzzer" in build.stderr:
-        pytest.skip(f"clang cannot link libFuzzer here: {build.stderr[-300:]}")
-    assert build.returncode == 0, build.stderr
+    libfuzzer.build(clang, "-std=c11", "-g", "-O1", "-fsanitize=fuzzer,address,undefined",
+                    "-fno-sanitize-recover=undefined", "-DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION",
+                    f"-I{core}", str(root / "tests" / "fuzz" / "fuzz_netfile.c"),
+                    *(str(core / f) for f in ("netfile.c", "netmodel.c", "nets.c", "smath.c")), "-o", str(exe))
     corpus = tmp_path / "corpus"
     corpus.mkdir()
     (corpus / "hot.bin").write_bytes(DriftIdentifier(DEFAULT_MODELS["hot"]).binary())
