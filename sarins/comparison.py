@@ -83,6 +83,20 @@ class Claim:
 
 
 HEADER = ["claim", "paper value", "ours (median)", "ours 5-95 %", "paper's percentile in ours"]
+CALIBRATED_HEADER = ["claim", "paper value", "sourced unit: ours (median)", "sourced: paper's percentile",
+                     "calibrated unit: ours (median)", "calibrated: ours 5-95 %", "calibrated: paper's percentile"]
+
+
+def calibrated_rows(sourced, calibrated, fitted: int, rename=lambda name: name) -> list:
+    """Rows under :data:`CALIBRATED_HEADER`: each claim of the sourced unit beside the same claim on a
+    calibrated unit (same order); row ``fitted`` is the figure the unit was fitted to, marked as no test.
+    ``rename`` maps the sourced claim's name to the row's."""
+    rows = []
+    for i, (a, b) in enumerate(zip(sourced, calibrated)):
+        ca, cb = a.cells(), b.cells()
+        name = rename(ca[0]) + (" -- **fitted to this: not a test**" if i == fitted else "")
+        rows.append([name, ca[1], ca[2], ca[4], cb[2], cb[3], cb[4]])
+    return rows
 
 
 def comparison_lines(claims, *, title: str = "## The paper against our runs", profile: str | None = None) -> list:

@@ -179,7 +179,7 @@ def calibrated_section(summary: dict, sourced_claims: list, calibrated_claims: l
     ``sourced_claims``, ``calibrated_claims``: the comparison table's claims
     (:func:`sarins.axial_rbf.report.comparison_claims`) of the sourced and the calibrated unit, in the
     same order; ``fitted``: the index of the claim the calibration fitted (not a test)."""
-    from sarins.comparison import MIN_RUNS
+    from sarins.comparison import CALIBRATED_HEADER, MIN_RUNS, calibrated_rows
 
     cal = summary.get("calibrated")
     if not cal:
@@ -215,19 +215,13 @@ def calibrated_section(summary: dict, sourced_claims: list, calibrated_claims: l
              + f". {'Converged' if fit['converged'] else '**Not converged**'}: median/target - 1 = "
                f"{100 * (fit['median_dph'] / target - 1):+.2f} % after {len(fit['trials'])} trials "
                f"({fit['wall_seconds']:.0f} s, reused runs not rerun).", ""]
-    heads = ["claim", "paper value", "sourced unit: ours (median)", "sourced: paper's percentile",
-             "calibrated unit: ours (median)", "calibrated: ours 5-95 %", "calibrated: paper's percentile"]
-    body = []
-    for i, (a, b) in enumerate(zip(sourced_claims, calibrated_claims)):
-        ca, cb = a.cells(), b.cells()
-        name = ca[0] + (" -- **fitted to this: not a test**" if i == fitted else "")
-        body.append([name, ca[1], ca[2], ca[4], cb[2], cb[3], cb[4]])
+    body = calibrated_rows(sourced_claims, calibrated_claims, fitted)
     lines += ["The calibrated unit's campaign: the sourced campaign's experiments, drifts, temperatures and noise "
               "seeds on the calibrated unit, with its own multi-temperature calibration, training runs, networks "
               "and held-out runs (in process, no live runs). The fitted row is the calibration's own figure; "
               "every other row is validation of the calibrated unit against the rest of the paper (paper's "
               f"percentile as in the comparison table above; fewer than {MIN_RUNS} runs: not tested).", "",
-              _md(heads, body), ""]
+              _md(CALIBRATED_HEADER, body), ""]
     hot, cold = sub["test"]["hot"], sub["test"]["cold"]
     if hot:
         herr = np.array([t["ident_dph"] - t["drift_dph"] for t in hot])

@@ -260,7 +260,7 @@ def calibrated_section(results: dict, calibrated: dict | None) -> list:
     sizes and the figure fitted to, the search's trials, and every claim of the comparison table on
     both units, the fitted one marked.  ``results``: the sourced campaign's runs; ``calibrated``:
     :func:`sarins.online_rls.campaign.calibrate_unit`'s {'fit', 'results'} (None: no section)."""
-    from sarins.comparison import MIN_RUNS
+    from sarins.comparison import CALIBRATED_HEADER, MIN_RUNS, calibrated_rows
 
     from .calibrate import noise_sizes
 
@@ -300,18 +300,13 @@ def calibrated_section(results: dict, calibrated: dict | None) -> list:
              + f". {'Converged' if fit['converged'] else '**Not converged**'}: median/target - 1 = "
                f"{100 * (fit['median_s'] / target - 1):+.2f} % after {len(fit['trials'])} trials "
                f"({fit['wall_seconds']:.0f} s, stored runs not rerun).", ""]
-    heads = ["claim", "paper value", "sourced unit: ours (median)", "sourced: paper's percentile",
-             "calibrated unit: ours (median)", "calibrated: ours 5-95 %", "calibrated: paper's percentile"]
-    body = []
-    for i, (a, b) in enumerate(zip(comparison_claims(results), comparison_claims(runs, unit))):
-        ca, cb = a.cells(), b.cells()
-        name = ca[0].replace(", nav-rlg", "") + (" -- **fitted to this: not a test**" if i == FITTED_CLAIM else "")
-        body.append([name, ca[1], ca[2], ca[4], cb[2], cb[3], cb[4]])
+    body = calibrated_rows(comparison_claims(results), comparison_claims(runs, unit), FITTED_CLAIM,
+                           rename=lambda name: name.replace(", nav-rlg", ""))
     lines += [f"The calibrated unit (`{unit}`): the sourced campaign's headline studies (stops, indexed stops, "
               "300-day runs, vehicle tests: same seeds, temperatures and days) on the calibrated unit, in process. "
               "The fitted row is the calibration's own figure; every other row is validation of the calibrated "
               "unit against the rest of the paper (paper's percentile as in the comparison table above; fewer "
-              f"than {MIN_RUNS} runs: not tested).", "", *_md_table(heads, body), ""]
+              f"than {MIN_RUNS} runs: not tested).", "", *_md_table(CALIBRATED_HEADER, body), ""]
     mc = _group(runs, f"mc-markov-{unit}-filter-")
     if mc:
         means = {key: float(np.mean([r[key] for r in mc])) for key in ("s_none", "s_rls", "s_ff")}
