@@ -27,7 +27,8 @@ from smath_accuracy import EXACT, _ulp_errors, argument_sets  # noqa: E402
 
 # largest error in ulps allowed per function: the measured maximum (docs/native-layer.md) plus a margin
 BOUND = {"sin": 0.6, "cos": 0.6, "tan": 0.65, "exp": 0.52, "exp10": 0.52, "log": 0.51, "log10": 0.51,
-         "atan": 0.51, "asin": 0.65, "acos": 0.7, "atan2": 0.51, "hypot": 0.51, "tanh": 0.55, "pow": 0.55}
+         "atan": 0.51, "asin": 0.65, "acos": 0.7, "atan2": 0.51, "hypot": 0.51, "tanh": 0.55, "pow": 0.55,
+         "tanhv": 3.0}  # sm_tanh_lanes, the recurrent gates' tanh: "below 3 ulp" (smath.h); measured 2.2
 
 
 def _bits(x: np.ndarray) -> np.ndarray:
@@ -112,6 +113,24 @@ def test_sincos_and_sincos4_give_the_bits_of_sin_and_cos():
     assert _same(evaluate("sincos4", x), both)
 
 
+def test_tanh_lanes_give_the_same_bits_in_every_lane_and_alone():
+    """sm_tanh_lanes: a value's bits do not depend on where it falls (a SIMD lane of a group of four, or the
+    scalar rest), nor on the array it is in; and it agrees with sm_tanh within the two functions' bounds."""
+    rng = np.random.default_rng(8)
+    x = np.concatenate([rng.uniform(-8, 8, 4_001), rng.normal(0, 0.3, 2_000), SPECIALS, -SPECIALS,
+                        np.exp(rng.uniform(-700, 4, 2_000)) * rng.choice([-1, 1], 2_000),
+                        [0.17328679513998632, 0.1732867951399863, 22.0, -22.0, 21.999999999999996, 2.0 ** -28,
+                         -(2.0 ** -28), math.nextafter(2.0 ** -28, 0)]])
+    whole = evaluate("tanhv", x)
+    alone = np.array([evaluate("tanhv", x[i:i + 1])[0] for i in range(len(x))])
+    shifted = evaluate("tanhv", np.concatenate([[0.5, 0.25], x]))[2:]
+    assert _same(whole, alone) and _same(whole, shifted)
+    finite = np.isfinite(x)
+    ref = evaluate("tanh", x)
+    assert np.all(np.abs(whole[finite] - ref[finite]) <= (BOUND["tanhv"] + BOUND["tanh"]) * np.spacing(np.abs(ref[finite])))
+    assert np.all(np.abs(whole[~np.isnan(x)]) <= 1.0)
+
+
 def test_special_values_follow_annex_f():
     inf, nan = math.inf, math.nan
 
@@ -137,6 +156,9 @@ def test_special_values_follow_annex_f():
              ("fmod", (-0.0, 1.0), -0.0), ("fma", (2.0, 3.0, -6.0), 0.0), ("fma", (1e308, 10.0, -inf), -inf),
              ("tanh", (-0.0,), -0.0), ("tanh", (inf,), 1.0), ("tanh", (-inf,), -1.0), ("tanh", (nan,), nan),
              ("tanh", (30.0,), 1.0), ("tanh", (5e-324,), 5e-324),
+             ("tanhv", (-0.0,), -0.0), ("tanhv", (0.0,), 0.0), ("tanhv", (inf,), 1.0), ("tanhv", (-inf,), -1.0),
+             ("tanhv", (nan,), nan), ("tanhv", (30.0,), 1.0), ("tanhv", (-22.0,), -1.0), ("tanhv", (5e-324,), 5e-324),
+             ("tanhv", (1e-20,), 1e-20),
              ("pow", (nan, 0.0), 1.0), ("pow", (1.0, nan), 1.0), ("pow", (nan, 1.0), nan), ("pow", (-0.0, -3.0), -inf),
              ("pow", (0.0, -2.0), inf), ("pow", (-0.0, 3.0), -0.0), ("pow", (-0.0, 2.0), 0.0), ("pow", (-1.0, inf), 1.0),
              ("pow", (0.5, -inf), inf), ("pow", (2.0, -inf), 0.0), ("pow", (0.5, inf), 0.0), ("pow", (2.0, inf), inf),
