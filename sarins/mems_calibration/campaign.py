@@ -356,9 +356,11 @@ def thinning(n: int) -> int:
     return max(1, n // FIGURE_POINTS)
 
 
-# C core's batch evaluation cost per sample (us, this machine, one core): orders the evaluations, longest first
-EVAL_US_PER_SAMPLE = {"traditional": 0.6, "rbf": 0.6, "grnn": 3.5, "lstm": 11.0, "gru": 7.8, "lstm3": 43.0,
-                      "gru3": 33.0}
+# CPU cost of evaluating one sample (us, this machine: the evaluating thread's CPU seconds per sample of the quick
+# campaign, reading and residual sums included, benchmarks/bench_mems_phases.py): orders the evaluations, longest
+# first, and estimates the phase (the memoryless controls are charged their recurrent model's cost)
+EVAL_US_PER_SAMPLE = {"traditional": 0.2, "rbf": 0.3, "grnn": 0.8, "lstm": 2.9, "gru": 2.1, "lstm3": 12.0,
+                      "gru3": 7.3}
 
 
 def _stream_us(model, rows) -> float | None:
