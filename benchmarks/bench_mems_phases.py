@@ -13,6 +13,9 @@ names one, so nothing is reused) and prints, from the campaign's ``summary.json`
 CPU seconds are what a loaded, shared machine still measures fairly; the wall time of a loaded machine is
 not the idle machine's.  ``--summary PATH`` prints the tables of an existing ``summary.json`` instead
 (with ``--time-log`` the ``/usr/bin/time -v`` output of that run).  ``--json PATH`` also writes the numbers.
+``--kernels DIR`` times only the C core's batch evaluation of the models a campaign fitted (``DIR/models``) on
+the first ``--rows`` rows of its held-out set (``DIR/datasets``), CPU us per sample, best of three: run it with
+``PYTHONPATH`` on two checkouts to compare their kernels on the same models and rows.
 
 Usage: ``PYTHONPATH=. python3 benchmarks/bench_mems_phases.py [--profile quick] [--out DIR]
 [--json PATH] [-- extra campaign options]`` (minutes on 2 cores).
@@ -99,6 +102,27 @@ def report(numbers: dict) -> str:
     return "\n".join(lines)
 
 
+def kernel_costs(folder: Path, rows: int, repeats: int = 3) -> dict:
+    """{model: CPU us per sample} of ``predict_batch`` (one thread) on the first ``rows`` held-out rows."""
+    import time
+
+    import numpy as np
+
+    from sarins_fmu.identify import compensators
+
+    X = np.ascontiguousarray(np.load(folder / "datasets" / "held-out.X.npy", mmap_mode="r")[:rows])
+    out = {}
+    for path in sorted((folder / "models").glob("*.npz")):
+        model = compensators.load(path)
+        best = float("inf")
+        for _ in range(repeats):
+            t0 = time.thread_time()
+            model.predict_batch(X)
+            best = min(best, time.thread_time() - t0)
+        out[path.stem] = best / len(X) * 1e6
+    return out
+
+
 def run_campaign(profile: str, out: Path, extra: list) -> dict:
     """Run the campaign under ``/usr/bin/time -v``; returns the parsed time log."""
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
@@ -118,8 +142,17 @@ def main(argv=None) -> int:
     parser.add_argument("--summary", default=None, help="print the tables of this summary.json, run nothing")
     parser.add_argument("--time-log", default=None, help="with --summary: the /usr/bin/time -v output of that run")
     parser.add_argument("--json", default=None, help="also write the numbers here")
+    parser.add_argument("--kernels", default=None, help="a campaign's output folder: time its models' evaluation")
+    parser.add_argument("--rows", type=int, default=50_000, help="with --kernels: held-out rows (default 50000)")
     parser.add_argument("extra", nargs="*", help="more campaign options (after --)")
     args = parser.parse_args(argv)
+    if args.kernels:
+        costs = kernel_costs(Path(args.kernels), args.rows)
+        for name, us in costs.items():
+            print(f"{name:16s} {us:8.2f} us/sample")
+        if args.json:
+            Path(args.json).write_text(json.dumps(costs, indent=1))
+        return 0
     if args.summary:
         summary = json.loads(Path(args.summary).read_text())
         whole = parse_time_log(Path(args.time_log).read_text()) if args.time_log else {}
