@@ -172,3 +172,48 @@ def test_special_values_follow_annex_f():
     for name, args, expected in cases:
         got = one(name, *args)
         assert same(got, expected), (name, args, got, expected)
+
+
+TANHV_DRIVER = r"""
+#include "smath.h"
+#include <stdio.h>
+#include <stdlib.h>
+int main(int argc, char **argv)
+{
+    (void)argc;
+    FILE *f = fopen(argv[1], "rb");
+    if (f == NULL) return 2;
+    static double x[1 << 16], y[1 << 16];
+    size_t n = fread(x, sizeof x[0], sizeof x / sizeof x[0], f);
+    fclose(f);
+    sm_tanh_lanes((int64_t)n, x, y);
+    f = fopen(argv[2], "wb");
+    if (f == NULL || fwrite(y, sizeof y[0], n, f) != n) return 3;
+    return fclose(f) != 0;
+}
+"""
+
+
+@pytest.mark.parametrize("line", [("gcc", "-O0"), ("gcc", "-O3", "-march=native"), ("clang", "-O2"),
+                                  ("clang", "-O3", "-march=native")])
+def test_tanh_lanes_give_the_libraries_bits_on_other_compile_lines(line, tmp_path):
+    """sm_tanh_lanes compiled by another compiler / optimisation level / instruction set (-march=native: wider
+    vectors, FMA available but not contracted) gives the bits of the library's build."""
+    import shutil
+    import subprocess
+
+    if shutil.which(line[0]) is None:
+        pytest.skip(f"{line[0]} not installed")
+    core = Path(__file__).resolve().parent.parent / "sarins_fmu" / "core"
+    (tmp_path / "driver.c").write_text(TANHV_DRIVER)
+    exe = tmp_path / "driver"
+    cmd = [*line, "-std=c11", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{core}", str(tmp_path / "driver.c"),
+           str(core / "smath.c"), "-o", str(exe)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    rng = np.random.default_rng(9)
+    x = np.concatenate([rng.uniform(-10, 10, 30_001), np.exp(rng.uniform(-700, 4, 10_000)) * rng.choice([-1, 1], 10_000),
+                        SPECIALS, -SPECIALS])
+    x.tofile(tmp_path / "x.bin")
+    subprocess.run([str(exe), str(tmp_path / "x.bin"), str(tmp_path / "y.bin")], check=True, timeout=60)
+    assert _same(np.fromfile(tmp_path / "y.bin"), evaluate("tanhv", x))
