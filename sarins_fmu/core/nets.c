@@ -256,39 +256,38 @@ static void rnn_layer(const sarins_rnn *net, int l, const double *in, int64_t n_
             gh[k] = 0.0 + net->b_hh[l][k]; /* what affine_t gives: 0.0 + (+-0) ... = +0, then + b */
     else
         affine_t(g * hid, hid, net->w_hh[l], h, net->b_hh[l], gh);
-    /* the gate nonlinearities over all lanes at once (sm_tanh_lanes: SIMD, the same bits in every lane): the
-     * logistic function as 0.5 (1 + tanh(x / 2)): exact in form, no overflow of exp(-x) */
-    double u[4 * SARINS_RNN_MAX_HIDDEN], t[4 * SARINS_RNN_MAX_HIDDEN];
+    /* the gate nonlinearities over all lanes at once (sm_tanh_lanes: SIMD, the same bits in every lane), in place
+     * in gi and gh: the logistic function as 0.5 (1 + tanh(x / 2)): exact in form, no overflow of exp(-x) */
     if (net->cell == SARINS_RNN_LSTM) {
         for (int64_t k = 0; k < 4 * hid; k++) {
             double s = gi[k] + gh[k];
-            u[k] = k >= 2 * hid && k < 3 * hid ? s : 0.5 * s; /* g: tanh; i, f, o: sigmoid */
+            gi[k] = k >= 2 * hid && k < 3 * hid ? s : 0.5 * s; /* g: tanh; i, f, o: sigmoid */
         }
-        sm_tanh_lanes(4 * hid, u, t);
+        sm_tanh_lanes(4 * hid, gi, gh); /* gh: the tanh of every gate's argument */
         for (int64_t k = 0; k < hid; k++) {
-            double i = 0.5 * (1.0 + t[k]);
-            double f = 0.5 * (1.0 + t[hid + k]);
-            double gg = t[2 * hid + k];
+            double i = 0.5 * (1.0 + gh[k]);
+            double f = 0.5 * (1.0 + gh[hid + k]);
+            double gg = gh[2 * hid + k];
             c[k] = f * c[k] + i * gg; /* c_t = f c_{t-1} + i g */
         }
-        sm_tanh_lanes(hid, c, u);
+        sm_tanh_lanes(hid, c, gi); /* gi[0 .. hid-1]: tanh(c_t) */
         for (int64_t k = 0; k < hid; k++) {
-            double o = 0.5 * (1.0 + t[3 * hid + k]);
-            h[k] = o * u[k]; /* h_t = o tanh(c_t) */
+            double o = 0.5 * (1.0 + gh[3 * hid + k]);
+            h[k] = o * gi[k]; /* h_t = o tanh(c_t) */
         }
         return;
     }
     for (int64_t k = 0; k < 2 * hid; k++)
-        u[k] = 0.5 * (gi[k] + gh[k]); /* r, z: sigmoid, eqs (7), (8) */
-    sm_tanh_lanes(2 * hid, u, t);
+        gi[k] = 0.5 * (gi[k] + gh[k]); /* r, z: sigmoid, eqs (7), (8) */
+    sm_tanh_lanes(2 * hid, gi, gi);
     for (int64_t k = 0; k < hid; k++) {
-        double r = 0.5 * (1.0 + t[k]);
-        u[k] = gi[2 * hid + k] + r * gh[2 * hid + k];
+        double r = 0.5 * (1.0 + gi[k]);
+        gh[k] = gi[2 * hid + k] + r * gh[2 * hid + k]; /* (k < hid: reads only what it has not written) */
     }
-    sm_tanh_lanes(hid, u, u); /* the candidate, eq. (9) */
+    sm_tanh_lanes(hid, gh, gh); /* the candidate, eq. (9) */
     for (int64_t k = 0; k < hid; k++) {
-        double z = 0.5 * (1.0 + t[hid + k]);
-        h[k] = (1.0 - z) * u[k] + z * h[k]; /* eq. (10) */
+        double z = 0.5 * (1.0 + gi[hid + k]);
+        h[k] = (1.0 - z) * gh[k] + z * h[k]; /* eq. (10) */
     }
 }
 
