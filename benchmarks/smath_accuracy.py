@@ -10,7 +10,7 @@ underflow limits) are checked against C's Annex F by tests/test_smath.py, not he
 functions (sqrt, fma, floor, ceil, trunc, round, nearbyint, fmod, fmin, fmax, fabs, copysign) are compared
 bit for bit with numpy / glibc over random bit patterns; sqrt and fma also in their software versions.
 
-    python benchmarks/smath_accuracy.py [--n 200000] [--seed 1]
+    python benchmarks/smath_accuracy.py [--n 200000] [--seed 1] [--only tanh,tanhv]
 
 Prints one row per function: the largest error in ulps, its argument, and the number of arguments.
 """
@@ -99,6 +99,9 @@ def argument_sets(rng, n: int) -> dict[str, list[tuple[str, tuple[np.ndarray, ..
         "tanh": [("|x| < 1 (both branches)", (rng.uniform(-1.0, 1.0, 2 * q),)),
                  ("near the branch point 5/8", (rng.uniform(0.6, 0.65, q) * rng.choice([-1.0, 1.0], q),)),
                  ("1e-300 .. 30, both signs", (_log_uniform(rng, 1e-300, 30.0, 2 * q),))],
+        "tanhv": [("|x| < 1", (rng.uniform(-1.0, 1.0, 2 * q),)),
+                  ("gate range |x| < 8", (rng.uniform(-8.0, 8.0, q),)),
+                  ("1e-300 .. 30, both signs", (_log_uniform(rng, 1e-300, 30.0, q),))],
         "hypot": [("normal(0, 1) pairs", (rng.normal(size=2 * q), rng.normal(size=2 * q))),
                   ("1e-300 .. 1e300 pairs", (_log_uniform(rng, 1e-300, 1e300, 2 * q),
                                              _log_uniform(rng, 1e-300, 1e300, 2 * q)))],
@@ -108,14 +111,18 @@ def argument_sets(rng, n: int) -> dict[str, list[tuple[str, tuple[np.ndarray, ..
 EXACT = {"sin": mpmath.sin, "cos": mpmath.cos, "tan": mpmath.tan, "exp": mpmath.exp,
          "exp10": lambda x: mpf(10) ** x, "log": mpmath.log, "log10": mpmath.log10, "atan": mpmath.atan,
          "asin": mpmath.asin, "acos": mpmath.acos, "atan2": mpmath.atan2,
-         "hypot": lambda x, y: mpmath.sqrt(x * x + y * y), "tanh": mpmath.tanh, "pow": mpmath.power}
+         "hypot": lambda x, y: mpmath.sqrt(x * x + y * y), "tanh": mpmath.tanh, "pow": mpmath.power,
+         "tanhv": mpmath.tanh}
 
 
-def accuracy(n: int, seed: int) -> list[tuple[str, float, str, int]]:
-    """(function, largest error in ulps, its argument, arguments tested) per function."""
+def accuracy(n: int, seed: int, only=None) -> list[tuple[str, float, str, int]]:
+    """(function, largest error in ulps, its argument, arguments tested) per function (those of ``only``, if
+    given)."""
     rng = np.random.default_rng(seed)
     rows = []
     for name, sets in argument_sets(rng, n).items():
+        if only and name not in only:
+            continue
         worst, where, count = 0.0, "", 0
         for _, args in sets:
             got = evaluate(name, *args)
@@ -170,11 +177,15 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=200_000, help="arguments per function")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--only", default=None, help="comma-separated functions (default: all; no exactness table)")
     args = parser.parse_args()
     t0 = time.perf_counter()
+    only = args.only.split(",") if args.only else None
     print(f"{'function':10s} {'max ulp':>8s}  {'arguments':>10s}  worst at")
-    for name, worst, where, count in accuracy(args.n, args.seed):
+    for name, worst, where, count in accuracy(args.n, args.seed, only):
         print(f"{name:10s} {worst:8.3f}  {count:10d}  {where}", flush=True)
+    if only:
+        return
     print(f"\n{'function':24s} {'exact':>6s}  {'arguments':>10s}")
     for name, same, count in exactness(args.n, args.seed):
         print(f"{name:24s} {str(same):>6s}  {count:10d}")

@@ -797,6 +797,12 @@ def test_parallel_fits_and_evaluations_give_the_sequential_numbers():
             for metric, value in par[key][1][name].items():
                 np.testing.assert_array_equal(value, seq[key][1][name][metric])
     assert par["a"][2]["grnn"]["stream_us"] > 0 and seq["a"][2]["grnn"]["stream_us"] is None
+    # the costs benchmarks/bench_mems_phases.py reports: each fit's and each (model, set) evaluation's CPU seconds
+    for k in kinds:
+        assert two[k].fit_cpu_seconds > 0 and one[k].fit_cpu_seconds > 0
+        for key in sets:
+            info = par[key][2][k]
+            assert 0 < info["predict_cpu_s"] and info["fit_cpu_s"] == two[k].fit_cpu_seconds
 
 
 # ------------------------------------------------------------- memory: chunks

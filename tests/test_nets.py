@@ -1,8 +1,9 @@
 """The C core's network kernels and binary model files (sarins_fmu/core/nets.c, netmodel.c, netfile.c).
 
 * Every model kind evaluated by the core equals an independent scalar Python evaluation in the same
-  operation order bit for bit (its exp and tanh are the core's own, sm_exp and sm_tanh of smath.h, through
-  sarins_fmu.core.smath).
+  operation order bit for bit (its exp and tanh are the core's own, sm_exp and sm_tanh_lanes of smath.h,
+  through sarins_fmu.core.smath; sm_tanh_lanes gives the same bits for a value in any lane, so the
+  reference calls it one value at a time).
 * The numpy references (RBFNetwork.predict_reference, grnn.grnn_predict, np.linalg.solve) differ from the
   core by rounding only, within bounds derived here from the summation lengths.
 * The binary model file: Python writer/reader and the C reader agree, and every malformed file is refused
@@ -35,8 +36,8 @@ def _exp(x: float) -> float:
 
 
 def _tanh(x: float) -> float:
-    """The core's tanh (sm_tanh)."""
-    return float(evaluate("tanh", x)[0])
+    """The recurrent gates' tanh (sm_tanh_lanes of one value: the bits it gives in any lane)."""
+    return float(evaluate("tanhv", x)[0])
 
 
 def gamma(n: int) -> float:

@@ -27,7 +27,8 @@ from smath_accuracy import EXACT, _ulp_errors, argument_sets  # noqa: E402
 
 # largest error in ulps allowed per function: the measured maximum (docs/native-layer.md) plus a margin
 BOUND = {"sin": 0.6, "cos": 0.6, "tan": 0.65, "exp": 0.52, "exp10": 0.52, "log": 0.51, "log10": 0.51,
-         "atan": 0.51, "asin": 0.65, "acos": 0.7, "atan2": 0.51, "hypot": 0.51, "tanh": 0.55, "pow": 0.55}
+         "atan": 0.51, "asin": 0.65, "acos": 0.7, "atan2": 0.51, "hypot": 0.51, "tanh": 0.55, "pow": 0.55,
+         "tanhv": 3.0}  # sm_tanh_lanes, the recurrent gates' tanh: "below 3 ulp" (smath.h); measured 2.2
 
 
 def _bits(x: np.ndarray) -> np.ndarray:
@@ -112,6 +113,24 @@ def test_sincos_and_sincos4_give_the_bits_of_sin_and_cos():
     assert _same(evaluate("sincos4", x), both)
 
 
+def test_tanh_lanes_give_the_same_bits_in_every_lane_and_alone():
+    """sm_tanh_lanes: a value's bits do not depend on where it falls (a SIMD lane of a group of four, or the
+    scalar rest), nor on the array it is in; and it agrees with sm_tanh within the two functions' bounds."""
+    rng = np.random.default_rng(8)
+    x = np.concatenate([rng.uniform(-8, 8, 4_001), rng.normal(0, 0.3, 2_000), SPECIALS, -SPECIALS,
+                        np.exp(rng.uniform(-700, 4, 2_000)) * rng.choice([-1, 1], 2_000),
+                        [0.17328679513998632, 0.1732867951399863, 22.0, -22.0, 21.999999999999996, 2.0 ** -28,
+                         -(2.0 ** -28), math.nextafter(2.0 ** -28, 0)]])
+    whole = evaluate("tanhv", x)
+    alone = np.array([evaluate("tanhv", x[i:i + 1])[0] for i in range(len(x))])
+    shifted = evaluate("tanhv", np.concatenate([[0.5, 0.25], x]))[2:]
+    assert _same(whole, alone) and _same(whole, shifted)
+    finite = np.isfinite(x)
+    ref = evaluate("tanh", x)
+    assert np.all(np.abs(whole[finite] - ref[finite]) <= (BOUND["tanhv"] + BOUND["tanh"]) * np.spacing(np.abs(ref[finite])))
+    assert np.all(np.abs(whole[~np.isnan(x)]) <= 1.0)
+
+
 def test_special_values_follow_annex_f():
     inf, nan = math.inf, math.nan
 
@@ -137,6 +156,9 @@ def test_special_values_follow_annex_f():
              ("fmod", (-0.0, 1.0), -0.0), ("fma", (2.0, 3.0, -6.0), 0.0), ("fma", (1e308, 10.0, -inf), -inf),
              ("tanh", (-0.0,), -0.0), ("tanh", (inf,), 1.0), ("tanh", (-inf,), -1.0), ("tanh", (nan,), nan),
              ("tanh", (30.0,), 1.0), ("tanh", (5e-324,), 5e-324),
+             ("tanhv", (-0.0,), -0.0), ("tanhv", (0.0,), 0.0), ("tanhv", (inf,), 1.0), ("tanhv", (-inf,), -1.0),
+             ("tanhv", (nan,), nan), ("tanhv", (30.0,), 1.0), ("tanhv", (-22.0,), -1.0), ("tanhv", (5e-324,), 5e-324),
+             ("tanhv", (1e-20,), 1e-20),
              ("pow", (nan, 0.0), 1.0), ("pow", (1.0, nan), 1.0), ("pow", (nan, 1.0), nan), ("pow", (-0.0, -3.0), -inf),
              ("pow", (0.0, -2.0), inf), ("pow", (-0.0, 3.0), -0.0), ("pow", (-0.0, 2.0), 0.0), ("pow", (-1.0, inf), 1.0),
              ("pow", (0.5, -inf), inf), ("pow", (2.0, -inf), 0.0), ("pow", (0.5, inf), 0.0), ("pow", (2.0, inf), inf),
@@ -150,3 +172,48 @@ def test_special_values_follow_annex_f():
     for name, args, expected in cases:
         got = one(name, *args)
         assert same(got, expected), (name, args, got, expected)
+
+
+TANHV_DRIVER = r"""
+#include "smath.h"
+#include <stdio.h>
+#include <stdlib.h>
+int main(int argc, char **argv)
+{
+    (void)argc;
+    FILE *f = fopen(argv[1], "rb");
+    if (f == NULL) return 2;
+    static double x[1 << 16], y[1 << 16];
+    size_t n = fread(x, sizeof x[0], sizeof x / sizeof x[0], f);
+    fclose(f);
+    sm_tanh_lanes((int64_t)n, x, y);
+    f = fopen(argv[2], "wb");
+    if (f == NULL || fwrite(y, sizeof y[0], n, f) != n) return 3;
+    return fclose(f) != 0;
+}
+"""
+
+
+@pytest.mark.parametrize("line", [("gcc", "-O0"), ("gcc", "-O3", "-march=native"), ("clang", "-O2"),
+                                  ("clang", "-O3", "-march=native")])
+def test_tanh_lanes_give_the_libraries_bits_on_other_compile_lines(line, tmp_path):
+    """sm_tanh_lanes compiled by another compiler / optimisation level / instruction set (-march=native: wider
+    vectors, FMA available but not contracted) gives the bits of the library's build."""
+    import shutil
+    import subprocess
+
+    if shutil.which(line[0]) is None:
+        pytest.skip(f"{line[0]} not installed")
+    core = Path(__file__).resolve().parent.parent / "sarins_fmu" / "core"
+    (tmp_path / "driver.c").write_text(TANHV_DRIVER)
+    exe = tmp_path / "driver"
+    cmd = [*line, "-std=c11", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{core}", str(tmp_path / "driver.c"),
+           str(core / "smath.c"), "-o", str(exe)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    rng = np.random.default_rng(9)
+    x = np.concatenate([rng.uniform(-10, 10, 30_001), np.exp(rng.uniform(-700, 4, 10_000)) * rng.choice([-1, 1], 10_000),
+                        SPECIALS, -SPECIALS])
+    x.tofile(tmp_path / "x.bin")
+    subprocess.run([str(exe), str(tmp_path / "x.bin"), str(tmp_path / "y.bin")], check=True, timeout=60)
+    assert _same(np.fromfile(tmp_path / "y.bin"), evaluate("tanhv", x))

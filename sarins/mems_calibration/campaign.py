@@ -239,9 +239,10 @@ def evaluate(models: dict, test, floor, *, log=None, stream_samples: int = 300):
 
     Returns (residuals {name: (n', 6)} with 'raw' first, every :func:`thinning`-th row (what the figures
     plot), stats {name: dict} (of every row),
-    info {name: n_parameters, fit_s, predict_s (whole test set, batch, chunk by chunk; wall time, the evaluations
-    of :func:`evaluate_sets` running side by side), stream_us (per sample, one at a time as in the compensator
-    FMU)}).
+    info {name: n_parameters, fit_s, fit_cpu_s (the fitting thread's CPU seconds; None if unknown), predict_s
+    (whole test set, batch, chunk by chunk; wall time, the evaluations of :func:`evaluate_sets` running side by
+    side), predict_cpu_s (the evaluating thread's CPU seconds), stream_us (per sample, one at a time as in the
+    compensator FMU)}).
     """
     return evaluate_sets(models, {"test": test}, floor, log=log, stream_samples={"test": stream_samples})["test"]
 
@@ -323,7 +324,9 @@ def evaluate_sets(models: dict, sets: dict, floor, *, log=None, stream_samples=N
         data = sets[key]
         if log:
             log(f"mems-calibration: evaluating {name} on {len(data)} samples ({key})")
-        return _residual_summary(data, floor, models[name].predict_batch_chunks)
+        cpu0 = time.thread_time()  # the C core runs on this thread (it releases the GIL, starts no threads)
+        rows, stats, seconds = _residual_summary(data, floor, models[name].predict_batch_chunks)
+        return rows, stats, seconds, time.thread_time() - cpu0
 
     workers = max(1, min(len(jobs), thread_count() if threads is None else int(threads)))
     with ThreadPoolExecutor(workers) as pool:
@@ -336,9 +339,11 @@ def evaluate_sets(models: dict, sets: dict, floor, *, log=None, stream_samples=N
         n_stream = stream_samples.get(key, 0)
         head = next(data.chunks(n_stream))[0] if n_stream > 0 and len(data) else ()
         for name, model in models.items():
-            residuals[name], stats[name], predict_s = done.pop((name, key))
+            residuals[name], stats[name], predict_s, predict_cpu_s = done.pop((name, key))
+            fit_cpu = getattr(model, "fit_cpu_seconds", None)
             info[name] = dict(n_parameters=int(model.n_parameters), fit_s=float(model.fit_seconds or 0.0),
-                              predict_s=predict_s, stream_us=_stream_us(model, head))
+                              fit_cpu_s=None if fit_cpu is None else float(fit_cpu), predict_s=predict_s,
+                              predict_cpu_s=predict_cpu_s, stream_us=_stream_us(model, head))
         out[key] = (residuals, stats, info)
     return out
 
@@ -351,9 +356,11 @@ def thinning(n: int) -> int:
     return max(1, n // FIGURE_POINTS)
 
 
-# C core's batch evaluation cost per sample (us, this machine, one core): orders the evaluations, longest first
-EVAL_US_PER_SAMPLE = {"traditional": 0.6, "rbf": 0.6, "grnn": 3.5, "lstm": 11.0, "gru": 7.8, "lstm3": 43.0,
-                      "gru3": 33.0}
+# CPU cost of evaluating one sample (us, this machine: the evaluating thread's CPU seconds per sample of the quick
+# campaign, reading and residual sums included, benchmarks/bench_mems_phases.py): orders the evaluations, longest
+# first, and estimates the phase (the memoryless controls are charged their recurrent model's cost)
+EVAL_US_PER_SAMPLE = {"traditional": 0.2, "rbf": 0.3, "grnn": 0.8, "lstm": 2.9, "gru": 2.1, "lstm3": 12.0,
+                      "gru3": 7.3}
 
 
 def _stream_us(model, rows) -> float | None:
@@ -512,6 +519,8 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     evaluated = evaluate_sets(models, sets, floor, log=log, stream_samples={"held-out": 300})
     residuals, stats, info = evaluated["held-out"]
     stats_repowered, stats_in_sample = evaluated["repowered"][1], evaluated["in-sample"][1]
+    evaluation_cpu = {name: {key: result[2][name]["predict_cpu_s"] for key, result in evaluated.items()}
+                      for name in models}
     del evaluated
     wall["model evaluation"] = time.perf_counter() - t0
     red = _reductions(stats)
@@ -534,7 +543,7 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
         stats={n: {k: v.tolist() for k, v in s.items()} for n, s in stats.items()},
         ablation=ablation, options=options, seed=seed, reused_models=reused, rnn_window=RNN_WINDOW,
         load_average=[load_start, os.getloadavg()[0]], fit_load_average=fit_load,
-        rnn_streams=RNN_STREAMS, phases=progress_lines.measured, scale=float(scale))
+        rnn_streams=RNN_STREAMS, phases=progress_lines.measured, scale=float(scale), evaluation_cpu_s=evaluation_cpu)
     if calibrated is not None:
         summary["calibrated"] = calibrated
     if skipped:

@@ -128,6 +128,8 @@ def _stored_models(model_dir: Path, kinds, key: str) -> dict:
                 continue
             seconds = fit_times.get(kind)
             model.fit_seconds = float(seconds) if isinstance(seconds, (int, float)) else model.fit_seconds
+            cpu = (index.get("fit_cpu_s") if isinstance(index.get("fit_cpu_s"), dict) else {}).get(kind)
+            model.fit_cpu_seconds = float(cpu) if isinstance(cpu, (int, float)) else None
             stored[kind] = model
     return stored
 
@@ -154,7 +156,8 @@ def model_set(model_dir: Path, kinds, train, fit, recs, options: dict, *, refit=
     for name, model in fitted.items():
         with atomic_output(model_dir / f"{name}.npz", keep_suffix=True) as tmp:
             model.save(tmp)
-    index = dict(models_key=key, fit_s={k: m.fit_seconds for k, m in models.items()}, fit_load_average=load)
+    index = dict(models_key=key, fit_s={k: m.fit_seconds for k, m in models.items()},
+                 fit_cpu_s={k: getattr(m, "fit_cpu_seconds", None) for k, m in models.items()}, fit_load_average=load)
     write_text(model_dir / "index.json", json.dumps(index, indent=1))
     return models, sorted(stored), load
 

@@ -8,11 +8,9 @@
 /* ln 2 as the double nearest to it (numpy's log(2.0)) */
 #define NET_LN2 0x1.62e42fefa39efp-1
 
-/* the networks' transcendental functions: the core's own exp and tanh (smath.h) */
+/* the networks' transcendental functions: the core's own (smath.h): sm_exp for the RBF and GRNN kernels,
+ * sm_tanh_lanes (below 3 ulp, branch-free over SIMD lanes) for the recurrent gates */
 static double net_exp(double x) { return sm_exp(x); }
-static double net_tanh(double x) { return sm_tanh(x); }
-/* logistic function as 0.5 (1 + tanh(x / 2)): exact in form, no overflow of exp(-x) */
-static double net_sigmoid(double x) { return 0.5 * (1.0 + net_tanh(0.5 * x)); }
 
 void sarins_standardize(int64_t n, int64_t d, const double *x, const double *mean, const double *scale, double *z)
 {
@@ -166,37 +164,66 @@ static void affine(int64_t rows, int64_t cols, const double *w, const double *v,
 
 /* g[rows] = W v + b with W given transposed, wt[cols][rows] (wt[j][i] = W[i][j]): each g[i] is summed from 0.0
  * in order j = 0 .. cols-1 and then b[i] added, exactly as affine does, so the result is the same bit for bit;
- * eight rows at a time in registers (with GCC or clang as four two-lane vectors, each lane the scalar
- * operation: SSE2's mulpd and addpd round as mulsd and addsd, and fp-contract is off, smath.h). */
+ * 32 rows at a time in registers (with GCC or clang as eight four-lane vectors, each lane the scalar
+ * operation: SSE2's and AVX's mulpd and addpd round as mulsd and addsd, and fp-contract is off, smath.h;
+ * compiled for AVX2 too where the loader can pick it, as smath.c's lane functions). */
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && defined(__GLIBC__) && defined(__has_attribute)
+#if __has_attribute(target_clones)
+#define NET_CLONES __attribute__((target_clones("avx2", "default")))
+#endif
+#endif
+#ifndef NET_CLONES
+#define NET_CLONES
+#endif
 #if defined(__GNUC__) || defined(__clang__)
-typedef double net_v2 __attribute__((vector_size(16)));
-static net_v2 v2_load(const double *p)
-{
-    net_v2 r;
-    memcpy(&r, p, sizeof r);
-    return r;
-}
-static void v2_store(double *p, net_v2 v) { memcpy(p, &v, sizeof v); }
+typedef double net_v4 __attribute__((vector_size(32)));
 #endif
 
-static void affine_t(int64_t rows, int64_t cols, const double *wt, const double *v, const double *b, double *g)
+NET_CLONES static void affine_t(int64_t rows, int64_t cols, const double *wt, const double *v, const double *b,
+                                double *g)
 {
     int64_t i = 0;
 #if defined(__GNUC__) || defined(__clang__)
-    for (; i + 8 <= rows; i += 8) {
-        net_v2 s0 = {0.0, 0.0}, s1 = s0, s2 = s0, s3 = s0;
+    for (; i + 32 <= rows; i += 32) { /* eight independent sums in flight: the adds' latency hidden */
+        net_v4 s0 = {0.0, 0.0, 0.0, 0.0}, s1 = s0, s2 = s0, s3 = s0, s4 = s0, s5 = s0, s6 = s0, s7 = s0;
         for (int64_t j = 0; j < cols; j++) {
+            const net_v4 vj = {v[j], v[j], v[j], v[j]};
             const double *col = wt + j * rows + i;
-            const net_v2 vj = {v[j], v[j]};
-            s0 += vj * v2_load(col);
-            s1 += vj * v2_load(col + 2);
-            s2 += vj * v2_load(col + 4);
-            s3 += vj * v2_load(col + 6);
+            net_v4 w0, w1, w2, w3, w4, w5, w6, w7;
+            memcpy(&w0, col, sizeof w0);
+            memcpy(&w1, col + 4, sizeof w1);
+            memcpy(&w2, col + 8, sizeof w2);
+            memcpy(&w3, col + 12, sizeof w3);
+            memcpy(&w4, col + 16, sizeof w4);
+            memcpy(&w5, col + 20, sizeof w5);
+            memcpy(&w6, col + 24, sizeof w6);
+            memcpy(&w7, col + 28, sizeof w7);
+            s0 += vj * w0;
+            s1 += vj * w1;
+            s2 += vj * w2;
+            s3 += vj * w3;
+            s4 += vj * w4;
+            s5 += vj * w5;
+            s6 += vj * w6;
+            s7 += vj * w7;
         }
-        v2_store(g + i, s0 + v2_load(b + i));
-        v2_store(g + i + 2, s1 + v2_load(b + i + 2));
-        v2_store(g + i + 4, s2 + v2_load(b + i + 4));
-        v2_store(g + i + 6, s3 + v2_load(b + i + 6));
+        net_v4 acc[8] = {s0, s1, s2, s3, s4, s5, s6, s7}, bias;
+        for (int q = 0; q < 8; q++) {
+            memcpy(&bias, b + i + 4 * q, sizeof bias);
+            acc[q] += bias;
+            memcpy(g + i + 4 * q, &acc[q], sizeof bias);
+        }
+    }
+    for (; i + 4 <= rows; i += 4) {
+        net_v4 s0 = {0.0, 0.0, 0.0, 0.0}, w0;
+        for (int64_t j = 0; j < cols; j++) {
+            const net_v4 vj = {v[j], v[j], v[j], v[j]};
+            memcpy(&w0, wt + j * rows + i, sizeof w0);
+            s0 += vj * w0;
+        }
+        memcpy(&w0, b + i, sizeof w0);
+        s0 += w0;
+        memcpy(g + i, &s0, sizeof s0);
     }
 #endif
     for (; i < rows; i++) {
@@ -229,22 +256,38 @@ static void rnn_layer(const sarins_rnn *net, int l, const double *in, int64_t n_
             gh[k] = 0.0 + net->b_hh[l][k]; /* what affine_t gives: 0.0 + (+-0) ... = +0, then + b */
     else
         affine_t(g * hid, hid, net->w_hh[l], h, net->b_hh[l], gh);
+    /* the gate nonlinearities over all lanes at once (sm_tanh_lanes: SIMD, the same bits in every lane), in place
+     * in gi and gh: the logistic function as 0.5 (1 + tanh(x / 2)): exact in form, no overflow of exp(-x) */
     if (net->cell == SARINS_RNN_LSTM) {
+        for (int64_t k = 0; k < 4 * hid; k++) {
+            double s = gi[k] + gh[k];
+            gi[k] = k >= 2 * hid && k < 3 * hid ? s : 0.5 * s; /* g: tanh; i, f, o: sigmoid */
+        }
+        sm_tanh_lanes(4 * hid, gi, gh); /* gh: the tanh of every gate's argument */
         for (int64_t k = 0; k < hid; k++) {
-            double i = net_sigmoid(gi[k] + gh[k]);
-            double f = net_sigmoid(gi[hid + k] + gh[hid + k]);
-            double gg = net_tanh(gi[2 * hid + k] + gh[2 * hid + k]);
-            double o = net_sigmoid(gi[3 * hid + k] + gh[3 * hid + k]);
-            c[k] = f * c[k] + i * gg;  /* c_t = f c_{t-1} + i g */
-            h[k] = o * net_tanh(c[k]); /* h_t = o tanh(c_t) */
+            double i = 0.5 * (1.0 + gh[k]);
+            double f = 0.5 * (1.0 + gh[hid + k]);
+            double gg = gh[2 * hid + k];
+            c[k] = f * c[k] + i * gg; /* c_t = f c_{t-1} + i g */
+        }
+        sm_tanh_lanes(hid, c, gi); /* gi[0 .. hid-1]: tanh(c_t) */
+        for (int64_t k = 0; k < hid; k++) {
+            double o = 0.5 * (1.0 + gh[3 * hid + k]);
+            h[k] = o * gi[k]; /* h_t = o tanh(c_t) */
         }
         return;
     }
+    for (int64_t k = 0; k < 2 * hid; k++)
+        gi[k] = 0.5 * (gi[k] + gh[k]); /* r, z: sigmoid, eqs (7), (8) */
+    sm_tanh_lanes(2 * hid, gi, gi);
     for (int64_t k = 0; k < hid; k++) {
-        double r = net_sigmoid(gi[k] + gh[k]);                               /* eq. (7) */
-        double z = net_sigmoid(gi[hid + k] + gh[hid + k]);                   /* eq. (8) */
-        double cand = net_tanh(gi[2 * hid + k] + r * gh[2 * hid + k]);       /* eq. (9) */
-        h[k] = (1.0 - z) * cand + z * h[k];                                  /* eq. (10) */
+        double r = 0.5 * (1.0 + gi[k]);
+        gh[k] = gi[2 * hid + k] + r * gh[2 * hid + k]; /* (k < hid: reads only what it has not written) */
+    }
+    sm_tanh_lanes(hid, gh, gh); /* the candidate, eq. (9) */
+    for (int64_t k = 0; k < hid; k++) {
+        double z = 0.5 * (1.0 + gi[hid + k]);
+        h[k] = (1.0 - z) * gh[k] + z * h[k]; /* eq. (10) */
     }
 }
 

@@ -76,13 +76,15 @@ class Compensator:
 
     def __init__(self):
         self.fit_seconds: float | None = None
+        self.fit_cpu_seconds: float | None = None  # CPU seconds of the fitting thread (torch: one thread)
         self._c_model = None
 
     def fit(self, X, Y) -> "Compensator":
         x, y = _check_xy(X, Y)
-        t0 = time.perf_counter()
+        t0, cpu0 = time.perf_counter(), time.thread_time()
         self._fit(x, y)
         self.fit_seconds = time.perf_counter() - t0
+        self.fit_cpu_seconds = time.thread_time() - cpu0
         self._c_model = None
         return self
 
