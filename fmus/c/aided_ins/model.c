@@ -72,7 +72,7 @@ static void publish(sarins_ctx *c, const ai_state *st)
                         SARINS_R_sigma_vel_n, SARINS_R_sigma_vel_u, SARINS_R_sigma_att_e, SARINS_R_sigma_att_n,
                         SARINS_R_sigma_att_u};
     for (int i = 0; i < 9; i++) {
-        double p = e->p[i * SARINS_ESKF_N + i];
+        double p = e->p[i * e->n + i];
         r[sig[i]] = p > 0.0 ? sm_sqrt(p) : 0.0;
     }
     c->i[SARINS_I_fixes_used] = (int)st->used;
@@ -371,8 +371,6 @@ static int ai_check_state(const sarins_ctx *c, int running)
              && sarins_state_finite(c, "eskf.q", e->q, 4) && sarins_state_finite(c, "eskf.v", e->v, 3)
              && sarins_state_finite(c, "eskf.pos", e->pos, 3) && sarins_state_finite(c, "eskf.bg", e->bg, 3)
              && sarins_state_finite(c, "eskf.ba", e->ba, 3)
-             && sarins_state_finite(c, "eskf.p", e->p, SARINS_ESKF_N * SARINS_ESKF_N)
-             && sarins_state_finite(c, "eskf.x", e->x, SARINS_ESKF_N)
              && sarins_state_finite(c, "eskf.w_ib", e->w_ib, 3) && sarins_state_finite(c, "eskf.f_n", e->f_n, 3)
              && sarins_state_int(c, "inc_first", st->inc_first, 0, MAX_INC - 1)
              && sarins_state_int(c, "n_inc", st->n_inc, 0, MAX_INC) && sarins_state_int(c, "done", st->done, 0, big)
@@ -380,6 +378,11 @@ static int ai_check_state(const sarins_ctx *c, int running)
              && sarins_state_int(c, "n_fix", st->n_fix, 0, MAX_FIX)
              && sarins_state_finite(c, "inc", &st->inc[0][0], INC_ROW * MAX_INC)
              && sarins_state_finite(c, "fix", &st->fix[0][0], FIX_ROW * MAX_FIX);
+    char msg[256];
+    if (ok && sarins_eskf_check(e, msg, sizeof msg)) { /* options, layout, P, x and the optional blocks */
+        sarins_log(c, SARINS_ERROR, "FMU state: eskf: %s", msg);
+        ok = 0;
+    }
     for (int i = 0; ok && i < MAX_INC; i++) /* the aiding flags aid_row writes */
         for (size_t k = 0; ok && k < sizeof AID_INPUTS / sizeof AID_INPUTS[0]; k++)
             ok = sarins_state_real(c, "inc (an aiding flag)", st->inc[i][6 + AID_INPUTS[k].flag_column], 0.0, 1.0);
