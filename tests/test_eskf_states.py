@@ -14,8 +14,11 @@ from sarins_fmu import trajectory as tr
 from sarins_fmu.core import aided as core
 
 STEP = 0.01
-# manoeuvres: two full turns each way (yaw rate 10 deg/s), a climb (pitch), accelerations
-MANOEUVRES = ({"kind": "stop", "duration": 20}, {"kind": "accelerate", "to_speed": 12, "accel": 1.0},
+# manoeuvres: two full turns each way (yaw rate 10 deg/s), a climb (pitch), accelerations.  The first stop lasts
+# 20.5 s so that no 1 Hz fix falls on a jump of the turn rate: there the receiver's antenna velocity takes the
+# rate of the step that starts at the epoch (gnss.h), the filter the rate of the step that ends there, a
+# velocity outlier of |omega x l| (0.2 m/s with l = 1.2 m) that a random-constant lever state keeps for good
+MANOEUVRES = ({"kind": "stop", "duration": 20.5}, {"kind": "accelerate", "to_speed": 12, "accel": 1.0},
               {"kind": "turn", "rate_dps": 10, "angle_deg": 360}, {"kind": "cruise", "duration": 20},
               {"kind": "climb", "to_pitch_deg": 5, "duration": 5}, {"kind": "cruise", "duration": 10},
               {"kind": "climb", "to_pitch_deg": 0, "duration": 5},
@@ -77,19 +80,18 @@ def test_scale_factors_fix_the_15_state_filters_attitude_nees(truth):
     assert np.mean(with_sf) < 5.0 < 10.0 < np.mean(without)
 
 
-def test_the_lever_arm_converges(truth):
-    """Configured 0.5 m off horizontally: the lever arm is learnt in the turns (error under 0.3 m, sigma below
-    0.08 m).  Known problem (docs/aided-navigation.md): the estimate stops short of the truth, a bias of about
-    -1 to -4 sigma on the forward axis (mean z over seeds 0-7: -2.4 with the tactical IMU, -1.2 with an ideal
-    one), which trades against heading in the turns; not resolved, so the bound here is 4.5 sigma, not 3."""
-    receiver = dataclasses.replace(WHITE_GNSS, lever_arm=(0.5, 1.5, 0.0))
-    settings = aided.FilterSettings(lever_arm=(0.0, 1.0, 0.0), lever0_std=0.5)
+def test_the_lever_arm_converges_within_3_sigma(truth):
+    """The filter told a lever arm 0.5 m off horizontally and 0.3 m vertically: the horizontal components are
+    learnt in the turns (sigma below 0.1 m from the prior 0.5 m), the vertical one barely (a level drive); every component ends
+    within 3 sigma of the truth."""
+    receiver = dataclasses.replace(WHITE_GNSS, lever_arm=(0.5, 1.5, 1.2))
+    settings = aided.FilterSettings(lever_arm=(0.0, 1.0, 0.9), lever0_std=0.5)
     for seed in range(4):
         r = aided.navigate(truth, gnss=receiver, seed=seed, filter_states=("lever",), settings=settings)
         err = r.states["lever"][-1] - receiver.lever_arm
         sigma = r.state_sigma("lever")[-1]
-        assert (np.abs(err[:2]) < 0.3).all() and (sigma[:2] < 0.08).all(), (err, sigma)
-        assert (np.abs(err[:2]) < 4.5 * sigma[:2]).all() and abs(err[2]) < 3.0 * sigma[2], (err, sigma)
+        assert (sigma[:2] < 0.1).all(), sigma  # from the prior 0.5 m
+        assert (np.abs(err) < 3.0 * sigma).all(), (err, sigma)
     r0 = aided.navigate(truth, gnss=receiver, seed=0, settings=settings)  # no lever state: the offset stays
     assert r0.nees("position").mean() > 2.0 * r.nees("position").mean()
 
