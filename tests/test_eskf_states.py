@@ -136,3 +136,47 @@ def test_imu_scale_factors_are_their_own_draws(truth):
     assert np.array_equal(a[1], b[1])
     with pytest.raises(ValueError, match="numpy"):
         aided.corrupt(truth, dataclasses.replace(base, gyro_sf_std=1e-3), 3, stream="core")
+
+
+SANITIZED_RUN = """
+import numpy as np
+from sarins_fmu import aided, trajectory as tr
+from sarins_fmu.core import _lib
+assert str(_lib.library_path()) == {lib!r}, _lib.library_path()
+segments = ({{"kind": "stop", "duration": 5}}, {{"kind": "accelerate", "to_speed": 10, "accel": 2.0}},
+            {{"kind": "turn", "rate_dps": 10, "angle_deg": 90}}, {{"kind": "accelerate", "to_speed": 0, "accel": 2.0}},
+            {{"kind": "stop", "duration": 3}})
+truth = tr.generate(tr.Trajectory(tr.Start(lat_deg=32.0, lon_deg=118.0), segments), 0.02)
+for states in [(), ("sf",), ("lever",), ("gnss-gm",), ("sf", "lever", "gnss-gm")]:
+    for cov in ("full", "diagonal"):
+        r = aided.navigate(truth, aiding=("gnss", "zupt", "zaru", "odometer", "nhc"), filter_states=states,
+                           covariance=cov, settings=aided.FilterSettings(sf_tau=100.0))
+        assert np.isfinite(r.nav).all() and np.isfinite(r.variance).all()
+print("sanitized run ok")
+"""
+
+
+@pytest.mark.slow
+def test_optional_states_under_address_and_undefined_behaviour_sanitizers(tmp_path):
+    """The core rebuilt with ASan + UBSan (as tests/test_core_imu.py does) runs every state layout, 15 .. 30."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    core_dir = root / "sarins_fmu" / "core"
+    lib = tmp_path / "_sarins_core_asan.so"
+    flags = ["-std=c11", "-O1", "-g", "-fPIC", "-shared", "-Wall", "-Wextra", "-Wpedantic", "-Werror",
+             "-ffp-contract=off", "-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
+    subprocess.run(["gcc", *flags, "-I", str(core_dir), *sorted(map(str, core_dir.glob("*.c"))), "-o", str(lib), "-lm"],
+                   check=True, capture_output=True, text=True)
+    libasan = subprocess.run(["gcc", "-print-file-name=libasan.so"], check=True, capture_output=True,
+                             text=True).stdout.strip()
+    env = {**os.environ, "SARINS_CORE_LIB": str(lib), "LD_PRELOAD": libasan, "PYTHONPATH": str(root),
+           "ASAN_OPTIONS": "detect_leaks=0:abort_on_error=1", "UBSAN_OPTIONS": "print_stacktrace=1:halt_on_error=1"}
+    run = subprocess.run([sys.executable, "-c", SANITIZED_RUN.format(lib=str(lib))], env=env, capture_output=True,
+                         text=True, timeout=900)
+    report = run.stderr[-4000:]
+    assert run.returncode == 0 and "sanitized run ok" in run.stdout, report
+    assert "runtime error" not in run.stderr and "AddressSanitizer" not in run.stderr, report
