@@ -1,6 +1,7 @@
 """Aided navigation in process: an IMU with white noise and biases on a trajectory's ideal
 increments, GNSS fixes, zero-velocity updates at stops, and the core's 15-state error-state
-Kalman filter (``sarins_fmu/core/eskf.h``, its header states the model) with feedback.
+Kalman filter (``sarins_fmu/core/eskf.h``, its header states the model) with feedback; optionally with
+scale-factor, lever-arm and receiver Gauss-Markov states (``navigate(..., filter_states=...)``).
 
 Frames and units: navigation ENU, body right-front-up, SI.  Errors are computed - true: position
 (E, N, U m), velocity (ENU m/s) and attitude phi (ENU rad, mat_nb,computed = (I - [phi x]) mat_nb).

@@ -1,5 +1,6 @@
-/* 15-state error-state Kalman filter for loosely coupled GNSS / INS with zero-velocity updates,
- * closed loop (the estimated errors are fed back into the INS after every update).
+/* 15-state error-state Kalman filter (up to 30 with the optional states at the end of this comment) for
+ * loosely coupled GNSS / INS with zero-velocity updates, closed loop (the estimated errors are fed back into
+ * the INS after every update).
  *
  * The INS is nav3.h's mechanization on the increments compensated with the estimated biases,
  *     dtheta_c = dtheta - b_g h,   dv_c = dv - b_a h.
