@@ -262,7 +262,14 @@ typedef struct {
 #ifndef ESKF_CLONES
 #define ESKF_CLONES
 #endif
-ESKF_CLONES static void mul_skip_zeros(int64_t n, const mat_w *a, const mat_w *b, mat_w *c)
+#if defined(__GNUC__)
+#define ESKF_INLINE __attribute__((always_inline)) inline
+#else
+#define ESKF_INLINE inline
+#endif
+/* n states; called with n = SARINS_ESKF_N as a constant for the 15 states (the loops then have the fixed trip
+ * counts they had before the optional states), else with s->n: the same operations in the same order */
+static ESKF_INLINE void mul_skip_zeros_n(const int64_t n, const mat_w *a, const mat_w *b, mat_w *c)
 {
     for (int i = 0; i < n; i++) {
         int ks[NMAX], nz = 0; /* the columns of a's row i that are not 0, ascending */
@@ -299,6 +306,14 @@ ESKF_CLONES static void mul_skip_zeros(int64_t n, const mat_w *a, const mat_w *b
             }
         }
     }
+}
+
+ESKF_CLONES static void mul_skip_zeros(int64_t n, const mat_w *a, const mat_w *b, mat_w *c)
+{
+    if (n == SARINS_ESKF_N)
+        mul_skip_zeros_n(SARINS_ESKF_N, a, b, c);
+    else
+        mul_skip_zeros_n(n, a, b, c);
 }
 
 static void propagate_cov(sarins_eskf *s, double t)
@@ -395,9 +410,8 @@ void sarins_eskf_predict(sarins_eskf *s, const double *dtheta, const double *dv)
 }
 
 /* scalar Joseph update with row hrow (N), innovation z (computed - measured), variance r; returns z^2 / s */
-static double scalar_update(sarins_eskf *s, const double *hrow, double z, double r)
+static ESKF_INLINE double scalar_update_n(sarins_eskf *s, const double *hrow, double z, double r, const int64_t n)
 {
-    const int64_t n = s->n;
     double ph[NMAX], k[NMAX], sv = r;
     for (int i = 0; i < n; i++) {
         double acc = 0.0;
@@ -421,6 +435,11 @@ static double scalar_update(sarins_eskf *s, const double *hrow, double z, double
             s->p[IDX(i, j)] += (sv * k[i] * k[j] - k[i] * ph[j]) - ph[i] * k[j];
     sarins_symmetrize((int)n, s->p);
     return innov * innov / sv;
+}
+
+static double scalar_update(sarins_eskf *s, const double *hrow, double z, double r)
+{ /* n a constant for the 15 states (see mul_skip_zeros_n) */
+    return s->n == SARINS_ESKF_N ? scalar_update_n(s, hrow, z, r, SARINS_ESKF_N) : scalar_update_n(s, hrow, z, r, s->n);
 }
 
 /* zero a measurement row of the n states */
