@@ -538,10 +538,10 @@ def outage_table(result: AidedResult, outages) -> list:
 def summary(result: AidedResult, outages=()) -> dict:
     """JSON-ready numbers of a run: RMS and max horizontal / vertical errors (m), RMS velocity error
     (m/s), RMS attitude error (deg; heading separately), the final errors, mean NEES per block and
-    the outage table."""
+    the outage table; with optional filter states, their final estimates and sigmas ('final_states')."""
     h = result.horizontal_error()
     deg = 180.0 / math.pi
-    return {
+    out = {
         "duration_s": float(result.time[-1]),
         "horizontal_error_rms_m": float(np.sqrt(np.mean(h**2))),
         "horizontal_error_max_m": float(h.max()),
@@ -557,6 +557,10 @@ def summary(result: AidedResult, outages=()) -> dict:
         "outages": [{"start_s": r.start, "end_s": r.end, "horizontal_error_m": r.error, "predicted_sigma_m": r.sigma,
                      "ratio": r.ratio} for r in outage_table(result, outages)],
     }
+    if result.states:
+        out["final_states"] = {name: {"estimate": result.states[name][-1].tolist(),
+                                      "sigma": result.state_sigma(name)[-1].tolist()} for name in result.states}
+    return out
 
 
 @dataclass(frozen=True)

@@ -111,6 +111,7 @@ def test_filter_states_option_runs_the_navigate_numbers(tmp_path, capsys):
     assert run(argv) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["filter_states"] == ["sf", "gnss-gm"]
+    assert set(out["final_states"]) == {"scale_g", "scale_a", "gnss_pos_gm", "gnss_vel_gm"}
     truth = tr.generate(tr.load_trajectory(path), 0.02)
     r = aided.navigate(truth, gnss=gnss.preset("sps", rate_hz=1.0), seed=2, filter_states=("sf", "gnss-gm"))
     assert out["horizontal_error_rms_m"] == aided.summary(r)["horizontal_error_rms_m"]
