@@ -1,17 +1,18 @@
-"""TrajectoryIMU FMU: a vehicle trajectory from segments, the aided runs' IMU and optionally a wheel odometer
-along it (the C core's traj.h + aided_imu.h + odo.h).
+"""TrajectoryIMU FMU: a vehicle trajectory from segments, the aided runs' IMU, optionally a wheel odometer and
+the zero-velocity (ZUPT) and non-holonomic (NHC) aiding rows along it (the C core's traj.h + aided_imu.h + odo.h +
+aid_noise.h).
 
 The declaration of the native TrajectoryIMU FMU: its variables, descriptions, start values and the timing
 contract.  ``fmus/native_fmu.py`` writes the model description and the C variable table from it;
 ``fmus/c/trajectory_imu/model.c`` computes it (the kernels :func:`sarins_fmu.trajectory.generate` and
-:func:`sarins_fmu.aided.corrupt` run in process, one step at a time, and the odometer readings of
-:func:`sarins_fmu.aided.per_step_aiding`).
+:func:`sarins_fmu.aided.corrupt` run in process, one step at a time, and the odometer readings and the ZUPT
+and NHC rows of :func:`sarins_fmu.aided.per_step_aiding` with ``stream='core'``).
 """
 
 from pythonfmu import Fmi2Slave
 
 from fmus.slave_support import OUTPUT, PARAMETER, declare, default_experiment
-from sarins_fmu.aided import OdometerConfig
+from sarins_fmu.aided import FilterSettings, OdometerConfig
 
 NAV = (("lat", "rad; deg", "latitude"), ("lon", "rad; deg", "longitude"), ("height", "m", "height"),
        ("v_e", "m/s", "east velocity"), ("v_n", "m/s", "north velocity"), ("v_u", "m/s", "up velocity"),
@@ -38,7 +39,12 @@ class TrajectoryIMU(Fmi2Slave):
         "odometer (the core's odo.h: scale-factor error, white noise, quantisation, seeded by odo_seed) reads the "
         "forward (body y) speed at t + h after every (1 / (odo_rate_hz h))-th step (a whole number): odo_valid = 1 "
         "and odo_speed for that step, odo_valid = 0 otherwise (odo_speed holds), tagged by increment_end_time "
-        "like the increments. A step past the last "
+        "like the increments. With zupt_enable = 1, zupt = 1 for a step over which the vehicle stands still (speed "
+        "below 1e-9 m/s at both ends: the core's aid_noise.h, Truth.stationary) and zupt_v_e/n/u the velocity "
+        "measured there (zupt_std times a normal); with nhc_enable = 1, nhc = 1 for a step that is not still and "
+        "nhc_v_x/z the body velocity measured (nhc_std times a normal); five normals per step from stream 33 of "
+        "jitter_seed whatever the flags (navigate(..., imu_stream='core')'s rows), tagged by increment_end_time "
+        "like the increments; a value under a flag 0 is zero. A step past the last "
         "segment is an error. State outputs only (no direct feedthrough). FMU state: get, set and serialize; "
         "no allocation after initialisation.")
     default_experiment = default_experiment(0.01)  # HOST_DEFAULT_STEPS steps, the default segments as long: runs on a host's defaults
@@ -65,6 +71,16 @@ class TrajectoryIMU(Fmi2Slave):
         declare(self, "real", "odo_noise_std", PARAMETER, "odometer white-noise std [m/s]", odo.noise_std)
         declare(self, "real", "odo_resolution", PARAMETER, "odometer speed resolution; 0: none [m/s]", odo.resolution)
         declare(self, "integer", "odo_seed", PARAMETER, "seed of the odometer's errors [1]", 0)
+        fs = FilterSettings()
+        declare(self, "integer", "zupt_enable", PARAMETER,
+                "1: output zupt = 1 over the steps the vehicle stands still, 0: zupt = 0 always [1]", 0)
+        declare(self, "integer", "nhc_enable", PARAMETER,
+                "1: output nhc = 1 over the steps the vehicle moves, 0: nhc = 0 always [1]", 0)
+        declare(self, "real", "zupt_std", PARAMETER, "std of the stop's velocity jitter, per ENU axis [m/s]",
+                fs.zupt_std)
+        declare(self, "real", "nhc_std", PARAMETER, "std of the wheels' body x and z velocity jitter [m/s]",
+                fs.nhc_std)
+        declare(self, "integer", "jitter_seed", PARAMETER, "seed of the ZUPT and NHC jitter (stream 33) [1]", 0)
         for name, unit, text in NAV:
             declare(self, "real", name, OUTPUT, f"true {text} at truth_time [{unit}]", 0.0)
         for ax in "xyz":
@@ -84,6 +100,17 @@ class TrajectoryIMU(Fmi2Slave):
         declare(self, "integer", "odo_valid", OUTPUT,
                 "1: odo_speed is a new odometer reading at increment_end_time, 0: none this step [1]", 0)
         declare(self, "real", "odo_speed", OUTPUT, "odometer speed, forward along body y, at its reading [m/s]", 0.0)
+        declare(self, "integer", "zupt", OUTPUT,
+                "1: the vehicle stands still over the increments' interval (zero-velocity update) [1]", 0)
+        for ax in ("e", "n", "u"):
+            declare(self, "real", f"zupt_v_{ax}", OUTPUT,
+                    f"velocity measured at the stop over the increments' interval, {ax.upper()} (0 when zupt is 0) "
+                    "[m/s]", 0.0)
+        declare(self, "integer", "nhc", OUTPUT,
+                "1: the vehicle moves on its wheels over the increments' interval (non-holonomic constraint) [1]", 0)
+        for ax in "xz":
+            declare(self, "real", f"nhc_v_{ax}", OUTPUT,
+                    f"body {ax} velocity measured over the increments' interval (0 when nhc is 0) [m/s]", 0.0)
 
     def do_step(self, current_time, step_size):
         raise NotImplementedError("the TrajectoryIMU FMU is native: fmus/c/trajectory_imu/model.c computes it (this "

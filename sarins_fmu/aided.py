@@ -360,18 +360,30 @@ def body_speed(truth) -> np.ndarray:
     return _core.odo_forward_speed(truth.velocity_n, truth.attitude)
 
 
-def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed: int, stops=None) -> np.ndarray:
+def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed: int, stops=None,
+                    stream: str = "numpy") -> np.ndarray:
     """(K, 10) rows of ``sarins_eskf_run``: ZUPT and / or ZARU at stops (``stops`` (K,) bool: the steps
     declared stationary; default the truth's), odometer speeds at its rate, NHC while moving.
     The trajectories have no side-slip or bounce, so the zero-velocity and non-holonomic pseudo-
     measurements carry simulated white jitter of the std the filter assumes (``zupt_std``, ``nhc_std``):
-    a real vehicle's stop and wheels violate them by about that much."""
+    a real vehicle's stop and wheels violate them by about that much.  ``stream``: where the jitter is drawn,
+    'numpy' (``rng``: the ZUPT's (K, 3) normals, then the NHC's (K, 2)) or 'core' (stream 33 of ``seed``,
+    ``aid_noise.h``: five normals per step whatever is aided, the TrajectoryIMU FMU's ``zupt_v_*`` and
+    ``nhc_v_*`` with ``jitter_seed`` = ``seed``)."""
+    if stream not in IMU_STREAMS:
+        raise ValueError(f"stream must be one of {', '.join(IMU_STREAMS)}, got {stream!r}")
     k = truth.n_steps
     aid = np.zeros((k, _core.ESKF_AID))
     needs_still = (("zupt" in aiding or "zaru" in aiding) and stops is None) or "nhc" in aiding
     still = truth.stationary() if needs_still else None
-    if "zupt" in aiding:  # a stop's jitter: white, the std the filter assumes
+    if "zupt" in aiding:
         aid[:, 0] = still if stops is None else stops
+    if "nhc" in aiding:
+        aid[:, 6] = ~still
+    if stream == "core" and ("zupt" in aiding or "nhc" in aiding):
+        jitter = _core.aid_noise_run(settings.zupt_std, settings.nhc_std, seed, aid[:, 0], aid[:, 6])
+        aid[:, 1:4], aid[:, 7:9] = jitter[:, :3], jitter[:, 3:]
+    elif "zupt" in aiding:  # a stop's jitter: white, the std the filter assumes
         aid[:, 1:4] = aid[:, :1] * settings.zupt_std * rng.standard_normal((k, 3))
     if "zaru" in aiding:  # the measurement is the gyro's own rate: nothing drawn
         aid[:, 9] = still if stops is None else stops
@@ -381,8 +393,7 @@ def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed
         cfg = np.array([odometer.scale_factor, odometer.noise_std, odometer.resolution])
         aid[idx, 4] = 1.0
         aid[idx, 5] = _core.OdoState(cfg, seed).speeds(body_speed(truth)[idx + 1])
-    if "nhc" in aiding:
-        aid[:, 6] = ~still
+    if "nhc" in aiding and stream == "numpy":
         aid[:, 7:9] = aid[:, 6:7] * settings.nhc_std * rng.standard_normal((k, 2))
     return aid
 
@@ -405,8 +416,9 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
     seed : IMU errors, initial errors (stream of ``seed``), vibration and GNSS errors (``seed``).
     imu : the increments ``corrupt(truth, noise, seed)`` returns, when made already (a peer filter runs
         the same data); fixes : ``gnss.simulate(truth, gnss, seed, outages)``'s fixes, likewise.
-    imu_stream : where the IMU's errors are drawn (:func:`corrupt`'s ``stream``): 'numpy' or 'core' (the
-        TrajectoryIMU FMU's, so the ``vehicle_gnss`` system gives the same run).
+    imu_stream : where the IMU's errors (:func:`corrupt`'s ``stream``) and the ZUPT and NHC jitter
+        (:func:`per_step_aiding`'s ``stream``) are drawn: 'numpy' or 'core' (the TrajectoryIMU FMU's, so the
+        ``vehicle_gnss``, ``vehicle_gnss_odometer`` and ``vehicle_gnss_zupt`` systems give the same run).
     covariance : what the result keeps of the filter's P at each output time: 'full' (``cov`` (n, 15, 15)
         and ``variance``) or 'diagonal' (``variance`` only, ``cov`` None: no NEES; the core then writes 30
         numbers per output row instead of 240).  The filter runs the same either way.
@@ -448,7 +460,7 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         info["filter_states"] = list(filter_states)
     if "zaru" in aiding:
         info["zaru_std"] = zaru_std(noise, settings, step)
-    aid = per_step_aiding(truth, aiding, settings, odometer, rng, seed, stops)
+    aid = per_step_aiding(truth, aiding, settings, odometer, rng, seed, stops, imu_stream)
     if "gnss" in aiding:
         if fixes is None:
             fixes = gnss_mod.simulate(truth, gnss, seed, outages)

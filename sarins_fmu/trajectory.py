@@ -265,10 +265,9 @@ class Truth:
 
     def stationary(self) -> np.ndarray:
         """(K,) bool: the vehicle stands still over each step (zero speed and no body rotation wrt
-        the Earth at both ends): the steps where a zero-velocity update is true."""
-        speed = np.linalg.norm(self.velocity_n, axis=1)
-        still = speed < 1e-9
-        return still[:-1] & still[1:]
+        the Earth at both ends): the steps where a zero-velocity update is true.  The core's decision
+        (``sarins_aid_still``: speed below 1e-9 m/s at both ends), the one the TrajectoryIMU FMU makes."""
+        return _core.aid_still(self.velocity_n)
 
 
 def generate(trajectory: Trajectory, step: float, substeps: int = 8) -> Truth:

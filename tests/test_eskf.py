@@ -104,6 +104,8 @@ from sarins_fmu import zero_velocity as zv
 r = aided.navigate(truth, gnss=cfg, seed=2, zupt_detect="imu", vibration=zv.VIBRATION["car"],
                    detector=zv.DetectorSettings(window=0.3), aiding=("gnss", "zupt", "zaru"))
 assert np.isfinite(r.error).all() and r.zupt_steps > 0 and r.zaru_steps == r.zupt_steps
+r = aided.navigate(truth, gnss=cfg, seed=3, aiding=("gnss", "zupt", "zaru", "nhc", "odometer"), imu_stream="core")
+assert np.isfinite(r.error).all() and r.zupt_steps == int(truth.stationary().sum()) > 0
 print("sanitized run ok")
 """
 
@@ -111,7 +113,7 @@ print("sanitized run ok")
 @pytest.mark.slow
 def test_aided_kernels_under_address_and_undefined_behaviour_sanitizers(tmp_path):
     """Rebuild the core with ASan + UBSan and run trajectory, GNSS, zero-velocity detector and filter (ZUPT and
-    ZARU) through the binding."""
+    ZARU; then every aiding on the core's streams: aid_noise.h) through the binding."""
     import os
     import subprocess
     import sys

@@ -2,8 +2,9 @@
 
 After doStep(t_k, h) its outputs are the truth row k + 1 of sarins_fmu.trajectory.generate and the measured
 increments of step k of aided.corrupt(..., stream='core') bit for bit, and its odometer's readings those
-navigate's odometer aiding applies (aided.per_step_aiding); the core stream's errors have the stated
-statistics; an FMU state taken mid-run repeats the rest; bad parameters are refused naming them.
+navigate's odometer aiding applies (aided.per_step_aiding), its ZUPT and NHC rows those of
+aided.per_step_aiding(..., stream='core'); the core stream's errors have the stated statistics; an FMU state taken
+mid-run repeats the rest, a state of the previous version is refused; bad parameters are refused naming them.
 """
 
 from __future__ import annotations
@@ -146,6 +147,11 @@ def test_core_stream_statistics():
     ({"odo_noise_std": -0.1}, "odo_noise_std"),
     ({"odo_scale_factor": 0.5}, "odo_scale_factor"),
     ({"odo_seed": -1}, "odo_seed"),
+    ({"zupt_enable": 2}, "zupt_enable = 2 must be 0 or 1"),
+    ({"nhc_enable": -1}, "nhc_enable = -1 must be 0 or 1"),
+    ({"zupt_std": -0.01}, "zupt_std"),
+    ({"nhc_std": float("nan")}, "nhc_std"),
+    ({"jitter_seed": -1}, "jitter_seed"),
 ])
 def test_bad_parameters_are_refused(fmu, params, text):
     check_parameter_error(fmu, params, text)
@@ -192,3 +198,119 @@ def test_odometer_equals_navigates_readings_bit_for_bit(fmu, expected, rate_hz):
     for flag, speed in zip(flags, speeds):  # between readings odo_speed holds the last one
         last = speed if flag else last
         assert speed == last
+
+
+AID_OUT = ["zupt_v_e", "zupt_v_n", "zupt_v_u", "nhc_v_x", "nhc_v_z"]
+
+
+def _run_aid(fmu, params, n, state_at):
+    """Every step's (zupt, nhc) flags and (zupt_v_e .. nhc_v_z), the other outputs, and the values again after
+    setting the state taken before step ``state_at``."""
+    slave = Slave(fmu, "aid")
+    try:
+        slave.set(**params)
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+        assert slave.fmu.getInteger([slave.vr["zupt"], slave.vr["nhc"]]) == [0, 0]
+        assert slave.get(*AID_OUT) == [0.0] * 5
+        flags, values, rest, again = [], [], [], []
+        for k in range(n):
+            if k == state_at:
+                state = slave.fmu.getFMUstate()
+            slave.fmu.doStep(k * STEP, STEP)
+            flags.append(slave.fmu.getInteger([slave.vr["zupt"], slave.vr["nhc"]]))
+            values.append(slave.get(*AID_OUT))
+            rest.append(slave.get(*OUT))
+        slave.fmu.setFMUstate(state)
+        for k in range(state_at, n):
+            slave.fmu.doStep(k * STEP, STEP)
+            again.append(slave.get(*AID_OUT))
+        return np.array(flags), np.array(values), np.array(rest), np.array(again)
+    finally:
+        slave.free()
+
+
+@pytest.mark.parametrize("zupt, nhc", [(1, 1), (1, 0), (0, 1)])
+def test_zupt_and_nhc_rows_equal_navigates_core_rows_bit_for_bit(fmu, expected, zupt, nhc):
+    """zupt / nhc and their velocities after each step are aided.per_step_aiding(..., stream='core')'s rows
+    (seed jitter_seed, FilterSettings' stds or others), the rest of the outputs unchanged; a state taken in the
+    stop repeats the rest."""
+    trajectory = tr.Trajectory(START, SEGMENTS)
+    truth = tr.generate(trajectory, STEP)
+    settings = aided.FilterSettings(zupt_std=0.02, nhc_std=0.07)
+    aiding = ("zupt",) * zupt + ("nhc",) * nhc
+    aid = aided.per_step_aiding(truth, aiding, settings, None, None, 13, stream="core")
+    params, rows = expected
+    params = {**params, "zupt_enable": zupt, "nhc_enable": nhc, "zupt_std": 0.02, "nhc_std": 0.07,
+              "jitter_seed": 13}
+    flags, values, rest, again = _run_aid(fmu, params, len(rows), state_at=60)
+    np.testing.assert_array_equal(rest, rows)
+    np.testing.assert_array_equal(flags, aid[:, [0, 6]])
+    np.testing.assert_array_equal(values, aid[:, [1, 2, 3, 7, 8]])
+    np.testing.assert_array_equal(again, values[60:])
+    still = truth.stationary()
+    assert flags[:, 0].sum() == zupt * still.sum() == zupt * 100 and flags[:, 1].sum() == nhc * (~still).sum()
+    on = np.column_stack([flags[:, 0]] * 3 + [flags[:, 1]] * 2) == 1
+    assert np.all(values[~on] == 0.0) and np.all(values[on] != 0.0)
+
+
+def test_state_of_the_previous_version_is_refused(fmu, expected):
+    """A serialized state of state version 2 (no ZUPT / NHC jitter) is refused naming why."""
+    from fmpy.fmi1 import FMICallException
+
+    params, _ = expected
+    slave = Slave(fmu, "old_state")
+    try:
+        slave.set(**params)
+        slave.fmu.enterInitializationMode()
+        slave.fmu.exitInitializationMode()
+        blob = bytearray(slave.fmu.serializeFMUstate(slave.fmu.getFMUstate()))
+        assert int.from_bytes(blob[12:16], "little") == 3
+        blob[12:16] = (2).to_bytes(4, "little")
+        with pytest.raises(FMICallException, match="status 3"):
+            slave.fmu.deSerializeFMUstate(bytes(blob))
+        assert any("state version differs" in m for status, _, m in slave.log if status == 3), slave.log
+    finally:
+        slave.free()
+
+
+def test_fmi3_variant_outputs_the_same_zupt_and_nhc_rows(tmp_path, expected):
+    """The FMI 3.0 TrajectoryIMU (validated by FMPy) gives the increments and the ZUPT / NHC rows of
+    per_step_aiding(..., stream='core') bit for bit."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi3 import FMU3Slave
+    from fmpy.validation import validate_fmu
+
+    path = build_native_fmu("TrajectoryIMU", "trajectory_imu_slave.py", tmp_path, fmi=3, win64=False, aarch64=False)
+    assert validate_fmu(str(path)) == []
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    truth = tr.generate(tr.Trajectory(START, SEGMENTS), STEP)
+    aid = aided.per_step_aiding(truth, ("zupt", "nhc"), aided.FilterSettings(), None, None, 5, stream="core")
+    params, rows = expected
+    params = {**params, "zupt_enable": 1, "nhc_enable": 1, "jitter_seed": 5}
+    fmu = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(path)), modelIdentifier="TrajectoryIMU",
+                    instanceName="ti3")
+    fmu.instantiate()
+    try:
+        for name, value in params.items():
+            if isinstance(value, str):
+                fmu.setString([vr[name]], [value])
+            elif isinstance(value, int):
+                fmu.setInt32([vr[name]], [value])
+            else:
+                fmu.setFloat64([vr[name]], [value])
+        fmu.enterInitializationMode(startTime=0.0)
+        fmu.exitInitializationMode()
+        got, flags, values = [], [], []
+        for k in range(len(rows)):
+            fmu.doStep(k * STEP, STEP)
+            got.append(fmu.getFloat64([vr[n] for n in OUT]))
+            flags.append(fmu.getInt32([vr["zupt"], vr["nhc"]]))
+            values.append(fmu.getFloat64([vr[n] for n in AID_OUT]))
+        fmu.terminate()
+    finally:
+        fmu.freeInstance()
+    np.testing.assert_array_equal(got, rows)
+    np.testing.assert_array_equal(flags, aid[:, [0, 6]])
+    np.testing.assert_array_equal(values, aid[:, [1, 2, 3, 7, 8]])

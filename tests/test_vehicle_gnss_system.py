@@ -2,7 +2,8 @@
 project's master: under Gauss-Seidel and Jacobi the rows at each nav_time equal the in-process aided run
 (aided.navigate(aiding=('gnss',)) on the core stream's IMU, aided.corrupt(stream='core')) bit for bit:
 navigation, bias estimates and the filter's sigmas, the GNSS outage included; with TrajectoryIMU's odometer
-wired in (vehicle_gnss_odometer) likewise navigate(aiding=('gnss', 'odometer'))."""
+wired in (vehicle_gnss_odometer) likewise navigate(aiding=('gnss', 'odometer')), and with its ZUPT / NHC rows
+too (vehicle_gnss_zupt) navigate(aiding=('gnss', 'zupt', 'zaru', 'nhc', 'odometer'), imu_stream='core')."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 
 from orchestration import simulate_system, write_ssp
-from sarins.systems import GNSS_DRIVE, vehicle_gnss, vehicle_gnss_odometer
+from sarins.systems import GNSS_DRIVE, vehicle_gnss, vehicle_gnss_odometer, vehicle_gnss_zupt
 from sarins_fmu import aided, gnss
 from sarins_fmu import trajectory as tr
 
@@ -21,12 +22,14 @@ OUT = NAV + [f"bias_{q}_{a}" for q in "ga" for a in "xyz"] + [f"sigma_{q}_{a}" f
                                                             for a in "enu"]
 
 
-def navigate_rows(aiding):
-    """navigate's rows (every 10th IMU step) and their times, and the valid fixes it applies."""
+def navigate_rows(aiding, imu_stream=None):
+    """navigate's rows (every 10th IMU step) and their times, and the valid fixes it applies (the IMU of the
+    core's stream; ``imu_stream='core'``: the ZUPT / NHC jitter too)."""
     truth = tr.generate(tr.Trajectory.from_dict(GNSS_DRIVE), 0.01)
     noise = aided.IMU_NOISE["tactical"]
+    how = {"imu_stream": "core"} if imu_stream else {"imu": aided.corrupt(truth, noise, SEED, stream="core")}
     result = aided.navigate(truth, noise=noise, gnss=gnss.preset("sps", rate_hz=1.0), aiding=aiding,
-                            outages=OUTAGES, seed=SEED, imu=aided.corrupt(truth, noise, SEED, stream="core"))
+                            outages=OUTAGES, seed=SEED, **how)
     sigma = np.sqrt(np.diagonal(result.cov, axis1=1, axis2=2)[:, :9])
     return result.time, np.column_stack([result.nav, result.bias_g, result.bias_a, sigma]), result.gnss_used
 
@@ -46,6 +49,27 @@ def expected_odometer(expected):
     sigma = [np.hypot(r[1][outage, -9], r[1][outage, -8]).max() for r in (rows, expected)]  # sigma_pos_e, _n
     assert sigma[0] < 0.8 * sigma[1], sigma
     return rows
+
+
+@pytest.fixture(scope="module")
+def expected_zupt(expected_odometer):
+    """navigate(aiding gnss, zupt, zaru, nhc, odometer; imu_stream 'core'): other rows than the odometer's, the
+    filter's horizontal sigma at the outage's worst below the odometer alone's."""
+    rows = navigate_rows(("gnss", "zupt", "zaru", "nhc", "odometer"), imu_stream="core")
+    outage = (rows[0] > OUTAGES[0][0]) & (rows[0] <= OUTAGES[0][1])
+    assert not np.array_equal(rows[1], expected_odometer[1])
+    sigma = [np.hypot(r[1][outage, -9], r[1][outage, -8]).max() for r in (rows, expected_odometer)]
+    assert sigma[0] < sigma[1], sigma
+    return rows
+
+
+@pytest.mark.parametrize("scheme", ["gauss-seidel", "jacobi"])
+def test_system_with_zupt_and_nhc_equals_navigate_bit_for_bit(fmu_dir, tmp_path, expected_zupt, scheme):
+    """TrajectoryIMU's odometer and ZUPT / NHC rows (ZARU from the same still flag) -> AidedINS:
+    navigate(aiding=('gnss', 'zupt', 'zaru', 'nhc', 'odometer'), imu_stream='core')."""
+    system = vehicle_gnss_zupt(fmu_dir, seed=SEED, outages=OUTAGES)
+    assert system.name == "vehicle_gnss_zupt"
+    check_system(system, tmp_path, expected_zupt, scheme)
 
 
 @pytest.mark.parametrize("scheme", ["gauss-seidel", "jacobi"])

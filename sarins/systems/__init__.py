@@ -178,6 +178,8 @@ IMU_TO_AIDED = [f"{q}_{a}" for q in ("dtheta", "dv") for a in "xyz"] + ["increme
 ODOMETER_TO_AIDED = ["odo_valid", "odo_speed"]  # TrajectoryIMU -> AidedINS, tagged with the increments
 UNUSED_AIDING = {"zaru": 0, "zupt": 0, "zupt_v_e": 0.0, "zupt_v_n": 0.0, "zupt_v_u": 0.0, "nhc": 0, "nhc_v_x": 0.0,
                  "nhc_v_z": 0.0}  # AidedINS inputs these systems leave off (their values are read under a flag only)
+STILL_TO_AIDED = [("zupt", "zupt"), ("zupt", "zaru")] + [(v, v) for v in ("zupt_v_e", "zupt_v_n", "zupt_v_u", "nhc",
+                                                                    "nhc_v_x", "nhc_v_z")]  # TrajectoryIMU -> AidedINS
 ODOMETER_SETTINGS = ["odo_scale_factor", "odo_noise_std", "odo_resolution"]  # aided.OdometerConfig's (odo.h)
 RECEIVER_TO_AIDED = ["fix_valid", "fix_lat", "fix_lon", "fix_height", "fix_v_e", "fix_v_n", "fix_v_u", "fix_count",
                      "fix_time", "fix_horizon"]
@@ -191,11 +193,15 @@ RECEIVER_SETTINGS = ["lever_x", "lever_y", "lever_z", "pos_white_e", "pos_white_
 
 def vehicle_gnss(fmu_dir: Path | str = "resources", *, trajectory=None, seed: int = 0, gnss="sps",
                  gnss_rate_hz: float = 1.0, imu_noise: str = "tactical", imu_rate_hz: float = 100.0,
-                 outages=GNSS_OUTAGES, odometer=None) -> System:
+                 outages=GNSS_OUTAGES, odometer=None, zupt: bool = False) -> System:
     """TrajectoryIMU -> GNSSReceiver -> AidedINS, TrajectoryIMU -> AidedINS: the aided run of
     ``sarins navigate --trajectory FILE --aiding gnss`` as a system; with ``odometer`` (an
     :class:`sarins_fmu.aided.OdometerConfig`) TrajectoryIMU's odometer feeds AidedINS too: the run of
-    ``--aiding gnss,odometer`` (odometer seed ``seed``, as navigate draws it).
+    ``--aiding gnss,odometer`` (odometer seed ``seed``, as navigate draws it); with ``zupt`` TrajectoryIMU's
+    ZUPT and NHC rows (``zupt_enable``, ``nhc_enable``, ``jitter_seed`` = ``seed``, the filter's stds) feed
+    AidedINS's ``zupt``, ``zupt_v_*``, ``nhc``, ``nhc_v_*``, and its still flag ``zupt`` also ``zaru``: with the
+    odometer the run of ``--aiding gnss,zupt,zaru,nhc,odometer --imu-stream core`` (system
+    ``vehicle_gnss_zupt``).
 
     ``trajectory``: a :class:`sarins_fmu.trajectory.Trajectory`, a dict or a JSON file (default
     ``GNSS_DRIVE``, 120 s); ``gnss``: a preset name or a GNSSConfig; ``outages``: windows [start, end) s.
@@ -236,8 +242,12 @@ def vehicle_gnss(fmu_dir: Path | str = "resources", *, trajectory=None, seed: in
            **{f"{n}0": float(v) for n, v in zip(["lat", "lon", "height", "v_e", "v_n", "v_u", "yaw", "pitch", "roll"],
                                                 nav0)},
            **{f"gnss_{k}_std_{a}": float(v) for k, std in (("pos", receiver.pos_std()), ("vel", receiver.vel_std()))
-              for a, v in zip("enu", std)}, "use_velocity": 1, **UNUSED_AIDING,
+              for a, v in zip("enu", std)}, "use_velocity": 1,
+           **({} if zupt else UNUSED_AIDING),
            **({} if odometer is not None else {"odo_valid": 0, "odo_speed": 0.0})}
+    if zupt:
+        motion.update({"zupt_enable": 1, "nhc_enable": 1, "zupt_std": float(settings.zupt_std),
+                       "nhc_std": float(settings.nhc_std), "jitter_seed": int(seed)})
     components = [Component("motion", fmu_dir / "TrajectoryIMU.fmu", motion),
                   Component("receiver", fmu_dir / "GNSSReceiver.fmu", rx),
                   Component("ins", fmu_dir / "AidedINS.fmu", ins)]
@@ -246,8 +256,11 @@ def vehicle_gnss(fmu_dir: Path | str = "resources", *, trajectory=None, seed: in
     connections += [Connection("receiver", v, "ins", v) for v in RECEIVER_TO_AIDED]
     if odometer is not None:
         connections += [Connection("motion", v, "ins", v) for v in ODOMETER_TO_AIDED]
-    return System(name="vehicle_gnss" if odometer is None else "vehicle_gnss_odometer", components=components,
-                  connections=connections, start_time=0.0, stop_time=truth.n_steps * step, step_size=step)
+    if zupt:
+        connections += [Connection("motion", a, "ins", b) for a, b in STILL_TO_AIDED]
+    name = "vehicle_gnss_zupt" if zupt else "vehicle_gnss" if odometer is None else "vehicle_gnss_odometer"
+    return System(name=name, components=components, connections=connections, start_time=0.0,
+                  stop_time=truth.n_steps * step, step_size=step)
 
 
 def vehicle_gnss_odometer(fmu_dir: Path | str = "resources", **kwargs) -> System:
@@ -259,9 +272,18 @@ def vehicle_gnss_odometer(fmu_dir: Path | str = "resources", **kwargs) -> System
     return vehicle_gnss(fmu_dir, **{"odometer": OdometerConfig(), **kwargs})
 
 
+def vehicle_gnss_zupt(fmu_dir: Path | str = "resources", **kwargs) -> System:
+    """:func:`vehicle_gnss` with the default wheel odometer and TrajectoryIMU's ZUPT / NHC rows (ZARU from the
+    same still flag) into AidedINS: ``sarins navigate --trajectory FILE --aiding gnss,zupt,zaru,nhc,odometer
+    --imu-stream core`` as a system (``kwargs`` go to :func:`vehicle_gnss`)."""
+    from sarins_fmu.aided import OdometerConfig
+
+    return vehicle_gnss(fmu_dir, **{"odometer": OdometerConfig(), "zupt": True, **kwargs})
+
+
 SYSTEMS = {"standard_static": standard_static, "standard_static_identified": standard_static_identified,
            "vehicle_rins": vehicle_rins, "vehicle_rins_online": vehicle_rins_online, "vehicle_gnss": vehicle_gnss,
-           "vehicle_gnss_odometer": vehicle_gnss_odometer}
+           "vehicle_gnss_odometer": vehicle_gnss_odometer, "vehicle_gnss_zupt": vehicle_gnss_zupt}
 
 
 def write_systems(fmu_dir: Path | str) -> list[Path]:

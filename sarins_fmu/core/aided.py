@@ -201,6 +201,36 @@ class OdoState:
         return out
 
 
+AID_NOISE_DRAWS = 5  # normals per IMU step of aid_noise.h
+_aid_noise_run = function("sarins_aid_noise_run", ctypes.c_int, _F64, _F64, ctypes.c_uint64, _I64, _P, _P, _P)
+_aid_still_n = function("sarins_aid_still_n", None, _I64, _P, _P)
+
+
+def aid_noise_run(zupt_std: float, nhc_std: float, seed: int, zupt, nhc) -> np.ndarray:
+    """``sarins_aid_noise_run``: the ZUPT and NHC pseudo-measurements' jitter over K steps (aid_noise.h, stream
+    33 of ``seed``) for the flags zupt (K,) and nhc (K,) (0 / 1): (K, 5) = ZUPT velocity E, N, U and NHC
+    velocity body x, z (m/s), (flag std) n with five normals drawn per step whatever the flags."""
+    zupt = np.ascontiguousarray(zupt, dtype=np.int32)
+    nhc = np.ascontiguousarray(nhc, dtype=np.int32)
+    if zupt.ndim != 1 or nhc.shape != zupt.shape:
+        raise ValueError("zupt and nhc flags must be two (K,) arrays")
+    out = np.empty((zupt.shape[0], AID_NOISE_DRAWS))
+    if _aid_noise_run(float(zupt_std), float(nhc_std), int(seed) % 2**64, zupt.shape[0], zupt.ctypes.data,
+                      nhc.ctypes.data, out.ctypes.data) != 0:
+        raise ValueError("the ZUPT and NHC stds must be finite and >= 0 and the flags 0 or 1")
+    return out
+
+
+def aid_still(velocity_n) -> np.ndarray:
+    """``sarins_aid_still_n``: (K,) bool, the steps between K + 1 velocities (K + 1, 3) ENU m/s over which
+    the vehicle stands still (speed below 1e-9 m/s at both ends)."""
+    velocity_n = _arrays.read(velocity_n, (np.shape(velocity_n)[0], 3), "velocity")
+    n = max(velocity_n.shape[0] - 1, 0)
+    out = np.zeros(n, dtype=np.int32)
+    _aid_still_n(n, velocity_n.ctypes.data, out.ctypes.data)
+    return out.astype(bool)
+
+
 ZVD_CONFIG = 5
 _zvd_size = function("sarins_zvd_size", _I64)
 _zvd_init = function("sarins_zvd_init", ctypes.c_int, _P, _P, ctypes.c_char_p, ctypes.c_size_t)

@@ -44,6 +44,7 @@ int sarins_core_abi(void);
 #include "gnss.h"
 #include "eskf.h"
 #include "odo.h"
+#include "aid_noise.h"
 #include "zvd.h"
 #include "ins_fmu_step.h"
 

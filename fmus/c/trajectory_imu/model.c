@@ -6,7 +6,9 @@
  * sarins_fmu.aided.corrupt draws), so after doStep(t_k, h) the outputs are the truth row k + 1 and the
  * measured increments of step k of the in-process run bit for bit.  With odo_rate_hz > 0 a wheel odometer
  * (odo.h, seed odo_seed) reads the forward speed of truth row k + 1 after every (1 / (odo_rate_hz h))-th step,
- * the readings sarins_fmu.aided.per_step_aiding draws for navigate's odometer aiding.
+ * the readings sarins_fmu.aided.per_step_aiding draws for navigate's odometer aiding.  With zupt_enable /
+ * nhc_enable the ZUPT and NHC aiding rows of step k (aid_noise.h: the still decision from truth rows k and k + 1,
+ * five normals per step from stream 33 of jitter_seed), the rows per_step_aiding(..., stream="core") gives.
  * Units: rad, m, m/s, rad/s, s.
  */
 #include "smath.h"
@@ -15,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "aid_noise.h"
 #include "aided_imu.h"
 #include "model.h"
 #include "odo.h"
@@ -31,6 +34,8 @@ typedef struct {
     int64_t k;            /* steps done */
     sarins_odo odo;       /* the odometer's errors */
     int64_t odo_every;    /* steps per odometer reading; 0: no odometer */
+    sarins_aid_noise jitter; /* the ZUPT and NHC jitter */
+    int32_t zupt_on, nhc_on; /* zupt_enable, nhc_enable */
 } ti_state;
 
 /* What the parameters give (built at initialisation, not part of the FMU state). */
@@ -169,6 +174,24 @@ static int ti_initialize(sarins_ctx *c)
         sarins_log(c, SARINS_ERROR, "parameter odo_seed = %d must be >= 0", c->i[SARINS_I_odo_seed]);
         return SARINS_ERROR;
     }
+    static const char *const flag_names[2] = {"zupt_enable", "nhc_enable"};
+    const int flags[2] = {c->i[SARINS_I_zupt_enable], c->i[SARINS_I_nhc_enable]};
+    for (int i = 0; i < 2; i++)
+        if (flags[i] != 0 && flags[i] != 1) {
+            sarins_log(c, SARINS_ERROR, "parameter %s = %d must be 0 or 1", flag_names[i], flags[i]);
+            return SARINS_ERROR;
+        }
+    static const char *const std_names[2] = {"zupt_std", "nhc_std"};
+    const double stds[2] = {r[SARINS_R_zupt_std], r[SARINS_R_nhc_std]};
+    for (int i = 0; i < 2; i++)
+        if (!(isfinite(stds[i]) && stds[i] >= 0.0)) {
+            sarins_log(c, SARINS_ERROR, "parameter %s = %.17g must be finite and >= 0", std_names[i], stds[i]);
+            return SARINS_ERROR;
+        }
+    if (c->i[SARINS_I_jitter_seed] < 0) {
+        sarins_log(c, SARINS_ERROR, "parameter jitter_seed = %d must be >= 0", c->i[SARINS_I_jitter_seed]);
+        return SARINS_ERROR;
+    }
     ti_work *w = calloc(1, sizeof *w);
     if (w == NULL) {
         sarins_log(c, SARINS_ERROR, "out of memory for the trajectory's segments");
@@ -200,6 +223,14 @@ static int ti_initialize(sarins_ctx *c)
         return SARINS_ERROR;
     }
     st->odo_every = (int64_t)odo_every;
+    if (sarins_aid_noise_init(&st->jitter, stds[0], stds[1], (uint64_t)c->i[SARINS_I_jitter_seed], msg,
+                              sizeof msg)) {
+        sarins_log(c, SARINS_ERROR, "parameters (zupt_std, nhc_std): %s", msg);
+        free(w);
+        return SARINS_ERROR;
+    }
+    st->zupt_on = flags[0];
+    st->nhc_on = flags[1];
     c->work = w;
     double row[SARINS_TRAJ_ROW];
     publish(c, w, st, c->start_time, row);
@@ -212,6 +243,11 @@ static int ti_initialize(sarins_ctx *c)
     out[SARINS_R_increment_end_time] = c->start_time;
     out[SARINS_R_odo_speed] = 0.0;
     c->i[SARINS_I_odo_valid] = 0;
+    const int aid[5] = {SARINS_R_zupt_v_e, SARINS_R_zupt_v_n, SARINS_R_zupt_v_u, SARINS_R_nhc_v_x, SARINS_R_nhc_v_z};
+    for (int i = 0; i < 5; i++)
+        out[aid[i]] = 0.0;
+    c->i[SARINS_I_zupt] = 0;
+    c->i[SARINS_I_nhc] = 0;
     return SARINS_OK;
 }
 
@@ -247,7 +283,8 @@ static int ti_do_step(sarins_ctx *c, double t, double h)
                    "(negative speed, |pitch| >= 89 deg or |latitude| >= 89.9 deg)", t);
         return SARINS_ERROR;
     }
-    double speed = 0.0, reading = 0.0, row[SARINS_TRAJ_ROW];
+    double speed = 0.0, reading = 0.0, row[SARINS_TRAJ_ROW], row0[SARINS_TRAJ_ROW];
+    sarins_traj_row(&st->traj, w->seg, row0); /* the truth at t: the step's start, for the still decision */
     int odo_due = st->odo_every > 0 && (st->k + 1) % st->odo_every == 0;
     if (odo_due) { /* the forward speed at the step's end */
         sarins_traj_row(&next, w->seg, row);
@@ -268,6 +305,15 @@ static int ti_do_step(sarins_ctx *c, double t, double h)
     c->i[SARINS_I_odo_valid] = odo_due;
     if (odo_due)
         r[SARINS_R_odo_speed] = reading;
+    /* ZUPT / NHC rows of the step: still from the velocities at t and t + h; five draws whatever the flags */
+    int still = sarins_aid_still(row0 + 3, row + 3), zupt = st->zupt_on && still, nhc = st->nhc_on && !still;
+    double jitter[SARINS_AID_NOISE_DRAWS];
+    sarins_aid_noise_step(&st->jitter, zupt, nhc, jitter);
+    const int aid[5] = {SARINS_R_zupt_v_e, SARINS_R_zupt_v_n, SARINS_R_zupt_v_u, SARINS_R_nhc_v_x, SARINS_R_nhc_v_z};
+    for (int i = 0; i < 5; i++)
+        r[aid[i]] = jitter[i];
+    c->i[SARINS_I_zupt] = zupt;
+    c->i[SARINS_I_nhc] = nhc;
     const int inc[6] = {SARINS_R_dtheta_x, SARINS_R_dtheta_y, SARINS_R_dtheta_z, SARINS_R_dv_x, SARINS_R_dv_y,
                         SARINS_R_dv_z};
     const int bs[6] = {SARINS_R_true_bias_g_x, SARINS_R_true_bias_g_y, SARINS_R_true_bias_g_z,
@@ -312,13 +358,18 @@ static int ti_check_state(const sarins_ctx *c, int running)
         sarins_log(c, SARINS_ERROR, "the state's %s", msg);
         ok = 0;
     }
+    ok = ok && sarins_state_int(c, "zupt_on", st->zupt_on, 0, 1) && sarins_state_int(c, "nhc_on", st->nhc_on, 0, 1);
+    if (ok && sarins_aid_noise_check(&st->jitter, msg, sizeof msg)) {
+        sarins_log(c, SARINS_ERROR, "the state's %s", msg);
+        ok = 0;
+    }
     return ok ? SARINS_OK : SARINS_ERROR;
 }
 
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(ti_state),
-    .state_version = 2, /* 2: the odometer (odo, odo_every) */
+    .state_version = 3, /* 2: the odometer (odo, odo_every); 3: the ZUPT / NHC jitter (jitter, zupt_on, nhc_on) */
     .initialize = ti_initialize,
     .do_step = ti_do_step,
     .release = ti_release,
