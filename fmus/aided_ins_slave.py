@@ -29,6 +29,29 @@ SETTINGS = (("arw", "rad/s0.5", "angle random walk"), ("vrw", "m/s/s0.5", "veloc
             ("nhc_std", "m/s", "non-holonomic constraint std, body x and z"), ("odo_std", "m/s", "odometer std"),
             ("zaru_std", "rad/s", "zero-angular-rate update std per step (the gyro's white rate noise arw / sqrt(step); "
                                   "navigate's default)"))
+# the optional filter states (eskf.h SARINS_ESKF_OPT; navigate's filter_states): switches, then priors
+STATE_SWITCHES = (("state_scale_factors", "gyro and accelerometer scale-factor errors (6 states, 'sf')"),
+                  ("state_lever_arm", "GNSS antenna lever-arm error, body (3 states, 'lever')"),
+                  ("state_gnss_pos_gm", "the receiver's Gauss-Markov position error, ENU (3 states, 'gnss-gm')"),
+                  ("state_gnss_vel_gm", "the receiver's Gauss-Markov velocity error, ENU (3 states, 'gnss-gm' with "
+                                        "use_velocity)"))
+STATE_SETTINGS = (("gyro_sf0_std", "1", "prior std of the gyro scale-factor errors"),
+                  ("accel_sf0_std", "1", "prior std of the accelerometer scale-factor errors"),
+                  ("sf_tau", "s", "scale-factor correlation time; 0: random constants"),
+                  ("lever0_std", "m", "prior std of the lever-arm error"),
+                  ("gnss_pos_gm_std_e", "m", "receiver Gauss-Markov position std, east"),
+                  ("gnss_pos_gm_std_n", "m", "receiver Gauss-Markov position std, north"),
+                  ("gnss_pos_gm_std_u", "m", "receiver Gauss-Markov position std, up"),
+                  ("gnss_pos_gm_tau", "s", "receiver Gauss-Markov position correlation time"),
+                  ("gnss_vel_gm_std_e", "m/s", "receiver Gauss-Markov velocity std, east"),
+                  ("gnss_vel_gm_std_n", "m/s", "receiver Gauss-Markov velocity std, north"),
+                  ("gnss_vel_gm_std_u", "m/s", "receiver Gauss-Markov velocity std, up"),
+                  ("gnss_vel_gm_tau", "s", "receiver Gauss-Markov velocity correlation time"))
+STATE_OUTPUTS = (("scale_g", "xyz", "1", "estimated gyro scale-factor error"),
+                 ("scale_a", "xyz", "1", "estimated accelerometer scale-factor error"),
+                 ("lever_est", "xyz", "m", "estimated antenna lever arm"),
+                 ("gnss_pos_gm", "enu", "m", "estimated receiver Gauss-Markov position error"),
+                 ("gnss_vel_gm", "enu", "m/s", "estimated receiver Gauss-Markov velocity error"))
 NAV = (("lat", "rad; deg", "latitude"), ("lon", "rad; deg", "longitude"), ("height", "m", "height"),
        ("v_e", "m/s", "east velocity"), ("v_n", "m/s", "north velocity"), ("v_u", "m/s", "up velocity"),
        ("yaw", "rad; deg", "yaw (CCW from north)"), ("pitch", "rad; deg", "pitch"), ("roll", "rad; deg", "roll"))
@@ -41,7 +64,8 @@ class AidedINS(Fmi2Slave):
         "A strapdown INS (nav3.h, ENU, body right-front-up) with a closed-loop 15-state error-state Kalman filter "
         "(eskf.h: position, velocity, attitude errors, gyro and accel biases) aided by GNSS position and velocity "
         "fixes, zero-velocity (ZUPT) and zero-angular-rate (ZARU) updates at stops, a wheel odometer and the "
-        "non-holonomic constraint (NHC). Contract: doStep(t, h) integrates the increments "
+        "non-holonomic constraint (NHC); optional states (parameters state_*: scale factors, lever arm, the "
+        "receiver's Gauss-Markov position and velocity errors; eskf.h). Contract: doStep(t, h) integrates the increments "
         "dtheta_*/dv_* (body rad, m/s) of [t, t + h] "
         "(h = step, fixed), then applies the interval's aiding in this order: when zupt is 1 a ZUPT against "
         "zupt_v_* (std zupt_std); when zaru is 1 a ZARU (the step's compensated rate against the Earth rate, std "
@@ -82,6 +106,14 @@ class AidedINS(Fmi2Slave):
                         float(values[i]))
         declare(self, "integer", "use_velocity", PARAMETER, "1: apply the fixes' velocity too, 0: position only [1]",
                 1)
+        for name, text in STATE_SWITCHES:
+            declare(self, "integer", name, PARAMETER, f"1: estimate the {text}; 0: not (the 15-state filter) [1]", 0)
+        state_starts = {"gyro_sf0_std": fs.gyro_sf0_std, "accel_sf0_std": fs.accel_sf0_std, "sf_tau": fs.sf_tau,
+                        "lever0_std": fs.lever0_std, "gnss_pos_gm_tau": g.pos_gm_tau, "gnss_vel_gm_tau": g.vel_gm_tau,
+                        **{f"gnss_pos_gm_std_{a}": v for a, v in zip("enu", g.pos_gm_std)},
+                        **{f"gnss_vel_gm_std_{a}": v for a, v in zip("enu", g.vel_gm_std)}}
+        for name, unit, text in STATE_SETTINGS:
+            declare(self, "real", name, PARAMETER, f"{text} (the optional states) [{unit}]", float(state_starts[name]))
         for q, unit in (("dtheta", "rad"), ("dv", "m/s")):
             for ax in "xyz":
                 declare(self, "real", f"{q}_{ax}", INPUT, f"{q} increment over [t, t + h], body {ax} [{unit}]", 0.0)
@@ -124,6 +156,9 @@ class AidedINS(Fmi2Slave):
             for ax in "enu":
                 declare(self, "real", f"sigma_{q}_{ax}", OUTPUT, f"filter std of the {q} error, {ax} axis [{unit}]",
                         0.0)
+        for q, axes, unit, text in STATE_OUTPUTS:
+            for ax in axes:
+                declare(self, "real", f"{q}_{ax}", OUTPUT, f"{text}, {ax} (0 when its state is off) [{unit}]", 0.0)
         declare(self, "integer", "fixes_used", OUTPUT, "valid fixes applied so far [1]", 0)
         declare(self, "real", "nav_time", OUTPUT, "time of the navigation outputs [s]", 0.0)
 

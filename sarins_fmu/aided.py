@@ -1,6 +1,7 @@
 """Aided navigation in process: an IMU with white noise and biases on a trajectory's ideal
 increments, GNSS fixes, zero-velocity updates at stops, and the core's 15-state error-state
-Kalman filter (``sarins_fmu/core/eskf.h``, its header states the model) with feedback.
+Kalman filter (``sarins_fmu/core/eskf.h``, its header states the model) with feedback; optionally with
+scale-factor, lever-arm and receiver Gauss-Markov states (``navigate(..., filter_states=...)``).
 
 Frames and units: navigation ENU, body right-front-up, SI.  Errors are computed - true: position
 (E, N, U m), velocity (ENU m/s) and attitude phi (ENU rad, mat_nb,computed = (I - [phi x]) mat_nb).
@@ -35,6 +36,9 @@ from .rotations import euler_to_mat
 from .units import DPH_TO_RPS, DPSH_TO_RPSS, UG_TO_MPS2
 
 AIDING = ("gnss", "zupt", "odometer", "nhc", "zaru")
+# optional filter states (eskf.h): sf gyro and accelerometer scale factors (6), lever the GNSS antenna lever arm
+# (3), gnss-gm the receiver's Gauss-Markov position (3) and, with gnss_velocity, velocity (3) errors
+FILTER_STATES = ("sf", "lever", "gnss-gm")
 ZUPT_DETECT = ("truth", "imu")  # where ZUPTs come from: the trajectory's stops, or the IMU's statistics
 COVARIANCE = ("full", "diagonal")  # what navigate's result keeps of the filter's P
 
@@ -44,7 +48,9 @@ class ImuNoise:
     """IMU errors of an aided run (SI, same on each axis).
 
     arw: rad/sqrt(s); vrw: m/s/sqrt(s); gyro_bias_std: rad/s; accel_bias_std: m/s^2 (the per-seed
-    constant biases' std); gyro_rw: rad/s/sqrt(s); accel_rw: m/s^2/sqrt(s) (bias random walks).
+    constant biases' std); gyro_rw: rad/s/sqrt(s); accel_rw: m/s^2/sqrt(s) (bias random walks);
+    gyro_sf_std, accel_sf_std: the per-seed constant scale-factor errors' std (1; 0 by default, drawn by
+    :func:`corrupt`'s 'numpy' stream only: the core's ``aided_imu.h`` has none).
     """
 
     arw: float = 0.0
@@ -53,6 +59,8 @@ class ImuNoise:
     accel_bias_std: float = 0.0
     gyro_rw: float = 0.0
     accel_rw: float = 0.0
+    gyro_sf_std: float = 0.0  # 1: per-seed constant scale-factor error per axis, N(0, std^2) (stream 'numpy' only)
+    accel_sf_std: float = 0.0  # 1
 
     def __post_init__(self):
         for name in self.__dataclass_fields__:
@@ -62,7 +70,7 @@ class ImuNoise:
 
     def array(self) -> np.ndarray:
         """The settings array of the core's ``aided_imu.h`` (arw, vrw, gyro_bias_std, accel_bias_std,
-        gyro_rw, accel_rw; SI)."""
+        gyro_rw, accel_rw; SI; the scale factors are not in it)."""
         return np.array([self.arw, self.vrw, self.gyro_bias_std, self.accel_bias_std, self.gyro_rw, self.accel_rw])
 
 
@@ -92,6 +100,9 @@ def corrupt(truth, noise: ImuNoise, seed: int, stream: str = "numpy"):
         rw sqrt(h) n: the draws the TrajectoryIMU FMU makes one step at a time, bit for bit).
     """
     if stream == "core":
+        if noise.gyro_sf_std or noise.accel_sf_std:
+            raise ValueError("IMU scale-factor errors are drawn by the 'numpy' stream only (the core's aided_imu.h "
+                             "has none)")
         dtheta, dv, bias = _core.aided_imu_run(noise.array(), truth.step, seed, truth.dtheta, truth.dv)
         return dtheta, dv, bias[:, :3], bias[:, 3:]
     if stream != "numpy":
@@ -105,7 +116,17 @@ def corrupt(truth, noise: ImuNoise, seed: int, stream: str = "numpy"):
     white = rng.standard_normal((2, k, 3)) * math.sqrt(h)
     dtheta = truth.dtheta + bias_g * h + noise.arw * white[0]
     dv = truth.dv + bias_a * h + noise.vrw * white[1]
+    if noise.gyro_sf_std or noise.accel_sf_std:  # dtheta = (1 + s_g) dtheta_true + ..., own draws: the rest unmoved
+        sg, sa = scale_factors(noise, seed)
+        dtheta, dv = dtheta + sg * truth.dtheta, dv + sa * truth.dv
     return dtheta, dv, bias_g, bias_a
+
+
+def scale_factors(noise: ImuNoise, seed: int):
+    """The per-seed constant scale-factor errors (3,) gyro and (3,) accelerometer (1) :func:`corrupt` applies,
+    N(0, std^2) from numpy's generator seeded [seed, 3019] (zeros when the stds are 0)."""
+    z = np.random.default_rng([seed, 3019]).standard_normal((2, 3))
+    return noise.gyro_sf_std * z[0], noise.accel_sf_std * z[1]
 
 
 @dataclass(frozen=True)
@@ -126,6 +147,12 @@ class FilterSettings:
     cov_every: int = 10  # IMU steps per covariance propagation
     out_every: int = 10  # IMU steps per output row
     zaru_std: float | None = None  # rad/s per step; None: arw / sqrt(h) (see the class docstring)
+    # optional states (navigate's filter_states): priors, and the lever arm the filter is configured with
+    gyro_sf0_std: float = 1e-3  # 1 (1000 ppm), 'sf'
+    accel_sf0_std: float = 1e-3  # 1, 'sf'
+    sf_tau: float = 0.0  # s, 'sf': 0 random constants, else first-order Gauss-Markov (Q = 2 std^2 / tau)
+    lever0_std: float = 0.1  # m, 'lever'
+    lever_arm: tuple | None = None  # m, body: the lever arm the filter assumes; None: the receiver's (GNSSConfig)
 
     def __post_init__(self):
         for name in ("pos0_std", "vel0_std", "tilt0_std", "heading0_std", "zupt_std", "nhc_std"):
@@ -139,6 +166,15 @@ class FilterSettings:
         for name in ("cov_every", "out_every"):
             if not (isinstance(getattr(self, name), int) and 1 <= getattr(self, name) <= 1000):
                 raise ValueError(f"filter {name} must be a whole number 1 .. 1000")
+        for name in ("gyro_sf0_std", "accel_sf0_std", "lever0_std"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ValueError(f"filter {name} must be positive, got {value!r}")
+        if not (isinstance(self.sf_tau, (int, float)) and math.isfinite(self.sf_tau) and self.sf_tau >= 0):
+            raise ValueError(f"filter sf_tau must be >= 0 s (0: random constants), got {self.sf_tau!r}")
+        if self.lever_arm is not None and not (len(self.lever_arm) == 3
+                                               and all(math.isfinite(x) for x in self.lever_arm)):
+            raise ValueError(f"filter lever_arm must be three finite numbers (m) or None, got {self.lever_arm!r}")
 
 
 @dataclass(frozen=True)
@@ -147,7 +183,10 @@ class AidedResult:
     roll; truth (n, 9) the same of the truth; error (n, 9) position ENU m, velocity ENU m/s, attitude
     phi ENU rad; cov (n, 15, 15) the filter's P, or None when the run kept only its diagonal
     (``navigate(..., covariance="diagonal")``); bias_g, bias_a (n, 3) estimates; bias_g_true,
-    bias_a_true (n, 3); variance (n, 15) P's diagonal (SI squared, the error state's order)."""
+    bias_a_true (n, 3); variance (n, 15) P's diagonal (SI squared, the error state's order).  With optional
+    filter states (``navigate(..., filter_states=...)``) cov and variance have n states (15 .. 30) and
+    ``states`` holds each optional block's estimate (n_out, 3) by name ('scale_g', 'scale_a' (1), 'lever' (body
+    m), 'gnss_pos_gm' (ENU m), 'gnss_vel_gm' (ENU m/s)); ``state_index`` its first index in P."""
 
     time: np.ndarray
     nav: np.ndarray
@@ -163,6 +202,13 @@ class AidedResult:
     zaru_steps: int = 0
     info: dict = field(default_factory=dict)
     variance: np.ndarray | None = None
+    states: dict = field(default_factory=dict)
+    state_index: dict = field(default_factory=dict)
+
+    def state_sigma(self, name: str) -> np.ndarray:
+        """(n_out, 3) the filter's std of the optional block ``name`` (see ``states``)."""
+        i = self.state_index[name]
+        return np.sqrt(self.variance[:, i:i + 3])
 
     def nees(self, block: str) -> np.ndarray:
         """(n,) normalised estimation error squared of 'position', 'velocity' or 'attitude' (3 dof)."""
@@ -234,12 +280,50 @@ def zaru_std(noise: ImuNoise, settings: FilterSettings, step: float) -> float:
 
 def _config(noise: ImuNoise, settings: FilterSettings, gnss_cfg, step: float, odometer=None) -> np.ndarray:
     lever = gnss_cfg.lever_arm if gnss_cfg is not None else (0.0, 0.0, 0.0)
+    if settings.lever_arm is not None:
+        lever = settings.lever_arm
     latency = gnss_cfg.latency if gnss_cfg is not None else 0.0
     odo_std = odometer.std() if odometer is not None else 1.0
     return np.array([step, noise.arw, noise.vrw, noise.gyro_rw, noise.accel_rw, settings.pos0_std, settings.vel0_std,
                      settings.tilt0_std, settings.heading0_std, max(noise.gyro_bias_std, 1e-12),
                      max(noise.accel_bias_std, 1e-12), *lever, latency, settings.zupt_std, settings.cov_every,
                      settings.nhc_std, odo_std, zaru_std(noise, settings, step)])
+
+
+BLOCKS = (("scale_g", _core.ESKF_SF), ("scale_a", _core.ESKF_SF), ("lever", _core.ESKF_LEVER),
+          ("gnss_pos_gm", _core.ESKF_GNSS_POS_GM), ("gnss_vel_gm", _core.ESKF_GNSS_VEL_GM))  # eskf.h's order
+GM_STD_FLOOR = 1e-6  # m, m/s: the fixes' white std the filter uses with 'gnss-gm' is at least this
+
+
+def check_filter_states(filter_states, aiding) -> tuple:
+    """The filter_states as a tuple; ValueError naming an unknown one, or 'lever' / 'gnss-gm' without GNSS."""
+    states = tuple(filter_states)
+    unknown = sorted(set(states) - set(FILTER_STATES))
+    if unknown:
+        raise ValueError(f"unknown filter states {', '.join(unknown)}; choose from {', '.join(FILTER_STATES)}")
+    needs = [s for s in ("lever", "gnss-gm") if s in states and "gnss" not in aiding]
+    if needs:
+        raise ValueError(f"filter states {', '.join(needs)} need 'gnss' in the aiding")
+    return states
+
+
+def state_mask(filter_states, gnss_velocity: bool = True) -> int:
+    """The core's STATES bit set (eskf.h) of filter_states."""
+    mask = _core.ESKF_SF if "sf" in filter_states else 0
+    mask |= _core.ESKF_LEVER if "lever" in filter_states else 0
+    if "gnss-gm" in filter_states:
+        mask |= _core.ESKF_GNSS_POS_GM | (_core.ESKF_GNSS_VEL_GM if gnss_velocity else 0)
+    return mask
+
+
+def _options(filter_states, settings: FilterSettings, gnss_cfg, gnss_velocity: bool):
+    """The core's options array (eskf.h SARINS_ESKF_OPT) of filter_states, or None for the 15 states."""
+    if not filter_states:
+        return None
+    g = gnss_cfg if gnss_cfg is not None else gnss_mod.GNSSConfig()
+    return np.array([state_mask(filter_states, gnss_velocity), settings.gyro_sf0_std, settings.accel_sf0_std,
+                     settings.sf_tau, settings.lever0_std, *g.pos_gm_std, g.pos_gm_tau, *g.vel_gm_std, g.vel_gm_tau],
+                    float)
 
 
 def _initial_state(truth, settings: FilterSettings, rng) -> np.ndarray:
@@ -259,10 +343,13 @@ def _initial_state(truth, settings: FilterSettings, rng) -> np.ndarray:
     return row
 
 
-def fix_rows(fixes, config, step: float) -> np.ndarray:
-    """(m, 11) fix rows of ``sarins_eskf_run``: each applied after the IMU step at which it is available."""
+def fix_rows(fixes, config, step: float, white: bool = False) -> np.ndarray:
+    """(m, 11) fix rows of ``sarins_eskf_run``: each applied after the IMU step at which it is available; the
+    position std the receiver's total, or with ``white`` its white part (the filter then models the
+    Gauss-Markov part as states), at least GM_STD_FLOOR."""
     index = np.ceil(fixes.available / step - 1e-9) - 1.0
-    std = np.tile(config.pos_std(), (fixes.time.size, 1))
+    pos_std = np.maximum(config.pos_white_std, GM_STD_FLOOR) if white else config.pos_std()
+    std = np.tile(pos_std, (fixes.time.size, 1))
     return np.column_stack([index, fixes.valid.astype(float), fixes.lat, fixes.lon, fixes.height, fixes.velocity_n,
                             std])
 
@@ -314,7 +401,8 @@ def per_step_aiding(truth, aiding, settings: FilterSettings, odometer, rng, seed
 def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aiding=("gnss", "zupt"), outages=(),
              settings: FilterSettings = FilterSettings(), seed: int = 0, gnss_velocity: bool = True,
              odometer: OdometerConfig | None = None, imu=None, fixes=None, zupt_detect: str = "truth",
-             vibration=None, detector=None, imu_stream: str = "numpy", covariance: str = "full") -> AidedResult:
+             vibration=None, detector=None, imu_stream: str = "numpy", covariance: str = "full",
+             filter_states=()) -> AidedResult:
     """Aided navigation along ``truth`` (:class:`sarins_fmu.trajectory.Truth`).
 
     gnss : GNSSConfig or None (preset ``sps`` when 'gnss' is aided and None is given).
@@ -334,6 +422,11 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
     covariance : what the result keeps of the filter's P at each output time: 'full' (``cov`` (n, 15, 15)
         and ``variance``) or 'diagonal' (``variance`` only, ``cov`` None: no NEES; the core then writes 30
         numbers per output row instead of 240).  The filter runs the same either way.
+    filter_states : optional error states beyond the 15 (:data:`FILTER_STATES`, eskf.h's header): 'sf' gyro and
+        accelerometer scale factors (priors ``settings.gyro_sf0_std``, ``accel_sf0_std``, ``sf_tau``), 'lever'
+        the antenna lever arm (prior ``settings.lever0_std``, from ``settings.lever_arm`` or the receiver's),
+        'gnss-gm' the receiver's Gauss-Markov position (and with ``gnss_velocity`` velocity) errors with the
+        receiver's std and correlation time (the fixes' std then the white part).  () : the 15-state filter.
     """
     from . import zero_velocity
 
@@ -342,6 +435,7 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
     unknown = set(aiding) - set(AIDING)
     if unknown:
         raise ValueError(f"unknown aiding {', '.join(sorted(unknown))}; choose from {', '.join(AIDING)}")
+    filter_states = check_filter_states(filter_states, aiding)
     if zupt_detect not in ZUPT_DETECT:
         raise ValueError(f"zupt_detect must be one of {', '.join(ZUPT_DETECT)}, got {zupt_detect!r}")
     if "gnss" in aiding and gnss is None:
@@ -360,15 +454,19 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         stops = found.stationary
         info.update({"detector_samples": found.samples, "detector_gamma": found.gamma, "detector_alpha": found.alpha})
     rng = np.random.default_rng([seed, 3018])
-    state = _core.EskfState(_config(noise, settings, gnss, step, odometer), _initial_state(truth, settings, rng))
+    state = _core.EskfState(_config(noise, settings, gnss, step, odometer), _initial_state(truth, settings, rng),
+                            _options(filter_states, settings, gnss, gnss_velocity))
+    if filter_states:
+        info["filter_states"] = list(filter_states)
     if "zaru" in aiding:
         info["zaru_std"] = zaru_std(noise, settings, step)
     aid = per_step_aiding(truth, aiding, settings, odometer, rng, seed, stops, imu_stream)
     if "gnss" in aiding:
         if fixes is None:
             fixes = gnss_mod.simulate(truth, gnss, seed, outages)
-        rows = fix_rows(fixes, gnss, step)
-        vel_std = gnss.vel_std()
+        gm = "gnss-gm" in filter_states
+        rows = fix_rows(fixes, gnss, step, white=gm)
+        vel_std = np.maximum(gnss.vel_white_std, GM_STD_FLOOR) if gm and gnss_velocity else gnss.vel_std()
     else:
         if len(outages):
             gnss_mod.check_outages(outages, truth.time[-1])
@@ -377,14 +475,20 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
     out = state.run(dtheta, dv, aid, rows, vel_std, gnss_velocity, settings.out_every, full_cov=full)
     idx = np.arange(1, out.shape[0] + 1) * settings.out_every
     true_rows = truth.nav_rows(idx)
-    nav = out[:, :9]
-    cov = out[:, 15:].reshape(-1, 15, 15) if full else None
+    nav, n = out[:, :9], state.n
+    cov = out[:, n:].reshape(-1, n, n) if full else None
+    states, index, at = {}, {}, 15
+    mask = state_mask(filter_states, gnss_velocity) if filter_states else 0
+    for name, bit in BLOCKS:
+        if mask & bit:
+            states[name], index[name] = out[:, at:at + 3], at
+            at += 3
     return AidedResult(time=truth.time[idx], nav=nav, truth=true_rows, error=nav_errors(nav, true_rows),
-                       cov=cov, bias_g=out[:, 9:12], bias_a=out[:, 12:15],
+                       cov=cov, bias_g=out[:, 9:12], bias_a=out[:, 12:15], states=states, state_index=index,
                        bias_g_true=bg_true[idx - 1], bias_a_true=ba_true[idx - 1],
                        gnss_used=int(np.sum(rows[:, 1] > 0)) if len(rows) else 0, zupt_steps=int(aid[:, 0].sum()),
                        zaru_steps=int(aid[:, 9].sum()), info=info,
-                       variance=np.diagonal(cov, axis1=1, axis2=2) if full else out[:, 15:])
+                       variance=np.diagonal(cov, axis1=1, axis2=2) if full else out[:, n:])
 
 
 @dataclass(frozen=True)
@@ -446,10 +550,10 @@ def outage_table(result: AidedResult, outages) -> list:
 def summary(result: AidedResult, outages=()) -> dict:
     """JSON-ready numbers of a run: RMS and max horizontal / vertical errors (m), RMS velocity error
     (m/s), RMS attitude error (deg; heading separately), the final errors, mean NEES per block and
-    the outage table."""
+    the outage table; with optional filter states, their final estimates and sigmas ('final_states')."""
     h = result.horizontal_error()
     deg = 180.0 / math.pi
-    return {
+    out = {
         "duration_s": float(result.time[-1]),
         "horizontal_error_rms_m": float(np.sqrt(np.mean(h**2))),
         "horizontal_error_max_m": float(h.max()),
@@ -465,6 +569,10 @@ def summary(result: AidedResult, outages=()) -> dict:
         "outages": [{"start_s": r.start, "end_s": r.end, "horizontal_error_m": r.error, "predicted_sigma_m": r.sigma,
                      "ratio": r.ratio} for r in outage_table(result, outages)],
     }
+    if result.states:
+        out["final_states"] = {name: {"estimate": result.states[name][-1].tolist(),
+                                      "sigma": result.state_sigma(name)[-1].tolist()} for name in result.states}
+    return out
 
 
 @dataclass(frozen=True)

@@ -61,6 +61,9 @@ RANGES = {
         "step": [0.0, -1.0], "arw": [-1.0], "cov_every": [0.0, 2.5], "zupt_std": [0.0], "lat0": [2.0],
         "gnss_pos_std_e": [0.0], "gnss_vel_std_u": [-1.0], "use_velocity": [2, -1], "latency": [-1.0],
         "zaru_std": [0.0, -1.0], "nhc_std": [0.0], "odo_std": [0.0],
+        "state_scale_factors": [2, -1], "state_lever_arm": [2], "state_gnss_pos_gm": [-1], "state_gnss_vel_gm": [3],
+        "gyro_sf0_std": [0.0], "accel_sf0_std": [-1.0], "sf_tau": [-1.0], "lever0_std": [0.0],
+        "gnss_pos_gm_std_e": [-1.0], "gnss_pos_gm_tau": [0.0], "gnss_vel_gm_std_n": [-1.0], "gnss_vel_gm_tau": [-1.0],
     },
     "VehicleMotion": {
         "legs": ["", "fly 3", "drive -5 10"], "lat0": [2.0], "lead_time": [-1.0], "grid": [0.0],

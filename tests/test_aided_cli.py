@@ -87,3 +87,37 @@ def test_zaru_at_the_stops(tmp_path, capsys):
     assert run([*argv, "--aiding", "gnss,zupt"]) == 0
     plain = json.loads(capsys.readouterr().out)
     assert plain["zaru_steps"] == 0 and plain["heading_error_rms_deg"] != out["heading_error_rms_deg"]
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--filter-states", "sf,scale"], "--filter-states sf,scale: 'scale' unknown; choose from sf, lever, gnss-gm"),
+    (["--filter-states", "sf,sf"], "--filter-states sf,sf: a state is named twice"),
+    (["--filter-states", "lever", "--aiding", "zupt"], "--filter-states lever: filter states lever need 'gnss'"),
+    (["--filter-states", "sf", "--nav-hours", "3"], "--nav-hours does not apply to an aided run"),
+])
+def test_bad_filter_states_exit_2_naming_them(tmp_path, capsys, extra, words):
+    assert run(["navigate", "--trajectory", write(tmp_path), *extra]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0]
+
+
+def test_filter_states_option_runs_the_navigate_numbers(tmp_path, capsys):
+    from sarins_fmu import aided, gnss
+    from sarins_fmu import trajectory as tr
+
+    path = write(tmp_path)
+    argv = ["navigate", "--trajectory", path, "--json", "--imu-rate-hz", "50", "--seed", "2",
+            "--filter-states", "sf,gnss-gm"]
+    assert run(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["filter_states"] == ["sf", "gnss-gm"]
+    assert set(out["final_states"]) == {"scale_g", "scale_a", "gnss_pos_gm", "gnss_vel_gm"}
+    truth = tr.generate(tr.load_trajectory(path), 0.02)
+    r = aided.navigate(truth, gnss=gnss.preset("sps", rate_hz=1.0), seed=2, filter_states=("sf", "gnss-gm"))
+    assert out["horizontal_error_rms_m"] == aided.summary(r)["horizontal_error_rms_m"]
+    assert run(["navigate", "--trajectory", path, "--imu-rate-hz", "50", "--seed", "2", "--filter-states", "none",
+                "--filter-states", "sf,gnss-gm", "--json"]) == 0  # the last one counts
+    assert json.loads(capsys.readouterr().out)["horizontal_error_rms_m"] == out["horizontal_error_rms_m"]
+    assert run(["navigate", "--trajectory", path, "--json", "--imu-rate-hz", "50", "--seed", "2"]) == 0
+    plain = json.loads(capsys.readouterr().out)
+    assert plain["filter_states"] == [] and plain["horizontal_error_rms_m"] != out["horizontal_error_rms_m"]

@@ -39,6 +39,12 @@ INPUTS = [f"{q}_{a}" for q in ("dtheta", "dv") for a in "xyz"] + [f"fix_{n}" for
 # the aiding inputs and their columns of the core's aiding row (eskf.h sarins_eskf_aid)
 AID_INT = {"zupt": 0, "odo_valid": 4, "nhc": 6, "zaru": 9}
 AID_REAL = {"zupt_v_e": 1, "zupt_v_n": 2, "zupt_v_u": 3, "odo_speed": 5, "nhc_v_x": 7, "nhc_v_z": 8}
+STATE_SWITCHES = ["state_scale_factors", "state_lever_arm", "state_gnss_pos_gm", "state_gnss_vel_gm"]  # bits 1 2 4 8
+STATE_SETTINGS = ["gyro_sf0_std", "accel_sf0_std", "sf_tau", "lever0_std", "gnss_pos_gm_std_e", "gnss_pos_gm_std_n",
+                  "gnss_pos_gm_std_u", "gnss_pos_gm_tau", "gnss_vel_gm_std_e", "gnss_vel_gm_std_n", "gnss_vel_gm_std_u",
+                  "gnss_vel_gm_tau"]  # eskf.h SARINS_ESKF_OPT after STATES
+STATE_OUT = [f"{q}_{a}" for q, axes in (("scale_g", "xyz"), ("scale_a", "xyz"), ("lever_est", "xyz"),
+                                        ("gnss_pos_gm", "enu"), ("gnss_vel_gm", "enu")) for a in axes]
 SETTING_NAMES = ["step", "arw", "vrw", "gyro_rw", "accel_rw", "pos0_std", "vel0_std", "tilt0_std", "heading0_std",
                  "gyro_bias0_std", "accel_bias0_std", "lever_x", "lever_y", "lever_z", "latency", "zupt_std",
                  "cov_every", "nhc_std", "odo_std", "zaru_std"]
@@ -59,11 +65,14 @@ class Case(NamedTuple):
     fix_time: np.ndarray
 
 
-def make_case(aiding) -> Case:
+def make_case(aiding, filter_states=(), settings=SETTINGS) -> Case:
+    """With filter_states, the optional states' switches and priors are parameters too and expected carries
+    their estimates after the 24 columns (STATE_OUT)."""
+    SETTINGS = settings  # noqa: N806  (the module's name: the body below reads it)
     truth = tr.generate(tr.Trajectory(tr.Start(lat_deg=35.0, heading_deg=-30.0), SEGMENTS), STEP)
     odometer = aided.OdometerConfig() if "odometer" in aiding else None
     result = aided.navigate(truth, noise=NOISE, gnss=GNSS, aiding=aiding, outages=OUTAGES, settings=SETTINGS,
-                            seed=SEED, odometer=odometer)
+                            seed=SEED, odometer=odometer, filter_states=filter_states)
     dtheta, dv, _, _ = aided.corrupt(truth, NOISE, SEED)
     rng = np.random.default_rng([SEED, 3018])  # navigate's: the initial errors, then the aiding's jitter
     nav0 = aided._initial_state(truth, SETTINGS, rng)
@@ -72,8 +81,16 @@ def make_case(aiding) -> Case:
     params.update({f"{n}0": float(v) for n, v in zip(NAV, nav0)})
     params.update({f"gnss_{k}_std_{a}": float(v) for k, std in (("pos", GNSS.pos_std()), ("vel", GNSS.vel_std()))
                    for a, v in zip("enu", std)})
+    if filter_states:
+        opt = aided._options(filter_states, SETTINGS, GNSS, True)
+        params.update(dict(zip(STATE_SWITCHES, [(int(opt[0]) >> b) & 1 for b in range(4)])))
+        params.update(dict(zip(STATE_SETTINGS, opt[1:].tolist())))
+        if "gnss-gm" in filter_states:  # the fixes' white part (aided.fix_rows(white=True))
+            params.update({f"gnss_{k}_std_{a}": float(max(v, aided.GM_STD_FLOOR))
+                           for k, std in (("pos", GNSS.pos_white_std), ("vel", GNSS.vel_white_std))
+                           for a, v in zip("enu", std)})
     fixes = gnss.simulate(truth, GNSS, SEED, OUTAGES)
-    rows, fix_time = aided.fix_rows(fixes, GNSS, STEP), fixes.time
+    rows, fix_time = aided.fix_rows(fixes, GNSS, STEP, white="gnss-gm" in filter_states), fixes.time
     if "gnss" not in aiding:
         rows, fix_time = rows[:0], fix_time[:0]
     k = truth.n_steps
@@ -87,6 +104,9 @@ def make_case(aiding) -> Case:
             flags[i, :2] = (int(row[1]), 1)
     sigma = np.sqrt(np.diagonal(result.cov, axis1=1, axis2=2)[:, :9])
     expected = np.column_stack([result.nav, result.bias_g, result.bias_a, sigma])
+    if filter_states:
+        est = [result.states.get(name, np.zeros((len(expected), 3))) for name, _ in aided.BLOCKS]
+        expected = np.column_stack([expected, *est])
     if "gnss" in aiding:
         assert 0 < (flags[:, 1] & ~flags[:, 0]).sum() < flags[:, 1].sum()  # the outage drops some fixes
     return Case(params, inputs, flags, expected, aid, rows, fix_time)
@@ -160,7 +180,7 @@ def tagged_inputs(case, k, lag):
     return values
 
 
-def _run(fmu, case, state_at=None, lag=None):
+def _run(fmu, case, state_at=None, lag=None, out_names=OUT):
     """The FMU through FMPy, one doStep per interval (``lag`` None: untagged; else time-tagged with ``lag``
     intervals waiting, lag more doSteps at the end).  Returns the rows after every doStep and fixes_used
     (time-tagged: the rows and their nav_time), or with ``state_at`` the rows after doStep state_at on,
@@ -178,7 +198,7 @@ def _run(fmu, case, state_at=None, lag=None):
             else:
                 s.set(**tagged_inputs(case, k, lag))
             s.fmu.doStep(k * STEP, STEP)
-            out.append(s.get(*OUT) + ([] if lag is None else s.get("nav_time")))
+            out.append(s.get(*out_names) + ([] if lag is None else s.get("nav_time")))
 
     try:
         slave.set(**params)
@@ -329,7 +349,7 @@ def test_a_value_under_a_clear_flag_is_not_read(fmu, aid_cases, lag):
 
 
 def test_state_of_the_previous_version_is_refused(fmu, case):
-    """A serialized state of state version 3 (the ring without the aiding columns) is refused naming why."""
+    """A serialized state of state version 4 (the 15-state filter only) is refused naming why."""
     from fmpy.fmi1 import FMICallException
 
     slave = Slave(fmu, "old_state")
@@ -338,8 +358,8 @@ def test_state_of_the_previous_version_is_refused(fmu, case):
         slave.fmu.enterInitializationMode()
         slave.fmu.exitInitializationMode()
         blob = bytearray(slave.fmu.serializeFMUstate(slave.fmu.getFMUstate()))
-        assert int.from_bytes(blob[12:16], "little") == 4
-        blob[12:16] = (3).to_bytes(4, "little")
+        assert int.from_bytes(blob[12:16], "little") == 5
+        blob[12:16] = (4).to_bytes(4, "little")
         with pytest.raises(FMICallException, match="status 3"):
             slave.fmu.deSerializeFMUstate(bytes(blob))
         assert any("state version differs" in m for status, _, m in slave.log if status == 3), slave.log
@@ -397,6 +417,12 @@ def test_c_host_empty_environment_no_allocation(fmu, case, tmp_path):
     ({"zaru_std": -1e-4}, "zaru_std"),
     ({"zaru_std": float("nan")}, "zaru_std"),
     ({"lat0": 1.6}, "lat0"),
+    ({"state_lever_arm": 2}, "state_lever_arm"),
+    ({"state_scale_factors": -1}, "state_scale_factors"),
+    ({"gyro_sf0_std": 0.0}, "gyro_sf0_std"),
+    ({"sf_tau": -1.0}, "sf_tau"),
+    ({"gnss_pos_gm_tau": 0.0}, "gnss_pos_gm_tau"),
+    ({"gnss_vel_gm_std_u": float("nan")}, "gnss_vel_gm_std_u"),
 ])
 def test_bad_parameters_are_refused(fmu, params, text):
     check_parameter_error(fmu, params, text)
@@ -487,3 +513,54 @@ def test_receiver_into_aided_ins_equals_navigate_with_two_steps_latency(fmu, tmp
     finally:
         receiver.free()
         ins.free()
+
+
+# every optional state, the filter configured with a lever arm 0.3 m off the receiver's
+STATES = ("sf", "lever", "gnss-gm")
+STATE_SETTINGS_CASE = aided.FilterSettings(out_every=1, lever_arm=(0.0, 0.6, 1.1))
+
+
+@pytest.fixture(scope="module")
+def states_case(aid_cases):
+    c = make_case(("gnss", "zupt", "zaru"), STATES, STATE_SETTINGS_CASE)
+    assert c.expected.shape[1] == len(OUT) + len(STATE_OUT)
+    assert np.abs(c.expected[-1, len(OUT):]).min() > 0  # every block estimated (none is 0)
+    return c
+
+
+def test_fmu_with_the_optional_states_equals_navigate_bit_for_bit(fmu, states_case):
+    got, used = _run(fmu, states_case, out_names=OUT + STATE_OUT)
+    assert np.array_equal(got, states_case.expected)
+    assert used == states_case.flags[:, 0].sum() > 10
+    out, again, there = _run(fmu, states_case, state_at=120, out_names=OUT + STATE_OUT)
+    assert again == out[120:] and there == out[120:]
+    assert [list(r) for r in got] == [list(r) for r in out]
+
+
+def test_fmi3_with_the_optional_states_equals_navigate(fmu3, states_case):
+    from fmpy import extract
+    from fmpy.fmi3 import FMU3Slave
+
+    c = states_case
+    md = read_model_description(str(fmu3))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(fmu3)), modelIdentifier="AidedINS", instanceName="ai3s")
+    fmu.instantiate()
+    try:
+        ints = {k: v for k, v in c.params.items() if k in STATE_SWITCHES}
+        reals = {k: v for k, v in c.params.items() if k not in ints}
+        fmu.setFloat64([vr[k] for k in reals], list(reals.values()))
+        fmu.setInt32([vr[k] for k in ints], list(ints.values()))
+        fmu.enterInitializationMode(startTime=0.0)
+        fmu.exitInitializationMode()
+        got = []
+        for k in range(len(c.inputs)):
+            r, i = step_inputs(c, k)
+            fmu.setFloat64([vr[n] for n in INPUTS + list(AID_REAL)], r)
+            fmu.setInt32([vr[n] for n in ["fix_valid", "fix_count", *AID_INT]], i)
+            fmu.doStep(k * STEP, STEP)
+            got.append(fmu.getFloat64([vr[n] for n in OUT + STATE_OUT]))
+        assert np.array_equal(np.array(got), c.expected)
+        fmu.terminate()
+    finally:
+        fmu.freeInstance()

@@ -33,7 +33,7 @@ def test_imulog_row_plays_its_log_and_aided_ins_steps_at_a_hundredth(fmu_dir, tm
     rows = [pt.platform_row(fmu_dir / f"{name}.fmu", tmp_path, pt.Hosts(tmp_path), lines=[line], others=())
             for name in ("IMULog", "AidedINS")]
     assert rows[0].cells["linux64"] == f"{pt.LOG_ROWS - 1} steps x 18", rows[0].cells
-    assert rows[1].cells["linux64"] == f"{pt.DEFAULT_STEPS} steps x 25", rows[1].cells
+    assert rows[1].cells["linux64"] == f"{pt.DEFAULT_STEPS} steps x 40", rows[1].cells  # 25 + 15 optional-state outputs
     assert [r.cells[pt.line_name(line)] for r in rows] == ["0", "0"], [r.cells for r in rows]
     assert pt.case_of("AidedINS", pt.read_model_description(str(fmu_dir / "AidedINS.fmu"))).step == 0.01
 

@@ -99,6 +99,10 @@ def register(sub) -> None:
     g.add_argument("--zupt-alpha", type=finite, default=None,
                    help="probability that a stationary window is declared moving, 0 .. 1 exclusive (default 0.001; "
                         "--zupt-detect imu)")
+    g.add_argument("--filter-states", default=None, metavar="LIST",
+                   help="optional filter states beyond the 15 (comma-separated): sf (gyro and accelerometer scale "
+                        "factors), lever (GNSS antenna lever arm), gnss-gm (the receiver's Gauss-Markov position and "
+                        "velocity errors), or none (default none; docs/aided-navigation.md)")
     g.add_argument("--vibration", default=None, metavar="PRESET",
                    help="vehicle vibration while moving: none, car (default car with --zupt-detect imu, else none)")
     p.set_defaults(func=run)
@@ -112,7 +116,7 @@ _AIDED_ONLY = {"aiding": "--aiding", "gnss_outage": "--gnss-outage", "gnss": "--
                "gnss_pos_std": "--gnss-pos-std", "imu_rate_hz": "--imu-rate-hz", "imu_noise": "--imu-noise",
                "imu_stream": "--imu-stream", "zupt_std": "--zupt-std", "zaru_std": "--zaru-std",
                "zupt_detect": "--zupt-detect", "zupt_window": "--zupt-window",
-               "zupt_alpha": "--zupt-alpha", "vibration": "--vibration"}
+               "zupt_alpha": "--zupt-alpha", "vibration": "--vibration", "filter_states": "--filter-states"}
 
 
 def _outage(text: str) -> tuple:
@@ -155,6 +159,7 @@ def run_aided(args) -> int:
     if args.zaru_std is not None and "zaru" not in aiding:
         raise UsageError("--zaru-std needs zaru in --aiding")
     detect, vibration, detector = _zupt_detection(args, aiding)
+    filter_states = _filter_states(args.filter_states, aiding)
     outages = [_outage(t) for t in args.gnss_outage]
     if outages and "gnss" not in aiding:
         raise UsageError("--gnss-outage needs --aiding gnss")
@@ -182,12 +187,13 @@ def run_aided(args) -> int:
     result = aided.navigate(truth, noise=aided.IMU_NOISE[args.imu_noise], gnss=receiver if "gnss" in aiding else None,
                             aiding=aiding, outages=outages, settings=aided.FilterSettings(zupt_std=args.zupt_std, zaru_std=args.zaru_std),
                             seed=args.seed, zupt_detect=detect, vibration=vibration, detector=detector,
-                            imu_stream=args.imu_stream or "numpy")
+                            imu_stream=args.imu_stream or "numpy", filter_states=filter_states)
     out = aided.summary(result, outages)
     out.update({"wall_seconds": time.perf_counter() - t0, "seed": args.seed, "aiding": aiding, "gnss": args.gnss,
                 "imu_noise": args.imu_noise, "imu_stream": args.imu_stream or "numpy",
                 "imu_rate_hz": args.imu_rate_hz, "gnss_rate_hz": args.gnss_rate_hz,
-                "zupt_detect": detect, "vibration": args.vibration or ("car" if detect == "imu" else "none")})
+                "zupt_detect": detect, "vibration": args.vibration or ("car" if detect == "imu" else "none"),
+                "filter_states": list(filter_states)})
     if args.json:
         print(json.dumps(out, allow_nan=False))
     else:
@@ -195,6 +201,25 @@ def run_aided(args) -> int:
             shown = f"{value:.6g}" if isinstance(value, float) else value
             print(f"{key:>26}: {shown}")
     return 0
+
+
+def _filter_states(text, aiding) -> tuple:
+    """The --filter-states list, or UsageError naming a bad entry."""
+    from sarins_fmu import aided
+
+    if text is None or text.strip() == "none":
+        return ()
+    states = [a.strip() for a in text.split(",")]
+    bad = [a for a in states if a not in aided.FILTER_STATES]
+    if bad or not text.strip():
+        raise UsageError(f"--filter-states {text}: {', '.join(repr(b) for b in bad) or 'empty'} unknown; choose from "
+                         f"{', '.join(aided.FILTER_STATES)} (comma-separated) or none")
+    if len(set(states)) != len(states):
+        raise UsageError(f"--filter-states {text}: a state is named twice")
+    try:
+        return aided.check_filter_states(states, aiding)
+    except ValueError as exc:
+        raise UsageError(f"--filter-states {text}: {exc} (--aiding)") from None
 
 
 def _zupt_detection(args, aiding):

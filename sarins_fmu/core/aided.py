@@ -110,12 +110,17 @@ class GnssState:
 
 
 ESKF_CONFIG = 20  # settings of eskf.h
-ESKF_ROW = 9 + 6 + 225  # an output row with P
-ESKF_ROW_DIAG = 9 + 6 + 15  # an output row with P's diagonal only
+ESKF_OPT = 13  # options of the optional states (eskf.h SARINS_ESKF_OPT)
+ESKF_SF, ESKF_LEVER, ESKF_GNSS_POS_GM, ESKF_GNSS_VEL_GM = 1, 2, 4, 8  # bits of option 0 (SARINS_ESKF_STATES)
+ESKF_ROW = 9 + 6 + 225  # an output row with P (15 states)
+ESKF_ROW_DIAG = 9 + 6 + 15  # an output row with P's diagonal only (15 states)
 ESKF_AID = 10  # columns of the aid row (eskf.h SARINS_ESKF_AID)
 ESKF_GNSS = 11
 _eskf_size = function("sarins_eskf_size", _I64)
 _eskf_init = function("sarins_eskf_init", ctypes.c_int, _P, _P, _P, ctypes.c_char_p, ctypes.c_size_t)
+_eskf_init_states = function("sarins_eskf_init_states", ctypes.c_int, _P, _P, _P, _P, ctypes.c_char_p,
+                             ctypes.c_size_t)
+_eskf_dim = function("sarins_eskf_dim", _I64, _P)
 _eskf_run = function("sarins_eskf_run", ctypes.c_int, _P, _I64, _P, _P, _P, _I64, _P, _P, ctypes.c_int, _I64,
                      ctypes.c_int, _P)
 
@@ -123,26 +128,35 @@ _eskf_run = function("sarins_eskf_run", ctypes.c_int, _P, _I64, _P, _P, _P, _I64
 class EskfState:
     """A ``sarins_eskf`` struct (eskf.h) in a numpy buffer; ValueError with the core's reason."""
 
-    def __init__(self, config, nav0):
+    def __init__(self, config, nav0, options=None):
+        """options: the optional states' settings (ESKF_OPT, eskf.h SARINS_ESKF_OPT) or None (the 15 states)."""
         config = _arrays.read(config, (ESKF_CONFIG,), "filter settings")
         nav0 = _arrays.read(nav0, (9,), "start state")
         self.buffer = np.zeros((int(_eskf_size()) + 7) // 8)
         msg = ctypes.create_string_buffer(256)
-        if _eskf_init(self.buffer.ctypes.data, config.ctypes.data, nav0.ctypes.data, msg, 256) != 0:
+        if options is None:
+            bad = _eskf_init(self.buffer.ctypes.data, config.ctypes.data, nav0.ctypes.data, msg, 256)
+        else:
+            options = _arrays.read(options, (ESKF_OPT,), "filter state options")
+            bad = _eskf_init_states(self.buffer.ctypes.data, config.ctypes.data, options.ctypes.data,
+                                    nav0.ctypes.data, msg, 256)
+        if bad != 0:
             raise ValueError(msg.value.decode())
+        self.n = int(_eskf_dim(self.buffer.ctypes.data))  # states: 15 .. 30
 
     def run(self, dtheta, dv, aid, gnss, vel_std, use_vel: bool, out_every: int, full_cov: bool = True) -> np.ndarray:
         """``sarins_eskf_run`` over K steps (aid (K, 10): ZUPT flag, measured velocity at a stop (3), odometer
         flag, odometer speed, NHC flag, measured lateral and vertical body velocity, ZARU flag); returns the
         (K // out_every, 240) rows (nav 9, b_g 3, b_a 3, P 225), or with ``full_cov`` False the
-        (K // out_every, 30) rows with P's diagonal (15) in place of P."""
+        (K // out_every, 30) rows with P's diagonal (15) in place of P.  With n states: nav 9, b_g, b_a, the
+        optional blocks' estimates (n - 15), then P (n, n) or its diagonal: n + n^2 or 2 n columns."""
         dtheta = _arrays.read(dtheta, (np.shape(dtheta)[0], 3), "dtheta")
         k = dtheta.shape[0]
         dv = _arrays.read(dv, (k, 3), "dv")
         aid = _arrays.read(aid, (k, ESKF_AID), "per-step aiding")
         gnss = _arrays.read(np.reshape(gnss, (-1, ESKF_GNSS)), (np.size(gnss) // ESKF_GNSS, ESKF_GNSS), "fixes")
         vel_std = _arrays.read(vel_std, (3,), "velocity std")
-        out = np.empty((k // out_every, ESKF_ROW if full_cov else ESKF_ROW_DIAG))
+        out = np.empty((k // out_every, self.n + self.n**2 if full_cov else 2 * self.n))
         if _eskf_run(self.buffer.ctypes.data, k, dtheta.ctypes.data, dv.ctypes.data, aid.ctypes.data, gnss.shape[0],
                      gnss.ctypes.data, vel_std.ctypes.data, int(bool(use_vel)), int(out_every), int(bool(full_cov)),
                      out.ctypes.data) != 0:

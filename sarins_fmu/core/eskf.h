@@ -1,5 +1,6 @@
-/* 15-state error-state Kalman filter for loosely coupled GNSS / INS with zero-velocity updates,
- * closed loop (the estimated errors are fed back into the INS after every update).
+/* 15-state error-state Kalman filter (up to 30 with the optional states at the end of this comment) for
+ * loosely coupled GNSS / INS with zero-velocity updates, closed loop (the estimated errors are fed back into
+ * the INS after every update).
  *
  * The INS is nav3.h's mechanization on the increments compensated with the estimated biases,
  *     dtheta_c = dtheta - b_g h,   dv_c = dv - b_a h.
@@ -58,6 +59,31 @@
  *     z_i = (mat_bn v^n)_i - meas_i,   H_i = [0, (mat_bn)_i, -(mat_bn [v^n x])_i, 0, 0]
  * (the odometer at the IMU, no scale-factor state: a scale-factor error is not estimated).
  * The struct holds no pointer and allocates nothing: copying it copies the filter.
+ *
+ * Optional states (sarins_eskf_init_states, options SARINS_ESKF_OPT below; all off = the 15 states above, the
+ * same numbers bit for bit).  They follow the 15 in this order, each block present only when its bit is set
+ * in option STATES, so the dimension n is 15 .. SARINS_ESKF_NMAX (30) and P is n x n (row-major, stride n):
+ *   bit 1 (SARINS_ESKF_SF): ds_g (body, 1 = 1e6 ppm), ds_a (body, 1), the gyro and accelerometer scale-factor
+ *       errors, true = estimate + ds.  Measured dtheta = (1 + s_g) dtheta_true + b_g h + noise per axis (same for
+ *       dv with s_a, b_a); compensated  dtheta_c = (dtheta - b_g h) / (1 + s_g),  dv_c = (dv - b_a h) / (1 + s_a),
+ *       so w_c = w_true + db_g + diag(w_ib) ds_g to first order, and
+ *           phi' = ... - mat_nb diag(w_ib) ds_g,   dv' = ... + mat_nb diag(f^b) ds_a
+ *       (w_ib, f^b the last compensated rate and specific force, body).  Random constants (option SF_TAU 0) or
+ *       first-order Gauss-Markov, ds' = -ds / tau + w with Q = 2 sigma^2 / tau (sigma = SF0 std); prior std
+ *       GYRO_SF0_STD, ACCEL_SF0_STD (1).  ZARU: w_ib carries diag(w_ib) ds_g too, H columns
+ *       (mat_bn omega_ie^n)_i (the true rate at rest: the measured rate in H would share z's noise and pull ds_g).
+ *   bit 2 (SARINS_ESKF_LEVER): dl (body right-front-up, m), the antenna lever arm's error, true = estimate + dl
+ *       (the estimate starts at config LEVER_X..Z); random constant, prior std LEVER0_STD (m).  In the GNSS rows
+ *       position  H_dl = -mat_nb,   velocity  H_dl = -mat_nb [omega_nb^b x]
+ *       (r_gnss = r + mat_nb,true l_true, v_gnss = v + mat_nb,true (omega_nb^b x l_true)).
+ *   bit 4 (SARINS_ESKF_GNSS_POS_GM): e_r (ENU m), the receiver's first-order Gauss-Markov position error,
+ *       r_gnss = r_true + mat_nb l + e_r + white;  e_r' = -e_r / tau_r + w, Q = 2 sigma_r^2 / tau_r per axis
+ *       (GNSS_POS_GM_STD E N U m, GNSS_POS_GM_TAU s, also the prior).  Not an INS correction: its estimate
+ *       ê_r is kept (decayed by Phi's diagonal 1 - T / tau + (T / tau)^2 / 2 at each propagation), the
+ *       predicted fix is r_ins + mat_nb l + ê_r and H_e = -I (true = estimate + de).
+ *   bit 8 (SARINS_ESKF_GNSS_VEL_GM): e_v (ENU m/s), the same for the fix's velocity (GNSS_VEL_GM_STD, _TAU).
+ * With GNSS Gauss-Markov states the fixes' std (sarins_eskf_gnss std, the fix rows) should be the white part
+ * only.  Feedback adds the estimated errors to the estimates (s_g, s_a, l, ê_r, ê_v) and resets x.
  */
 #ifndef SARINS_ESKF_H
 #define SARINS_ESKF_H
@@ -65,7 +91,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define SARINS_ESKF_N 15
+#define SARINS_ESKF_N 15    /* the base states; n = N + the optional blocks' */
+#define SARINS_ESKF_NMAX 30 /* the largest n: every optional block */
 /* settings (SI) */
 enum {
     SARINS_ESKF_STEP, SARINS_ESKF_ARW, SARINS_ESKF_VRW, SARINS_ESKF_GYRO_RW, SARINS_ESKF_ACCEL_RW,
@@ -74,8 +101,20 @@ enum {
     SARINS_ESKF_LEVER_Z, SARINS_ESKF_LATENCY, SARINS_ESKF_ZUPT_STD, SARINS_ESKF_COV_EVERY, SARINS_ESKF_NHC_STD,
     SARINS_ESKF_ODO_STD, SARINS_ESKF_ZARU_STD, SARINS_ESKF_CONFIG
 };
-/* output row: nav row (9: lat, lon, h, v E N U, yaw, pitch, roll), b_g (3), b_a (3), P (15 x 15); the
- * short row has P's diagonal (15) in place of P */
+/* options of the optional states (sarins_eskf_init_states; SI, the header's model): STATES a bit set (a whole
+ * number 0 .. 15) of the blocks below; scale-factor prior stds (1) and correlation time (s, 0: random
+ * constants); lever-arm prior std (m); the receiver's Gauss-Markov position std E N U (m) and correlation
+ * time (s), velocity std E N U (m/s) and correlation time (s).  A std must be >= 0, a used tau > 0. */
+enum {
+    SARINS_ESKF_STATES, SARINS_ESKF_GYRO_SF0_STD, SARINS_ESKF_ACCEL_SF0_STD, SARINS_ESKF_SF_TAU,
+    SARINS_ESKF_LEVER0_STD, SARINS_ESKF_GNSS_POS_GM_STD, SARINS_ESKF_GNSS_POS_GM_TAU = SARINS_ESKF_GNSS_POS_GM_STD + 3,
+    SARINS_ESKF_GNSS_VEL_GM_STD, SARINS_ESKF_GNSS_VEL_GM_TAU = SARINS_ESKF_GNSS_VEL_GM_STD + 3, SARINS_ESKF_OPT
+};
+enum { SARINS_ESKF_SF = 1, SARINS_ESKF_LEVER = 2, SARINS_ESKF_GNSS_POS_GM = 4, SARINS_ESKF_GNSS_VEL_GM = 8 };
+/* output row (15 states): nav row (9: lat, lon, h, v E N U, yaw, pitch, roll), b_g (3), b_a (3), P (15 x 15);
+ * the short row has P's diagonal (15) in place of P.  With n states: nav (9), b_g, b_a, the optional blocks'
+ * estimates in the state's order (s_g, s_a, l, ê_r, ê_v as present: n - 15), then P (n x n) or its diagonal
+ * (n): n + n^2 or 2 n numbers (sarins_eskf_row_size). */
 #define SARINS_ESKF_ROW (9 + 6 + SARINS_ESKF_N * SARINS_ESKF_N)
 #define SARINS_ESKF_ROW_DIAG (9 + 6 + SARINS_ESKF_N)
 #define SARINS_ESKF_AID 10 /* aid row of sarins_eskf_run (columns below) */
@@ -86,15 +125,35 @@ typedef struct {
     double config[SARINS_ESKF_CONFIG];
     double q[4], v[3], pos[3]; /* INS state: q_nb [w x y z], ENU m/s, lat lon rad h m */
     double bg[3], ba[3];       /* estimated biases, body rad/s, m/s^2 */
-    double p[SARINS_ESKF_N * SARINS_ESKF_N];
-    double x[SARINS_ESKF_N];   /* error state between an update and its feedback (0 otherwise) */
+    double p[SARINS_ESKF_NMAX * SARINS_ESKF_NMAX]; /* n x n, row-major, stride n */
+    double x[SARINS_ESKF_NMAX]; /* error state between an update and its feedback (0 otherwise) */
     double w_ib[3];            /* last compensated angular rate, body rad/s */
     double f_n[3];             /* last specific force, nav m/s^2 (for F) */
     int64_t steps, since_cov;
+    double opt[SARINS_ESKF_OPT]; /* options of the optional states (all 0: none) */
+    double f_b[3];             /* last compensated specific force, body m/s^2 (scale-factor rows of F) */
+    double sg[3], sa[3];       /* scale-factor estimates, body (1) */
+    double lever[3];           /* antenna lever-arm estimate, body m (config LEVER_X..Z at the start) */
+    double gm_r[3], gm_v[3];   /* receiver Gauss-Markov error estimates, ENU m and m/s */
+    int64_t n;                 /* states: 15 .. SARINS_ESKF_NMAX */
+    int64_t i_sg, i_sa, i_lever, i_gm_r, i_gm_v; /* first index of each optional block, -1 when absent */
 } sarins_eskf;
 
 /* Initialise from config and the start nav row (9); 0, or 1 with a reason in msg. */
 int sarins_eskf_init(sarins_eskf *s, const double *config, const double *nav0, char *msg, size_t size);
+
+/* Initialise with the optional states of opt (SARINS_ESKF_OPT, NULL: none); 0, or 1 with a reason in msg.
+ * sarins_eskf_init is this with opt NULL. */
+int sarins_eskf_init_states(sarins_eskf *s, const double *config, const double *opt, const double *nav0, char *msg,
+                            size_t size);
+
+/* The state dimension n of s; the width of sarins_eskf_run's output rows (full_cov != 0: n + n^2, else 2 n). */
+int64_t sarins_eskf_dim(const sarins_eskf *s);
+int64_t sarins_eskf_row_size(const sarins_eskf *s, int full_cov);
+
+/* 0 when s is a state sarins_eskf_init_states and the steps can make as far as the layout goes (options
+ * valid, n and the block indices those of the options' bits, the state finite), else 1 with msg. */
+int sarins_eskf_check(const sarins_eskf *s, char *msg, size_t size);
 
 /* One IMU step (dtheta, dv body rad, m/s): mechanization + covariance propagation. */
 void sarins_eskf_predict(sarins_eskf *s, const double *dtheta, const double *dv);
@@ -129,7 +188,8 @@ void sarins_eskf_aid(sarins_eskf *s, const double *dtheta, const double *a);
  * whose step index (gnss row column 0, the step after which the fix is applied) equals k, in order:
  * rows (m, 11) = step index, valid, lat, lon, h, v E N U, std E N U (position m), and vel_std (3)
  * shared by all fixes.  Writes out rows after every out_every-th step (n_out = K / out_every rows):
- * SARINS_ESKF_ROW with full_cov != 0, else SARINS_ESKF_ROW_DIAG (P's diagonal only).  Returns 0, or 1
+ * sarins_eskf_row_size(s, full_cov) numbers each (SARINS_ESKF_ROW with full_cov != 0, else SARINS_ESKF_ROW_DIAG,
+ * P's diagonal only, for the 15 states).  Returns 0, or 1
  * (nothing changed) for a non-finite input or fix rows not in step order. */
 int sarins_eskf_run(sarins_eskf *s, int64_t k, const double *dtheta, const double *dv, const double *aid, int64_t m,
                     const double *gnss, const double *vel_std, int use_vel, int64_t out_every, int full_cov, double *out);

@@ -1,5 +1,6 @@
 /* AidedINS FMU (native): strapdown INS + 15-state error-state Kalman filter aided by GNSS fixes, zero-velocity
- * and zero-angular-rate updates at stops, a wheel odometer and the non-holonomic constraint.
+ * and zero-angular-rate updates at stops, a wheel odometer and the non-holonomic constraint; optional states
+ * (parameters state_*: scale factors, lever arm, the receiver's Gauss-Markov errors; eskf.h) on request.
  *
  * The declaration (variables, descriptions, the timing contract) is fmus/aided_ins_slave.py; the filter is
  * the C core's (sarins_fmu/core/eskf.h: sarins_eskf_predict, sarins_eskf_aid, sarins_eskf_gnss), the kernels
@@ -72,10 +73,64 @@ static void publish(sarins_ctx *c, const ai_state *st)
                         SARINS_R_sigma_vel_n, SARINS_R_sigma_vel_u, SARINS_R_sigma_att_e, SARINS_R_sigma_att_n,
                         SARINS_R_sigma_att_u};
     for (int i = 0; i < 9; i++) {
-        double p = e->p[i * SARINS_ESKF_N + i];
+        double p = e->p[i * e->n + i];
         r[sig[i]] = p > 0.0 ? sm_sqrt(p) : 0.0;
     }
+    const int est[15] = {SARINS_R_scale_g_x, SARINS_R_scale_g_y, SARINS_R_scale_g_z, SARINS_R_scale_a_x,
+                         SARINS_R_scale_a_y, SARINS_R_scale_a_z, SARINS_R_lever_est_x, SARINS_R_lever_est_y,
+                         SARINS_R_lever_est_z, SARINS_R_gnss_pos_gm_e, SARINS_R_gnss_pos_gm_n, SARINS_R_gnss_pos_gm_u,
+                         SARINS_R_gnss_vel_gm_e, SARINS_R_gnss_vel_gm_n, SARINS_R_gnss_vel_gm_u};
+    const double *blocks[5] = {e->sg, e->sa, e->lever, e->gm_r, e->gm_v};
+    const int64_t first[5] = {e->i_sg, e->i_sa, e->i_lever, e->i_gm_r, e->i_gm_v};
+    for (int b = 0; b < 5; b++)
+        for (int i = 0; i < 3; i++)
+            r[est[3 * b + i]] = first[b] >= 0 ? blocks[b][i] : 0.0;
     c->i[SARINS_I_fixes_used] = (int)st->used;
+}
+
+/* The optional states' options (eskf.h SARINS_ESKF_OPT) from the parameters state_* and their priors: 0, or
+ * SARINS_ERROR with the parameter named. */
+static int state_options(sarins_ctx *c, double *opt)
+{
+    const double *r = c->r;
+    static const char *const switch_names[4] = {"state_scale_factors", "state_lever_arm", "state_gnss_pos_gm",
+                                                "state_gnss_vel_gm"};
+    const int switches[4] = {SARINS_I_state_scale_factors, SARINS_I_state_lever_arm, SARINS_I_state_gnss_pos_gm,
+                             SARINS_I_state_gnss_vel_gm};
+    const int bits[4] = {SARINS_ESKF_SF, SARINS_ESKF_LEVER, SARINS_ESKF_GNSS_POS_GM, SARINS_ESKF_GNSS_VEL_GM};
+    int mask = 0;
+    for (int i = 0; i < 4; i++) {
+        int v = c->i[switches[i]];
+        if (v != 0 && v != 1) {
+            sarins_log(c, SARINS_ERROR, "parameter %s = %d must be 0 or 1", switch_names[i], v);
+            return SARINS_ERROR;
+        }
+        mask |= v ? bits[i] : 0;
+    }
+    static const char *const names[SARINS_ESKF_OPT - 1] = {
+        "gyro_sf0_std", "accel_sf0_std", "sf_tau", "lever0_std", "gnss_pos_gm_std_e", "gnss_pos_gm_std_n",
+        "gnss_pos_gm_std_u", "gnss_pos_gm_tau", "gnss_vel_gm_std_e", "gnss_vel_gm_std_n", "gnss_vel_gm_std_u",
+        "gnss_vel_gm_tau"};
+    const int slots[SARINS_ESKF_OPT - 1] = {
+        SARINS_R_gyro_sf0_std, SARINS_R_accel_sf0_std, SARINS_R_sf_tau, SARINS_R_lever0_std,
+        SARINS_R_gnss_pos_gm_std_e, SARINS_R_gnss_pos_gm_std_n, SARINS_R_gnss_pos_gm_std_u, SARINS_R_gnss_pos_gm_tau,
+        SARINS_R_gnss_vel_gm_std_e, SARINS_R_gnss_vel_gm_std_n, SARINS_R_gnss_vel_gm_std_u, SARINS_R_gnss_vel_gm_tau};
+    opt[SARINS_ESKF_STATES] = (double)mask;
+    for (int i = 0; i < SARINS_ESKF_OPT - 1; i++) {
+        double v = r[slots[i]];
+        int k = i + 1; /* its index in opt */
+        /* the priors of navigate's FilterSettings positive, the Gauss-Markov times positive, sf_tau and the
+         * receiver's stds >= 0 */
+        int positive = k == SARINS_ESKF_GYRO_SF0_STD || k == SARINS_ESKF_ACCEL_SF0_STD || k == SARINS_ESKF_LEVER0_STD
+                       || k == SARINS_ESKF_GNSS_POS_GM_TAU || k == SARINS_ESKF_GNSS_VEL_GM_TAU;
+        if (!isfinite(v) || (positive ? !(v > 0.0) : v < 0.0)) {
+            sarins_log(c, SARINS_ERROR, "parameter %s = %.17g must be %s", names[i], v,
+                       positive ? "positive" : "finite and >= 0");
+            return SARINS_ERROR;
+        }
+        opt[k] = v;
+    }
+    return SARINS_OK;
 }
 
 static int ai_initialize(sarins_ctx *c)
@@ -126,10 +181,13 @@ static int ai_initialize(sarins_ctx *c)
                        i == 0 ? " and within +-89.9 deg" : "");
             return SARINS_ERROR;
         }
+    double opt[SARINS_ESKF_OPT];
+    if (state_options(c, opt) != SARINS_OK)
+        return SARINS_ERROR;
     ai_state *st = c->state;
     memset(st, 0, sizeof *st);
     char msg[256];
-    if (sarins_eskf_init(&st->eskf, config, nav0, msg, sizeof msg)) {
+    if (sarins_eskf_init_states(&st->eskf, config, opt, nav0, msg, sizeof msg)) {
         sarins_log(c, SARINS_ERROR, "parameters (lat0 .. roll0, filter settings): %s", msg);
         return SARINS_ERROR;
     }
@@ -371,8 +429,6 @@ static int ai_check_state(const sarins_ctx *c, int running)
              && sarins_state_finite(c, "eskf.q", e->q, 4) && sarins_state_finite(c, "eskf.v", e->v, 3)
              && sarins_state_finite(c, "eskf.pos", e->pos, 3) && sarins_state_finite(c, "eskf.bg", e->bg, 3)
              && sarins_state_finite(c, "eskf.ba", e->ba, 3)
-             && sarins_state_finite(c, "eskf.p", e->p, SARINS_ESKF_N * SARINS_ESKF_N)
-             && sarins_state_finite(c, "eskf.x", e->x, SARINS_ESKF_N)
              && sarins_state_finite(c, "eskf.w_ib", e->w_ib, 3) && sarins_state_finite(c, "eskf.f_n", e->f_n, 3)
              && sarins_state_int(c, "inc_first", st->inc_first, 0, MAX_INC - 1)
              && sarins_state_int(c, "n_inc", st->n_inc, 0, MAX_INC) && sarins_state_int(c, "done", st->done, 0, big)
@@ -380,6 +436,11 @@ static int ai_check_state(const sarins_ctx *c, int running)
              && sarins_state_int(c, "n_fix", st->n_fix, 0, MAX_FIX)
              && sarins_state_finite(c, "inc", &st->inc[0][0], INC_ROW * MAX_INC)
              && sarins_state_finite(c, "fix", &st->fix[0][0], FIX_ROW * MAX_FIX);
+    char msg[256];
+    if (ok && sarins_eskf_check(e, msg, sizeof msg)) { /* options, layout, P, x and the optional blocks */
+        sarins_log(c, SARINS_ERROR, "FMU state: eskf: %s", msg);
+        ok = 0;
+    }
     for (int i = 0; ok && i < MAX_INC; i++) /* the aiding flags aid_row writes */
         for (size_t k = 0; ok && k < sizeof AID_INPUTS / sizeof AID_INPUTS[0]; k++)
             ok = sarins_state_real(c, "inc (an aiding flag)", st->inc[i][6 + AID_INPUTS[k].flag_column], 0.0, 1.0);
@@ -389,7 +450,8 @@ static int ai_check_state(const sarins_ctx *c, int running)
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(ai_state),
-    .state_version = 4, /* 4: the ring's rows carry the aiding row (ZUPT, odometer, NHC, ZARU) */
+    .state_version = 5, /* 4: the ring's rows carry the aiding row (ZUPT, odometer, NHC, ZARU); 5: the filter's
+                         * optional states (eskf.h: n x n P, options, their estimates) */
     .initialize = ai_initialize,
     .do_step = ai_do_step,
     .release = ai_release,
