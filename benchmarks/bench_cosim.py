@@ -19,7 +19,11 @@ with the identified drift subtracted from the same navigation time, the
 identifier's one evaluation costing nothing there.  The two agree to 1e-12 of
 the error's scale (not bit for bit: the drift crosses deg/h there, rad/s here).
 
-Usage: ``python benchmarks/bench_cosim.py [--hours 88] [--system standard|identified]``
+``--system both`` runs the standard and the identified system one after the other and ends with one
+summary line per system (the ratio against the threaded and the single-thread in-process run, and where a
+co-simulated step goes: each FMU's doStep, gets and sets; recording and the master's own work).
+
+Usage: ``python benchmarks/bench_cosim.py [--hours 88] [--system standard|identified|both]``
 """
 from __future__ import annotations
 
@@ -77,24 +81,35 @@ def cosimulate(system, hours: float, loop: str = "auto", profile: bool = False):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--hours", type=float, default=88.0)
-    parser.add_argument("--system", choices=("standard", "identified"), default="standard")
+    parser.add_argument("--system", choices=("standard", "identified", "both"), default="standard")
     args = parser.parse_args()
-    hours = args.hours
-    steps = int(round(hours * 3600))
-    align = min(4.0, hours / 4)
+    kinds = ("standard", "identified") if args.system == "both" else (args.system,)
+    summary = []
     with tempfile.TemporaryDirectory() as tmp:
         fmu_dir = Path(tmp)
         build_fmus(fmu_dir)
-        make = standard_static_identified if args.system == "identified" else standard_static
-        system = make(fmu_dir, hours=hours, turntable=dict(align_time=align * 3600), ins=dict(align_time=align * 3600))
-        run_static(align_hours=align, nav_hours=0.1)  # compile / load caches first
-        cosimulate(system, 0.2)  # the FMUs' caches too
-        res, t_cosim = cosimulate(system, hours)
-        correction = _identified_correction(res) if args.system == "identified" else {}
-        ref, t_inproc = in_process(hours, align, **correction)
-        _, t_serial = in_process(hours, align, threads=1, **correction)
-        res_py, t_python = cosimulate(system, hours, loop="python")
-        profiled, _ = cosimulate(system, hours, profile=True)
+        run_static(align_hours=min(4.0, args.hours / 4), nav_hours=0.1)  # compile / load caches first
+        for kind in kinds:
+            summary.append(measure(kind, args.hours, fmu_dir))
+    load = os.getloadavg()
+    print(f"summary (load average {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f}):")
+    for line in summary:
+        print("  " + line)
+
+
+def measure(kind: str, hours: float, fmu_dir: Path) -> str:
+    """Run and print one system's comparison; returns its summary line."""
+    steps = int(round(hours * 3600))
+    align = min(4.0, hours / 4)
+    make = standard_static_identified if kind == "identified" else standard_static
+    system = make(fmu_dir, hours=hours, turntable=dict(align_time=align * 3600), ins=dict(align_time=align * 3600))
+    cosimulate(system, 0.2)  # the FMUs' caches too
+    res, t_cosim = cosimulate(system, hours)
+    correction = _identified_correction(res) if kind == "identified" else {}
+    ref, t_inproc = in_process(hours, align, **correction)
+    _, t_serial = in_process(hours, align, threads=1, **correction)
+    res_py, t_python = cosimulate(system, hours, loop="python")
+    profiled, _ = cosimulate(system, hours, profile=True)
     nav = int(round(align * 3600)) + 1
     tol = 1e-12 if correction else 0.0
     for field, series in (("lat_error", ref.lat_error), ("position_error", ref.position_error)):
@@ -109,7 +124,7 @@ def main():
     if correction:
         print(f"identified system: drift {correction['correction_dph']:.6g} deg/h subtracted from "
               f"{correction['correction_from_hours']:g} h of navigation on; co-simulated = in process to {tol:g}")
-    print(f"{args.system} system, {hours:g} h, {steps} steps of 1 s (load average {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f})")
+    print(f"{kind} system, {hours:g} h, {steps} steps of 1 s (load average {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f})")
     print(f"in process     : {t_inproc:7.2f} s = {t_inproc * us:5.1f} us/step (run_static, core threads); "
           f"single thread {t_serial:.2f} s = {t_serial * us:.1f} us/step")
     print(f"co-simulation  : {t_cosim:7.2f} s = {per_step:5.1f} us/step, {t_cosim / t_inproc:.2f}x the in-process "
@@ -118,11 +133,17 @@ def main():
     print(f"  Python loop  : {t_python:7.2f} s = {t_python * us:5.1f} us/step, {t_python / t_inproc:.2f}x")
     profile = profiled.meta["profile"]
     print("where a co-simulated step goes (profiled run; the clock readings add about 0.05 us per call):")
+    parts_text = []
     for name, parts in profile["components"].items():
         text = ", ".join(f"{part} {seconds * us:.2f}" for part, seconds in parts.items() if seconds > 0)
         print(f"  {name:<10} {text} us")
+        parts_text.append(f"{name} {sum(parts.values()) * us:.2f}")
     print(f"  recording {profile['record_s'] * us:.2f} us, conversions {profile['conversions_s'] * us:.2f} us, "
           f"master's own work {profile['master_s'] * us:.2f} us")
+    return (f"{kind}: co-simulated {per_step:.1f} us/step = {t_cosim / t_inproc:.2f}x in process "
+            f"({t_inproc * us:.1f} us/step, core threads), {t_cosim / t_serial:.2f}x single thread "
+            f"({t_serial * us:.1f} us/step); per step (us): {', '.join(parts_text)} (doStep + gets + sets), "
+            f"recording {profile['record_s'] * us:.2f}, master {profile['master_s'] * us:.2f}")
 
 
 def _identified_correction(res) -> dict:
