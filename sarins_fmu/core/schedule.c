@@ -244,13 +244,16 @@ static void write_segment(sink *k, double length, const double *acc)
         }
         s->times[k->n_seg + 1] = t1;
         double *a = s->accel + k->n_axes * k->n_seg;
+        /* n_axes is 1 .. 3 by construction; the explicit bound lets GCC -O3 -march=native (znver) see that acc's
+         * row is never read past its end, which it otherwise reports as maybe-uninitialized */
+        const int64_t n_axes = k->n_axes < SARINS_SCHEDULE_MAX_AXES ? k->n_axes : SARINS_SCHEDULE_MAX_AXES;
         if (k->steps) {
             /* accel * (n grid) / diff(times) */
             double ratio = (length * k->grid) / (t1 - k->t_last);
-            for (int64_t j = 0; j < k->n_axes; j++)
+            for (int64_t j = 0; j < n_axes; j++)
                 a[j] = acc[j] * ratio;
         } else {
-            for (int64_t j = 0; j < k->n_axes; j++)
+            for (int64_t j = 0; j < n_axes; j++)
                 a[j] = acc[j];
         }
     }
