@@ -82,8 +82,8 @@ RANGES = {
         "segments": ["", "1 0 0", "1.5 0 0 0", "1 0 0 0 0", "0 0 0 0"], "step": [0.0, -1.0, 2.0],
         "substeps": [0, 1001], "lat0": [1.6], "pitch0": [1.56], "speed0": [-1.0], "arw": [-1.0], "gyro_rw": [-1.0],
         "seed": [-1], "odo_rate_hz": [-1.0, 30.0], "odo_scale_factor": [0.5], "odo_noise_std": [-1.0],
-        "odo_resolution": [-1.0], "odo_seed": [-1], "zupt_enable": [2, -1], "nhc_enable": [2, -1],
-        "zupt_std": [-1.0], "nhc_std": [-1.0], "jitter_seed": [-1],
+        "odo_resolution": [-1.0], "odo_seed": [-1], "zupt_enable": [3, -1], "nhc_enable": [2, -1],
+        "zupt_std": [-1.0], "nhc_std": [-1.0], "jitter_seed": [-1], "vib_accel_rms": [-1.0], "vib_rate_rms": [float("nan")],
     },
 }
 
