@@ -99,6 +99,34 @@ def test_system_with_detected_stops_equals_navigate_bit_for_bit(fmu_dir, tmp_pat
     check_system(system, tmp_path, expected_detected, scheme)
 
 
+def test_navigate_command_with_detected_stops_gives_the_systems_numbers(tmp_path, capsys, expected_detected):
+    """``sarins navigate --aiding gnss,zupt,zaru,nhc,odometer --zupt-detect imu --imu-stream core --json`` (the car's
+    vibration by default with --zupt-detect imu) prints the summary of the run whose rows the detected system
+    gives (expected_detected: navigate's rows, equal to the system's in the test above)."""
+    import json
+
+    from sarins.cli import main
+
+    path = tmp_path / "drive.json"
+    path.write_text(json.dumps(GNSS_DRIVE))
+    assert main(["navigate", "--trajectory", str(path), "--aiding", ",".join(ALL_AIDING), "--gnss-outage", "60:80",
+                 "--seed", str(SEED), "--imu-stream", "core", "--zupt-detect", "imu", "--json"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    truth = tr.generate(tr.Trajectory.from_dict(GNSS_DRIVE), 0.01)
+    time, rows, used = expected_detected
+    true_rows = truth.nav_rows(np.round(time / 0.01).astype(int))
+    nav = rows[:, :9]
+    result = aided.AidedResult(time=time, nav=nav, truth=true_rows, error=aided.nav_errors(nav, true_rows),
+                               cov=np.tile(np.eye(15), (len(time), 1, 1)), bias_g=nav[:, :3], bias_a=nav[:, :3],
+                               bias_g_true=nav[:, :3], bias_a_true=nav[:, :3], gnss_used=used)
+    made = aided.summary(result, OUTAGES)
+    for key in ("horizontal_error_rms_m", "horizontal_error_max_m", "vertical_error_rms_m", "velocity_error_rms_mps",
+                "tilt_error_rms_deg", "heading_error_rms_deg", "final_horizontal_error_m", "gnss_fixes_used"):
+        assert made[key] == printed[key], key
+    assert made["outages"][0]["horizontal_error_m"] == printed["outages"][0]["horizontal_error_m"]
+    assert printed["zupt_steps"] == printed["zaru_steps"] < 2000
+
+
 @pytest.mark.parametrize("scheme", ["gauss-seidel", "jacobi"])
 def test_system_with_zupt_and_nhc_equals_navigate_bit_for_bit(fmu_dir, tmp_path, expected_zupt, scheme):
     """TrajectoryIMU's odometer and ZUPT / NHC rows (ZARU from the same still flag) -> AidedINS:

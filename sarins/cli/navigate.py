@@ -86,8 +86,9 @@ def register(sub) -> None:
     g.add_argument("--imu-noise", default="tactical", metavar="GRADE",
                    help="IMU noise grade of the aided run: ideal, tactical, mems (default tactical)")
     g.add_argument("--imu-stream", choices=("numpy", "core"), default=None,
-                   help="where the IMU's errors and the ZUPT / NHC jitter are drawn: numpy (default) or core (the "
-                        "C core's streams, as the TrajectoryIMU FMU and the vehicle_gnss* systems draw them)")
+                   help="where the IMU's errors, the ZUPT / NHC jitter and the vibration are drawn: numpy "
+                        "(default) or core (the C core's streams, as the TrajectoryIMU FMU and the vehicle_gnss* "
+                        "systems draw them)")
     g.add_argument("--zupt-std", type=finite, default=0.01, help="zero-velocity update std, m/s (default 0.01)")
     g.add_argument("--zaru-std", type=finite, default=None,
                    help="zero-angular-rate update std per IMU step, rad/s (default: the gyro's white rate noise "
