@@ -87,6 +87,11 @@ PRESETS = {
     "sbas": _split(2.0 * CEP_TO_SIGMA, 0.0, 60.0, _VEL),
     "rtk": _split(0.01 * CEP_TO_SIGMA, 0.0, 10.0, _VEL),
 }
+# Hypothetical (no data sheet): a receiver with white errors only, 1 m horizontal / 2 m vertical and 0.05 / 0.1 m/s
+# (1 sigma), for which the 15-state filter's measurement model is exact: the consistency (NEES) and outage
+# checks, the campaign's drive and the KF-GINS comparison use it.
+WHITE = GNSSConfig(pos_white_std=(1.0, 1.0, 2.0), pos_gm_std=(0.0, 0.0, 0.0), vel_white_std=(0.05, 0.05, 0.1),
+                   vel_gm_std=(0.0, 0.0, 0.0))
 
 
 @dataclass(frozen=True)

@@ -113,7 +113,8 @@ def test_filter_states_option_runs_the_navigate_numbers(tmp_path, capsys):
     assert out["filter_states"] == ["sf", "gnss-gm"]
     assert set(out["final_states"]) == {"scale_g", "scale_a", "gnss_pos_gm", "gnss_vel_gm"}
     truth = tr.generate(tr.load_trajectory(path), 0.02)
-    r = aided.navigate(truth, gnss=gnss.preset("sps", rate_hz=1.0), seed=2, filter_states=("sf", "gnss-gm"))
+    r = aided.navigate(truth, gnss=gnss.preset("sps", rate_hz=1.0), seed=2, filter_states=("sf", "gnss-gm"),
+                       imu_stream="core")  # the command's default stream
     assert out["horizontal_error_rms_m"] == aided.summary(r)["horizontal_error_rms_m"]
     assert run(["navigate", "--trajectory", path, "--imu-rate-hz", "50", "--seed", "2", "--filter-states", "none",
                 "--filter-states", "sf,gnss-gm", "--json"]) == 0  # the last one counts

@@ -9,8 +9,7 @@ import pytest
 from sarins_fmu import aided, gnss
 from sarins_fmu import trajectory as tr
 
-WHITE_GNSS = gnss.GNSSConfig(pos_white_std=(1.0, 1.0, 2.0), pos_gm_std=(0, 0, 0), vel_white_std=(0.05, 0.05, 0.1),
-                             vel_gm_std=(0, 0, 0))
+WHITE_GNSS = gnss.WHITE
 BLOCKS = ("position", "velocity", "attitude")
 
 

@@ -13,8 +13,7 @@ SEGMENTS = ({"kind": "stop", "duration": 20}, {"kind": "accelerate", "to_speed":
             {"kind": "turn", "rate_dps": 6, "angle_deg": 180}, {"kind": "cruise", "duration": 20},
             {"kind": "turn", "rate_dps": -6, "angle_deg": 90}, {"kind": "accelerate", "to_speed": 0, "accel": 1.5},
             {"kind": "stop", "duration": 10})
-WHITE_GNSS = gnss.GNSSConfig(pos_white_std=(1.0, 1.0, 2.0), pos_gm_std=(0, 0, 0), vel_white_std=(0.05, 0.05, 0.1),
-                             vel_gm_std=(0, 0, 0))
+WHITE_GNSS = gnss.WHITE
 
 
 @pytest.fixture(scope="module")

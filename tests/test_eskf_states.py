@@ -24,8 +24,7 @@ MANOEUVRES = ({"kind": "stop", "duration": 20.5}, {"kind": "accelerate", "to_spe
               {"kind": "climb", "to_pitch_deg": 0, "duration": 5},
               {"kind": "turn", "rate_dps": -10, "angle_deg": 360}, {"kind": "accelerate", "to_speed": 0, "accel": 1.5},
               {"kind": "stop", "duration": 10})
-WHITE_GNSS = gnss.GNSSConfig(pos_white_std=(1.0, 1.0, 2.0), pos_gm_std=(0, 0, 0), vel_white_std=(0.05, 0.05, 0.1),
-                             vel_gm_std=(0, 0, 0))
+WHITE_GNSS = gnss.WHITE
 
 
 @pytest.fixture(scope="module")

@@ -168,7 +168,8 @@ def check_system(system, tmp_path, expected, scheme):
 
 
 def test_navigate_command_and_the_system_give_the_same_numbers(fmu_dir, tmp_path, capsys):
-    """``sarins navigate --trajectory FILE --aiding gnss --imu-stream core --json`` and the system's rows give
+    """``sarins navigate --trajectory FILE --aiding gnss --json`` (its default stream: the core's) and the system's
+    rows give
     the same summary numbers (every one computed from the navigation rows: errors, fixes used, the outage's
     error; NEES and the predicted sigma need P's off-diagonal terms, which the FMU does not output)."""
     import json
@@ -178,8 +179,12 @@ def test_navigate_command_and_the_system_give_the_same_numbers(fmu_dir, tmp_path
     path = tmp_path / "drive.json"
     path.write_text(json.dumps(GNSS_DRIVE))
     assert main(["navigate", "--trajectory", str(path), "--aiding", "gnss", "--gnss-outage", "60:80", "--seed",
-                 str(SEED), "--imu-stream", "core", "--json"]) == 0
+                 str(SEED), "--json"]) == 0
     printed = json.loads(capsys.readouterr().out)
+    assert printed["imu_stream"] == "core"
+    assert main(["navigate", "--trajectory", str(path), "--aiding", "gnss", "--gnss-outage", "60:80", "--seed",
+                 str(SEED), "--imu-stream", "numpy", "--json"]) == 0
+    numpy_run = json.loads(capsys.readouterr().out)
     system = vehicle_gnss(fmu_dir, trajectory=str(path), seed=SEED, outages=OUTAGES)
     rows = simulate_system(system, scheme="jacobi", record=[f"ins.{n}" for n in NAV] + ["ins.nav_time",
                                                                                          "ins.fixes_used"],
@@ -201,6 +206,7 @@ def test_navigate_command_and_the_system_give_the_same_numbers(fmu_dir, tmp_path
                 "gnss_fixes_used"):
         assert made[key] == printed[key], key
     assert made["outages"][0]["horizontal_error_m"] == printed["outages"][0]["horizontal_error_m"]
+    assert numpy_run["horizontal_error_rms_m"] != printed["horizontal_error_rms_m"]  # other draws: other numbers
 
 
 def _tagged(fmu, name, params, steps):

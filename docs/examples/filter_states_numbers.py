@@ -19,8 +19,7 @@ from sarins_fmu import trajectory as tr
 OUT = Path(__file__).resolve().parents[1] / "results" / "aided-navigation" / "filter-states.json"
 RUNS = 50
 STEP = 0.01
-WHITE_GNSS = gnss.GNSSConfig(pos_white_std=(1.0, 1.0, 2.0), pos_gm_std=(0, 0, 0), vel_white_std=(0.05, 0.05, 0.1),
-                             vel_gm_std=(0, 0, 0))
+WHITE_GNSS = gnss.WHITE
 # the drive of aided_navigation_numbers.py (380 s, one 90 deg turn each way) and a manoeuvring one (162.5 s: two
 # full turns at 10 deg/s each way, a 5 deg climb, accelerations; tests/test_eskf_states.py's, whose first stop
 # of 20.5 s keeps the turn-rate jumps off the 1 Hz fix epochs: see there)

@@ -86,9 +86,10 @@ def register(sub) -> None:
     g.add_argument("--imu-noise", default="tactical", metavar="GRADE",
                    help="IMU noise grade of the aided run: ideal, tactical, mems (default tactical)")
     g.add_argument("--imu-stream", choices=("numpy", "core"), default=None,
-                   help="where the IMU's errors, the ZUPT / NHC jitter and the vibration are drawn: numpy "
-                        "(default) or core (the C core's streams, as the TrajectoryIMU FMU and the vehicle_gnss* "
-                        "systems draw them)")
+                   help="where the IMU's errors, the ZUPT / NHC jitter and the vibration are drawn: core (default: "
+                        "the C core's streams, as the TrajectoryIMU FMU and the vehicle_gnss* systems draw them, so "
+                        "the command and the systems give the same numbers) or numpy (aided.navigate's default, with "
+                        "which docs/aided-navigation.md's in-process numbers are made)")
     g.add_argument("--zupt-std", type=finite, default=0.01, help="zero-velocity update std, m/s (default 0.01)")
     g.add_argument("--zaru-std", type=finite, default=None,
                    help="zero-angular-rate update std per IMU step, rad/s (default: the gyro's white rate noise "
@@ -188,10 +189,10 @@ def run_aided(args) -> int:
     result = aided.navigate(truth, noise=aided.IMU_NOISE[args.imu_noise], gnss=receiver if "gnss" in aiding else None,
                             aiding=aiding, outages=outages, settings=aided.FilterSettings(zupt_std=args.zupt_std, zaru_std=args.zaru_std),
                             seed=args.seed, zupt_detect=detect, vibration=vibration, detector=detector,
-                            imu_stream=args.imu_stream or "numpy", filter_states=filter_states)
+                            imu_stream=args.imu_stream or "core", filter_states=filter_states)
     out = aided.summary(result, outages)
     out.update({"wall_seconds": time.perf_counter() - t0, "seed": args.seed, "aiding": aiding, "gnss": args.gnss,
-                "imu_noise": args.imu_noise, "imu_stream": args.imu_stream or "numpy",
+                "imu_noise": args.imu_noise, "imu_stream": args.imu_stream or "core",
                 "imu_rate_hz": args.imu_rate_hz, "gnss_rate_hz": args.gnss_rate_hz,
                 "zupt_detect": detect, "vibration": args.vibration or ("car" if detect == "imu" else "none"),
                 "filter_states": list(filter_states)})

@@ -24,8 +24,7 @@ STEP = 0.01  # IMU step, s
 LAT_DEG = 32.0  # start latitude, deg
 SPEED = 12.0  # cruise speed, m/s
 # 1 Hz fixes with white errors only (hypothetical, a receiver whose errors the 15-state filter models)
-WHITE_GNSS = gnss.GNSSConfig(pos_white_std=(1.0, 1.0, 2.0), pos_gm_std=(0, 0, 0), vel_white_std=(0.05, 0.05, 0.1),
-                             vel_gm_std=(0, 0, 0))
+WHITE_GNSS = gnss.WHITE
 OUTAGES = ((60.0, 90.0), (150.0, 210.0), (280.0, 400.0))  # GNSS outages [start, end) s: 30, 60, 120 s
 CRUISE = 400.0  # s: the outages all fall in the cruise
 BLOCKS = ("position", "velocity", "attitude")

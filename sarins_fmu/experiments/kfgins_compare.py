@@ -47,8 +47,7 @@ def find_binary(path=None) -> tuple:
 
 
 START_SOW = 345600.0  # s of GPS week (Thursday 00:00) at the trajectory's t = 0
-WHITE_GNSS = gnss_mod.GNSSConfig(pos_white_std=(1.0, 1.0, 2.0), pos_gm_std=(0.0, 0.0, 0.0),
-                                 vel_white_std=(0.05, 0.05, 0.1), vel_gm_std=(0.0, 0.0, 0.0))
+WHITE_GNSS = gnss_mod.WHITE
 GNSS_CHOICES = {"white": WHITE_GNSS, **gnss_mod.PRESETS}
 
 
