@@ -11,7 +11,7 @@ kernels :func:`sarins_fmu.aided.navigate` runs in process).
 from pythonfmu import Fmi2Slave
 
 from fmus.slave_support import INPUT, NO_TAG, OUTPUT, PARAMETER, declare, default_experiment
-from sarins_fmu import aided
+from sarins_fmu import aided, zero_velocity
 from sarins_fmu.aided import FilterSettings
 from sarins_fmu.gnss import GNSSConfig
 
@@ -71,7 +71,11 @@ class AidedINS(Fmi2Slave):
         "zupt_v_* (std zupt_std); when zaru is 1 a ZARU (the step's compensated rate against the Earth rate, std "
         "zaru_std); when odo_valid and / or nhc is 1 one body-velocity update, forward (body y) against odo_speed "
         "(std odo_std) and / or body x, z against nhc_v_x, nhc_v_z (std nhc_std); a flag other than 0 or 1, or a "
-        "non-finite value read under a set flag, is an error. Then, when "
+        "non-finite value read under a set flag, is an error. With zupt_source = 1 the stops are detected from the "
+        "increments (the core's zvd.h, sarins_fmu.zero_velocity.detect: a chi-square test of standing still over "
+        "the zvd_window samples ending at the interval, causal, threshold zvd_gamma, the IMU's noise densities "
+        "zvd_vrw, zvd_arw): the ZUPT (against zupt_v_*) and ZARU are applied where the input zupt / zaru is 1 and "
+        "the detector says still (navigate(..., zupt_detect='imu')). Then, when "
         "the input fix_count grew since the last step and fix_valid is 1, it applies the fix (fix_lat .. fix_v_u) "
         "taken back by latency s; the outputs describe t + h: navigation, the "
         "bias estimates and the filter's standard deviations (sqrt of P's diagonal). Time-tagged (increment_end_time "
@@ -106,6 +110,20 @@ class AidedINS(Fmi2Slave):
                         float(values[i]))
         declare(self, "integer", "use_velocity", PARAMETER, "1: apply the fixes' velocity too, 0: position only [1]",
                 1)
+        declare(self, "integer", "zupt_source", PARAMETER,
+                "0: ZUPT / ZARU where the inputs zupt / zaru are 1; 1: where they are 1 and the stillness detector "
+                "declares the interval still (zvd_*) [1]", 0)
+        det = zero_velocity.DetectorSettings()
+        declare(self, "integer", "zvd_window", PARAMETER,
+                "stillness detector: window of samples ending at the interval (zupt_source 1) [1]", det.samples(0.01))
+        declare(self, "real", "zvd_gamma", PARAMETER,
+                "stillness detector: chi-square threshold (zero_velocity.threshold(zvd_window, alpha); the default "
+                f"that of {det.samples(0.01)} samples and alpha {det.alpha}) [1]",
+                zero_velocity.threshold(det.samples(0.01), det.alpha))
+        declare(self, "real", "zvd_vrw", PARAMETER,
+                "stillness detector: the IMU's velocity random walk (positive with zupt_source 1) [m/s/s0.5]", 0.0)
+        declare(self, "real", "zvd_arw", PARAMETER,
+                "stillness detector: the IMU's angle random walk (positive with zupt_source 1) [rad/s0.5]", 0.0)
         for name, text in STATE_SWITCHES:
             declare(self, "integer", name, PARAMETER, f"1: estimate the {text}; 0: not (the 15-state filter) [1]", 0)
         state_starts = {"gyro_sf0_std": fs.gyro_sf0_std, "accel_sf0_std": fs.accel_sf0_std, "sf_tau": fs.sf_tau,

@@ -44,7 +44,12 @@ class TrajectoryIMU(Fmi2Slave):
         "measured there (zupt_std times a normal); with nhc_enable = 1, nhc = 1 for a step that is not still and "
         "nhc_v_x/z the body velocity measured (nhc_std times a normal); five normals per step from stream 33 of "
         "jitter_seed whatever the flags (navigate(..., imu_stream='core')'s rows), tagged by increment_end_time "
-        "like the increments; a value under a flag 0 is zero. A step past the last "
+        "like the increments; a value under a flag 0 is zero; zupt_enable = 2 outputs the ZUPT jitter on every "
+        "step (zupt still the truth's flag) for a stillness detector downstream (AidedINS zupt_source = 1). With "
+        "vib_accel_rms or vib_rate_rms > 0 the vehicle's vibration while moving (the core's vibration.h, stream 34 "
+        "of seed: white velocity and attitude jitter at the moving points, seen as a sample specific force and "
+        "rate of those rms per axis) is added to the increments (navigate(..., imu_stream='core', "
+        "vibration=Vibration(vib_accel_rms, vib_rate_rms))). A step past the last "
         "segment is an error. State outputs only (no direct feedthrough). FMU state: get, set and serialize; "
         "no allocation after initialisation.")
     default_experiment = default_experiment(0.01)  # HOST_DEFAULT_STEPS steps, the default segments as long: runs on a host's defaults
@@ -73,7 +78,8 @@ class TrajectoryIMU(Fmi2Slave):
         declare(self, "integer", "odo_seed", PARAMETER, "seed of the odometer's errors [1]", 0)
         fs = FilterSettings()
         declare(self, "integer", "zupt_enable", PARAMETER,
-                "1: output zupt = 1 over the steps the vehicle stands still, 0: zupt = 0 always [1]", 0)
+                "1: output zupt = 1 over the steps the vehicle stands still, 0: zupt = 0 always; 2: as 1 with "
+                "zupt_v_e/n/u the jitter on every step (for a detector downstream) [1]", 0)
         declare(self, "integer", "nhc_enable", PARAMETER,
                 "1: output nhc = 1 over the steps the vehicle moves, 0: nhc = 0 always [1]", 0)
         declare(self, "real", "zupt_std", PARAMETER, "std of the stop's velocity jitter, per ENU axis [m/s]",
@@ -81,6 +87,11 @@ class TrajectoryIMU(Fmi2Slave):
         declare(self, "real", "nhc_std", PARAMETER, "std of the wheels' body x and z velocity jitter [m/s]",
                 fs.nhc_std)
         declare(self, "integer", "jitter_seed", PARAMETER, "seed of the ZUPT and NHC jitter (stream 33) [1]", 0)
+        declare(self, "real", "vib_accel_rms", PARAMETER,
+                "vehicle vibration while moving: rms sample specific force per axis (stream 34 of seed); 0: none "
+                "[m/s2]", 0.0)
+        declare(self, "real", "vib_rate_rms", PARAMETER,
+                "vehicle vibration while moving: rms sample angular rate per axis; 0: none [rad/s]", 0.0)
         for name, unit, text in NAV:
             declare(self, "real", name, OUTPUT, f"true {text} at truth_time [{unit}]", 0.0)
         for ax in "xyz":
@@ -104,8 +115,8 @@ class TrajectoryIMU(Fmi2Slave):
                 "1: the vehicle stands still over the increments' interval (zero-velocity update) [1]", 0)
         for ax in ("e", "n", "u"):
             declare(self, "real", f"zupt_v_{ax}", OUTPUT,
-                    f"velocity measured at the stop over the increments' interval, {ax.upper()} (0 when zupt is 0) "
-                    "[m/s]", 0.0)
+                    f"velocity measured at the stop over the increments' interval, {ax.upper()} (0 when zupt is 0 "
+                    "and zupt_enable is not 2) [m/s]", 0.0)
         declare(self, "integer", "nhc", OUTPUT,
                 "1: the vehicle moves on its wheels over the increments' interval (non-holonomic constraint) [1]", 0)
         for ax in "xz":

@@ -412,7 +412,9 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         :mod:`sarins_fmu.zero_velocity` declares stationary from the increments, with the IMU's
         noise densities and ``detector``, a :class:`~sarins_fmu.zero_velocity.DetectorSettings`).
     vibration : :class:`~sarins_fmu.zero_velocity.Vibration` added to the increments while moving, or None
-        (added to ``imu`` too when given).
+        (added to ``imu`` too when given); drawn from ``imu_stream`` (:func:`~sarins_fmu.zero_velocity.vibrate`'s
+        ``stream``; 'core': the TrajectoryIMU FMU's ``vib_accel_rms``, ``vib_rate_rms``, nothing added when both are
+        0, as the FMU does).
     seed : IMU errors, initial errors (stream of ``seed``), vibration and GNSS errors (``seed``).
     imu : the increments ``corrupt(truth, noise, seed)`` returns, when made already (a peer filter runs
         the same data); fixes : ``gnss.simulate(truth, gnss, seed, outages)``'s fixes, likewise.
@@ -444,8 +446,8 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         odometer = OdometerConfig()
     step = truth.step
     dtheta, dv, bg_true, ba_true = corrupt(truth, noise, seed, imu_stream) if imu is None else imu
-    if vibration is not None:
-        vib_theta, vib_v = zero_velocity.vibrate(truth, vibration, seed)
+    if vibration is not None and (imu_stream == "numpy" or vibration.accel_rms or vibration.rate_rms):
+        vib_theta, vib_v = zero_velocity.vibrate(truth, vibration, seed, imu_stream)
         dtheta, dv = dtheta + vib_theta, dv + vib_v
     info = {"seed": seed, "aiding": list(aiding), "zupt_detect": zupt_detect}
     stops = None

@@ -125,9 +125,15 @@ def moving_points(truth) -> np.ndarray:
     return np.linalg.norm(truth.velocity_n, axis=1) >= 1e-9
 
 
-def vibrate(truth, vibration: Vibration, seed: int):
+def vibrate(truth, vibration: Vibration, seed: int, stream: str = "numpy"):
     """Increments of the vibration (dtheta, dv (K, 3) rad, m/s) to add to the IMU's: jitter
-    u_k, theta_k white at the moving points, zero at rest; increments u_{k+1} - u_k."""
+    u_k, theta_k white at the moving points, zero at rest; increments u_{k+1} - u_k.  ``stream``: 'numpy'
+    (numpy's generator seeded [seed, 3019]) or 'core' (the C core's ``vibration.h``, stream 34 of ``seed``: the
+    draws the TrajectoryIMU FMU makes one step at a time with ``vib_accel_rms``, ``vib_rate_rms``, bit for bit)."""
+    if stream == "core":
+        return _core.vibration_run(vibration.accel_rms, vibration.rate_rms, truth.step, seed, truth.velocity_n)
+    if stream != "numpy":
+        raise ValueError(f"vibration stream must be 'numpy' or 'core', got {stream!r}")
     rng = np.random.default_rng([seed, 3019])
     moving = moving_points(truth)[:, None]
     h = truth.step

@@ -64,6 +64,7 @@ RANGES = {
         "state_scale_factors": [2, -1], "state_lever_arm": [2], "state_gnss_pos_gm": [-1], "state_gnss_vel_gm": [3],
         "gyro_sf0_std": [0.0], "accel_sf0_std": [-1.0], "sf_tau": [-1.0], "lever0_std": [0.0],
         "gnss_pos_gm_std_e": [-1.0], "gnss_pos_gm_tau": [0.0], "gnss_vel_gm_std_n": [-1.0], "gnss_vel_gm_tau": [-1.0],
+        "zupt_source": [2, -1], "zvd_window": [1, 4097], "zvd_gamma": [0.0], "zvd_vrw": [0.0, -1.0], "zvd_arw": [0.0],
     },
     "VehicleMotion": {
         "legs": ["", "fly 3", "drive -5 10"], "lat0": [2.0], "lead_time": [-1.0], "grid": [0.0],
@@ -82,8 +83,8 @@ RANGES = {
         "segments": ["", "1 0 0", "1.5 0 0 0", "1 0 0 0 0", "0 0 0 0"], "step": [0.0, -1.0, 2.0],
         "substeps": [0, 1001], "lat0": [1.6], "pitch0": [1.56], "speed0": [-1.0], "arw": [-1.0], "gyro_rw": [-1.0],
         "seed": [-1], "odo_rate_hz": [-1.0, 30.0], "odo_scale_factor": [0.5], "odo_noise_std": [-1.0],
-        "odo_resolution": [-1.0], "odo_seed": [-1], "zupt_enable": [2, -1], "nhc_enable": [2, -1],
-        "zupt_std": [-1.0], "nhc_std": [-1.0], "jitter_seed": [-1],
+        "odo_resolution": [-1.0], "odo_seed": [-1], "zupt_enable": [3, -1], "nhc_enable": [2, -1],
+        "zupt_std": [-1.0], "nhc_std": [-1.0], "jitter_seed": [-1], "vib_accel_rms": [-1.0], "vib_rate_rms": [float("nan")],
     },
 }
 
@@ -94,6 +95,8 @@ CONTEXT = {
     ("Turntable", "chamber_step"): {"ambient_mode": "chamber"},
     ("Turntable", "chamber_step_hold"): {"ambient_mode": "chamber"},
     ("Turntable", "chamber_first"): {"ambient_mode": "chamber"},
+    **{("AidedINS", name): {"zupt_source": 1, "zvd_vrw": 1e-3, "zvd_arw": 1e-4}  # the detector's, read when it runs
+       for name in ("zvd_window", "zvd_gamma", "zvd_vrw", "zvd_arw")},
 }
 
 # FMUs that need a parameter to run at all (a fixture file), given by the caller as NAME=VALUE arguments

@@ -349,7 +349,7 @@ def test_a_value_under_a_clear_flag_is_not_read(fmu, aid_cases, lag):
 
 
 def test_state_of_the_previous_version_is_refused(fmu, case):
-    """A serialized state of state version 4 (the 15-state filter only) is refused naming why."""
+    """A serialized state of state version 5 (no stillness detector) is refused naming why."""
     from fmpy.fmi1 import FMICallException
 
     slave = Slave(fmu, "old_state")
@@ -358,8 +358,8 @@ def test_state_of_the_previous_version_is_refused(fmu, case):
         slave.fmu.enterInitializationMode()
         slave.fmu.exitInitializationMode()
         blob = bytearray(slave.fmu.serializeFMUstate(slave.fmu.getFMUstate()))
-        assert int.from_bytes(blob[12:16], "little") == 5
-        blob[12:16] = (4).to_bytes(4, "little")
+        assert int.from_bytes(blob[12:16], "little") == 6
+        blob[12:16] = (5).to_bytes(4, "little")
         with pytest.raises(FMICallException, match="status 3"):
             slave.fmu.deSerializeFMUstate(bytes(blob))
         assert any("state version differs" in m for status, _, m in slave.log if status == 3), slave.log
@@ -423,6 +423,11 @@ def test_c_host_empty_environment_no_allocation(fmu, case, tmp_path):
     ({"sf_tau": -1.0}, "sf_tau"),
     ({"gnss_pos_gm_tau": 0.0}, "gnss_pos_gm_tau"),
     ({"gnss_vel_gm_std_u": float("nan")}, "gnss_vel_gm_std_u"),
+    ({"zupt_source": 2}, "zupt_source = 2 must be 0"),
+    ({"zupt_source": 1, "zvd_window": 1, "zvd_vrw": 1e-3, "zvd_arw": 1e-4}, "zvd_window = 1 must be 2 .. 4096"),
+    ({"zupt_source": 1, "zvd_arw": 1e-4}, "zvd_vrw = 0 must be positive"),
+    ({"zupt_source": 1, "zvd_vrw": 1e-3, "zvd_arw": float("nan")}, "zvd_arw"),
+    ({"zupt_source": 1, "zvd_vrw": 1e-3, "zvd_arw": 1e-4, "zvd_gamma": -1.0}, "zvd_gamma = -1 must be positive"),
 ])
 def test_bad_parameters_are_refused(fmu, params, text):
     check_parameter_error(fmu, params, text)
@@ -561,6 +566,85 @@ def test_fmi3_with_the_optional_states_equals_navigate(fmu3, states_case):
             fmu.doStep(k * STEP, STEP)
             got.append(fmu.getFloat64([vr[n] for n in OUT + STATE_OUT]))
         assert np.array_equal(np.array(got), c.expected)
+        fmu.terminate()
+    finally:
+        fmu.freeInstance()
+
+
+DETECTED = ("gnss", "zupt", "zaru", "nhc")
+
+
+@pytest.fixture(scope="module")
+def detect_case(aid_cases):
+    """navigate(gnss, zupt, zaru, nhc; zupt_detect 'imu', the car's vibration) as FMU inputs: the vibrating
+    increments, the inputs zupt and zaru 1 at every step with the ZUPT jitter of every step (per_step_aiding with
+    every step a stop, the same draws), zupt_source 1 and the detector's settings; the detector finds the first
+    second's stop late by its window (26 of 50 steps: 24 .. 49), no moving step, and the rows differ from the
+    truth's stops'."""
+    from sarins_fmu import zero_velocity as zv
+
+    vibration = zv.VIBRATION["car"]
+    truth = tr.generate(tr.Trajectory(tr.Start(lat_deg=35.0, heading_deg=-30.0), SEGMENTS), STEP)
+    result = aided.navigate(truth, noise=NOISE, gnss=GNSS, aiding=DETECTED, outages=OUTAGES, settings=SETTINGS,
+                            seed=SEED, zupt_detect="imu", vibration=vibration)
+    base = make_case(DETECTED)
+    dtheta, dv, _, _ = aided.corrupt(truth, NOISE, SEED)
+    vib_theta, vib_v = zv.vibrate(truth, vibration, SEED)
+    found = zv.detect(dtheta + vib_theta, dv + vib_v, STEP, NOISE.vrw, NOISE.arw)
+    still = truth.stationary()
+    assert 0 < found.stationary.sum() == result.zupt_steps < still.sum() and not np.any(found.stationary & ~still)
+    rng = np.random.default_rng([SEED, 3018])
+    aided._initial_state(truth, SETTINGS, rng)
+    aid = aided.per_step_aiding(truth, DETECTED, SETTINGS, None, rng, SEED, stops=np.ones(truth.n_steps, bool))
+    inputs = base.inputs.copy()
+    inputs[:, :3], inputs[:, 3:6] = dtheta + vib_theta, dv + vib_v
+    sigma = np.sqrt(np.diagonal(result.cov, axis1=1, axis2=2)[:, :9])
+    expected = np.column_stack([result.nav, result.bias_g, result.bias_a, sigma])
+    assert not np.array_equal(expected, base.expected)
+    params = {**base.params, "zupt_source": 1, "zvd_window": found.samples, "zvd_gamma": found.gamma,
+              "zvd_vrw": NOISE.vrw, "zvd_arw": NOISE.arw}
+    return base._replace(params=params, inputs=inputs, expected=expected, aid=aid)
+
+
+@pytest.mark.parametrize("lag", [None, 2])
+def test_detected_stops_equal_navigate_bit_for_bit(fmu, detect_case, lag):
+    """zupt_source 1: the FMU's causal detector (zvd.h) gives navigate(..., zupt_detect='imu')'s rows, untagged
+    and time-tagged (two intervals waiting in the ring); a state taken in the detected stop (interval 40 of
+    24 .. 49) or while moving repeats the rest, in the same and in another instance."""
+    rows = _run(fmu, detect_case, lag=lag)[0]
+    if lag is None:
+        np.testing.assert_array_equal(rows, detect_case.expected)
+    else:
+        np.testing.assert_array_equal(rows[:, -1], np.maximum(np.arange(len(rows)) + 1 - lag, 0) * STEP)
+        np.testing.assert_array_equal(rows[lag:, :-1], detect_case.expected)
+    for state_at in (40, 120):
+        out, again, there = _run(fmu, detect_case, state_at=state_at, lag=lag)
+        assert again == out[state_at:] and there == out[state_at:]
+
+
+def test_fmi3_detected_stops_equal_navigate(fmu3, detect_case):
+    from fmpy import extract
+    from fmpy.fmi3 import FMU3Slave
+
+    c = detect_case
+    md = read_model_description(str(fmu3))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(fmu3)), modelIdentifier="AidedINS", instanceName="ai3z")
+    fmu.instantiate()
+    try:
+        ints = {k: v for k, v in c.params.items() if k in ("zupt_source", "zvd_window")}
+        fmu.setFloat64([vr[k] for k in c.params if k not in ints], [v for k, v in c.params.items() if k not in ints])
+        fmu.setInt32([vr[k] for k in ints], [int(v) for v in ints.values()])
+        fmu.enterInitializationMode(startTime=0.0)
+        fmu.exitInitializationMode()
+        got = []
+        for k in range(len(c.inputs)):
+            reals, flags = step_inputs(c, k)
+            fmu.setFloat64([vr[n] for n in INPUTS + list(AID_REAL)], reals)
+            fmu.setInt32([vr[n] for n in ["fix_valid", "fix_count", *AID_INT]], flags)
+            fmu.doStep(k * STEP, STEP)
+            got.append(fmu.getFloat64([vr[n] for n in OUT]))
+        np.testing.assert_array_equal(np.array(got), c.expected)
         fmu.terminate()
     finally:
         fmu.freeInstance()

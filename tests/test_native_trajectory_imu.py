@@ -147,7 +147,9 @@ def test_core_stream_statistics():
     ({"odo_noise_std": -0.1}, "odo_noise_std"),
     ({"odo_scale_factor": 0.5}, "odo_scale_factor"),
     ({"odo_seed": -1}, "odo_seed"),
-    ({"zupt_enable": 2}, "zupt_enable = 2 must be 0 or 1"),
+    ({"zupt_enable": 3}, "zupt_enable = 3 must be 0 or 1 (or 2"),
+    ({"vib_accel_rms": -0.1}, "vib_accel_rms = -0.10000000000000001 must be finite and >= 0"),
+    ({"vib_rate_rms": float("inf")}, "vib_rate_rms"),
     ({"nhc_enable": -1}, "nhc_enable = -1 must be 0 or 1"),
     ({"zupt_std": -0.01}, "zupt_std"),
     ({"nhc_std": float("nan")}, "nhc_std"),
@@ -255,7 +257,7 @@ def test_zupt_and_nhc_rows_equal_navigates_core_rows_bit_for_bit(fmu, expected, 
 
 
 def test_state_of_the_previous_version_is_refused(fmu, expected):
-    """A serialized state of state version 2 (no ZUPT / NHC jitter) is refused naming why."""
+    """A serialized state of state version 3 (no vibration) is refused naming why."""
     from fmpy.fmi1 import FMICallException
 
     params, _ = expected
@@ -265,8 +267,8 @@ def test_state_of_the_previous_version_is_refused(fmu, expected):
         slave.fmu.enterInitializationMode()
         slave.fmu.exitInitializationMode()
         blob = bytearray(slave.fmu.serializeFMUstate(slave.fmu.getFMUstate()))
-        assert int.from_bytes(blob[12:16], "little") == 3
-        blob[12:16] = (2).to_bytes(4, "little")
+        assert int.from_bytes(blob[12:16], "little") == 4
+        blob[12:16] = (3).to_bytes(4, "little")
         with pytest.raises(FMICallException, match="status 3"):
             slave.fmu.deSerializeFMUstate(bytes(blob))
         assert any("state version differs" in m for status, _, m in slave.log if status == 3), slave.log
@@ -314,3 +316,34 @@ def test_fmi3_variant_outputs_the_same_zupt_and_nhc_rows(tmp_path, expected):
     np.testing.assert_array_equal(got, rows)
     np.testing.assert_array_equal(flags, aid[:, [0, 6]])
     np.testing.assert_array_equal(values, aid[:, [1, 2, 3, 7, 8]])
+
+
+def test_vibration_and_every_step_jitter_equal_navigates_core_draws_bit_for_bit(fmu, expected):
+    """vib_accel_rms / vib_rate_rms add zero_velocity.vibrate(..., stream='core') (vibration.h, stream 34 of seed) to
+    the increments, and zupt_enable = 2 outputs the ZUPT jitter of every step (per_step_aiding's rows with every
+    step a stop): bit for bit, a state taken mid-run repeats the rest; the truth and the flags are unchanged."""
+    from sarins_fmu import zero_velocity as zv
+
+    truth = tr.generate(tr.Trajectory(START, SEGMENTS), STEP)
+    vib = zv.Vibration(accel_rms=0.3, rate_rms=0.01)
+    vt, vv = zv.vibrate(truth, vib, SEED, stream="core")
+    params, rows = expected
+    want = rows.copy()
+    want[:, 13:16] = rows[:, 13:16] + vt
+    want[:, 16:19] = rows[:, 16:19] + vv
+    still = truth.stationary()
+    assert np.all(vt[still] == 0.0) and np.all(vv[still] == 0.0) and np.all(vv[~still][1:] != 0.0)
+    aid = aided.per_step_aiding(truth, ("zupt", "nhc"), aided.FilterSettings(), None, None, 5, stops=np.ones(len(rows)),
+                                stream="core")
+    params = {**params, "vib_accel_rms": 0.3, "vib_rate_rms": 0.01, "zupt_enable": 2, "nhc_enable": 1,
+              "jitter_seed": 5}
+    flags, values, rest, again = _run_aid(fmu, params, len(rows), state_at=150)
+    np.testing.assert_array_equal(rest, want)
+    np.testing.assert_array_equal(values, aid[:, [1, 2, 3, 7, 8]])
+    np.testing.assert_array_equal(again, values[150:])
+    np.testing.assert_array_equal(flags[:, 0], still)  # the truth's stops all the same
+    assert np.all(values[:, :3] != 0.0)
+    # the sample specific force the vibration adds while moving has the stated rms per axis (3 x ~500 samples)
+    moving = ~still
+    rms = np.sqrt(np.mean((vv[moving][1:] / STEP) ** 2))
+    assert abs(rms / 0.3 - 1.0) < 0.1, rms

@@ -3,7 +3,9 @@ project's master: under Gauss-Seidel and Jacobi the rows at each nav_time equal 
 (aided.navigate(aiding=('gnss',)) on the core stream's IMU, aided.corrupt(stream='core')) bit for bit:
 navigation, bias estimates and the filter's sigmas, the GNSS outage included; with TrajectoryIMU's odometer
 wired in (vehicle_gnss_odometer) likewise navigate(aiding=('gnss', 'odometer')), and with its ZUPT / NHC rows
-too (vehicle_gnss_zupt) navigate(aiding=('gnss', 'zupt', 'zaru', 'nhc', 'odometer'), imu_stream='core')."""
+too (vehicle_gnss_zupt) navigate(aiding=('gnss', 'zupt', 'zaru', 'nhc', 'odometer'), imu_stream='core'), and with
+the stops detected by AidedINS from the vibrating IMU's increments (vehicle_gnss_zupt(zupt_detect='imu',
+vibration=...)) navigate(..., zupt_detect='imu', vibration=..., imu_stream='core')."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ import pytest
 from orchestration import simulate_system, write_ssp
 from sarins.systems import GNSS_DRIVE, vehicle_gnss, vehicle_gnss_odometer, vehicle_gnss_zupt
 from sarins_fmu import aided, gnss
+from sarins_fmu import zero_velocity as zv
 from sarins_fmu import trajectory as tr
 
 SEED = 4
@@ -22,14 +25,14 @@ OUT = NAV + [f"bias_{q}_{a}" for q in "ga" for a in "xyz"] + [f"sigma_{q}_{a}" f
                                                             for a in "enu"]
 
 
-def navigate_rows(aiding, imu_stream=None):
+def navigate_rows(aiding, imu_stream=None, **kwargs):
     """navigate's rows (every 10th IMU step) and their times, and the valid fixes it applies (the IMU of the
-    core's stream; ``imu_stream='core'``: the ZUPT / NHC jitter too)."""
+    core's stream; ``imu_stream='core'``: the ZUPT / NHC jitter too; ``kwargs`` to navigate)."""
     truth = tr.generate(tr.Trajectory.from_dict(GNSS_DRIVE), 0.01)
     noise = aided.IMU_NOISE["tactical"]
     how = {"imu_stream": "core"} if imu_stream else {"imu": aided.corrupt(truth, noise, SEED, stream="core")}
     result = aided.navigate(truth, noise=noise, gnss=gnss.preset("sps", rate_hz=1.0), aiding=aiding,
-                            outages=OUTAGES, seed=SEED, **how)
+                            outages=OUTAGES, seed=SEED, **how, **kwargs)
     sigma = np.sqrt(np.diagonal(result.cov, axis1=1, axis2=2)[:, :9])
     return result.time, np.column_stack([result.nav, result.bias_g, result.bias_a, sigma]), result.gnss_used
 
@@ -61,6 +64,67 @@ def expected_zupt(expected_odometer):
     sigma = [np.hypot(r[1][outage, -9], r[1][outage, -8]).max() for r in (rows, expected_odometer)]
     assert sigma[0] < sigma[1], sigma
     return rows
+
+
+VIBRATION = zv.VIBRATION["car"]
+ALL_AIDING = ("gnss", "zupt", "zaru", "nhc", "odometer")
+
+
+@pytest.fixture(scope="module")
+def expected_detected(expected_zupt):
+    """navigate(all aiding, zupt_detect 'imu', the car's vibration, imu_stream 'core'): the detector finds the two
+    stops, late by its window (of the truth's 2000 still steps 1901, and no moving step), the ZUPT and ZARU at
+    those steps, other rows than at the truth's stops."""
+    truth = tr.generate(tr.Trajectory.from_dict(GNSS_DRIVE), 0.01)
+    noise = aided.IMU_NOISE["tactical"]
+    dtheta, dv, _, _ = aided.corrupt(truth, noise, SEED, stream="core")
+    vib_theta, vib_v = zv.vibrate(truth, VIBRATION, SEED, stream="core")
+    found = zv.detect(dtheta + vib_theta, dv + vib_v, 0.01, noise.vrw, noise.arw).stationary
+    still = truth.stationary()
+    samples = zv.DetectorSettings().samples(0.01)
+    assert not np.any(found & ~still) and still.sum() - 2 * samples <= found.sum() < still.sum()
+    result = aided.navigate(truth, noise=noise, gnss=gnss.preset("sps", rate_hz=1.0), aiding=ALL_AIDING,
+                            outages=OUTAGES, seed=SEED, imu_stream="core", zupt_detect="imu", vibration=VIBRATION)
+    assert result.zupt_steps == result.zaru_steps == found.sum()
+    rows = navigate_rows(ALL_AIDING, imu_stream="core", zupt_detect="imu", vibration=VIBRATION)
+    assert not np.array_equal(rows[1], expected_zupt[1])
+    return rows
+
+
+@pytest.mark.parametrize("scheme", ["gauss-seidel", "jacobi"])
+def test_system_with_detected_stops_equals_navigate_bit_for_bit(fmu_dir, tmp_path, expected_detected, scheme):
+    """TrajectoryIMU's vibrating increments -> AidedINS's stillness detector (zupt_source 1): navigate(all aiding,
+    zupt_detect='imu', vibration=car, imu_stream='core')."""
+    system = vehicle_gnss_zupt(fmu_dir, seed=SEED, outages=OUTAGES, zupt_detect="imu", vibration=VIBRATION)
+    check_system(system, tmp_path, expected_detected, scheme)
+
+
+def test_navigate_command_with_detected_stops_gives_the_systems_numbers(tmp_path, capsys, expected_detected):
+    """``sarins navigate --aiding gnss,zupt,zaru,nhc,odometer --zupt-detect imu --imu-stream core --json`` (the car's
+    vibration by default with --zupt-detect imu) prints the summary of the run whose rows the detected system
+    gives (expected_detected: navigate's rows, equal to the system's in the test above)."""
+    import json
+
+    from sarins.cli import main
+
+    path = tmp_path / "drive.json"
+    path.write_text(json.dumps(GNSS_DRIVE))
+    assert main(["navigate", "--trajectory", str(path), "--aiding", ",".join(ALL_AIDING), "--gnss-outage", "60:80",
+                 "--seed", str(SEED), "--imu-stream", "core", "--zupt-detect", "imu", "--json"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    truth = tr.generate(tr.Trajectory.from_dict(GNSS_DRIVE), 0.01)
+    time, rows, used = expected_detected
+    true_rows = truth.nav_rows(np.round(time / 0.01).astype(int))
+    nav = rows[:, :9]
+    result = aided.AidedResult(time=time, nav=nav, truth=true_rows, error=aided.nav_errors(nav, true_rows),
+                               cov=np.tile(np.eye(15), (len(time), 1, 1)), bias_g=nav[:, :3], bias_a=nav[:, :3],
+                               bias_g_true=nav[:, :3], bias_a_true=nav[:, :3], gnss_used=used)
+    made = aided.summary(result, OUTAGES)
+    for key in ("horizontal_error_rms_m", "horizontal_error_max_m", "vertical_error_rms_m", "velocity_error_rms_mps",
+                "tilt_error_rms_deg", "heading_error_rms_deg", "final_horizontal_error_m", "gnss_fixes_used"):
+        assert made[key] == printed[key], key
+    assert made["outages"][0]["horizontal_error_m"] == printed["outages"][0]["horizontal_error_m"]
+    assert printed["zupt_steps"] == printed["zaru_steps"] < 2000
 
 
 @pytest.mark.parametrize("scheme", ["gauss-seidel", "jacobi"])

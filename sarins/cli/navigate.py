@@ -86,10 +86,10 @@ def register(sub) -> None:
     g.add_argument("--imu-noise", default="tactical", metavar="GRADE",
                    help="IMU noise grade of the aided run: ideal, tactical, mems (default tactical)")
     g.add_argument("--imu-stream", choices=("numpy", "core"), default=None,
-                   help="where the IMU's errors and the ZUPT / NHC jitter are drawn: core (default: the C core's "
-                        "streams, as the TrajectoryIMU FMU and the vehicle_gnss* systems draw them, so the command "
-                        "and the systems give the same numbers) or numpy (aided.navigate's default, with which "
-                        "docs/aided-navigation.md's in-process numbers are made)")
+                   help="where the IMU's errors, the ZUPT / NHC jitter and the vibration are drawn: core (default: "
+                        "the C core's streams, as the TrajectoryIMU FMU and the vehicle_gnss* systems draw them, so "
+                        "the command and the systems give the same numbers) or numpy (aided.navigate's default, with "
+                        "which docs/aided-navigation.md's in-process numbers are made)")
     g.add_argument("--zupt-std", type=finite, default=0.01, help="zero-velocity update std, m/s (default 0.01)")
     g.add_argument("--zaru-std", type=finite, default=None,
                    help="zero-angular-rate update std per IMU step, rad/s (default: the gyro's white rate noise "

@@ -193,7 +193,8 @@ RECEIVER_SETTINGS = ["lever_x", "lever_y", "lever_z", "pos_white_e", "pos_white_
 
 def vehicle_gnss(fmu_dir: Path | str = "resources", *, trajectory=None, seed: int = 0, gnss="sps",
                  gnss_rate_hz: float = 1.0, imu_noise: str = "tactical", imu_rate_hz: float = 100.0,
-                 outages=GNSS_OUTAGES, odometer=None, zupt: bool = False) -> System:
+                 outages=GNSS_OUTAGES, odometer=None, zupt: bool = False, zupt_detect: str = "truth",
+                 vibration=None, detector=None) -> System:
     """TrajectoryIMU -> GNSSReceiver -> AidedINS, TrajectoryIMU -> AidedINS: the aided run of
     ``sarins navigate --trajectory FILE --aiding gnss`` as a system; with ``odometer`` (an
     :class:`sarins_fmu.aided.OdometerConfig`) TrajectoryIMU's odometer feeds AidedINS too: the run of
@@ -201,7 +202,12 @@ def vehicle_gnss(fmu_dir: Path | str = "resources", *, trajectory=None, seed: in
     ZUPT and NHC rows (``zupt_enable``, ``nhc_enable``, ``jitter_seed`` = ``seed``, the filter's stds) feed
     AidedINS's ``zupt``, ``zupt_v_*``, ``nhc``, ``nhc_v_*``, and its still flag ``zupt`` also ``zaru``: with the
     odometer the run of ``--aiding gnss,zupt,zaru,nhc,odometer --imu-stream core`` (system
-    ``vehicle_gnss_zupt``).
+    ``vehicle_gnss_zupt``).  With ``zupt`` and ``zupt_detect='imu'`` the stops are AidedINS's own, detected from
+    the increments (``zupt_source`` 1, the detector of :mod:`sarins_fmu.zero_velocity` with ``detector``, a
+    ``DetectorSettings``, default its defaults; inputs ``zupt`` and ``zaru`` held at 1, TrajectoryIMU's
+    ``zupt_enable`` 2 giving the ZUPT jitter of every step) and ``vibration`` (a ``Vibration``, or None)
+    shakes TrajectoryIMU's increments while moving (``vib_accel_rms``, ``vib_rate_rms``): the run of
+    ``navigate(..., zupt_detect='imu', vibration=vibration, detector=detector, imu_stream='core')``.
 
     ``trajectory``: a :class:`sarins_fmu.trajectory.Trajectory`, a dict or a JSON file (default
     ``GNSS_DRIVE``, 120 s); ``gnss``: a preset name or a GNSSConfig; ``outages``: windows [start, end) s.
@@ -214,7 +220,11 @@ def vehicle_gnss(fmu_dir: Path | str = "resources", *, trajectory=None, seed: in
     """
     import numpy as np
 
-    from sarins_fmu import aided, gnss as gnss_mod, trajectory as tr
+    from sarins_fmu import aided, gnss as gnss_mod, trajectory as tr, zero_velocity as zv
+
+    if zupt_detect not in aided.ZUPT_DETECT:
+        raise ValueError(f"zupt_detect must be one of {', '.join(aided.ZUPT_DETECT)}, got {zupt_detect!r}")
+    detected = zupt and zupt_detect == "imu"
 
     if trajectory is None or isinstance(trajectory, dict):
         trajectory = tr.Trajectory.from_dict(trajectory or GNSS_DRIVE)
@@ -246,8 +256,15 @@ def vehicle_gnss(fmu_dir: Path | str = "resources", *, trajectory=None, seed: in
            **({} if zupt else UNUSED_AIDING),
            **({} if odometer is not None else {"odo_valid": 0, "odo_speed": 0.0})}
     if zupt:
-        motion.update({"zupt_enable": 1, "nhc_enable": 1, "zupt_std": float(settings.zupt_std),
+        motion.update({"zupt_enable": 2 if detected else 1, "nhc_enable": 1, "zupt_std": float(settings.zupt_std),
                        "nhc_std": float(settings.nhc_std), "jitter_seed": int(seed)})
+    if vibration is not None:
+        motion.update({"vib_accel_rms": float(vibration.accel_rms), "vib_rate_rms": float(vibration.rate_rms)})
+    if detected:
+        samples = (detector or zv.DetectorSettings()).samples(step)
+        ins.update({"zupt_source": 1, "zvd_window": samples, "zupt": 1, "zaru": 1,
+                    "zvd_gamma": zv.threshold(samples, (detector or zv.DetectorSettings()).alpha),
+                    "zvd_vrw": float(noise.vrw), "zvd_arw": float(noise.arw)})
     components = [Component("motion", fmu_dir / "TrajectoryIMU.fmu", motion),
                   Component("receiver", fmu_dir / "GNSSReceiver.fmu", rx),
                   Component("ins", fmu_dir / "AidedINS.fmu", ins)]
@@ -257,7 +274,8 @@ def vehicle_gnss(fmu_dir: Path | str = "resources", *, trajectory=None, seed: in
     if odometer is not None:
         connections += [Connection("motion", v, "ins", v) for v in ODOMETER_TO_AIDED]
     if zupt:
-        connections += [Connection("motion", a, "ins", b) for a, b in STILL_TO_AIDED]
+        connections += [Connection("motion", a, "ins", b) for a, b in STILL_TO_AIDED
+                        if not (detected and a == "zupt")]  # detected: the inputs zupt, zaru held at 1
     name = "vehicle_gnss_zupt" if zupt else "vehicle_gnss" if odometer is None else "vehicle_gnss_odometer"
     return System(name=name, components=components, connections=connections, start_time=0.0,
                   stop_time=truth.n_steps * step, step_size=step)

@@ -79,6 +79,11 @@ int sarins_aid_still(const double *v0, const double *v1)
     return speed(v0) < SARINS_AID_STILL_SPEED && speed(v1) < SARINS_AID_STILL_SPEED;
 }
 
+int sarins_aid_moving(const double *v)
+{
+    return !(speed(v) < SARINS_AID_STILL_SPEED);
+}
+
 void sarins_aid_still_n(int64_t n, const double *v, int32_t *out)
 {
     for (int64_t k = 0; k < n; k++)

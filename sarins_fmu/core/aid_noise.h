@@ -53,6 +53,10 @@ int sarins_aid_noise_check(const sarins_aid_noise *s, char *msg, size_t size);
 /* 1 when the step between the velocities v0 and v1 (3 each, ENU m/s) is still, else 0. */
 int sarins_aid_still(const double *v0, const double *v1);
 
+/* 1 when the vehicle moves at the velocity v (3, ENU m/s): its speed is not below SARINS_AID_STILL_SPEED (the
+ * points sarins_fmu.zero_velocity.moving_points marks; vibration.h adds its jitter there). */
+int sarins_aid_moving(const double *v);
+
 /* The stillness of n steps from n + 1 velocities v (n + 1, 3): out (n) 0 / 1. */
 void sarins_aid_still_n(int64_t n, const double *v, int32_t *out);
 

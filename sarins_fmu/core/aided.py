@@ -258,3 +258,19 @@ class ZvdState:
                     flag.ctypes.data) != 0:
             raise ValueError("the zero-velocity detector's increments must be finite")
         return stat, flag > 0.5
+
+
+_vibration_run = function("sarins_vibration_run", ctypes.c_int, _F64, _F64, _F64, ctypes.c_uint64, _I64, _P, _P, _P)
+
+
+def vibration_run(accel_rms: float, rate_rms: float, step: float, seed: int, velocity_n):
+    """``sarins_vibration_run``: the vehicle vibration's increments (vibration.h, stream 34 of ``seed``) along K + 1
+    velocities (K + 1, 3) ENU m/s: dtheta, dv (K, 3) rad, m/s (jitter at the moving points, zero at rest)."""
+    velocity_n = _arrays.read(velocity_n, (np.shape(velocity_n)[0], 3), "velocity")
+    n = max(velocity_n.shape[0] - 1, 0)
+    dtheta, dv = np.empty((n, 3)), np.empty((n, 3))
+    if _vibration_run(float(accel_rms), float(rate_rms), float(step), int(seed) % 2**64, n, velocity_n.ctypes.data,
+                      dtheta.ctypes.data, dv.ctypes.data) != 0:
+        raise ValueError("the vibration's rms values must be finite and >= 0, the step positive and the velocities "
+                         "finite")
+    return dtheta, dv

@@ -46,6 +46,7 @@ int sarins_core_abi(void);
 #include "odo.h"
 #include "aid_noise.h"
 #include "zvd.h"
+#include "vibration.h"
 #include "ins_fmu_step.h"
 
 /* trained networks: model files, inference kernels, identifier and compensators */

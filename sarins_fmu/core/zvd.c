@@ -86,3 +86,24 @@ int sarins_zvd_run(sarins_zvd *s, int64_t n, const double *dtheta, const double 
 }
 
 int64_t sarins_zvd_size(void) { return (int64_t)sizeof(sarins_zvd); }
+
+int sarins_zvd_check(const sarins_zvd *s, char *msg, size_t size)
+{
+    if (!(s->window >= 2 && s->window <= SARINS_ZVD_MAX_WINDOW && s->count >= 0)) {
+        sarins_say(msg, size, "zero-velocity detector: the window or the sample count is out of range");
+        return 1;
+    }
+    const double v[4] = {s->step, s->inv_var_f, s->inv_var_w, s->gamma};
+    for (int i = 0; i < 4; i++)
+        if (!(isfinite(v[i]) && v[i] > 0.0)) {
+            sarins_say(msg, size, "zero-velocity detector: the step, inverse variances and threshold must be positive");
+            return 1;
+        }
+    for (int64_t j = 0; j < s->window; j++)
+        for (int i = 0; i < 3; i++)
+            if (!isfinite(s->f[j][i]) || !isfinite(s->w[j][i])) {
+                sarins_say(msg, size, "zero-velocity detector: a sample of the window is not finite");
+                return 1;
+            }
+    return 0;
+}

@@ -56,4 +56,8 @@ int sarins_zvd_run(sarins_zvd *s, int64_t n, const double *dtheta, const double 
 
 int64_t sarins_zvd_size(void);
 
+/* 0 when s is a state init and push make (window 2 .. SARINS_ZVD_MAX_WINDOW, positive finite step, inverse
+ * variances and threshold, count >= 0, the window's samples finite), else 1 with a reason in msg. */
+int sarins_zvd_check(const sarins_zvd *s, char *msg, size_t size);
+
 #endif

@@ -8,7 +8,12 @@
  * per-step aiding rows and the fixes at the steps after which navigate applies them, the outputs equal its
  * rows bit for bit.  doStep(t, h) integrates the increments of [t, t + h], applies the interval's aiding row
  * (eskf.h's order: ZUPT, ZARU, odometer and / or NHC) built from the inputs zupt, zupt_v_*, zaru, odo_valid,
- * odo_speed, nhc, nhc_v_*, then a new valid fix.  Units: rad, m, m/s, rad/s, m/s^2, s.
+ * odo_speed, nhc, nhc_v_*, then a new valid fix.  With zupt_source = 1 the stops come from the IMU's statistics:
+ * the core's detector (zvd.h, window zvd_window samples ending at the interval, threshold zvd_gamma, noise
+ * densities zvd_vrw, zvd_arw) sees each interval's increments once and in order (causal: its decision for an
+ * interval uses that interval and the zvd_window - 1 before it, as sarins_fmu.zero_velocity.detect), and the
+ * ZUPT / ZARU are applied where the input zupt / zaru is 1 and the detector says still:
+ * navigate(..., zupt_detect="imu") on the same increments.  Units: rad, m, m/s, rad/s, m/s^2, s.
  */
 #include "smath.h"
 
@@ -20,6 +25,7 @@
 #include "model.h"
 #include "nav3.h"
 #include "variables.h"
+#include "zvd.h"
 
 #define STEP_TOL 1e-9 /* relative: the communication step equals the filter's step */
 #define NO_TAG -1.0e9  /* s: increment_end_time unconnected (fmus.slave_support.NO_TAG): untagged mode */
@@ -39,6 +45,8 @@ typedef struct {
     int64_t done;             /* intervals integrated */
     double fix[MAX_FIX][FIX_ROW]; /* waiting fixes (ring), in time order */
     int64_t fix_first, n_fix;
+    int64_t zupt_source; /* 0: the inputs zupt, zaru; 1: and the detector's decision */
+    sarins_zvd zvd;      /* the stillness detector (zupt_source 1) */
 } ai_state;
 
 /* 1 when st can be run, else 0 with the reason in msg. */
@@ -184,9 +192,36 @@ static int ai_initialize(sarins_ctx *c)
     double opt[SARINS_ESKF_OPT];
     if (state_options(c, opt) != SARINS_OK)
         return SARINS_ERROR;
+    int source = c->i[SARINS_I_zupt_source], window = c->i[SARINS_I_zvd_window];
+    if (source != 0 && source != 1) {
+        sarins_log(c, SARINS_ERROR, "parameter zupt_source = %d must be 0 (the inputs zupt, zaru) or 1 (detected from "
+                   "the increments)", source);
+        return SARINS_ERROR;
+    }
+    double zvd[SARINS_ZVD_CONFIG] = {(double)window, r[SARINS_R_step], r[SARINS_R_zvd_vrw], r[SARINS_R_zvd_arw],
+                                     r[SARINS_R_zvd_gamma]};
+    if (source == 1) {
+        if (window < 2 || window > SARINS_ZVD_MAX_WINDOW) {
+            sarins_log(c, SARINS_ERROR, "parameter zvd_window = %d must be 2 .. " SARINS_ZVD_STR(SARINS_ZVD_MAX_WINDOW)
+                       " samples (zupt_source 1)", window);
+            return SARINS_ERROR;
+        }
+        static const char *const zvd_names[3] = {"zvd_vrw", "zvd_arw", "zvd_gamma"};
+        for (int i = 0; i < 3; i++)
+            if (!(isfinite(zvd[SARINS_ZVD_VRW + i]) && zvd[SARINS_ZVD_VRW + i] > 0.0)) {
+                sarins_log(c, SARINS_ERROR, "parameter %s = %.17g must be positive (zupt_source 1)", zvd_names[i],
+                           zvd[SARINS_ZVD_VRW + i]);
+                return SARINS_ERROR;
+            }
+    }
     ai_state *st = c->state;
     memset(st, 0, sizeof *st);
     char msg[256];
+    st->zupt_source = source;
+    if (source == 1 && sarins_zvd_init(&st->zvd, zvd, msg, sizeof msg)) {
+        sarins_log(c, SARINS_ERROR, "parameters (zvd_window, step, zvd_vrw, zvd_arw, zvd_gamma): %s", msg);
+        return SARINS_ERROR;
+    }
     if (sarins_eskf_init_states(&st->eskf, config, opt, nav0, msg, sizeof msg)) {
         sarins_log(c, SARINS_ERROR, "parameters (lat0 .. roll0, filter settings): %s", msg);
         return SARINS_ERROR;
@@ -263,6 +298,27 @@ static int aid_row(sarins_ctx *c, double t, double *aid)
     return 0;
 }
 
+/* zupt_source 1: the detector sees the interval's increments; the ZUPT and ZARU flags of its aiding row stay 1 only
+ * where the detector says still (a cleared ZUPT's values zeroed, as aid_row leaves a clear flag's).  0, or -1 with
+ * the error logged (a non-finite increment, checked before). */
+static int detect(sarins_ctx *c, ai_state *st, const double *dtheta, const double *dv, double *aid)
+{
+    if (st->zupt_source != 1)
+        return 0;
+    double stat;
+    int still = sarins_zvd_push(&st->zvd, dtheta, dv, &stat);
+    if (still < 0) {
+        sarins_log(c, SARINS_ERROR, "ValueError: the zero-velocity detector's increments are not finite");
+        return -1;
+    }
+    if (!still) {
+        for (int j = 0; j < 4; j++)
+            aid[j] = 0.0;
+        aid[9] = 0.0;
+    }
+    return 0;
+}
+
 /* Time-tagged mode (model.h's do_step, the declaration's contract): queue the inputs, integrate what is due. */
 static int tagged_step(sarins_ctx *c, ai_state *st, double t)
 {
@@ -293,7 +349,7 @@ static int tagged_step(sarins_ctx *c, ai_state *st, double t)
                 return SARINS_ERROR;
             }
         }
-        if (aid_row(c, t, slot + 6) < 0)
+        if (aid_row(c, t, slot + 6) < 0 || detect(c, st, slot, slot + 3, slot + 6) < 0)
             return SARINS_ERROR;
         st->n_inc += 1;
     } else if (m != received) {
@@ -383,7 +439,7 @@ static int ai_do_step(sarins_ctx *c, double t, double h)
             return SARINS_ERROR;
         }
     double aid[SARINS_ESKF_AID];
-    if (aid_row(c, t, aid) < 0)
+    if (aid_row(c, t, aid) < 0 || detect(c, st, dtheta, dv, aid) < 0)
         return SARINS_ERROR;
     int64_t count = c->i[SARINS_I_fix_count];
     int fresh = count > st->last_count && c->i[SARINS_I_fix_valid] != 0;
@@ -441,6 +497,15 @@ static int ai_check_state(const sarins_ctx *c, int running)
         sarins_log(c, SARINS_ERROR, "FMU state: eskf: %s", msg);
         ok = 0;
     }
+    ok = ok && sarins_state_int(c, "zupt_source", st->zupt_source, 0, 1);
+    if (ok && st->zupt_source == 1 && sarins_zvd_check(&st->zvd, msg, sizeof msg)) {
+        sarins_log(c, SARINS_ERROR, "FMU state: %s", msg);
+        ok = 0;
+    }
+    if (ok && st->zupt_source == 1 && !(st->zvd.step == e->config[SARINS_ESKF_STEP])) {
+        sarins_log(c, SARINS_ERROR, "FMU state: the zero-velocity detector's step differs from the filter's");
+        ok = 0;
+    }
     for (int i = 0; ok && i < MAX_INC; i++) /* the aiding flags aid_row writes */
         for (size_t k = 0; ok && k < sizeof AID_INPUTS / sizeof AID_INPUTS[0]; k++)
             ok = sarins_state_real(c, "inc (an aiding flag)", st->inc[i][6 + AID_INPUTS[k].flag_column], 0.0, 1.0);
@@ -450,8 +515,9 @@ static int ai_check_state(const sarins_ctx *c, int running)
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(ai_state),
-    .state_version = 5, /* 4: the ring's rows carry the aiding row (ZUPT, odometer, NHC, ZARU); 5: the filter's
-                         * optional states (eskf.h: n x n P, options, their estimates) */
+    .state_version = 6, /* 4: the ring's rows carry the aiding row (ZUPT, odometer, NHC, ZARU); 5: the filter's
+                         * optional states (eskf.h: n x n P, options, their estimates); 6: the stillness detector
+                         * (zupt_source, zvd) */
     .initialize = ai_initialize,
     .do_step = ai_do_step,
     .release = ai_release,

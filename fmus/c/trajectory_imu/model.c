@@ -8,7 +8,11 @@
  * (odo.h, seed odo_seed) reads the forward speed of truth row k + 1 after every (1 / (odo_rate_hz h))-th step,
  * the readings sarins_fmu.aided.per_step_aiding draws for navigate's odometer aiding.  With zupt_enable /
  * nhc_enable the ZUPT and NHC aiding rows of step k (aid_noise.h: the still decision from truth rows k and k + 1,
- * five normals per step from stream 33 of jitter_seed), the rows per_step_aiding(..., stream="core") gives.
+ * five normals per step from stream 33 of jitter_seed), the rows per_step_aiding(..., stream="core") gives;
+ * zupt_enable 2 outputs the ZUPT jitter on every step (zupt still the truth's flag): the values for the stops a
+ * detector downstream declares (AidedINS zupt_source 1, per_step_aiding's rows with stops from the IMU).
+ * With vib_accel_rms or vib_rate_rms > 0 the vehicle's vibration while moving (vibration.h, stream 34 of seed) is
+ * added to the increments: navigate(..., imu_stream="core", vibration=Vibration(vib_accel_rms, vib_rate_rms)).
  * Units: rad, m, m/s, rad/s, s.
  */
 #include "smath.h"
@@ -22,6 +26,7 @@
 #include "model.h"
 #include "odo.h"
 #include "traj.h"
+#include "vibration.h"
 #include "variables.h"
 
 #define TAG_TOL 1e-9                      /* relative to the step: two times name the same grid point */
@@ -36,6 +41,8 @@ typedef struct {
     int64_t odo_every;    /* steps per odometer reading; 0: no odometer */
     sarins_aid_noise jitter; /* the ZUPT and NHC jitter */
     int32_t zupt_on, nhc_on; /* zupt_enable, nhc_enable */
+    sarins_vibration vib;    /* the vehicle's vibration while moving */
+    int32_t vib_on;          /* vib_accel_rms or vib_rate_rms > 0 */
 } ti_state;
 
 /* What the parameters give (built at initialisation, not part of the FMU state). */
@@ -177,8 +184,9 @@ static int ti_initialize(sarins_ctx *c)
     static const char *const flag_names[2] = {"zupt_enable", "nhc_enable"};
     const int flags[2] = {c->i[SARINS_I_zupt_enable], c->i[SARINS_I_nhc_enable]};
     for (int i = 0; i < 2; i++)
-        if (flags[i] != 0 && flags[i] != 1) {
-            sarins_log(c, SARINS_ERROR, "parameter %s = %d must be 0 or 1", flag_names[i], flags[i]);
+        if (flags[i] != 0 && flags[i] != 1 && !(i == 0 && flags[i] == 2)) {
+            sarins_log(c, SARINS_ERROR, "parameter %s = %d must be 0 or 1%s", flag_names[i], flags[i],
+                       i == 0 ? " (or 2: the jitter on every step)" : "");
             return SARINS_ERROR;
         }
     static const char *const std_names[2] = {"zupt_std", "nhc_std"};
@@ -186,6 +194,14 @@ static int ti_initialize(sarins_ctx *c)
     for (int i = 0; i < 2; i++)
         if (!(isfinite(stds[i]) && stds[i] >= 0.0)) {
             sarins_log(c, SARINS_ERROR, "parameter %s = %.17g must be finite and >= 0", std_names[i], stds[i]);
+            return SARINS_ERROR;
+        }
+    static const char *const vib_names[2] = {"vib_accel_rms", "vib_rate_rms"};
+    const double vib[2] = {r[SARINS_R_vib_accel_rms], r[SARINS_R_vib_rate_rms]};
+    for (int i = 0; i < 2; i++)
+        if (!(isfinite(vib[i]) && vib[i] >= 0.0)) {
+            sarins_log(c, SARINS_ERROR, "parameter %s = %.17g must be finite and >= 0 (0: no vibration)", vib_names[i],
+                       vib[i]);
             return SARINS_ERROR;
         }
     if (c->i[SARINS_I_jitter_seed] < 0) {
@@ -234,6 +250,13 @@ static int ti_initialize(sarins_ctx *c)
     c->work = w;
     double row[SARINS_TRAJ_ROW];
     publish(c, w, st, c->start_time, row);
+    st->vib_on = vib[0] > 0.0 || vib[1] > 0.0;
+    if (sarins_vibration_init(&st->vib, vib[0], vib[1], step, (uint64_t)c->i[SARINS_I_seed], sarins_aid_moving(row + 3),
+                              msg, sizeof msg)) {
+        sarins_log(c, SARINS_ERROR, "parameters (vib_accel_rms, vib_rate_rms, step): %s", msg);
+        ti_release(c);
+        return SARINS_ERROR;
+    }
     double *out = c->r;
     const int zero[12] = {SARINS_R_dtheta_x, SARINS_R_dtheta_y, SARINS_R_dtheta_z, SARINS_R_dv_x, SARINS_R_dv_y,
                           SARINS_R_dv_z, SARINS_R_true_bias_g_x, SARINS_R_true_bias_g_y, SARINS_R_true_bias_g_z,
@@ -307,13 +330,21 @@ static int ti_do_step(sarins_ctx *c, double t, double h)
         r[SARINS_R_odo_speed] = reading;
     /* ZUPT / NHC rows of the step: still from the velocities at t and t + h; five draws whatever the flags */
     int still = sarins_aid_still(row0 + 3, row + 3), zupt = st->zupt_on && still, nhc = st->nhc_on && !still;
-    double jitter[SARINS_AID_NOISE_DRAWS];
-    sarins_aid_noise_step(&st->jitter, zupt, nhc, jitter);
+    double jitter[SARINS_AID_NOISE_DRAWS]; /* zupt_enable 2: the ZUPT jitter on every step (a detector's stops) */
+    sarins_aid_noise_step(&st->jitter, st->zupt_on == 2 ? 1 : zupt, nhc, jitter);
     const int aid[5] = {SARINS_R_zupt_v_e, SARINS_R_zupt_v_n, SARINS_R_zupt_v_u, SARINS_R_nhc_v_x, SARINS_R_nhc_v_z};
     for (int i = 0; i < 5; i++)
         r[aid[i]] = jitter[i];
     c->i[SARINS_I_zupt] = zupt;
     c->i[SARINS_I_nhc] = nhc;
+    if (st->vib_on) { /* the vibration's increments to the step's end point: dtheta + vib, as navigate adds them */
+        double vib_theta[3], vib_v[3];
+        sarins_vibration_step(&st->vib, sarins_aid_moving(row + 3), vib_theta, vib_v);
+        for (int i = 0; i < 3; i++) {
+            dtheta[i] = dtheta[i] + vib_theta[i];
+            dv[i] = dv[i] + vib_v[i];
+        }
+    }
     const int inc[6] = {SARINS_R_dtheta_x, SARINS_R_dtheta_y, SARINS_R_dtheta_z, SARINS_R_dv_x, SARINS_R_dv_y,
                         SARINS_R_dv_z};
     const int bs[6] = {SARINS_R_true_bias_g_x, SARINS_R_true_bias_g_y, SARINS_R_true_bias_g_z,
@@ -358,9 +389,18 @@ static int ti_check_state(const sarins_ctx *c, int running)
         sarins_log(c, SARINS_ERROR, "the state's %s", msg);
         ok = 0;
     }
-    ok = ok && sarins_state_int(c, "zupt_on", st->zupt_on, 0, 1) && sarins_state_int(c, "nhc_on", st->nhc_on, 0, 1);
+    ok = ok && sarins_state_int(c, "zupt_on", st->zupt_on, 0, 2) && sarins_state_int(c, "nhc_on", st->nhc_on, 0, 1);
     if (ok && sarins_aid_noise_check(&st->jitter, msg, sizeof msg)) {
         sarins_log(c, SARINS_ERROR, "the state's %s", msg);
+        ok = 0;
+    }
+    ok = ok && sarins_state_int(c, "vib_on", st->vib_on, 0, 1);
+    if (ok && sarins_vibration_check(&st->vib, msg, sizeof msg)) {
+        sarins_log(c, SARINS_ERROR, "the state's %s", msg);
+        ok = 0;
+    }
+    if (ok && !(st->vib.step == s->step)) {
+        sarins_log(c, SARINS_ERROR, "the state's vibration step differs from the trajectory's");
         ok = 0;
     }
     return ok ? SARINS_OK : SARINS_ERROR;
@@ -369,7 +409,8 @@ static int ti_check_state(const sarins_ctx *c, int running)
 const sarins_model sarins_model_desc = {
     .table = &SARINS_TABLE,
     .state_size = sizeof(ti_state),
-    .state_version = 3, /* 2: the odometer (odo, odo_every); 3: the ZUPT / NHC jitter (jitter, zupt_on, nhc_on) */
+    .state_version = 4, /* 2: the odometer (odo, odo_every); 3: the ZUPT / NHC jitter (jitter, zupt_on, nhc_on);
+                         * 4: the vibration (vib, vib_on), zupt_on 2 */
     .initialize = ti_initialize,
     .do_step = ti_do_step,
     .release = ti_release,
