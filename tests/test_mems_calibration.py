@@ -842,6 +842,63 @@ def test_dataset_in_chunks_is_the_whole_recordings_bit_for_bit():
         mems_calibration.dataset(rec, SHORT, rows=0)
 
 
+def test_streamed_recording_and_chunked_sets_are_the_whole_arrays_bit_for_bit(tmp_path, monkeypatch):
+    """The campaign's low-memory path: the recording spooled chunk by chunk and streamed into its result file,
+    read back a slice at a time, its data sets written a part at a time -- the same arrays, bit for bit, as the
+    whole-array path (one chunk, np.savez-style file, load_result, dataset)."""
+    import hashlib
+
+    from sarins.mems_calibration import fitting, storage
+    from sarins.results import StoredResultError, load_result, save_result
+
+    whole = mems_calibration.record_in_process("heldout", SHORT, seed=4, chunk=10**9)
+    spooled = mems_calibration.record_in_process("heldout", SHORT, seed=4, chunk=333, spool=tmp_path)
+    assert len(whole["time"]) > 3 * 333
+    assert {type(v) for v in spooled.values()} == {mems_calibration.SpooledArray}
+    for key in whole:
+        np.testing.assert_array_equal(np.asarray(spooled[key]), whole[key], err_msg=key)
+    save_result(tmp_path / "whole.npz", dict(whole, wall_s=1.5), {"id": 1})
+    save_result(tmp_path / "streamed.npz", dict(spooled, wall_s=1.5), {"id": 1})
+    assert not list(tmp_path.glob(".spool-*"))  # each spool file removed once streamed
+    a, b = load_result(tmp_path / "whole.npz"), load_result(tmp_path / "streamed.npz")
+    assert set(a) == set(b) == set(whole) | {"wall_s"}
+    for key in whole:
+        assert a[key].dtype == b[key].dtype == whole[key].dtype
+        np.testing.assert_array_equal(b[key], whole[key], err_msg=key)
+        np.testing.assert_array_equal(a[key], whole[key], err_msg=key)
+
+    monkeypatch.setattr(storage, "LAZY_BYTES", 0)  # every 2-D array read from the file a slice at a time
+    lazy = storage.open_recording(tmp_path / "streamed.npz")
+    assert isinstance(lazy["temps"], storage.StoredArray) and isinstance(lazy["time"], np.ndarray)
+    assert lazy["wall_s"] == 1.5
+    temps = whole["temps"]
+    for key in (slice(None), slice(5, 700), slice(None, None, 7), slice(3, -2, 1000), slice(10, 5)):
+        np.testing.assert_array_equal(lazy["temps"][key], temps[key])
+    np.testing.assert_array_equal(lazy["rate"][-1], whole["rate"][-1])
+    digests = [fitting.models_digest({}) for _ in range(2)]
+    fitting.digest_recording(digests[0], a)
+    fitting.digest_recording(digests[1], lazy)
+    assert digests[0].hexdigest() == digests[1].hexdigest()
+
+    data = mems_calibration.dataset(whole, SHORT)
+    for rows, limit in ((50, None), (1 << 16, None), (333, 1001), (7, 10**9)):
+        n, parts = mems_calibration.dataset_chunks(lazy, SHORT, rows=rows)
+        stored = storage.save_chunks(tmp_path, f"set{rows}", n, parts, limit=limit).load()
+        ref = data.head(len(data) if limit is None else limit)
+        for column in ("X", "Y", "time"):
+            np.testing.assert_array_equal(getattr(stored, column), getattr(ref, column), err_msg=column)
+            assert getattr(stored, column).dtype == np.float64
+    np.testing.assert_array_equal(mems_calibration.dataset(lazy, SHORT, rows=99).X, data.X)
+
+    member = lazy["temps"]
+    raw = bytearray((tmp_path / "streamed.npz").read_bytes())
+    raw[member.offset + 100] ^= 1  # a byte of temps flipped on disk
+    (tmp_path / "bad.npz").write_bytes(bytes(raw))
+    with pytest.raises(StoredResultError, match="temps"):
+        storage.open_recording(tmp_path / "bad.npz")
+    assert hashlib.sha256(bytes(raw)).hexdigest() != hashlib.sha256((tmp_path / "streamed.npz").read_bytes()).hexdigest()
+
+
 def test_in_process_recording_does_not_depend_on_its_chunk():
     a = mems_calibration.record_in_process("heldout", SHORT, seed=4)
     b = mems_calibration.record_in_process("heldout", SHORT, seed=4, chunk=333)

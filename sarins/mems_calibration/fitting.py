@@ -201,4 +201,9 @@ def digest_recording(digest, rec: dict) -> None:
     for key in sorted(rec):
         if key != "wall_s":
             digest.update(key.encode())
-            digest.update(np.ascontiguousarray(rec[key]).tobytes())
+            value = rec[key]
+            if hasattr(value, "blocks"):  # read from disk a block at a time: the same bytes in order
+                for block in value.blocks():
+                    digest.update(np.ascontiguousarray(block).tobytes())
+            else:
+                digest.update(np.ascontiguousarray(value).tobytes())
