@@ -907,6 +907,45 @@ def test_in_process_recording_does_not_depend_on_its_chunk():
         np.testing.assert_array_equal(a[key], b[key], err_msg=key)
 
 
+def test_fits_on_a_stored_set_equal_the_fits_on_the_arrays(tmp_path, monkeypatch):
+    """The fits' statistics summed a block at a time are numpy's on the whole arrays, bit for bit, and the
+    recurrent fits' processes reading the training set from disk give the models fitted on it in memory."""
+    from sarins.mems_calibration import fitting
+    from sarins.mems_calibration.storage import save_set
+    from sarins_fmu.identify import compensators
+
+    X, Y = _toy_series(3000)
+    X, Y = X * [1e-3, 2.0, 5e2, 1.0, 3.0, 7.0, 40.0] + 11.0, Y * 3.0 - 2.0  # means far from zero
+    train = mems_calibration.Dataset(X, Y, np.arange(len(X)) * 0.1)
+    monkeypatch.setattr(compensators, "STATS_ROWS", 333)  # 3000 rows: nine blocks and a short one
+    for rows in (X, Y - X[:, :6]):
+        mean, std = compensators.column_stats(lambda a, b, rows=rows: rows[a:b], len(rows))
+        np.testing.assert_array_equal(mean, rows.mean(axis=0))
+        np.testing.assert_array_equal(std, rows.std(axis=0))
+    stored = save_set(tmp_path, "training", train)
+    kinds = ["rbf", "grnn"] + (["lstm", "gru-memoryless"] if recurrent.torch_available() else [])
+    opts = dict(rnn_steps=3, grnn_patterns=300, rbf_samples=500)
+    disk = fitting.fit_models(kinds, stored, None, workers=2, **opts)
+    memory = fitting.fit_models(kinds, train, None, workers=1, **opts)
+    d = Y - X[:, :6]
+    for k in kinds:
+        np.testing.assert_array_equal(disk[k].target_mean, d.mean(axis=0))
+        np.testing.assert_array_equal(disk[k].target_scale, d.std(axis=0))
+        np.testing.assert_array_equal(disk[k].predict(X[:200]), memory[k].predict(X[:200]), err_msg=k)
+        if k in fitting.RECURRENT:
+            np.testing.assert_array_equal(disk[k].input_mean, X.mean(axis=0))
+            np.testing.assert_array_equal(disk[k].input_scale, X.std(axis=0))
+            np.testing.assert_array_equal(disk[k].losses, memory[k].losses)
+    column = stored.column("X")
+    np.testing.assert_array_equal(column[[0, 5, 2999]], X[[0, 5, 2999]])
+    np.testing.assert_array_equal(stored.tail(100).column("Y")[10:20], Y[-90:-80])
+    bad = Y.copy()
+    bad[1234, 2] = np.nan
+    with pytest.raises(ValueError):
+        compensators.make("rbf", max_samples=100).fit(column, save_set(tmp_path, "bad", train.__class__(
+            X, bad, train.time)).column("Y"))
+
+
 def test_evaluation_in_chunks_from_disk_equals_the_whole_sets(tmp_path, monkeypatch):
     """evaluate_sets a chunk at a time, on sets in memory and read back from disk: the statistics and the
     figure rows of the whole arrays in one piece, bit for bit (the recurrent state carried over chunks)."""

@@ -417,17 +417,19 @@ def run_ablations(ablations, recs, full_test, prof, kinds, out: Path, floor, opt
 
 
 def build_datasets(recs, prof, folder: Path, options: dict, check_samples=None):
-    """The data sets of the protocol's recordings, each recording loaded once and dropped when used.
+    """The data sets of the protocol's recordings, each recording read from its file a slice at a time
+    (:meth:`.storage.StoredRecordings.lazy`) and each set written a part at a time (:func:`.storage.save_chunks`):
+    neither a recording nor a set is held whole.
 
     Writes the held-out set, the third power-up's first ``check_samples`` (None: as many as the held-out
-    set) and the training run's tail as long as the held-out set to ``folder``
-    (:func:`.storage.save_set`); returns (training set in memory, {'held-out', 'repowered', 'in-sample':
-    StoredSet}, traditional fit, models key, {'dynamic', 'heldout': programme series for the figure})."""
+    set) and the training set to ``folder``; returns (training set, {'held-out', 'repowered', 'in-sample' (the
+    training set's tail as long as the held-out set): StoredSet}, traditional fit, models key, {'dynamic',
+    'heldout': programme series for the figure})."""
     from sarins_fmu.experiments import mems_calibration as mc
 
     from . import report as rep
     from .fitting import digest_recording, models_digest
-    from .storage import save_chunks, save_set
+    from .storage import save_chunks
 
     series, stored = {}, {}
     for kind, name in (("heldout", "held-out"), ("repowered", "repowered")):
@@ -444,9 +446,9 @@ def build_datasets(recs, prof, folder: Path, options: dict, check_samples=None):
     rec = _lazy(recs, "dynamic")
     digest_recording(digest, rec)
     series["dynamic"] = rep.programme_series(rec)
-    train = mc.dataset(rec, prof)
+    train = save_chunks(folder, "training", *mc.dataset_chunks(rec, prof))
     del rec
-    stored["in-sample"] = save_set(folder, "in-sample", train.tail(len(stored["held-out"])))
+    stored["in-sample"] = train.tail(len(stored["held-out"]))  # the training run's tail, read from its file
     rates = recs["rates"]
     digest_recording(digest, rates)
     tumble = recs["tumble"]
@@ -476,9 +478,10 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     (:data:`~sarins_fmu.experiments.mems_calibration.CALIBRATED_TERMS`; 1: the sourced unit).
     ``calibrated``: the result of :func:`run_calibrated`, reported in the section 'Calibrated unit'.
 
-    Memory: the recordings stay on disk and are loaded one at a time; the evaluated sets are written to
-    ``<out>/datasets`` and read back a chunk at a time; only the training set is held whole, while the
-    models are fitted (docs/mems-calibration.md, *Memory*).
+    Memory: the recordings are streamed to disk as they are recorded and read back a slice at a time; the
+    data sets are written to ``<out>/datasets`` a part at a time and read back a chunk at a time; the
+    training set is held whole only by this process while it fits the non-recurrent models, after the
+    recurrent fits' processes have forked (they read it from disk) (docs/mems-calibration.md, *Memory*).
     """
     from dataclasses import asdict
 

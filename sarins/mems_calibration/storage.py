@@ -192,6 +192,11 @@ class StoredSet:
         finally:
             del mapped
 
+    def column(self, column: str) -> "StoredColumn":
+        """One column (X or Y) as a row source read from its file a slice at a time (what the recurrent fits
+        read: :meth:`sarins_fmu.identify.compensators.Compensator.fit` takes row sources)."""
+        return StoredColumn(self.path(column), self.start, self.stop)
+
     def rows(self, a: int, b: int) -> Dataset:
         """Rows a .. b - 1 (relative to ``start``) in memory."""
         a, b = max(0, int(a)), min(len(self), int(b))
@@ -219,6 +224,52 @@ class StoredSet:
     def load(self) -> Dataset:
         """All rows in memory."""
         return self.rows(0, len(self))
+
+
+class StoredColumn:
+    """Rows ``start .. stop - 1`` of a stored ``.npy`` array, read with plain file reads at their offset:
+    ``c[i:j]`` (step 1) and ``c[indices]`` (ascending row indices) return arrays; nothing stays mapped."""
+
+    def __init__(self, path: Path, start: int, stop: int):
+        self.path, self.start, self.stop = Path(path), int(start), int(stop)
+        with open(self.path, "rb") as fh:
+            version = np.lib.format.read_magic(fh)
+            read_header = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                           else np.lib.format.read_array_header_2_0)
+            shape, fortran, self.dtype = read_header(fh)
+            self.offset = fh.tell()
+        if fortran or self.dtype.hasobject or not 0 <= self.start <= self.stop <= shape[0]:
+            raise ValueError(f"{self.path}: not a C-ordered plain array with rows {start} .. {stop - 1}")
+        self.shape = (self.stop - self.start,) + tuple(shape[1:])
+        self.row_bytes = int(np.prod(self.shape[1:], dtype=np.int64)) * self.dtype.itemsize
+
+    def __len__(self) -> int:
+        return self.shape[0]
+
+    def _read(self, fh, a: int, b: int) -> np.ndarray:
+        out = np.empty((max(0, b - a),) + self.shape[1:], self.dtype)
+        fh.seek(self.offset + (self.start + a) * self.row_bytes)
+        if out.nbytes and fh.readinto(memoryview(out.reshape(-1).view(np.uint8))) != out.nbytes:
+            raise ValueError(f"{self.path}: truncated array")
+        return out
+
+    def __getitem__(self, rows) -> np.ndarray:
+        with open(self.path, "rb") as fh:
+            if isinstance(rows, slice):
+                a, b, step = rows.indices(len(self))
+                if step != 1:
+                    raise ValueError("a stored column is read by slices of step 1 or by row indices")
+                return self._read(fh, a, max(a, b))
+            idx = np.asarray(rows)
+            if idx.ndim != 1 or idx.dtype.kind not in "iu":
+                raise TypeError("a stored column is read by slices or 1-D integer row indices")
+            idx = np.where(idx < 0, idx + len(self), idx)
+            if len(idx) and (idx.min() < 0 or idx.max() >= len(self)):
+                raise IndexError("row index out of range")
+            out = np.empty((len(idx),) + self.shape[1:], self.dtype)
+            for i, row in enumerate(idx):
+                out[i] = self._read(fh, int(row), int(row) + 1)[0]
+            return out
 
 
 def save_set(folder: Path, name: str, data: Dataset) -> StoredSet:
