@@ -215,10 +215,11 @@ def record_all(profile_name: str, out: Path, *, workers=None, scheduler=None, pr
     volatile = ("fmu_dir",)
     if engine != "cosim":
         common["engine"] = engine  # (absent for cosim: the recordings' keys stay those of earlier campaigns)
-        # written there chunk by chunk and streamed into the result file (stale pieces: '.*.tmp', removed by
-        # the campaign); no part of the result
-        common["spool"] = str(out / "recordings")
-        volatile += ("spool",)
+        if not scheduler:  # (a Dask worker may not see this folder)
+            # written there chunk by chunk and streamed into the result file (stale pieces: '.*.tmp', removed
+            # by the campaign); no part of the result
+            common["spool"] = str(out / "recordings")
+            volatile += ("spool",)
     if float(scale) != 1.0:
         mc.scaled_overrides(scale)  # checks it
         common["scale"] = float(scale)  # (absent for the sourced unit, likewise)
