@@ -30,8 +30,8 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
                log=None, workers: int | None = None) -> dict:
     """Fitted compensators by name (the traditional one from the calibration fit ``fit``; the controls of
     :data:`CONTROLS` as memoryless recurrent compensators) on ``train``: a data set in memory, or a
-    :class:`.storage.StoredSet`, which the fitting processes read from disk a slice at a time and this process
-    loads once they are forked (so none of them inherits it; the same numbers).
+    :class:`.storage.StoredSet`, which every fit (in the fitting processes and in this one) reads from disk a
+    slice at a time: no process holds it whole (the same numbers, tests/test_mems_calibration.py).
 
     The recurrent fits (one torch thread each) run side by side in ``workers`` forked processes (default
     ``SARINS_THREADS`` or every core), longest first; the others in this process meanwhile.  Each fit is
@@ -59,8 +59,6 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
                 "processes, longest first)")
         for kind in recurrent_kinds:  # (the processes are forked at the first submission)
             pending[kind] = pool.submit(_fit_recurrent, kind, rnn, train if stored else None)
-    if stored and any(k not in pending and k != "traditional" for k in kinds):
-        train = train.load()  # the fits in this process: the set in memory, after the fitting processes forked
     try:
         for kind in kinds:
             if kind in pending:
@@ -74,7 +72,7 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
             elif kind in RECURRENT:
                 model = _fit_recurrent(kind, rnn, train)
             else:
-                model = compensators_module().make(kind, **options[kind]).fit(train.X, train.Y)
+                model = compensators_module().make(kind, **options[kind]).fit(*_columns(train))
             models[kind] = model
         names = {future: kind for kind, future in pending.items()}
         for future in as_completed(names):
@@ -94,14 +92,17 @@ def compensators_module():
     return compensators
 
 
+def _columns(train) -> tuple:
+    """(X, Y) of a data set: its arrays, or a :class:`.storage.StoredSet`'s columns read a slice at a time."""
+    if hasattr(train, "column"):
+        return train.column("X"), train.column("Y")
+    return train.X, train.Y
+
+
 def _fit_recurrent(kind: str, rnn: dict, train=None):
     """One recurrent compensator (or memoryless control) fitted on ``train`` (default the inherited set; a
     :class:`.storage.StoredSet` is read from disk a slice at a time, the same numbers)."""
-    train = _TRAIN if train is None else train
-    if hasattr(train, "column"):
-        X, Y = train.column("X"), train.column("Y")
-    else:
-        X, Y = train.X, train.Y
+    X, Y = _columns(_TRAIN if train is None else train)
     compensators = compensators_module()
     if kind in CONTROLS:
         return compensators.make(CONTROLS[kind], memory=False, **rnn).fit(X, Y)
