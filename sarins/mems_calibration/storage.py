@@ -118,8 +118,11 @@ def open_recording(path) -> dict:
         small = {}
         members = {}
         for key in keys:
-            lazy = StoredArray(path, key + ".npy")
-            if lazy.ndim >= 2 and lazy.nbytes > LAZY_BYTES:
+            try:
+                lazy = StoredArray(path, key + ".npy")
+            except ValueError:  # compressed or Fortran-ordered (not what save_result writes): read whole
+                lazy = None
+            if lazy is not None and lazy.ndim >= 2 and lazy.nbytes > LAZY_BYTES:
                 members[key] = lazy
             else:
                 small[key] = data[key]
