@@ -38,6 +38,7 @@ import math
 import os
 import shutil
 import tempfile
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -186,31 +187,75 @@ def write_text(path, text: str) -> None:
 
 def save_result(path, result: dict, record: dict | None = None) -> None:
     """Atomically write a result dict (values become numpy arrays; no pickle),
-    with its ``record`` and the record's hash when given."""
+    with its ``record`` and the record's hash when given.
+
+    A value with a ``blocks()`` method, ``shape`` and ``dtype`` (e.g.
+    :class:`sarins_fmu.experiments.mems_calibration.SpooledArray`) is streamed into the file a row block at a
+    time, never held whole, and its ``unlink()`` is called once written; the file is the one ``np.savez``
+    writes of the whole array."""
     path = Path(path)
     arrays = {}
     for key, value in result.items():
         if key in RESERVED:
             raise ValueError(f"result key {key!r} of {path.name} is reserved")
-        arr = np.asarray(value)
+        arr = value if _streamed(value) else np.asarray(value)
         if arr.dtype == object:
             raise TypeError(f"result {key!r} of {path.name} is not numeric or text")
         arrays[key] = arr
     arrays[KEYS_KEY] = np.array(sorted(result), dtype=str)
-    arrays[MANIFEST_KEY] = np.array(json.dumps({key: _describe(arr) for key, arr in arrays.items()
-                                                if key != KEYS_KEY}, sort_keys=True))
-    if record is not None:
-        arrays[RECORD_KEY] = np.array(canonical_json(record))
-        arrays[HASH_KEY] = np.array(record_hash(record))
+    manifest = {}
     with atomic_output(path) as tmp:
-        with open(tmp, "wb") as fh:
-            np.savez(fh, **arrays)
+        with open(tmp, "wb") as fh, zipfile.ZipFile(fh, mode="w", compression=zipfile.ZIP_STORED,
+                                                    allowZip64=True) as archive:
+            for key, arr in arrays.items():  # as np.savez writes them
+                with archive.open(key + ".npy", "w", force_zip64=True) as member:
+                    if _streamed(arr):
+                        manifest[key] = _write_blocks(member, arr)
+                    else:
+                        np.lib.format.write_array(member, arr, allow_pickle=False)
+                        if key != KEYS_KEY:
+                            manifest[key] = _describe(arr)
+            tail = {MANIFEST_KEY: np.array(json.dumps(manifest, sort_keys=True))}
+            if record is not None:
+                tail[RECORD_KEY] = np.array(canonical_json(record))
+                tail[HASH_KEY] = np.array(record_hash(record))
+            for key, arr in tail.items():
+                with archive.open(key + ".npy", "w", force_zip64=True) as member:
+                    np.lib.format.write_array(member, arr, allow_pickle=False)
+    for arr in arrays.values():
+        if _streamed(arr) and hasattr(arr, "unlink"):
+            arr.unlink()
+
+
+def _streamed(value) -> bool:
+    return hasattr(value, "blocks") and hasattr(value, "shape") and hasattr(value, "dtype")
+
+
+def _write_blocks(member, arr) -> list:
+    """Write a streamed array as a ``.npy`` member a block at a time; its manifest entry."""
+    dtype = np.dtype(arr.dtype)
+    np.lib.format.write_array_header_1_0(member, {"descr": np.lib.format.dtype_to_descr(dtype),
+                                                  "fortran_order": False, "shape": tuple(arr.shape)})
+    digest, rows = hashlib.sha256(), 0
+    for block in arr.blocks():
+        block = np.ascontiguousarray(block, dtype=dtype)
+        member.write(_buffer(block))
+        digest.update(_buffer(block))
+        rows += len(block)
+    if rows != (arr.shape[0] if arr.shape else 1):
+        raise ValueError(f"a streamed array gave {rows} rows of {arr.shape}")
+    return [dtype.str, list(arr.shape), digest.hexdigest()]
 
 
 def _describe(arr: np.ndarray) -> list:
     """[dtype, shape, SHA-256 of the bytes] of an array: what the manifest promises of it."""
-    arr = np.ascontiguousarray(arr)
-    return [arr.dtype.str, list(arr.shape), hashlib.sha256(arr.tobytes()).hexdigest()]
+    arr = np.ascontiguousarray(arr)  # (hashed in place: no copy of a contiguous array's bytes)
+    return [arr.dtype.str, list(arr.shape), hashlib.sha256(_buffer(arr)).hexdigest()]
+
+
+def _buffer(arr: np.ndarray):
+    """The bytes of a C-contiguous array as a buffer (``arr.tobytes()`` without the copy)."""
+    return memoryview(arr.reshape(-1).view(np.uint8)) if arr.size else b""
 
 
 def _check_manifest(raw: dict, text) -> None:

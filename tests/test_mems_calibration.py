@@ -842,12 +842,108 @@ def test_dataset_in_chunks_is_the_whole_recordings_bit_for_bit():
         mems_calibration.dataset(rec, SHORT, rows=0)
 
 
+def test_streamed_recording_and_chunked_sets_are_the_whole_arrays_bit_for_bit(tmp_path, monkeypatch):
+    """The campaign's low-memory path: the recording spooled chunk by chunk and streamed into its result file,
+    read back a slice at a time, its data sets written a part at a time -- the same arrays, bit for bit, as the
+    whole-array path (one chunk, np.savez-style file, load_result, dataset)."""
+    import hashlib
+
+    from sarins.mems_calibration import fitting, storage
+    from sarins.results import StoredResultError, load_result, save_result
+
+    whole = mems_calibration.record_in_process("heldout", SHORT, seed=4, chunk=10**9)
+    spooled = mems_calibration.record_in_process("heldout", SHORT, seed=4, chunk=333, spool=tmp_path)
+    assert len(whole["time"]) > 3 * 333
+    assert {type(v) for v in spooled.values()} == {mems_calibration.SpooledArray}
+    for key in whole:
+        np.testing.assert_array_equal(np.asarray(spooled[key]), whole[key], err_msg=key)
+    save_result(tmp_path / "whole.npz", dict(whole, wall_s=1.5), {"id": 1})
+    save_result(tmp_path / "streamed.npz", dict(spooled, wall_s=1.5), {"id": 1})
+    assert not list(tmp_path.glob(".spool-*"))  # each spool file removed once streamed
+    a, b = load_result(tmp_path / "whole.npz"), load_result(tmp_path / "streamed.npz")
+    assert set(a) == set(b) == set(whole) | {"wall_s"}
+    for key in whole:
+        assert a[key].dtype == b[key].dtype == whole[key].dtype
+        np.testing.assert_array_equal(b[key], whole[key], err_msg=key)
+        np.testing.assert_array_equal(a[key], whole[key], err_msg=key)
+
+    monkeypatch.setattr(storage, "LAZY_BYTES", 0)  # every 2-D array read from the file a slice at a time
+    lazy = storage.open_recording(tmp_path / "streamed.npz")
+    assert isinstance(lazy["temps"], storage.StoredArray) and isinstance(lazy["time"], np.ndarray)
+    assert lazy["wall_s"] == 1.5
+    temps = whole["temps"]
+    for key in (slice(None), slice(5, 700), slice(None, None, 7), slice(3, -2, 1000), slice(10, 5)):
+        np.testing.assert_array_equal(lazy["temps"][key], temps[key])
+    np.testing.assert_array_equal(lazy["rate"][-1], whole["rate"][-1])
+    digests = [fitting.models_digest({}) for _ in range(2)]
+    fitting.digest_recording(digests[0], a)
+    fitting.digest_recording(digests[1], lazy)
+    assert digests[0].hexdigest() == digests[1].hexdigest()
+
+    data = mems_calibration.dataset(whole, SHORT)
+    for rows, limit in ((50, None), (1 << 16, None), (333, 1001), (7, 10**9)):
+        n, parts = mems_calibration.dataset_chunks(lazy, SHORT, rows=rows)
+        stored = storage.save_chunks(tmp_path, f"set{rows}", n, parts, limit=limit).load()
+        ref = data.head(len(data) if limit is None else limit)
+        for column in ("X", "Y", "time"):
+            np.testing.assert_array_equal(getattr(stored, column), getattr(ref, column), err_msg=column)
+            assert getattr(stored, column).dtype == np.float64
+    np.testing.assert_array_equal(mems_calibration.dataset(lazy, SHORT, rows=99).X, data.X)
+
+    member = lazy["temps"]
+    raw = bytearray((tmp_path / "streamed.npz").read_bytes())
+    raw[member.offset + 100] ^= 1  # a byte of temps flipped on disk
+    (tmp_path / "bad.npz").write_bytes(bytes(raw))
+    with pytest.raises(StoredResultError, match="temps"):
+        storage.open_recording(tmp_path / "bad.npz")
+    assert hashlib.sha256(bytes(raw)).hexdigest() != hashlib.sha256((tmp_path / "streamed.npz").read_bytes()).hexdigest()
+
+
 def test_in_process_recording_does_not_depend_on_its_chunk():
     a = mems_calibration.record_in_process("heldout", SHORT, seed=4)
     b = mems_calibration.record_in_process("heldout", SHORT, seed=4, chunk=333)
     assert set(a) == set(b) and len(a["time"]) > 3 * 333
     for key in a:
         np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+def test_fits_on_a_stored_set_equal_the_fits_on_the_arrays(tmp_path, monkeypatch):
+    """The fits' statistics summed a block at a time are numpy's on the whole arrays, bit for bit, and the
+    recurrent fits' processes reading the training set from disk give the models fitted on it in memory."""
+    from sarins.mems_calibration import fitting
+    from sarins.mems_calibration.storage import save_set
+    from sarins_fmu.identify import compensators
+
+    X, Y = _toy_series(3000)
+    X, Y = X * [1e-3, 2.0, 5e2, 1.0, 3.0, 7.0, 40.0] + 11.0, Y * 3.0 - 2.0  # means far from zero
+    train = mems_calibration.Dataset(X, Y, np.arange(len(X)) * 0.1)
+    monkeypatch.setattr(compensators, "STATS_ROWS", 333)  # 3000 rows: nine blocks and a short one
+    for rows in (X, Y - X[:, :6]):
+        mean, std = compensators.column_stats(lambda a, b, rows=rows: rows[a:b], len(rows))
+        np.testing.assert_array_equal(mean, rows.mean(axis=0))
+        np.testing.assert_array_equal(std, rows.std(axis=0))
+    stored = save_set(tmp_path, "training", train)
+    kinds = ["rbf", "grnn"] + (["lstm", "gru-memoryless"] if recurrent.torch_available() else [])
+    opts = dict(rnn_steps=3, grnn_patterns=300, rbf_samples=500)
+    disk = fitting.fit_models(kinds, stored, None, workers=2, **opts)
+    memory = fitting.fit_models(kinds, train, None, workers=1, **opts)
+    d = Y - X[:, :6]
+    for k in kinds:
+        np.testing.assert_array_equal(disk[k].target_mean, d.mean(axis=0))
+        np.testing.assert_array_equal(disk[k].target_scale, d.std(axis=0))
+        np.testing.assert_array_equal(disk[k].predict(X[:200]), memory[k].predict(X[:200]), err_msg=k)
+        if k in fitting.RECURRENT:
+            np.testing.assert_array_equal(disk[k].input_mean, X.mean(axis=0))
+            np.testing.assert_array_equal(disk[k].input_scale, X.std(axis=0))
+            np.testing.assert_array_equal(disk[k].losses, memory[k].losses)
+    column = stored.column("X")
+    np.testing.assert_array_equal(column[[0, 5, 2999]], X[[0, 5, 2999]])
+    np.testing.assert_array_equal(stored.tail(100).column("Y")[10:20], Y[-90:-80])
+    bad = Y.copy()
+    bad[1234, 2] = np.nan
+    with pytest.raises(ValueError):
+        compensators.make("rbf", max_samples=100).fit(column, save_set(tmp_path, "bad", train.__class__(
+            X, bad, train.time)).column("Y"))
 
 
 def test_evaluation_in_chunks_from_disk_equals_the_whole_sets(tmp_path, monkeypatch):

@@ -212,13 +212,19 @@ def record_all(profile_name: str, out: Path, *, workers=None, scheduler=None, pr
     if engine == "cosim":
         build_artifacts(fmu_dir, [f"{n}.fmu" for n in names], lambda tmp: build_fmus(tmp, list(names)), code_hash())
     common = dict(profile_name=profile_name, fmu_dir=str(fmu_dir), seed=seed)
+    volatile = ("fmu_dir",)
     if engine != "cosim":
         common["engine"] = engine  # (absent for cosim: the recordings' keys stay those of earlier campaigns)
+        if not scheduler:  # (a Dask worker may not see this folder)
+            # written there chunk by chunk and streamed into the result file (stale pieces: '.*.tmp', removed
+            # by the campaign); no part of the result
+            common["spool"] = str(out / "recordings")
+            volatile += ("spool",)
     if float(scale) != 1.0:
         mc.scaled_overrides(scale)  # checks it
         common["scale"] = float(scale)  # (absent for the sourced unit, likewise)
-    tasks = [Task(kind, record_task, dict(kind=kind, **common), volatile=("fmu_dir",)) for kind in mc.KINDS]
-    tasks += [Task(f"{kind}.no-{term}", record_task, dict(kind=kind, ablation=term, **common), volatile=("fmu_dir",))
+    tasks = [Task(kind, record_task, dict(kind=kind, **common), volatile=volatile) for kind in mc.KINDS]
+    tasks += [Task(f"{kind}.no-{term}", record_task, dict(kind=kind, ablation=term, **common), volatile=volatile)
               for term in ablations for kind in ("dynamic", "heldout")]
     return StoredRecordings(run_campaign(tasks, out / "recordings", workers=recording_workers(engine, workers, scheduler),
                                          scheduler=scheduler, progress=progress, description="mems-calibration recordings",
@@ -395,14 +401,14 @@ def run_ablations(ablations, recs, full_test, prof, kinds, out: Path, floor, opt
     if ablations and isinstance(full_test, StoredSet):
         full_test = full_test.load()
     for term in ablations:
-        train_rec = recs[f"dynamic.no-{term}"]
+        train_rec = _lazy(recs, f"dynamic.no-{term}")
         train = mc.dataset(train_rec, prof)
         key = models_key({"dynamic": train_rec}, options)
         del train_rec
         models, reused, _ = model_set(out / "models" / f"no-{term}", kinds, train, None, key, options,
                                       refit=refit, log=log)
         del train
-        test = mc.dataset(recs[f"heldout.no-{term}"], prof)
+        test = mc.dataset(_lazy(recs, f"heldout.no-{term}"), prof)
         _, stats, info = evaluate(models, test, floor, log=log, stream_samples=0)
         red = _reductions(stats)
         result[term] = dict(reductions=red, order=analysis.ordering(red), reused_models=reused,
@@ -412,44 +418,50 @@ def run_ablations(ablations, recs, full_test, prof, kinds, out: Path, floor, opt
 
 
 def build_datasets(recs, prof, folder: Path, options: dict, check_samples=None):
-    """The data sets of the protocol's recordings, each recording loaded once and dropped when used.
+    """The data sets of the protocol's recordings, each recording read from its file a slice at a time
+    (:meth:`.storage.StoredRecordings.lazy`) and each set written a part at a time (:func:`.storage.save_chunks`):
+    neither a recording nor a set is held whole.
 
     Writes the held-out set, the third power-up's first ``check_samples`` (None: as many as the held-out
-    set) and the training run's tail as long as the held-out set to ``folder``
-    (:func:`.storage.save_set`); returns (training set in memory, {'held-out', 'repowered', 'in-sample':
-    StoredSet}, traditional fit, models key, {'dynamic', 'heldout': programme series for the figure})."""
+    set) and the training set to ``folder``; returns (training set, {'held-out', 'repowered', 'in-sample' (the
+    training set's tail as long as the held-out set): StoredSet}, traditional fit, models key, {'dynamic',
+    'heldout': programme series for the figure})."""
     from sarins_fmu.experiments import mems_calibration as mc
 
     from . import report as rep
     from .fitting import digest_recording, models_digest
-    from .storage import save_set
+    from .storage import save_chunks
 
     series, stored = {}, {}
     for kind, name in (("heldout", "held-out"), ("repowered", "repowered")):
-        rec = recs[kind]
+        rec = _lazy(recs, kind)
         if kind == "heldout":
             series[kind] = rep.programme_series(rec)
-        data = mc.dataset(rec, prof)
-        del rec
+        limit = None
         if kind == "repowered":
-            n_check = len(stored["held-out"]) if check_samples is None else min(int(check_samples),
-                                                                                 len(stored["held-out"]))
-            data = data.head(n_check)
-        stored[name] = save_set(folder, name, data)
-        del data
+            limit = len(stored["held-out"]) if check_samples is None else min(int(check_samples),
+                                                                               len(stored["held-out"]))
+        stored[name] = save_chunks(folder, name, *mc.dataset_chunks(rec, prof), limit=limit)
+        del rec
     digest = models_digest(options)  # the recordings in the order of models_key: dynamic, rates, tumble
-    rec = recs["dynamic"]
+    rec = _lazy(recs, "dynamic")
     digest_recording(digest, rec)
     series["dynamic"] = rep.programme_series(rec)
-    train = mc.dataset(rec, prof)
+    train = save_chunks(folder, "training", *mc.dataset_chunks(rec, prof))
     del rec
-    stored["in-sample"] = save_set(folder, "in-sample", train.tail(len(stored["held-out"])))
+    stored["in-sample"] = train.tail(len(stored["held-out"]))  # the training run's tail, read from its file
     rates = recs["rates"]
     digest_recording(digest, rates)
     tumble = recs["tumble"]
     digest_recording(digest, tumble)
     fit = mc.traditional_calibration(tumble, rates, prof)
     return train, stored, fit, digest.hexdigest(), series
+
+
+def _lazy(recs, key: str) -> dict:
+    """Recording ``key`` of ``recs`` with its large arrays read from disk a slice at a time when ``recs``
+    is a :class:`.storage.StoredRecordings` (else as it is)."""
+    return recs.lazy(key) if hasattr(recs, "lazy") else recs[key]
 
 
 def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, scheduler=None, progress=True, seed=3,
@@ -467,9 +479,10 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     (:data:`~sarins_fmu.experiments.mems_calibration.CALIBRATED_TERMS`; 1: the sourced unit).
     ``calibrated``: the result of :func:`run_calibrated`, reported in the section 'Calibrated unit'.
 
-    Memory: the recordings stay on disk and are loaded one at a time; the evaluated sets are written to
-    ``<out>/datasets`` and read back a chunk at a time; only the training set is held whole, while the
-    models are fitted (docs/mems-calibration.md, *Memory*).
+    Memory: the recordings are streamed to disk as they are recorded and read back a slice at a time; the
+    data sets are written to ``<out>/datasets`` a part at a time and read back a chunk at a time; the
+    training set is held whole only by this process while it fits the non-recurrent models, after the
+    recurrent fits' processes have forked (they read it from disk) (docs/mems-calibration.md, *Memory*).
     """
     from dataclasses import asdict
 

@@ -29,7 +29,9 @@ _TRAIN = None  # the training set a forked fitting process inherits (not pickled
 def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_samples: int, seed: int = 0,
                log=None, workers: int | None = None) -> dict:
     """Fitted compensators by name (the traditional one from the calibration fit ``fit``; the controls of
-    :data:`CONTROLS` as memoryless recurrent compensators).
+    :data:`CONTROLS` as memoryless recurrent compensators) on ``train``: a data set in memory, or a
+    :class:`.storage.StoredSet`, which every fit (in the fitting processes and in this one) reads from disk a
+    slice at a time: no process holds it whole (the same numbers, tests/test_mems_calibration.py).
 
     The recurrent fits (one torch thread each) run side by side in ``workers`` forked processes (default
     ``SARINS_THREADS`` or every core), longest first; the others in this process meanwhile.  Each fit is
@@ -42,6 +44,7 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
     from sarins_fmu.core.imu import thread_count
 
     global _TRAIN
+    stored = hasattr(train, "column")  # a StoredSet: the fitting processes read it from disk
     rnn = dict(steps=rnn_steps, seed=seed, seq_len=RNN_WINDOW, streams=RNN_STREAMS)
     options = {"rbf": dict(max_samples=rbf_samples), "grnn": dict(max_patterns=grnn_patterns)}
     recurrent_kinds = sorted((k for k in kinds if k in RECURRENT), key=lambda k: -STEP_MS.get(k, 100.0))
@@ -49,13 +52,13 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
     models, pending = {}, {}
     pool = None
     if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
-        _TRAIN = train
+        _TRAIN = None if stored else train
         pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"))
         if log:
             log(f"mems-calibration: fitting {', '.join(recurrent_kinds)} on {len(train)} samples ({workers} "
                 "processes, longest first)")
-        for kind in recurrent_kinds:
-            pending[kind] = pool.submit(_fit_recurrent, kind, rnn)
+        for kind in recurrent_kinds:  # (the processes are forked at the first submission)
+            pending[kind] = pool.submit(_fit_recurrent, kind, rnn, train if stored else None)
     try:
         for kind in kinds:
             if kind in pending:
@@ -69,7 +72,7 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
             elif kind in RECURRENT:
                 model = _fit_recurrent(kind, rnn, train)
             else:
-                model = compensators_module().make(kind, **options[kind]).fit(train.X, train.Y)
+                model = compensators_module().make(kind, **options[kind]).fit(*_columns(train))
             models[kind] = model
         names = {future: kind for kind, future in pending.items()}
         for future in as_completed(names):
@@ -89,13 +92,21 @@ def compensators_module():
     return compensators
 
 
+def _columns(train) -> tuple:
+    """(X, Y) of a data set: its arrays, or a :class:`.storage.StoredSet`'s columns read a slice at a time."""
+    if hasattr(train, "column"):
+        return train.column("X"), train.column("Y")
+    return train.X, train.Y
+
+
 def _fit_recurrent(kind: str, rnn: dict, train=None):
-    """One recurrent compensator (or memoryless control) fitted on ``train`` (default the inherited set)."""
-    train = _TRAIN if train is None else train
+    """One recurrent compensator (or memoryless control) fitted on ``train`` (default the inherited set; a
+    :class:`.storage.StoredSet` is read from disk a slice at a time, the same numbers)."""
+    X, Y = _columns(_TRAIN if train is None else train)
     compensators = compensators_module()
     if kind in CONTROLS:
-        return compensators.make(CONTROLS[kind], memory=False, **rnn).fit(train.X, train.Y)
-    return compensators.make(kind, **rnn).fit(train.X, train.Y)
+        return compensators.make(CONTROLS[kind], memory=False, **rnn).fit(X, Y)
+    return compensators.make(kind, **rnn).fit(X, Y)
 
 
 def _index(model_dir: Path) -> dict:
@@ -201,4 +212,9 @@ def digest_recording(digest, rec: dict) -> None:
     for key in sorted(rec):
         if key != "wall_s":
             digest.update(key.encode())
-            digest.update(np.ascontiguousarray(rec[key]).tobytes())
+            value = rec[key]
+            if hasattr(value, "blocks"):  # read from disk a block at a time: the same bytes in order
+                for block in value.blocks():
+                    digest.update(np.ascontiguousarray(block).tobytes())
+            else:
+                digest.update(np.ascontiguousarray(value).tobytes())

@@ -67,7 +67,7 @@ def record_cosim(kind: str, prof: Profile, fmu_dir: str | Path, *, seed: int = 3
 
 
 def record_task(kind: str, profile_name: str, fmu_dir: str, seed: int = 3, profile_changes: dict | None = None,
-                ablation: str | None = None, engine: str = "cosim", scale: float = 1.0) -> dict:
+                ablation: str | None = None, engine: str = "cosim", scale: float = 1.0, spool: str | None = None) -> dict:
     """Campaign task: one co-simulated recording as a dict of arrays, plus its wall time ``wall_s``.
 
     ``seed`` is the campaign seed: the recording uses its
@@ -76,14 +76,17 @@ def record_task(kind: str, profile_name: str, fmu_dir: str, seed: int = 3, profi
     (``ablation``: a time-correlated term switched off; ``scale``: the factor on the unsourced
     time-correlated sizes, :data:`~sarins_fmu.experiments.mems_calibration.CALIBRATED_TERMS`).
     ``engine='inprocess'``: the same recording from the library in this process
-    (:func:`~sarins_fmu.experiments.mems_calibration.record_in_process`, the same numbers; ``fmu_dir`` unused).
+    (:func:`~sarins_fmu.experiments.mems_calibration.record_in_process`, the same numbers; ``fmu_dir`` unused),
+    with ``spool`` (a folder) written there chunk by chunk and returned as spooled arrays that the campaign
+    streams into the result file (the recording is never held whole).
     """
     import time as _time
 
     prof = with_profile(profile(profile_name), **(profile_changes or {}))
     t0 = _time.perf_counter()
     if engine == "inprocess":
-        rec = record_in_process(kind, prof, seed=run_seed(kind, seed), model=recording_model(kind, seed, ablation, scale))
+        rec = record_in_process(kind, prof, seed=run_seed(kind, seed), model=recording_model(kind, seed, ablation, scale),
+                                spool=spool)
     elif engine == "cosim":
         rec = record_cosim(kind, prof, fmu_dir, seed=run_seed(kind, seed),
                            model_overrides=recording_overrides(kind, seed, ablation, scale))

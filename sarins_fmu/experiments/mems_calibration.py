@@ -44,6 +44,7 @@ Units: SI inside (rad/s, m/s^2, s), degC for temperatures.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -385,31 +386,140 @@ def _default_base():
 
 
 def record_in_process(kind: str, prof: Profile, *, seed: int = 3, model: imu.ImuModel | None = None,
-                      base=None, chunk: int = 20000) -> dict:
+                      base=None, chunk: int = 20000, spool=None) -> dict:
     """The same recording as :func:`sarins.mems_calibration.recording.record_cosim`, from the library in this process.
 
     ``base``: the turntable's base (default the static base at :data:`LAT_DEG`;
-    any object with the moving-base interface ``base_motion``).
+    any object with the moving-base interface ``base_motion``).  The table's states, the ambient and the
+    IMU's outputs are computed ``chunk`` steps at a time (the same numbers as on the whole time grid: each
+    is a function of its own time, the IMU's state carries over).  ``spool``: a folder; each array is then
+    written there chunk by chunk and returned as a :class:`SpooledArray` (read back a block at a time), so
+    the recording is never held whole.
     """
     model = imu.preset("mems") if model is None else model
     base = _default_base() if base is None else base
     step = prof.step if kind in DYNAMIC_KINDS else prof.cal_step
     sched, _ = schedule_of(kind, prof)
+    ambient_at = ambient_of(kind, prof)
     n = int(round(stop_time(kind, prof) / step))
-    time = np.arange(n + 1) * step
-    angle, rate, _ = sched.state(time)
-    ambient = ambient_of(kind, prof)(time)
     sensor = imu.IMU(model, base, turntable.RATE_TABLE_AXES,
                      output_interval=step, internal_rate=prof.internal_rate, seed=seed, thermal_start="hot")
-    sensor.reset(ambient0=float(ambient[0]))
-    dtheta, dv, temps = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 6))  # filled chunk by chunk
+    shapes = dict(time=(n + 1,), angle=(n + 1, 3), rate=(n + 1, 3), ambient=(n + 1,), dtheta=(n, 3), dv=(n, 3),
+                  temps=(n, 6))
+    if spool is None:
+        out = {key: np.empty(shape) for key, shape in shapes.items()}  # filled chunk by chunk
+    else:
+        out = {}
+        for key, shape in shapes.items():
+            out[key] = SpooledArray(spool, key, shape)
+    try:
+        _record_chunks(out, n, chunk, step, sched, ambient_at, sensor)
+    except BaseException:
+        for arr in out.values():
+            if isinstance(arr, SpooledArray):
+                arr.close(check=False)
+                arr.unlink()
+        raise
+    if spool is not None:
+        for arr in out.values():
+            arr.close()
+    return out
+
+
+def _record_chunks(out: dict, n: int, chunk: int, step: float, sched, ambient_at, sensor) -> None:
+    """Fill (or write) the arrays of :func:`record_in_process` ``chunk`` steps at a time."""
     for k in range(0, n, chunk):
         end = min(k + chunk, n)
-        acc = (rate[k + 1:end + 1] - rate[k:end]) / step
-        part = sensor.step(angle[k:end], rate[k:end], acc, ambient=ambient[k + 1:end + 1])
-        for whole, rows in zip((dtheta, dv, temps), part):
-            whole[k:k + len(rows)] = rows
-    return dict(time=time, angle=angle, rate=rate, ambient=ambient, dtheta=dtheta, dv=dv, temps=temps)
+        time = np.arange(k, end + 1) * step  # rows k .. end
+        angle, rate, _ = sched.state(time)
+        ambient = ambient_at(time)
+        if k == 0:
+            sensor.reset(ambient0=float(ambient[0]))
+        acc = (rate[1:] - rate[:-1]) / step
+        part = sensor.step(angle[:-1], rate[:-1], acc, ambient=ambient[1:])
+        last = end == n  # the last chunk also gives row n of the states
+        for key, rows in (("time", time), ("angle", angle), ("rate", rate), ("ambient", ambient)):
+            _put(out[key], k, rows if last else rows[:-1])
+        for key, rows in zip(("dtheta", "dv", "temps"), part):
+            _put(out[key], k, rows)
+    if n == 0:
+        time = np.zeros(1)
+        angle, rate, _ = sched.state(time)
+        for key, rows in (("time", time), ("angle", angle), ("rate", rate), ("ambient", ambient_at(time))):
+            _put(out[key], 0, rows)
+
+
+def _put(whole, start: int, rows) -> None:
+    if isinstance(whole, SpooledArray):
+        whole.write(rows)
+    else:
+        whole[start:start + len(rows)] = rows
+
+
+class SpooledArray:
+    """A float64 array written row block by row block to a raw file and read back a block at a time
+    (:meth:`blocks`, slices): what :func:`record_in_process` returns with ``spool``.  ``np.asarray`` on it
+    reads it whole; :func:`sarins.results.save_result` streams it into the result file and
+    :meth:`unlink` then removes the file."""
+
+    def __init__(self, folder, name: str, shape):
+        import os
+        import tempfile
+
+        fd, path = tempfile.mkstemp(prefix=f".spool-{name}-", suffix=".tmp", dir=folder)
+        self.path, self.shape, self.dtype = Path(path), tuple(int(s) for s in shape), np.dtype(float)
+        self.ndim = len(self.shape)
+        self._row = int(np.prod(self.shape[1:], dtype=np.int64)) * self.dtype.itemsize
+        self._fh, self._rows = os.fdopen(fd, "wb"), 0
+
+    def __len__(self) -> int:
+        return self.shape[0]
+
+    def write(self, rows) -> None:
+        rows = np.ascontiguousarray(rows, dtype=self.dtype)
+        if rows.shape[1:] != self.shape[1:] or self._rows + len(rows) > len(self):
+            raise ValueError(f"{self.path.name}: rows of shape {rows.shape} do not fit {self.shape}")
+        self._fh.write(memoryview(rows.reshape(-1).view(np.uint8)) if rows.size else b"")
+        self._rows += len(rows)
+
+    def close(self, check: bool = True) -> None:
+        """Finish writing; ``check``: raise unless every row was written."""
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = None
+        if check and self._rows != len(self):
+            raise ValueError(f"{self.path.name}: {self._rows} rows written of {len(self)}")
+
+    def __getstate__(self):
+        if self._fh is not None:
+            raise TypeError("a spooled array is pickled only once written")
+        return self.__dict__
+
+    def blocks(self, rows: int = 1 << 16):
+        """Consecutive row blocks (arrays), in order."""
+        with open(self.path, "rb") as fh:
+            for a in range(0, len(self), int(rows)):
+                m = min(int(rows), len(self) - a)
+                block = np.empty((m,) + self.shape[1:], self.dtype)
+                fh.readinto(memoryview(block.reshape(-1).view(np.uint8)))
+                yield block
+
+    def __getitem__(self, key):
+        if not isinstance(key, slice) or key.step not in (None, 1):
+            return np.asarray(self)[key]
+        a, b, _ = key.indices(len(self))
+        block = np.empty((max(0, b - a),) + self.shape[1:], self.dtype)
+        with open(self.path, "rb") as fh:
+            fh.seek(a * self._row)
+            fh.readinto(memoryview(block.reshape(-1).view(np.uint8)))
+        return block
+
+    def __array__(self, dtype=None, copy=None):
+        whole = self[:]
+        return whole if dtype is None else whole.astype(dtype)
+
+    def unlink(self) -> None:
+        self.path.unlink(missing_ok=True)
 
 
 def truth_of(rec: dict, internal_rate: float = 200.0, base=None) -> tuple[np.ndarray, np.ndarray]:
@@ -469,36 +579,49 @@ DATASET_ROWS = 1 << 16  # recorded steps turned into samples at once by :func:`d
 def dataset(rec: dict, prof: Profile, *, rows: int = DATASET_ROWS) -> Dataset:
     """The samples of a dynamic recording after its warm-up, in time order (the recurrent models need it).
 
-    Built ``rows`` recorded steps at a time into the final arrays: the truth of :func:`truth_of` (one error-free
-    IMU stepped chunk after chunk: its state carries over) and the inputs of :func:`measured_of`, the same
-    numbers bit for bit as on the whole recording (tests/test_mems_calibration.py), with temporaries a chunk
-    long instead of a dozen recording-long arrays.
+    Built ``rows`` recorded steps at a time into the final arrays (:func:`dataset_chunks`): the truth of
+    :func:`truth_of` (one error-free IMU stepped chunk after chunk: its state carries over) and the inputs of
+    :func:`measured_of`, the same numbers bit for bit as on the whole recording (tests/test_mems_calibration.py),
+    with temporaries a chunk long instead of a dozen recording-long arrays.
     """
+    n_keep, chunks = dataset_chunks(rec, prof, rows=rows)
+    X, Y, t = np.empty((n_keep, len(INPUT_NAMES))), np.empty((n_keep, len(OUTPUT_NAMES))), np.empty(n_keep)
+    done = 0
+    for x, y, tt in chunks:
+        X[done:done + len(tt)], Y[done:done + len(tt)], t[done:done + len(tt)] = x, y, tt
+        done += len(tt)
+    return Dataset(X, Y, t)
+
+
+def dataset_chunks(rec: dict, prof: Profile, *, rows: int = DATASET_ROWS):
+    """(samples, iterator over (X, Y, time) of consecutive parts) of :func:`dataset`, ``rows`` recorded
+    steps at a time: the parts, concatenated, are :func:`dataset`'s arrays.  ``rec``'s arrays are read only
+    by row slices, so they may be :class:`sarins.mems_calibration.storage.StoredArray` read from disk."""
     if int(rows) < 1:
         raise ValueError(f"rows must be at least 1, got {rows}")
-    t = rec["time"]
+    t = np.asarray(rec["time"])
     step = float(t[1] - t[0])
     t_end = t[1:]
     keep = t_end > prof.warmup + 1e-9
     n_keep = int(np.count_nonzero(keep))
     if not n_keep:
         raise ValueError("the dynamic recording ends within its warm-up")
-    ideal = imu.IMU(imu.preset("ideal"), _default_base(), turntable.RATE_TABLE_AXES,
-                    output_interval=step, internal_rate=prof.internal_rate, seed=0)
-    X, Y = np.empty((n_keep, len(INPUT_NAMES))), np.empty((n_keep, len(OUTPUT_NAMES)))
-    angle, rate = rec["angle"], rec["rate"]
-    done = 0
-    for a in range(0, len(t_end), int(rows)):
-        b = min(a + int(rows), len(t_end))
-        acc = (rate[a + 1:b + 1] - rate[a:b]) / step
-        dtheta, dv, _ = ideal.step(angle[a:b], rate[a:b], acc)
-        sel = keep[a:b]
-        m = int(np.count_nonzero(sel))
-        X[done:done + m] = measured_of({"time": t, "dtheta": rec["dtheta"][a:b], "dv": rec["dv"][a:b],
-                                        "temps": rec["temps"][a:b]})[sel]
-        Y[done:done + m] = np.column_stack([dtheta / step, dv / step])[sel]
-        done += m
-    return Dataset(X, Y, t_end[keep])
+
+    def parts():
+        ideal = imu.IMU(imu.preset("ideal"), _default_base(), turntable.RATE_TABLE_AXES,
+                        output_interval=step, internal_rate=prof.internal_rate, seed=0)
+        angle, rate = rec["angle"], rec["rate"]
+        for a in range(0, len(t_end), int(rows)):
+            b = min(a + int(rows), len(t_end))
+            rates = rate[a:b + 1]
+            acc = (rates[1:] - rates[:-1]) / step
+            dtheta, dv, _ = ideal.step(angle[a:b], rates[:-1], acc)
+            sel = keep[a:b]
+            x = measured_of({"time": t, "dtheta": rec["dtheta"][a:b], "dv": rec["dv"][a:b],
+                             "temps": rec["temps"][a:b]})[sel]
+            yield x, np.column_stack([dtheta / step, dv / step])[sel], t_end[a:b][sel]
+
+    return n_keep, parts()
 
 
 def dynamic_dataset(train_rec: dict, test_rec: dict, prof: Profile) -> tuple[Dataset, Dataset]:

@@ -80,7 +80,10 @@ class Compensator:
         self._c_model = None
 
     def fit(self, X, Y) -> "Compensator":
-        x, y = _check_xy(X, Y)
+        """Fit on inputs X (n, 7) and targets Y (n, 6): arrays, or (the recurrent and residual networks)
+        row sources -- objects with ``shape`` whose row slices are arrays, e.g. a stored set read from disk a
+        slice at a time -- checked and summed a block at a time, the same numbers as on the arrays."""
+        x, y = _check_rows(X, Y) if _is_rows(X) or _is_rows(Y) else _check_xy(X, Y)
         t0, cpu0 = time.perf_counter(), time.thread_time()
         self._fit(x, y)
         self.fit_seconds = time.perf_counter() - t0
@@ -218,13 +221,12 @@ class _Residual(Compensator):
         self.target_scale: np.ndarray | None = None
 
     def _targets(self, x, y):
-        d = y - x[:, :N_OUT]
-        self.target_mean = d.mean(axis=0)
-        scale = d.std(axis=0)
+        """The standardised correction ((y - x[:, :6]) - mean) / scale as a :class:`_Correction` (its rows
+        computed when sliced); its mean and std summed a block at a time (:func:`column_stats`): the numbers of
+        ``d.mean(axis=0)``, ``d.std(axis=0)`` and the in-place standardisation of the whole d, without it."""
+        self.target_mean, scale = column_stats(lambda a, b: y[a:b] - x[a:b][:, :N_OUT], len(x))
         self.target_scale = np.where(scale > 0, scale, 1.0)
-        d -= self.target_mean  # (d - mean) / scale in place: the same numbers, one series-long array fewer
-        d /= self.target_scale
-        return d
+        return _Correction(x, y, self.target_mean, self.target_scale)
 
     def _output(self, x, z_out):
         return x[:, :N_OUT] + z_out * self.target_scale + self.target_mean
@@ -257,6 +259,82 @@ def _prefixed(prefix, arrays):
 
 def _unprefixed(prefix, arrays):
     return {k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix)}
+
+
+STATS_ROWS = 1 << 16  # rows summed at once by :func:`column_stats`
+
+
+def column_stats(rows, n: int, block: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(mean, std) over the rows of an (n, d) series (d >= 2) given as ``rows(a, b)`` (rows a .. b - 1, a
+    C-ordered float64 array): the numbers of ``x.mean(axis=0)`` and ``x.std(axis=0)`` on the whole array,
+    bit for bit (numpy sums a C-ordered array along axis 0 row after row: the running sum carried from block
+    to block is the same sum; tests/test_compensators.py), with block-long temporaries only."""
+    block = STATS_ROWS if block is None else block
+    total = None
+    for a in range(0, n, int(block)):
+        part = rows(a, min(a + int(block), n))
+        total = np.add.reduce(part if total is None else np.concatenate([total[None], part]), axis=0)
+    mean = total / n  # np.mean: the sum divided by the count
+    keep = total[None] / n  # np.var's mean (kept dimension): the same division
+    squares = None
+    for a in range(0, n, int(block)):
+        dev = rows(a, min(a + int(block), n)) - keep
+        np.multiply(dev, dev, out=dev)
+        squares = np.add.reduce(dev if squares is None else np.concatenate([squares[None], dev]), axis=0)
+    return mean, np.sqrt(squares / n)
+
+
+class _Correction:
+    """The standardised correction ((y - x[:, :6]) - mean) / scale of :meth:`_Residual._targets`, computed on
+    the rows sliced out only (the same operations in the same order as on the whole series)."""
+
+    def __init__(self, x, y, mean: np.ndarray, scale: np.ndarray):
+        self.x, self.y, self.mean, self.scale = x, y, mean, scale
+
+    @property
+    def shape(self) -> tuple:
+        return (self.x.shape[0], N_OUT)
+
+    def __len__(self) -> int:
+        return self.x.shape[0]
+
+    def __getitem__(self, rows) -> np.ndarray:
+        d = self.y[rows] - self.x[rows][:, :N_OUT]
+        d -= self.mean
+        d /= self.scale
+        return d
+
+
+def _is_rows(value) -> bool:
+    """A row source (not an array or nested sequence): ``shape`` and row slices."""
+    return hasattr(value, "shape") and hasattr(value, "__getitem__") and not isinstance(value, np.ndarray)
+
+
+class _Rows:
+    """A row source as float64 rows (fancy indices read in order)."""
+
+    def __init__(self, source):
+        self.source, self.shape = source, tuple(source.shape)
+
+    def __len__(self) -> int:
+        return self.shape[0]
+
+    def __getitem__(self, rows) -> np.ndarray:
+        return np.ascontiguousarray(self.source[rows], dtype=float)
+
+
+def _check_rows(X, Y):
+    """:func:`_check_xy` of row sources, a block at a time (shapes, finite values); as row sources."""
+    x = _Rows(X) if _is_rows(X) else _check_xy(X)
+    y = _Rows(Y) if _is_rows(Y) else np.asarray(Y, dtype=float)
+    n = x.shape[0]
+    if len(x.shape) != 2 or x.shape[1] != N_IN or n == 0:
+        raise ValueError(f"X must have shape (n, {N_IN}) with n > 0, got {x.shape}")
+    if tuple(y.shape) != (n, N_OUT):
+        raise ValueError(f"Y must have shape ({n}, {N_OUT}), got {tuple(y.shape)}")
+    for a in range(0, n, STATS_ROWS):
+        _check_xy(x[a:a + STATS_ROWS], y[a:a + STATS_ROWS])
+    return x, y
 
 
 class _NetworkResidual(_Residual):
@@ -412,8 +490,7 @@ class RecurrentCompensator(_Residual):
     def _fit(self, x, y):
         recurrent.require_torch()
         z_out = self._targets(x, y)
-        self.input_mean = x.mean(axis=0)
-        scale = x.std(axis=0)
+        self.input_mean, scale = column_stats(lambda a, b: x[a:b], len(x))  # x.mean(axis=0), x.std(axis=0)
         self.input_scale = np.where(scale > 0, scale, 1.0)
         self.weights, self.losses = recurrent.train(self.cell, _Standardised(x, self.input_mean, self.input_scale),
                                                     z_out, **self.options)
