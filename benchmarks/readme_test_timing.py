@@ -77,7 +77,8 @@ def one_round(work: Path) -> Round:
     lines = [ln for ln in done.stdout.splitlines() if ln.strip()]
     summary = lines[-1] if lines else "(no output)"
     if done.returncode != 0:
-        raise SystemExit(f"{tests!r} failed: {summary}")
+        failed = "\n".join(ln for ln in lines if ln.startswith(("FAILED", "ERROR")))
+        raise SystemExit(f"{tests!r} failed: {summary}\n{failed}")
     return Round(install_s, tests_s, summary, load_before, os.getloadavg())
 
 
