@@ -74,7 +74,8 @@ def growth(t, dv0, phi0, db_g, db_a, mat_nb, f_n, omega_n=None) -> np.ndarray:
     """(len(t), 3) ENU position error growth dp(t) - dp(0) (m) at the times ``t`` (s) since the outage start,
     from the velocity error dv0 (ENU m/s), attitude error phi0 (ENU rad), residual gyro bias db_g (body rad/s)
     and residual accelerometer bias db_a (body m/s^2) at the start (module docstring); omega_n as in
-    :func:`growth_matrix`.  Beyond the linear map it keeps the second-order term of the heading error rotating the residual accelerometer bias,
+    :func:`growth_matrix`.  Beyond the linear map it keeps the second-order term of the heading error rotating
+    the residual accelerometer bias,
     -(phi_U(t) up) x (mat_nb db_a) with phi_U(t) = phi_U0 - (mat_nb db_g)_U t (integrated twice)."""
     x = np.concatenate([dv0, phi0, db_g, db_a]).astype(float)
     t = np.atleast_1d(np.asarray(t, float))
