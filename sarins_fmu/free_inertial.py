@@ -9,8 +9,8 @@ For t much shorter than the Schuler period (84 min), with the navigation frame t
 (Earth rate, transport rate and Coriolis neglected), a constant attitude mat_nb and a constant specific
 force f^n (a straight cruise: f^n = (0, 0, g)), the error equations phi' = -mat_nb db_g and
 dv' = f^n x phi + mat_nb db_a integrate to (Titterton & Weston, Strapdown Inertial Navigation Technology,
-2nd ed., 2004, §12.3.4 short-term approximations; Groves, Principles of GNSS, Inertial, and Multisensor
-Integrated Navigation Systems, 2nd ed., 2013, §14.2.2-14.2.4):
+2nd ed., 2004, chapter 12, its short-term approximations; Groves, Principles of GNSS, Inertial, and Multisensor
+Integrated Navigation Systems, 2nd ed., 2013, §14.2, short-term straight-line error propagation):
 
     dp(t) - dp(0) = dv0 t + (mat_nb db_a + f^n x phi0) t^2 / 2 - (f^n x mat_nb db_g) t^3 / 6,
 
@@ -43,7 +43,7 @@ x = (dv, phi, db_g, db_a) (12,) at the outage start (the filter's P[3:15, 3:15] 
 optionally, the white sensor noises during the outage (per axis, frame-free for isotropic noise):
 velocity random walk vrw^2 t^3 / 3, angle random walk g^2 arw^2 t^5 / 20, accelerometer bias random
 walk accel_rw^2 t^5 / 20, gyro bias random walk g^2 gyro_rw^2 t^7 / 252 (the 1st to 4th integrals of
-white noise; Groves 2013 §14.2.5).
+white noise; Groves 2013 §14.2).
 """
 
 from __future__ import annotations
