@@ -605,3 +605,50 @@ def outage_monte_carlo(truth, runs: int, outages, *, first_seed: int = 0, **kwar
             var[j] += row.sigma**2
     return OutageReport(runs=runs, windows=windows, rms_error=list(np.sqrt(err2 / runs)),
                         predicted_sigma=list(np.sqrt(var / runs)))
+
+
+@dataclass(frozen=True)
+class ClosedFormReport:
+    """Monte Carlo outage growth against the closed-form free-inertial growth (:mod:`sarins_fmu.free_inertial`):
+    per window (start, end s), the RMS over the runs of the horizontal error growth e(end) - e(start) (m, the
+    rows of :func:`outage_table` and the row at ``start``), and the RMS of the closed form's horizontal sigma
+    from the filter's covariance of velocity, attitude and biases at the start, without the IMU's noise
+    during the outage (``state_sigma``) and with it (``sigma``)."""
+
+    runs: int
+    windows: list
+    rms_growth: list
+    state_sigma: list
+    sigma: list
+
+    @property
+    def ratios(self) -> list:
+        return [e / s for e, s in zip(self.rms_growth, self.sigma)]
+
+
+def outage_closed_form_monte_carlo(truth, runs: int, outages, *, first_seed: int = 0,
+                                   noise: ImuNoise = IMU_NOISE["tactical"], **kwargs) -> ClosedFormReport:
+    """Horizontal error growth over each GNSS outage over ``runs`` seeds vs the closed-form growth
+    (:func:`sarins_fmu.free_inertial.horizontal_growth_sigma`, with the Earth's rate) from the filter's P at the
+    window's start, with the computed attitude and specific force (0, 0, g).  Keyword arguments go to
+    :func:`navigate` (with ``covariance='full'``)."""
+    from . import free_inertial
+
+    windows = [tuple(map(float, w)) for w in np.asarray(outages, float).reshape(-1, 2)]
+    sums = np.zeros((3, len(windows)))
+    for seed in range(first_seed, first_seed + runs):
+        r = navigate(truth, noise=noise, seed=seed, outages=outages, **kwargs)
+        for j, (start, end) in enumerate(windows):
+            i0 = int(np.searchsorted(r.time, start - 1e-9))
+            i1 = int(np.searchsorted(r.time, end - 1e-9)) - 1
+            t = float(r.time[i1] - r.time[i0])
+            mat = euler_to_mat(*r.nav[i0, 6:9])
+            f_n = np.array([0.0, 0.0, earth.gravity(r.nav[i0, 0], r.nav[i0, 2])])
+            om = earth.earth_rate_n(r.nav[i0, 0])
+            cov = r.cov[i0, 3:15, 3:15]
+            sums[0, j] += float(np.sum((r.error[i1, :2] - r.error[i0, :2]) ** 2))
+            sums[1, j] += free_inertial.horizontal_growth_sigma(t, cov, mat, f_n, omega_n=om) ** 2
+            sums[2, j] += free_inertial.horizontal_growth_sigma(t, cov, mat, f_n, noise, om) ** 2
+    rms = np.sqrt(sums / runs)
+    return ClosedFormReport(runs=runs, windows=windows, rms_growth=list(rms[0]), state_sigma=list(rms[1]),
+                            sigma=list(rms[2]))
