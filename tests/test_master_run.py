@@ -167,9 +167,25 @@ def test_ssp_file_runs_like_the_python_description(ramp_gain, tmp_path):
 
 
 def test_many_runs_in_one_process_exit_cleanly(fixture_fmus, tmp_path):
+    """Twelve runs in one process (simulate_system and one Master, Jacobi): every instance the master made is
+    terminated and freed before the process ends, and the process ends with exit code 0.
+
+    The process leaves with os._exit after its last line: the pythonfmu fixtures' own library reads freed memory
+    in its exit-time destructor (valgrind: ``finalizePythonInterpreter`` in the fixture's binary reads a block
+    that the C++ exit handlers freed; it aborted 1 run of 60 with "corrupted double-linked list"), which is
+    pythonfmu's, not the master's; the master's part, every fmi2FreeInstance, is counted here instead."""
     script = textwrap.dedent(f"""
-        import warnings
+        import collections, os, sys, warnings
+        import fmpy.fmi2 as fmi2
         from orchestration import Component, Connection, System, Master, simulate_system
+        calls = collections.Counter()
+        def counted(name, method):
+            def call(self, *args, **kwargs):
+                calls[name] += 1
+                return method(self, *args, **kwargs)
+            return call
+        fmi2.FMU2Slave.instantiate = counted("instantiate", fmi2.FMU2Slave.instantiate)
+        fmi2.FMU2Slave.freeInstance = counted("free", fmi2.FMU2Slave.freeInstance)
         system = System("s", [Component("r", {str(fixture_fmus['Ramp'])!r}),
                               Component("g1", {str(fixture_fmus['Gain'])!r}),
                               Component("g2", {str(fixture_fmus['Gain'])!r})],
@@ -180,7 +196,9 @@ def test_many_runs_in_one_process_exit_cleanly(fixture_fmus, tmp_path):
         with Master(system, scheme="jacobi") as master:
             for run in range(6):
                 result = master.simulate(1.0, 0.1)
-        print("final", result["g2.y"][-1])
+        print("final", result["g2.y"][-1], calls["instantiate"], calls["free"])
+        sys.stdout.flush()
+        os._exit(0)
     """)
     for _attempt in range(3):
         done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
@@ -189,7 +207,8 @@ def test_many_runs_in_one_process_exit_cleanly(fixture_fmus, tmp_path):
                                    "PYTHONPATH": str(__import__("pathlib").Path(__file__)
                                                      .parents[1])})
         assert done.returncode == 0, done.stderr
-        assert "final" in done.stdout
+        final = done.stdout.split()
+        assert final[0] == "final" and int(final[2]) == int(final[3]) >= 3, done.stdout
 
 
 def test_variable_steps_are_refused_for_fmus_that_cannot_take_them(fixture_fmus):
