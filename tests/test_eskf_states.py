@@ -157,25 +157,7 @@ print("sanitized run ok")
 
 @pytest.mark.slow
 def test_optional_states_under_address_and_undefined_behaviour_sanitizers(tmp_path):
-    """The core rebuilt with ASan + UBSan (as tests/test_core_imu.py does) runs every state layout, 15 .. 30."""
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
+    """The core rebuilt with ASan + UBSan (tests/sanitized_core.py) runs every state layout, 15 .. 30."""
+    import sanitized_core
 
-    root = Path(__file__).resolve().parents[1]
-    core_dir = root / "sarins_fmu" / "core"
-    lib = tmp_path / "_sarins_core_asan.so"
-    flags = ["-std=c11", "-O1", "-g", "-fPIC", "-shared", "-Wall", "-Wextra", "-Wpedantic", "-Werror",
-             "-ffp-contract=off", "-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
-    subprocess.run(["gcc", *flags, "-I", str(core_dir), *sorted(map(str, core_dir.glob("*.c"))), "-o", str(lib), "-lm"],
-                   check=True, capture_output=True, text=True)
-    libasan = subprocess.run(["gcc", "-print-file-name=libasan.so"], check=True, capture_output=True,
-                             text=True).stdout.strip()
-    env = {**os.environ, "SARINS_CORE_LIB": str(lib), "LD_PRELOAD": libasan, "PYTHONPATH": str(root),
-           "ASAN_OPTIONS": "detect_leaks=0:abort_on_error=1", "UBSAN_OPTIONS": "print_stacktrace=1:halt_on_error=1"}
-    run = subprocess.run([sys.executable, "-c", SANITIZED_RUN.format(lib=str(lib))], env=env, capture_output=True,
-                         text=True, timeout=900)
-    report = run.stderr[-4000:]
-    assert run.returncode == 0 and "sanitized run ok" in run.stdout, report
-    assert "runtime error" not in run.stderr and "AddressSanitizer" not in run.stderr, report
+    sanitized_core.run(tmp_path, SANITIZED_RUN)
