@@ -402,7 +402,7 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
              settings: FilterSettings = FilterSettings(), seed: int = 0, gnss_velocity: bool = True,
              odometer: OdometerConfig | None = None, imu=None, fixes=None, zupt_detect: str = "truth",
              vibration=None, detector=None, imu_stream: str = "numpy", covariance: str = "full",
-             filter_states=()) -> AidedResult:
+             filter_states=(), initial=None) -> AidedResult:
     """Aided navigation along ``truth`` (:class:`sarins_fmu.trajectory.Truth`).
 
     gnss : GNSSConfig or None (preset ``sps`` when 'gnss' is aided and None is given).
@@ -429,6 +429,9 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         the antenna lever arm (prior ``settings.lever0_std``, from ``settings.lever_arm`` or the receiver's),
         'gnss-gm' the receiver's Gauss-Markov position (and with ``gnss_velocity`` velocity) errors with the
         receiver's std and correlation time (the fixes' std then the white part).  () : the 15-state filter.
+    initial : (9,) the filter's start row (lat, lon rad, h m, v ENU m/s, yaw, pitch, roll rad), e.g. an INS's
+        state after driving; None (default): the truth's first row with errors drawn from ``settings``'
+        initial std (drawn either way, so the rest of the run's random numbers do not depend on it).
     """
     from . import zero_velocity
 
@@ -456,7 +459,13 @@ def navigate(truth, *, noise: ImuNoise = IMU_NOISE["tactical"], gnss=None, aidin
         stops = found.stationary
         info.update({"detector_samples": found.samples, "detector_gamma": found.gamma, "detector_alpha": found.alpha})
     rng = np.random.default_rng([seed, 3018])
-    state = _core.EskfState(_config(noise, settings, gnss, step, odometer), _initial_state(truth, settings, rng),
+    start = _initial_state(truth, settings, rng)
+    if initial is not None:
+        start = np.array(initial, float)
+        if start.shape != (9,) or not np.isfinite(start).all():
+            raise ValueError(f"initial must be 9 finite numbers (lat, lon, h, v E N U, yaw, pitch, roll), "
+                             f"got shape {start.shape}")
+    state = _core.EskfState(_config(noise, settings, gnss, step, odometer), start,
                             _options(filter_states, settings, gnss, gnss_velocity))
     if filter_states:
         info["filter_states"] = list(filter_states)

@@ -5,6 +5,9 @@ Tasks (each one campaign task, stored as it finishes, resumable):
 * ``stop-<unit>-<seed>``: one 30-minute stop filter run (convergence, error);
 * ``stop-indexed-<unit>-<seed>``: the same stop (seed, temperature) with the dual-axis RINS indexed
   through :data:`~sarins_fmu.experiments.online_rls_indexed.STOP_SEQUENCE` and the indexed filter;
+* ``stop-zupt-<unit>-<seed>``: the same stop through the aided navigation filter (15 states, a
+  zero-velocity update at every step) instead of the stop filter
+  (:func:`~sarins_fmu.experiments.online_rls_zupt.simulate_zupt_stop`);
 * ``mc-<ageing>-<unit>-<estimate>-<seed>``: one 300-day model-update run;
 * ``veh-<ageing>-<unit>-<seed>``: one vehicle test (a year of online
   updates, then a 6 h drive with the initial and the updated model), in
@@ -38,6 +41,7 @@ PROFILES = {
     "quick": {
         "stops": {"nav-rlg": 4, "premise": 1},
         "indexed_stops": {"nav-rlg": 4},
+        "zupt_stops": {"nav-rlg": 4},
         "mc": [("markov", "nav-rlg", "filter", 8), ("markov", "premise", "filter", 8)],
         "vehicle": [("markov", "nav-rlg", 1)],
         "vehicle_kwargs": {"n_sessions": 8, "year_days": 120.0, "test_day": 170.0, "drive_hours": 1.0},
@@ -45,6 +49,7 @@ PROFILES = {
     "paper": {
         "stops": {"nav-rlg": 40, "premise": 20},
         "indexed_stops": {"nav-rlg": 40},  # paired with the stops above: the same seeds and temperatures
+        "zupt_stops": {"nav-rlg": 40},  # likewise
         "mc": [("markov", "nav-rlg", "filter", 100), ("integrated", "nav-rlg", "filter", 100),
                ("markov", "nav-rlg", "truth", 100), ("integrated", "nav-rlg", "truth", 100),
                ("markov", "premise", "filter", 50),
@@ -90,10 +95,10 @@ def add_arguments(parser) -> None:
                              "(0 .. 2**31-1 minus the runs; default 0)")
 
 
-def stop_schema(kwargs: dict, function=None) -> dict:
-    """What ``function`` (default :func:`simulate_stop`; or ``simulate_indexed_stop``) returns for
-    ``kwargs``: five finite scalars and the stop filter's convergence curves, one row per step of
-    the stop (``round(duration / step)``)."""
+def stop_schema(kwargs: dict, function=None, extra=()) -> dict:
+    """What ``function`` (default :func:`simulate_stop`; or ``simulate_indexed_stop``,
+    ``simulate_zupt_stop``) returns for ``kwargs``: five finite scalars (and the scalars named in
+    ``extra``) and the filter's convergence curves, one row per step of the stop (``round(duration / step)``)."""
     import inspect
 
     from sarins.campaign import Field
@@ -101,7 +106,7 @@ def stop_schema(kwargs: dict, function=None) -> dict:
 
     defaults = {k: p.default for k, p in inspect.signature(function or simulate_stop).parameters.items()}
     n = int(round(kwargs.get("duration", defaults["duration"]) / kwargs.get("step", defaults["step"])))
-    scalars = ("truth_dph", "estimate_dph", "error_dph", "std_dph", "mean_temperature")
+    scalars = ("truth_dph", "estimate_dph", "error_dph", "std_dph", "mean_temperature", *extra)
     return {**{k: Field() for k in scalars}, **{k: Field((n,)) for k in ("time", "estimate_curve_dph",
                                                                           "std_curve_dph")}}
 
@@ -129,6 +134,7 @@ def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0, eng
     from sarins.campaign import Task
     from sarins_fmu.experiments import online_rls
     from sarins_fmu.experiments.online_rls_indexed import simulate_indexed_stop
+    from sarins_fmu.experiments.online_rls_zupt import simulate_zupt_stop
 
     from .cosim import ENGINES, vehicle_task
 
@@ -141,7 +147,8 @@ def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0, eng
     if not (MIN_LAMBDA <= forgetting_factor <= 1.0):
         raise ValueError(f"--lambda must be in [{MIN_LAMBDA}, 1], got {forgetting_factor}")
     p = PROFILES[profile] if unit is None else headline_profile(profile, unit)
-    most = max(list(p["stops"].values()) + list(p.get("indexed_stops", {}).values()) + [0])
+    most = max(list(p["stops"].values()) + list(p.get("indexed_stops", {}).values())
+               + list(p.get("zupt_stops", {}).values()) + [0])
     most = max([most] + [row[3] for row in p["mc"]] + [row[2] for row in p["vehicle"]])
     if not 0 <= seed <= 2**31 - most:
         raise ValueError(f"--seed must be in 0 .. {2**31 - most} for the {profile} profile ({most} runs per study), "
@@ -158,6 +165,13 @@ def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0, eng
             tasks.append(Task(f"stop-indexed-{unit}-{s:03d}", simulate_indexed_stop, kwargs,
                               finite=("estimate_dph", "error_dph"),
                               schema=stop_schema(kwargs, simulate_indexed_stop)))
+    for unit, n in p.get("zupt_stops", {}).items():
+        for s in range(n):  # the seed and temperature of stop-<unit>-<s>
+            kwargs = {"imu": unit, "seed": seed + s, "temperature": 5.0 + 40.0 * ((s * 0.618) % 1.0)}
+            tasks.append(Task(f"stop-zupt-{unit}-{s:03d}", simulate_zupt_stop, kwargs,
+                              finite=("estimate_dph", "error_dph", "heading_error_arcsec"),
+                              schema=stop_schema(kwargs, simulate_zupt_stop,
+                                                 ("heading_error_arcsec", "heading_std_arcsec"))))
     for ageing, unit, estimate, n, *scale in p["mc"]:
         x = scale[0] if scale else 1.0
         tasks += [Task(f"mc-{ageing}{_scale_tag(x)}-{unit}-{estimate}-{s:03d}", online_rls.model_update_run,

@@ -19,7 +19,7 @@ Units: SI inside (rad/s, s); ``_dph`` names carry °/h; temperatures °C.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -107,6 +107,61 @@ def _perturbed_attitude(mat_true: np.ndarray, phi: np.ndarray) -> np.ndarray:
     return rotvec_to_mat(-np.asarray(phi, float)) @ mat_true
 
 
+@dataclass(frozen=True)
+class StopData:
+    """One simulated stop on a static base, what every stop filter sees (SI).
+
+    model : the IMU unit.  lat : rad.  step : s, the IMU output interval.  table : the turntable's
+    forward-reverse azimuth rotation.  phi0 : (3,) rad, the INS's initial attitude error (ENU);
+    velocity0 : (2,) m/s, its initial east / north velocity error.  dtheta, dv : (n, 3) the IMU's
+    increments (rad, m/s, body).  temps : (n, 3) gyro temperatures, degC.  comp : (n,) rad/s, the
+    azimuth-gyro compensation the INS subtracts (zeros without a model).
+    """
+
+    model: ImuModel
+    lat: float
+    step: float
+    table: turntable.GimbalSchedule
+    phi0: np.ndarray
+    velocity0: np.ndarray
+    dtheta: np.ndarray
+    dv: np.ndarray
+    temps: np.ndarray
+    comp: np.ndarray
+
+    def attitude(self, k: int) -> np.ndarray:
+        """(3, 3) true body-to-ENU matrix of the IMU at the start of step k."""
+        return turntable.chain_matrix(self.table.axes, self.table.state(k * self.step)[0][0])
+
+
+def stop_data(*, imu: str = "nav-rlg", lat_deg: float = 40.0, temperature: float = 30.0,
+              duration: float = 1800.0, seed: int = 0, coefficients=None, compensation=None,
+              tilt0_arcsec: float = 10.0, heading0_deg: float = 0.05, velocity0: float = 0.3,
+              step: float = 1.0, internal_rate: float = 100.0) -> StopData:
+    """The IMU record and initial INS errors of one stop (parameters as :func:`simulate_stop`)."""
+    if not (math.isfinite(duration) and duration >= 2 * step):
+        raise ValueError("duration must cover at least two steps")
+    model = imu_unit(imu)
+    if coefficients is not None:
+        model = replace(model, axial_drift_poly=np.asarray(coefficients, float), aging_sigma=np.zeros(3))
+    lat = lat_deg * DEG_TO_RAD
+    rng = np.random.default_rng([seed, 2])
+    n = int(round(duration / step))
+    table = turntable.single_axis("forward-reverse", (n + 1) * step, grid=step)
+    base = StaticBase(lat, 0.0, 0.0, 0.0)
+    ambient = Ambient(mean=temperature - model.thermal.self_heating[GYRO_Z])
+    sensor = IMU(model, base, table.axes, output_interval=step, internal_rate=internal_rate, seed=seed,
+                 thermal_start="hot", ambient=ambient)
+    phi0 = rng.standard_normal(3) * np.array([tilt0_arcsec * ARCSEC_TO_RAD, tilt0_arcsec * ARCSEC_TO_RAD,
+                                              heading0_deg * DEG_TO_RAD])
+    v0 = rng.standard_normal(2) * velocity0
+    angle, rate, accel = table.state(np.arange(n) * step)
+    dtheta, dv, temps = sensor.step(angle, rate, accel)
+    comp = np.zeros(n) if compensation is None else np.polyval(np.asarray(compensation, float), temps[:, GYRO_Z])
+    return StopData(model=model, lat=lat, step=step, table=table, phi0=phi0, velocity0=v0, dtheta=dtheta, dv=dv,
+                    temps=temps, comp=comp)
+
+
 def simulate_stop(*, imu: str = "nav-rlg", lat_deg: float = 40.0, temperature: float = 30.0,
                   duration: float = 1800.0, seed: int = 0, coefficients=None, compensation=None,
                   tilt0_arcsec: float = 10.0, heading0_deg: float = 0.05, velocity0: float = 0.3,
@@ -132,32 +187,17 @@ def simulate_stop(*, imu: str = "nav-rlg", lat_deg: float = 40.0, temperature: f
     1σ), ``mean_temperature``, and the convergence curve ``time``,
     ``estimate_curve_dph``, ``std_curve_dph``.
     """
-    if not (math.isfinite(duration) and duration >= 2 * step):
-        raise ValueError("duration must cover at least two steps")
-    model = imu_unit(imu)
-    if coefficients is not None:
-        model = replace(model, axial_drift_poly=np.asarray(coefficients, float), aging_sigma=np.zeros(3))
-    lat = lat_deg * DEG_TO_RAD
-    rng = np.random.default_rng([seed, 2])
-    n = int(round(duration / step))
-    table = turntable.single_axis("forward-reverse", (n + 1) * step, grid=step)
-    base = StaticBase(lat, 0.0, 0.0, 0.0)
-    ambient = Ambient(mean=temperature - model.thermal.self_heating[GYRO_Z])
-    sensor = IMU(model, base, table.axes, output_interval=step, internal_rate=internal_rate, seed=seed,
-                 thermal_start="hot", ambient=ambient)
-    mat_true = turntable.chain_matrix(table.axes, table.state(0.0)[0][0])
-    phi0 = rng.standard_normal(3) * np.array([tilt0_arcsec * ARCSEC_TO_RAD, tilt0_arcsec * ARCSEC_TO_RAD,
-                                              heading0_deg * DEG_TO_RAD])
-    ins = StrapdownINS(InsConfig(lat=lat, align_time=0.0, step=step),
-                       initial_attitude=_perturbed_attitude(mat_true, phi0))
-    ins.v[:2] = rng.standard_normal(2) * velocity0
-    kf = StopKalmanFilter(lat, StopFilterSettings.for_model(model), dt=step, history_limit=n)
-    angle, rate, accel = table.state(np.arange(n) * step)
-    dtheta, dv, temps = sensor.step(angle, rate, accel)
-    comp = np.zeros(n) if compensation is None else np.polyval(np.asarray(compensation, float), temps[:, GYRO_Z])
-    out = ins.step(dtheta, dv, comp)
-    kf.step(out[:, 3:5], out[:, 6:9], comp, temps[:, GYRO_Z])
-    truth = float(model_drift(model, kf.mean_temperature))
+    d = stop_data(imu=imu, lat_deg=lat_deg, temperature=temperature, duration=duration, seed=seed,
+                  coefficients=coefficients, compensation=compensation, tilt0_arcsec=tilt0_arcsec,
+                  heading0_deg=heading0_deg, velocity0=velocity0, step=step, internal_rate=internal_rate)
+    n = d.dtheta.shape[0]
+    ins = StrapdownINS(InsConfig(lat=d.lat, align_time=0.0, step=step),
+                       initial_attitude=_perturbed_attitude(d.attitude(0), d.phi0))
+    ins.v[:2] = d.velocity0
+    kf = StopKalmanFilter(d.lat, StopFilterSettings.for_model(d.model), dt=step, history_limit=n)
+    out = ins.step(d.dtheta, d.dv, d.comp)
+    kf.step(out[:, 3:5], out[:, 6:9], d.comp, d.temps[:, GYRO_Z])
+    truth = float(model_drift(d.model, kf.mean_temperature))
     curve = kf.convergence()
     return {
         "truth_dph": truth * RPS_TO_DPH,
@@ -166,7 +206,7 @@ def simulate_stop(*, imu: str = "nav-rlg", lat_deg: float = 40.0, temperature: f
         "std_dph": kf.drift_std * RPS_TO_DPH,
         "mean_temperature": kf.mean_temperature,
         "time": curve[:, 0],
-        "estimate_curve_dph": (curve[:, 1] + comp.mean()) * RPS_TO_DPH,
+        "estimate_curve_dph": (curve[:, 1] + d.comp.mean()) * RPS_TO_DPH,
         "std_curve_dph": curve[:, 2] * RPS_TO_DPH,
     }
 
