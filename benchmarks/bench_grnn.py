@@ -10,9 +10,12 @@ this process:
   sample, scaled to the whole run (its cost is the same per query);
 
 and prints the ratio dense / truncated (CPU) and the largest difference on the dense rows against the
-derived bound (tolerance times each output's training range times the target scale).
+derived bound (tolerance times each output's training range times the target scale).  ``--blocks 64,128,256``
+also times the truncation with those query rows per k-d tree ball query (``grnn.SEARCH_BLOCK``), the tree
+search and the C kernel apart, on one thread (the outputs must not change: asserted).
 
     PYTHONPATH=. python3 benchmarks/bench_grnn.py [--profile paper] [--patterns 20000] [--dense-stride 500]
+    [--blocks 128,256,512]
 """
 
 from __future__ import annotations
@@ -45,6 +48,7 @@ def main(argv=None) -> None:
     parser.add_argument("--profile", default="paper", choices=("quick", "paper"))
     parser.add_argument("--patterns", type=int, default=20000)
     parser.add_argument("--dense-stride", type=int, default=500)
+    parser.add_argument("--blocks", default="", help="comma-separated query rows per ball query to compare")
     args = parser.parse_args(argv)
     from sarins_fmu.identify import compensators
     from sarins_fmu.identify.grnn import GRNN_TOLERANCE
@@ -68,6 +72,32 @@ def main(argv=None) -> None:
     diff = np.abs(y[::args.dense_stride] - dense).max(axis=0)
     print("largest |truncated - dense| per output:", " ".join(f"{v:.2e}" for v in diff))
     print("bound tol * range * target scale:       ", " ".join(f"{v:.2e}" for v in bound))
+    for block in (int(b) for b in args.blocks.split(",") if b):
+        search, kernel, cand, out = block_costs(comp, test.X, block)
+        assert np.array_equal(out, y), "the block size changed the outputs"
+        print(f"block {block}: tree search {search:.2f} + kernel {kernel:.2f} CPU-s, candidates per query {cand:.0f}")
+
+
+def block_costs(comp, x, block: int):
+    """(search CPU s, kernel CPU s, candidates per row, outputs) of the truncated GRNN on one thread, the
+    queries in the campaign's chunks, ``block`` rows per ball query."""
+    from scipy.spatial import cKDTree
+
+    from sarins_fmu.identify.grnn import CHUNK_ROWS, neighbour_blocks
+
+    net, model = comp.net, comp.native()
+    tree = cKDTree(net._z_train)
+    search = kernel = 0.0
+    cand, outs = 0, []
+    for start in range(0, len(x), CHUNK_ROWS):
+        rows = x[start:start + CHUNK_ROWS]
+        blocks, cpu_s, _ = timed(lambda: neighbour_blocks(tree, net.scaling_.apply(rows), net.settings.sigma,
+                                                          block=block))
+        (out, _), cpu_k, _ = timed(lambda: model.run_grnn_blocks(rows, blocks))
+        search, kernel = search + cpu_s, kernel + cpu_k
+        cand += int(np.sum(np.diff(blocks.cand_ptr) * np.diff(blocks.row_ptr)))
+        outs.append(out)
+    return search, kernel, cand / len(x), np.concatenate(outs)
 
 
 if __name__ == "__main__":

@@ -346,6 +346,11 @@ int64_t sarins_comp_state_size(const sarins_comp *c)
 
 int64_t sarins_comp_scratch_size(const sarins_comp *c) { return c->kind == SARINS_NET_KIND_GRNN ? c->grnn.n : 0; }
 
+int64_t sarins_comp_grnn_per_candidate(const sarins_comp *c)
+{
+    return c->kind == SARINS_NET_KIND_GRNN ? sarins_grnn_block_scratch(&c->grnn, 1) : 0;
+}
+
 static int inputs_finite(const double *x)
 {
     for (int i = 0; i < SARINS_COMP_N_IN; i++)
@@ -404,19 +409,21 @@ int sarins_comp_run_grnn_blocks(const sarins_comp *c, int64_t n_blocks, const in
     if (c->kind != SARINS_NET_KIND_GRNN)
         return SARINS_NET_KIND;
     double z[SARINS_COMP_N_OUT];
-    for (int64_t b = 0; b < n_blocks; b++)
+    for (int64_t b = 0; b < n_blocks; b++) {
+        int64_t n_cand = cand_ptr[b + 1] - cand_ptr[b];
+        sarins_grnn_gather(&c->grnn, n_cand, cand + cand_ptr[b], scratch);
         for (int64_t r = row_ptr[b]; r < row_ptr[b + 1]; r++) {
             const double *xr = x + r * SARINS_COMP_N_IN;
             if (!inputs_finite(xr))
                 return SARINS_NET_INPUT;
-            int64_t k = sarins_grnn_eval_subset(&c->grnn, xr, cand_ptr[b + 1] - cand_ptr[b], cand + cand_ptr[b],
-                                                log_cut, z, scratch);
+            int64_t k = sarins_grnn_eval_gathered(&c->grnn, xr, n_cand, log_cut, z, scratch);
             if (kept != NULL)
                 kept[r] = k;
             int status = comp_finish(c, xr, z, y + r * SARINS_COMP_N_OUT);
             if (status != SARINS_NET_OK)
                 return status;
         }
+    }
     return SARINS_NET_OK;
 }
 

@@ -80,8 +80,10 @@ void sarins_grnn_eval(const sarins_grnn *net, int64_t n, const double *x, double
     }
 }
 
-int64_t sarins_grnn_eval_subset(const sarins_grnn *net, const double *x, int64_t n_cand, const int64_t *cand,
-                                double log_cut, double *y, double *scratch)
+/* The truncated sum over candidates k = 0 .. n_cand-1 whose pattern rows are zs[idx][d] and ys[idx][m], idx =
+ * cand[k] (cand != NULL: the net's own arrays) or k (cand == NULL: rows gathered by sarins_grnn_gather). */
+static int64_t grnn_truncated(const sarins_grnn *net, const double *x, int64_t n_cand, const int64_t *cand,
+                              const double *zs, const double *ys, double log_cut, double *y, double *d2)
 {
     const int64_t d = net->d, m = net->m;
     const double inv_two_var = 1.0 / (2.0 * (net->sigma * net->sigma));
@@ -89,9 +91,9 @@ int64_t sarins_grnn_eval_subset(const sarins_grnn *net, const double *x, int64_t
     sarins_standardize(1, d, x, net->mean, net->scale, z);
     double d2_min = INFINITY;
     for (int64_t k = 0; k < n_cand; k++) {
-        scratch[k] = sq_dist(d, z, net->zt + cand[k] * d);
-        if (scratch[k] < d2_min)
-            d2_min = scratch[k];
+        d2[k] = sq_dist(d, z, zs + (cand != NULL ? cand[k] : k) * d);
+        if (d2[k] < d2_min)
+            d2_min = d2[k];
     }
     /* the dense sum's terms (sarins_grnn_eval), in the same pattern order, those below the cut left out */
     double s_d = 0.0;
@@ -99,31 +101,57 @@ int64_t sarins_grnn_eval_subset(const sarins_grnn *net, const double *x, int64_t
     for (int64_t o = 0; o < m; o++)
         y[o] = 0.0;
     for (int64_t k = 0; k < n_cand; k++) {
-        double e = (d2_min - scratch[k]) * inv_two_var; /* ln(P_j / max P) */
+        double e = (d2_min - d2[k]) * inv_two_var; /* ln(P_j / max P) */
         if (e < log_cut)
             continue;
         double p = net_exp(e);
+        const double *yk = ys + (cand != NULL ? cand[k] : k) * m;
         s_d += p;
         kept++;
         for (int64_t o = 0; o < m; o++)
-            y[o] += net->y[cand[k] * m + o] * p;
+            y[o] += yk[o] * p;
     }
     for (int64_t o = 0; o < m; o++)
         y[o] = y[o] / s_d; /* no candidate: 0 / 0, NaN */
     return kept;
 }
 
+int64_t sarins_grnn_eval_subset(const sarins_grnn *net, const double *x, int64_t n_cand, const int64_t *cand,
+                                double log_cut, double *y, double *scratch)
+{
+    return grnn_truncated(net, x, n_cand, cand, net->zt, net->y, log_cut, y, scratch);
+}
+
+void sarins_grnn_gather(const sarins_grnn *net, int64_t n_cand, const int64_t *cand, double *scratch)
+{
+    const int64_t d = net->d, m = net->m;
+    double *zb = scratch + n_cand, *yb = zb + n_cand * d;
+    for (int64_t k = 0; k < n_cand; k++) {
+        memcpy(zb + k * d, net->zt + cand[k] * d, (size_t)d * sizeof(double));
+        memcpy(yb + k * m, net->y + cand[k] * m, (size_t)m * sizeof(double));
+    }
+}
+
+int64_t sarins_grnn_eval_gathered(const sarins_grnn *net, const double *x, int64_t n_cand, double log_cut, double *y,
+                                  double *scratch)
+{
+    const double *zb = scratch + n_cand, *yb = zb + n_cand * net->d;
+    return grnn_truncated(net, x, n_cand, NULL, zb, yb, log_cut, y, scratch);
+}
+
 void sarins_grnn_eval_blocks(const sarins_grnn *net, int64_t n_blocks, const int64_t *row_ptr,
                              const int64_t *cand_ptr, const int64_t *cand, double log_cut, const double *x, double *y,
                              double *scratch, int64_t *kept)
 {
-    for (int64_t b = 0; b < n_blocks; b++)
+    for (int64_t b = 0; b < n_blocks; b++) {
+        int64_t n_cand = cand_ptr[b + 1] - cand_ptr[b];
+        sarins_grnn_gather(net, n_cand, cand + cand_ptr[b], scratch);
         for (int64_t r = row_ptr[b]; r < row_ptr[b + 1]; r++) {
-            int64_t k = sarins_grnn_eval_subset(net, x + r * net->d, cand_ptr[b + 1] - cand_ptr[b],
-                                                cand + cand_ptr[b], log_cut, y + r * net->m, scratch);
+            int64_t k = sarins_grnn_eval_gathered(net, x + r * net->d, n_cand, log_cut, y + r * net->m, scratch);
             if (kept != NULL)
                 kept[r] = k;
         }
+    }
 }
 
 void sarins_rnn_transpose(int64_t rows, int64_t cols, const double *src, double *dst)

@@ -73,9 +73,26 @@ void sarins_grnn_eval(const sarins_grnn *net, int64_t n, const double *x, double
 int64_t sarins_grnn_eval_subset(const sarins_grnn *net, const double *x, int64_t n_cand, const int64_t *cand,
                                 double log_cut, double *y, double *scratch);
 
+/* Candidates gathered for sarins_grnn_eval_gathered: scratch[n_cand .. n_cand (1 + d) - 1] the candidates'
+ * standardised patterns zt[cand[k]][d], then n_cand m doubles their targets y[cand[k]][m] (scratch holds
+ * sarins_grnn_block_scratch(net, n_cand) doubles; the first n_cand are sarins_grnn_eval_gathered's work space). */
+void sarins_grnn_gather(const sarins_grnn *net, int64_t n_cand, const int64_t *cand, double *scratch);
+
+/* sarins_grnn_eval_subset over the candidates sarins_grnn_gather put in scratch: the same terms in the same order,
+ * so the same bits; the patterns of one block of query rows read from contiguous memory. */
+int64_t sarins_grnn_eval_gathered(const sarins_grnn *net, const double *x, int64_t n_cand, double log_cut, double *y,
+                                  double *scratch);
+
+/* Doubles of scratch sarins_grnn_gather and sarins_grnn_eval_gathered need for n_cand candidates: n_cand (1 + d + m). */
+static inline int64_t sarins_grnn_block_scratch(const sarins_grnn *net, int64_t n_cand)
+{
+    return n_cand * (1 + net->d + net->m);
+}
+
 /* sarins_grnn_eval_subset for the rows row_ptr[b] .. row_ptr[b+1]-1 of x[][d] and y[][m], block b's
- * candidates cand[cand_ptr[b] .. cand_ptr[b+1]-1]; scratch holds the largest block's candidate count; kept[row]
- * (may be NULL) receives each row's kept terms. */
+ * candidates cand[cand_ptr[b] .. cand_ptr[b+1]-1] (gathered once per block); scratch holds
+ * sarins_grnn_block_scratch of the largest block's candidate count; kept[row] (may be NULL) receives each row's
+ * kept terms. */
 void sarins_grnn_eval_blocks(const sarins_grnn *net, int64_t n_blocks, const int64_t *row_ptr,
                              const int64_t *cand_ptr, const int64_t *cand, double log_cut, const double *x, double *y,
                              double *scratch, int64_t *kept);

@@ -38,6 +38,7 @@ _comp_open = function("sarins_comp_open", _P, ctypes.c_char_p, _SZ, ctypes.c_cha
 _comp_close = function("sarins_comp_close", None, _P)
 _comp_state = function("sarins_comp_state_size", _I64, _P)
 _comp_scratch = function("sarins_comp_scratch_size", _I64, _P)
+_comp_per_candidate = function("sarins_comp_grnn_per_candidate", _I64, _P)
 _comp_run = function("sarins_comp_run", ctypes.c_int, _P, _P, _I64, _P, _P, _P)
 _comp_grnn_blocks = function("sarins_comp_run_grnn_blocks", ctypes.c_int, _P, _I64, _P, _P, _P, _F64, _P, _P, _P, _P)
 
@@ -102,9 +103,10 @@ def grnn_predict_dense(x, mean, scale, z_train, y_train, sigma: float) -> np.nda
     return out
 
 
-def _checked_blocks(blocks, n_rows: int, n_patterns: int):
+def _checked_blocks(blocks, n_rows: int, n_patterns: int, per_candidate: int):
     """The int64 arrays (row_ptr, cand_ptr, cand) of ``blocks`` (a :class:`~sarins_fmu.identify.grnn.Blocks`),
-    checked against the rows and patterns they index (the C kernels trust them)."""
+    checked against the rows and patterns they index (the C kernels trust them), and the kernels' scratch:
+    ``per_candidate`` doubles (1 + d + m, ``sarins_grnn_block_scratch``) per candidate of the largest block."""
     row_ptr, cand_ptr, cand = (np.ascontiguousarray(a, dtype=np.int64)
                                for a in (blocks.row_ptr, blocks.cand_ptr, blocks.cand))
     nb = len(row_ptr) - 1
@@ -112,7 +114,7 @@ def _checked_blocks(blocks, n_rows: int, n_patterns: int):
             or cand_ptr[-1] != len(cand) or np.any(np.diff(row_ptr) < 0) or np.any(np.diff(cand_ptr) < 0)
             or (len(cand) and (cand.min() < 0 or cand.max() >= n_patterns))):
         raise ValueError("GRNN blocks do not index these rows and patterns")
-    scratch = np.empty(max(1, int(np.diff(cand_ptr).max(initial=0))))
+    scratch = np.empty(max(1, int(np.diff(cand_ptr).max(initial=0)) * per_candidate))
     return row_ptr, cand_ptr, cand, scratch
 
 
@@ -127,7 +129,7 @@ def grnn_predict_blocks(x, mean, scale, z_train, y_train, sigma: float, blocks) 
     m = yt.shape[1]
     yt = _arrays.read(yt, (p, m), "y_train")
     mean, scale = _arrays.read(mean, (d,), "mean"), _arrays.read(scale, (d,), "scale")
-    row_ptr, cand_ptr, cand, scratch = _checked_blocks(blocks, x.shape[0], p)
+    row_ptr, cand_ptr, cand, scratch = _checked_blocks(blocks, x.shape[0], p, 1 + d + m)
     out = np.empty((x.shape[0], m))
     kept = np.empty(x.shape[0], dtype=np.int64)
     _grnn_blocks(d, p, m, mean.ctypes.data, scale.ctypes.data, zt.ctypes.data, yt.ctypes.data, float(sigma),
@@ -208,7 +210,8 @@ class CompensatorModel(_Handle):
         candidates ``blocks`` (:func:`sarins_fmu.identify.grnn.neighbour_blocks` of the model's patterns),
         and each row's kept patterns (n,)."""
         x = _rows(x, COMP_N_IN)
-        row_ptr, cand_ptr, cand, scratch = _checked_blocks(blocks, x.shape[0], self.scratch_size)
+        row_ptr, cand_ptr, cand, scratch = _checked_blocks(blocks, x.shape[0], self.scratch_size,
+                                                           int(_comp_per_candidate(self.ptr)))
         out = np.empty((x.shape[0], COMP_N_OUT))
         kept = np.empty(x.shape[0], dtype=np.int64)
         status = _comp_grnn_blocks(self.ptr, len(row_ptr) - 1, row_ptr.ctypes.data, cand_ptr.ctypes.data,

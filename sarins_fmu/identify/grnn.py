@@ -87,7 +87,7 @@ FORMAT_VERSION = 1
 
 SEED003_SIGMA = 0.07  # smoothing factor of seed 003's GRNN, standardised units
 GRNN_TOLERANCE = 1e-9  # truncation: the prediction moves by less than this times each output's target range
-SEARCH_BLOCK = 128  # consecutive query rows sharing one k-d tree ball query
+SEARCH_BLOCK = 256  # consecutive query rows sharing one k-d tree ball query (benchmarks/bench_grnn.py --blocks)
 CHUNK_ROWS = 2**17  # query rows searched and evaluated at once (memory bound: a few (rows, d) arrays)
 RADIUS_MARGIN = 1e-9  # relative widening of the ball radius against the tree's own distance rounding
 
