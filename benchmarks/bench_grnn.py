@@ -91,9 +91,9 @@ def block_costs(comp, x, block: int):
     cand, outs = 0, []
     for start in range(0, len(x), CHUNK_ROWS):
         rows = x[start:start + CHUNK_ROWS]
-        blocks, cpu_s, _ = timed(lambda: neighbour_blocks(tree, net.scaling_.apply(rows), net.settings.sigma,
-                                                          block=block))
-        (out, _), cpu_k, _ = timed(lambda: model.run_grnn_blocks(rows, blocks))
+        blocks, cpu_s, _ = timed(lambda rows=rows: neighbour_blocks(tree, net.scaling_.apply(rows), net.settings.sigma,
+                                                                    block=block))
+        (out, _), cpu_k, _ = timed(lambda rows=rows, blocks=blocks: model.run_grnn_blocks(rows, blocks))
         search, kernel = search + cpu_s, kernel + cpu_k
         cand += int(np.sum(np.diff(blocks.cand_ptr) * np.diff(blocks.row_ptr)))
         outs.append(out)
