@@ -62,10 +62,12 @@ def test_quick_campaign_writes_a_report_and_ff_rls_beats_no_update(tmp_path):
     assert mc["runs"] == 8 and mc["mean_s_ff"] < mc["mean_s_none"]
     assert summary["stop_filter"]["nav-rlg"]["runs"] == 4 and summary["stop_filter"]["premise"]["runs"] == 1
     assert summary["stop_filter"]["indexed-nav-rlg"]["runs"] == 4  # the same stops, the RINS indexed
+    assert summary["stop_filter"]["zupt-nav-rlg"]["runs"] == 4  # the same stops through the aided filter's ZUPT
     veh = summary["vehicle"]["markov-nav-rlg"]
     assert veh["runs"] == 1 and veh["mean_cep_initial"] > 0
     report = (out / "report.md").read_text()
     assert "Table 2" in report and "fig5_curves.png" in report
+    assert "## The stop through the aided filter's zero-velocity updates (nav-rlg)" in report
     # the comparison table (sarins.comparison), with what the quick profile is too small to test
     assert "| claim | paper value | ours (median) | ours 5-95 % | paper's percentile in ours |" in report
     assert "| mean S after FF-RLS (°/h·°C), Table 2 | 0.066 |" in report
