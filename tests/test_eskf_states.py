@@ -12,18 +12,9 @@ import pytest
 from sarins_fmu import aided, gnss
 from sarins_fmu import trajectory as tr
 from sarins_fmu.core import aided as core
+from sarins_fmu.experiments.aided_nav import MANOEUVRES
 
 STEP = 0.01
-# manoeuvres: two full turns each way (yaw rate 10 deg/s), a climb (pitch), accelerations.  The first stop lasts
-# 20.5 s so that no 1 Hz fix falls on a jump of the turn rate: there the receiver's antenna velocity takes the
-# rate of the step that starts at the epoch (gnss.h), the filter the rate of the step that ends there, a
-# velocity outlier of |omega x l| (0.2 m/s with l = 1.2 m) that a random-constant lever state keeps for good
-MANOEUVRES = ({"kind": "stop", "duration": 20.5}, {"kind": "accelerate", "to_speed": 12, "accel": 1.0},
-              {"kind": "turn", "rate_dps": 10, "angle_deg": 360}, {"kind": "cruise", "duration": 20},
-              {"kind": "climb", "to_pitch_deg": 5, "duration": 5}, {"kind": "cruise", "duration": 10},
-              {"kind": "climb", "to_pitch_deg": 0, "duration": 5},
-              {"kind": "turn", "rate_dps": -10, "angle_deg": 360}, {"kind": "accelerate", "to_speed": 0, "accel": 1.5},
-              {"kind": "stop", "duration": 10})
 WHITE_GNSS = gnss.WHITE
 
 

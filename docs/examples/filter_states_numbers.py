@@ -15,24 +15,19 @@ import numpy as np
 
 from sarins_fmu import aided, gnss
 from sarins_fmu import trajectory as tr
+from sarins_fmu.experiments.aided_nav import MANOEUVRES
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "aided-navigation" / "filter-states.json"
 RUNS = 50
 STEP = 0.01
 WHITE_GNSS = gnss.WHITE
-# the drive of aided_navigation_numbers.py (380 s, one 90 deg turn each way) and a manoeuvring one (162.5 s: two
-# full turns at 10 deg/s each way, a 5 deg climb, accelerations; tests/test_eskf_states.py's, whose first stop
-# of 20.5 s keeps the turn-rate jumps off the 1 Hz fix epochs: see there)
+# the drive of aided_navigation_numbers.py (380 s, one 90 deg turn each way) and the manoeuvring one of
+# sarins_fmu.experiments.aided_nav.MANOEUVRES (162.5 s: two full turns at 10 deg/s each way, a 5 deg climb,
+# accelerations; its first stop of 20.5 s keeps the turn-rate jumps off the 1 Hz fix epochs: see there)
 DRIVE = ({"kind": "stop", "duration": 20}, {"kind": "accelerate", "to_speed": 12, "accel": 1.0},
          {"kind": "turn", "rate_dps": 6, "angle_deg": 90}, {"kind": "cruise", "duration": 300},
          {"kind": "turn", "rate_dps": 6, "angle_deg": -90}, {"kind": "accelerate", "to_speed": 0, "accel": 1.5},
          {"kind": "stop", "duration": 10})
-MANOEUVRES = ({"kind": "stop", "duration": 20.5}, {"kind": "accelerate", "to_speed": 12, "accel": 1.0},
-              {"kind": "turn", "rate_dps": 10, "angle_deg": 360}, {"kind": "cruise", "duration": 20},
-              {"kind": "climb", "to_pitch_deg": 5, "duration": 5}, {"kind": "cruise", "duration": 10},
-              {"kind": "climb", "to_pitch_deg": 0, "duration": 5},
-              {"kind": "turn", "rate_dps": -10, "angle_deg": 360}, {"kind": "accelerate", "to_speed": 0, "accel": 1.5},
-              {"kind": "stop", "duration": 10})
 SF_NOISE = dataclasses.replace(aided.IMU_NOISE["tactical"], gyro_sf_std=1e-3, accel_sf_std=1e-3)
 LEVER_GNSS = dataclasses.replace(WHITE_GNSS, lever_arm=(0.5, 1.5, 1.2))
 LEVER_SETTINGS = aided.FilterSettings(lever_arm=(0.0, 1.0, 0.9), lever0_std=0.5)

@@ -41,6 +41,18 @@ def drive(cruise: float = CRUISE, step: float = STEP) -> tr.Truth:
     return tr.generate(tr.Trajectory(tr.Start(lat_deg=LAT_DEG, lon_deg=118.0), segments), step)
 
 
+# A manoeuvring drive (162.5 s) for the optional filter states (docs/aided-navigation.md, "Optional filter
+# states"): two full turns each way (yaw rate 10 deg/s), a climb (pitch), accelerations.  The first stop lasts
+# 20.5 s so that no 1 Hz fix falls on a jump of the turn rate: there the receiver's antenna velocity takes the
+# rate of the step that starts at the epoch (gnss.h), the filter the rate of the step that ends there, a
+# velocity outlier of |omega x l| (0.2 m/s with l = 1.2 m) that a random-constant lever state keeps for good.
+MANOEUVRES = ({"kind": "stop", "duration": 20.5}, {"kind": "accelerate", "to_speed": 12, "accel": 1.0},
+              {"kind": "turn", "rate_dps": 10, "angle_deg": 360}, {"kind": "cruise", "duration": 20},
+              {"kind": "climb", "to_pitch_deg": 5, "duration": 5}, {"kind": "cruise", "duration": 10},
+              {"kind": "climb", "to_pitch_deg": 0, "duration": 5},
+              {"kind": "turn", "rate_dps": -10, "angle_deg": 360}, {"kind": "accelerate", "to_speed": 0, "accel": 1.5},
+              {"kind": "stop", "duration": 10})
+
 def trajectory_task(cruise: float = CRUISE, out_every: int = 20) -> dict:
     """The drive's truth at the output rate: time (n,) s; east, north, up (n,) m from the start;
     speed (n,) m/s; yaw (n,) rad; stationary (n,) 1 where the vehicle stands still."""
