@@ -252,3 +252,29 @@ def test_truncated_does_not_depend_on_threads_or_chunks(campaign_data):
     one = run(threads=1)
     assert_array_equal(run(threads=2, chunk_rows=1000, block=64), one)
     assert_array_equal(run(threads=1, chunk_rows=512, block=512), one)
+
+
+@pytest.mark.slow
+def test_truncated_kernels_run_clean_under_sanitizers(tmp_path):
+    """The gathered block kernels (sarins_grnn_eval_blocks, sarins_comp_run_grnn_blocks) on the core built with
+    ASan + UBSan: the scratch the binding sizes holds every block's gathered candidates; same bits as in the
+    normal build's run of the same script."""
+    import sanitized_core
+
+    script = """
+import numpy as np
+from sarins_fmu.identify import compensators
+from sarins_fmu.identify.grnn import GRNN
+rng = np.random.default_rng(5)
+x = rng.normal(size=(400, 7)); y = np.column_stack([np.sin(x[:, 0]), x[:, 1] * x[:, 2], x[:, 3] ** 2,
+                                                    x[:, 4], x[:, 5] - x[:, 6], np.cos(x[:, 6])])
+q = np.vstack([rng.normal(size=(900, 7)) * 2, np.full((1, 7), 50.0)])
+net = GRNN(0.5).fit(x, y)
+out, kept = net.predict_truncated(q, return_kept=True)
+assert np.all(kept >= 1) and np.allclose(out, net.predict_dense(q), atol=1e-6)
+comp = compensators.make("grnn", max_patterns=300).fit(x, y * 1e-3)
+batch = comp.predict_batch(q)
+assert np.allclose(batch, comp.predict(q), atol=1e-9)
+print("sanitized run ok")
+"""
+    sanitized_core.run(tmp_path, script)
