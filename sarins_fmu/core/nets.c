@@ -80,48 +80,6 @@ void sarins_grnn_eval(const sarins_grnn *net, int64_t n, const double *x, double
     }
 }
 
-/* The truncated sum over candidates k = 0 .. n_cand-1 whose pattern rows are zs[idx][d] and ys[idx][m], idx =
- * cand[k] (cand != NULL: the net's own arrays) or k (cand == NULL: rows gathered by sarins_grnn_gather). */
-static int64_t grnn_truncated(const sarins_grnn *net, const double *x, int64_t n_cand, const int64_t *cand,
-                              const double *zs, const double *ys, double log_cut, double *y, double *d2)
-{
-    const int64_t d = net->d, m = net->m;
-    const double inv_two_var = 1.0 / (2.0 * (net->sigma * net->sigma));
-    double z[SARINS_NET_MAX_INPUTS];
-    sarins_standardize(1, d, x, net->mean, net->scale, z);
-    double d2_min = INFINITY;
-    for (int64_t k = 0; k < n_cand; k++) {
-        d2[k] = sq_dist(d, z, zs + (cand != NULL ? cand[k] : k) * d);
-        if (d2[k] < d2_min)
-            d2_min = d2[k];
-    }
-    /* the dense sum's terms (sarins_grnn_eval), in the same pattern order, those below the cut left out */
-    double s_d = 0.0;
-    int64_t kept = 0;
-    for (int64_t o = 0; o < m; o++)
-        y[o] = 0.0;
-    for (int64_t k = 0; k < n_cand; k++) {
-        double e = (d2_min - d2[k]) * inv_two_var; /* ln(P_j / max P) */
-        if (e < log_cut)
-            continue;
-        double p = net_exp(e);
-        const double *yk = ys + (cand != NULL ? cand[k] : k) * m;
-        s_d += p;
-        kept++;
-        for (int64_t o = 0; o < m; o++)
-            y[o] += yk[o] * p;
-    }
-    for (int64_t o = 0; o < m; o++)
-        y[o] = y[o] / s_d; /* no candidate: 0 / 0, NaN */
-    return kept;
-}
-
-int64_t sarins_grnn_eval_subset(const sarins_grnn *net, const double *x, int64_t n_cand, const int64_t *cand,
-                                double log_cut, double *y, double *scratch)
-{
-    return grnn_truncated(net, x, n_cand, cand, net->zt, net->y, log_cut, y, scratch);
-}
-
 void sarins_grnn_gather(const sarins_grnn *net, int64_t n_cand, const int64_t *cand, double *scratch)
 {
     const int64_t d = net->d, m = net->m;
@@ -135,8 +93,36 @@ void sarins_grnn_gather(const sarins_grnn *net, int64_t n_cand, const int64_t *c
 int64_t sarins_grnn_eval_gathered(const sarins_grnn *net, const double *x, int64_t n_cand, double log_cut, double *y,
                                   double *scratch)
 {
-    const double *zb = scratch + n_cand, *yb = zb + n_cand * net->d;
-    return grnn_truncated(net, x, n_cand, NULL, zb, yb, log_cut, y, scratch);
+    const int64_t d = net->d, m = net->m;
+    const double inv_two_var = 1.0 / (2.0 * (net->sigma * net->sigma));
+    const double *zb = scratch + n_cand, *yb = zb + n_cand * d;
+    double *d2 = scratch;
+    double z[SARINS_NET_MAX_INPUTS];
+    sarins_standardize(1, d, x, net->mean, net->scale, z);
+    double d2_min = INFINITY;
+    for (int64_t k = 0; k < n_cand; k++) {
+        d2[k] = sq_dist(d, z, zb + k * d);
+        if (d2[k] < d2_min)
+            d2_min = d2[k];
+    }
+    /* the dense sum's terms (sarins_grnn_eval), in the same pattern order, those below the cut left out */
+    double s_d = 0.0;
+    int64_t kept = 0;
+    for (int64_t o = 0; o < m; o++)
+        y[o] = 0.0;
+    for (int64_t k = 0; k < n_cand; k++) {
+        double e = (d2_min - d2[k]) * inv_two_var; /* ln(P_j / max P) */
+        if (e < log_cut)
+            continue;
+        double p = net_exp(e);
+        s_d += p;
+        kept++;
+        for (int64_t o = 0; o < m; o++)
+            y[o] += yb[k * m + o] * p;
+    }
+    for (int64_t o = 0; o < m; o++)
+        y[o] = y[o] / s_d; /* no candidate: 0 / 0, NaN */
+    return kept;
 }
 
 void sarins_grnn_eval_blocks(const sarins_grnn *net, int64_t n_blocks, const int64_t *row_ptr,

@@ -63,23 +63,19 @@ void sarins_rbf_eval(const sarins_rbf *net, int64_t n, const double *x, double *
 /* GRNN outputs y[n][m] of the inputs x[n][d]; scratch holds net->n doubles. */
 void sarins_grnn_eval(const sarins_grnn *net, int64_t n, const double *x, double *y, double *scratch);
 
-/* Truncated GRNN (exact to a bound): the output y[m] of one input x[d] over the candidate patterns
- * cand[0 .. n_cand-1] (pattern indices, ascending, in [0, net->n)), keeping the terms whose weight relative to the
- * largest candidate's, P_j / max P = exp(-(D_j^2 - min D^2) / (2 sigma^2)), is at least exp(log_cut).  The kept
- * terms are those of sarins_grnn_eval in the same order, so with every pattern a candidate and nothing cut the
- * result is the dense one bit for bit.  The candidates must hold the query's nearest pattern and every pattern
- * above the cut (sarins_fmu/identify/grnn.py finds them with a k-d tree; the error bound is derived there).
- * scratch holds n_cand doubles; returns the number of kept terms (no candidate: y is NaN, 0 returned). */
-int64_t sarins_grnn_eval_subset(const sarins_grnn *net, const double *x, int64_t n_cand, const int64_t *cand,
-                                double log_cut, double *y, double *scratch);
-
 /* Candidates gathered for sarins_grnn_eval_gathered: scratch[n_cand .. n_cand (1 + d) - 1] the candidates'
- * standardised patterns zt[cand[k]][d], then n_cand m doubles their targets y[cand[k]][m] (scratch holds
- * sarins_grnn_block_scratch(net, n_cand) doubles; the first n_cand are sarins_grnn_eval_gathered's work space). */
+ * standardised patterns zt[cand[k]][d] (cand[0 .. n_cand-1]: pattern indices, ascending, in [0, net->n)), then
+ * n_cand m doubles their targets y[cand[k]][m] (scratch holds sarins_grnn_block_scratch(net, n_cand) doubles; the
+ * first n_cand are sarins_grnn_eval_gathered's work space). */
 void sarins_grnn_gather(const sarins_grnn *net, int64_t n_cand, const int64_t *cand, double *scratch);
 
-/* sarins_grnn_eval_subset over the candidates sarins_grnn_gather put in scratch: the same terms in the same order,
- * so the same bits; the patterns of one block of query rows read from contiguous memory. */
+/* Truncated GRNN (exact to a bound): the output y[m] of one input x[d] over the n_cand candidate patterns
+ * sarins_grnn_gather put in scratch, keeping the terms whose weight relative to the largest candidate's,
+ * P_j / max P = exp(-(D_j^2 - min D^2) / (2 sigma^2)), is at least exp(log_cut).  The kept terms are those of
+ * sarins_grnn_eval in the same order, so with every pattern a candidate and nothing cut the result is the dense one
+ * bit for bit.  The candidates must hold the query's nearest pattern and every pattern above the cut
+ * (sarins_fmu/identify/grnn.py finds them with a k-d tree; the error bound is derived there).  Returns the number
+ * of kept terms (no candidate: y is NaN, 0 returned). */
 int64_t sarins_grnn_eval_gathered(const sarins_grnn *net, const double *x, int64_t n_cand, double log_cut, double *y,
                                   double *scratch);
 
@@ -89,7 +85,7 @@ static inline int64_t sarins_grnn_block_scratch(const sarins_grnn *net, int64_t 
     return n_cand * (1 + net->d + net->m);
 }
 
-/* sarins_grnn_eval_subset for the rows row_ptr[b] .. row_ptr[b+1]-1 of x[][d] and y[][m], block b's
+/* sarins_grnn_eval_gathered for the rows row_ptr[b] .. row_ptr[b+1]-1 of x[][d] and y[][m], block b's
  * candidates cand[cand_ptr[b] .. cand_ptr[b+1]-1] (gathered once per block); scratch holds
  * sarins_grnn_block_scratch of the largest block's candidate count; kept[row] (may be NULL) receives each row's
  * kept terms. */

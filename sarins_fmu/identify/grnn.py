@@ -56,7 +56,7 @@ Truncation, exact to a bound (:meth:`GRNN.predict_truncated`, the campaigns' eva
     distance :math:`D_c`.  A row q of the block has :math:`D_{min}(q) \le \rho + D_c`, so every pattern it
     keeps lies within :math:`\rho + \sqrt{(\rho + D_c)^2 + R^2}` of c, and so does its nearest pattern
     (within :math:`2\rho + D_c`): one ball query per block finds a superset, sorted by pattern index, and the
-    C kernel (``sarins_grnn_eval_subset``) applies the exact cut per row.  The radius is relative to the
+    C kernel (``sarins_grnn_eval_gathered``) applies the exact cut per row.  The radius is relative to the
     nearest distance, so a query far from every pattern still finds its nearest one; a fixed number of
     nearest neighbours would not be exact (the rate-table data hold many near-duplicate patterns).
 
