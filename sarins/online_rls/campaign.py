@@ -154,24 +154,19 @@ def build_tasks(profile: str, forgetting_factor: float = 0.8, seed: int = 0, eng
         raise ValueError(f"--seed must be in 0 .. {2**31 - most} for the {profile} profile ({most} runs per study), "
                          f"got {seed}")
     tasks = []
-    for unit, n in p["stops"].items():
-        for s in range(n):
-            kwargs = {"imu": unit, "seed": seed + s, "temperature": 5.0 + 40.0 * ((s * 0.618) % 1.0)}
-            tasks.append(Task(f"stop-{unit}-{s:03d}", online_rls.simulate_stop, kwargs,
-                              finite=("estimate_dph", "error_dph"), schema=stop_schema(kwargs)))
-    for unit, n in p.get("indexed_stops", {}).items():
-        for s in range(n):  # the seed and temperature of stop-<unit>-<s>
-            kwargs = {"imu": unit, "seed": seed + s, "temperature": 5.0 + 40.0 * ((s * 0.618) % 1.0)}
-            tasks.append(Task(f"stop-indexed-{unit}-{s:03d}", simulate_indexed_stop, kwargs,
-                              finite=("estimate_dph", "error_dph"),
-                              schema=stop_schema(kwargs, simulate_indexed_stop)))
-    for unit, n in p.get("zupt_stops", {}).items():
-        for s in range(n):  # the seed and temperature of stop-<unit>-<s>
-            kwargs = {"imu": unit, "seed": seed + s, "temperature": 5.0 + 40.0 * ((s * 0.618) % 1.0)}
-            tasks.append(Task(f"stop-zupt-{unit}-{s:03d}", simulate_zupt_stop, kwargs,
-                              finite=("estimate_dph", "error_dph", "heading_error_arcsec"),
-                              schema=stop_schema(kwargs, simulate_zupt_stop,
-                                                 ("heading_error_arcsec", "heading_std_arcsec"))))
+    # (profile key, task prefix, function, results checked finite, extra result scalars): each kind's stop k has
+    # the seed and temperature of stop-<unit>-k
+    checked = ("estimate_dph", "error_dph")
+    stop_kinds = (("stops", "stop", online_rls.simulate_stop, checked, ()),
+                  ("indexed_stops", "stop-indexed", simulate_indexed_stop, checked, ()),
+                  ("zupt_stops", "stop-zupt", simulate_zupt_stop, (*checked, "heading_error_arcsec"),
+                   ("heading_error_arcsec", "heading_std_arcsec")))
+    for key, prefix, function, finite, extra in stop_kinds:
+        for unit, n in p.get(key, {}).items():
+            for s in range(n):
+                kwargs = {"imu": unit, "seed": seed + s, "temperature": 5.0 + 40.0 * ((s * 0.618) % 1.0)}
+                tasks.append(Task(f"{prefix}-{unit}-{s:03d}", function, kwargs, finite=finite,
+                                  schema=stop_schema(kwargs, function, extra)))
     for ageing, unit, estimate, n, *scale in p["mc"]:
         x = scale[0] if scale else 1.0
         tasks += [Task(f"mc-{ageing}{_scale_tag(x)}-{unit}-{estimate}-{s:03d}", online_rls.model_update_run,
