@@ -30,9 +30,10 @@ SETS, RUNS = 10, 100
 OUT_EVERY = 20  # the campaign's output every 0.2 s
 
 
-def nees(seed: int) -> np.ndarray:
-    """(n, 3) position, velocity, attitude NEES of one campaign run."""
-    return aided_nav.monte_carlo_run(seed, out_every=OUT_EVERY)["nees"]
+def nees(seed: int) -> tuple:
+    """(time (n,) s, (n, 3) position, velocity, attitude NEES) of one campaign run."""
+    run = aided_nav.monte_carlo_run(seed, out_every=OUT_EVERY)
+    return run["time"], run["nees"]
 
 
 def band(runs: int) -> tuple:
@@ -62,8 +63,8 @@ def block_stats(mean: np.ndarray, lo: float, hi: float, time: np.ndarray) -> dic
 
 def main(sets: int = SETS, runs: int = RUNS) -> dict:
     with Pool(2) as pool:
-        values = np.array(pool.map(nees, range(sets * runs), chunksize=10))  # (runs, n, 3)
-    time = aided_nav.monte_carlo_run(0, out_every=OUT_EVERY)["time"]
+        done = pool.map(nees, range(sets * runs), chunksize=10)
+    time, values = done[0][0], np.array([v for _, v in done])  # values (runs, n, 3)
     names = aided_nav.BLOCKS
     lo, hi = band(runs)
     per_set = []
