@@ -602,9 +602,14 @@ class OutageReport:
         return [e / s for e, s in zip(self.rms_error, self.predicted_sigma)]
 
 
+def outage_windows(outages) -> list:
+    """The GNSS outage windows [(start, end), ...] s as floats, from an (m, 2) array-like."""
+    return [tuple(map(float, w)) for w in np.asarray(outages, float).reshape(-1, 2)]
+
+
 def outage_monte_carlo(truth, runs: int, outages, *, first_seed: int = 0, **kwargs) -> OutageReport:
     """Horizontal error at the end of each GNSS outage over ``runs`` seeds vs the filter's sigma."""
-    windows = [tuple(map(float, w)) for w in np.asarray(outages, float).reshape(-1, 2)]
+    windows = outage_windows(outages)
     err2 = np.zeros(len(windows))
     var = np.zeros(len(windows))
     for seed in range(first_seed, first_seed + runs):
@@ -643,7 +648,7 @@ def outage_closed_form_monte_carlo(truth, runs: int, outages, *, first_seed: int
     :func:`navigate` (with ``covariance='full'``)."""
     from . import free_inertial
 
-    windows = [tuple(map(float, w)) for w in np.asarray(outages, float).reshape(-1, 2)]
+    windows = outage_windows(outages)
     sums = np.zeros((3, len(windows)))
     for seed in range(first_seed, first_seed + runs):
         r = navigate(truth, noise=noise, seed=seed, outages=outages, **kwargs)
