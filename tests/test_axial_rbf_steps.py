@@ -141,6 +141,29 @@ def test_real_time_table_removes_exactly_its_drift():
         assert left < 1e-3 * np.max(np.abs(getattr(c, name) - getattr(b, name))), name
 
 
+def test_reruns_from_one_imu_record_give_the_bits_of_whole_runs():
+    """The held-out experiments navigate one IMU record several times (corrections, table): each
+    re-run equals a run that simulates its IMU again, bit for bit, and leaves the record as it was."""
+    from sarins.axial_rbf.runs import record_inprocess, run_inprocess
+
+    e = s0.generate("cold", 2, 1, 4)[-1]
+    table = {"temp_c": [0.0, 70.0], "drift_dph": [0.002, 0.004]}
+    rec = record_inprocess(e, 1.0, align_hours=0.25)
+    before = rec.dtheta.copy()
+    for kwargs in ({}, {"correction_dph": 0.003}, {"table": table}, {"correction_dph": -0.001, "table": table}):
+        again = run_inprocess(e, 1.0, align_hours=0.25, record=rec, **kwargs)
+        whole = run_inprocess(e, 1.0, align_hours=0.25, **kwargs)
+        for key, value in whole.items():
+            assert np.array_equal(np.asarray(again[key]), np.asarray(value)), (kwargs, key)
+    assert np.array_equal(rec.dtheta, before)
+    assert run_inprocess(e, 1.0, align_hours=0.25, record=rec, correction_dph=0.003)["lat_error"][-1] != \
+        run_inprocess(e, 1.0, align_hours=0.25, record=rec)["lat_error"][-1]
+    other = s0.generate("cold", 2, 1, 5)[-1]
+    for exp, hours in ((other, 1.0), (e, 2.0)):
+        with pytest.raises(ValueError, match="not this run's"):
+            run_inprocess(exp, hours, align_hours=0.25, record=rec)
+
+
 def test_residual_truth_is_the_true_drift_minus_the_table_mean():
     e = s0.generate("cold", 2, 1, 9)[0]
     assert s0.window_mean_table_dph(e, MultiTemperatureTable((0.0, 90.0), (0.001, 0.001))) == pytest.approx(0.001)

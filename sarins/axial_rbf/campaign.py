@@ -34,6 +34,8 @@ PROFILES = {  # (hot train, hot test, cold train, cold test)
     "paper": (16, 6, 24, 8),
 }
 DEFAULT_ENGINE = {"quick": "inprocess", "paper": "cosim"}
+# the FMUs of the co-simulated systems (sarins.systems.standard_static and standard_static_identified)
+FMUS = ("Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier")
 # the multi-temperature calibration (seed 000 sec. 2.3, ref. [15]): z-gyro temperature points and holds
 # (0..70 degC covers the gyro temperatures of every hot and cold experiment)
 MULTITEMP = {"points_c": [float(t) for t in range(0, 71, 10)], "settle_hours": 20.0, "average_hours": 4.0,
@@ -177,10 +179,12 @@ def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, 
     check_cosim = profile == "quick" and scale == 1.0  # the quick profile's co-simulated twin check
     fmu_dir = None
     if engine == "cosim" or check_cosim:
-        from fmus.build import DEFAULT_NAMES, build_fmus
+        from fmus.build import build_fmus
 
-        # built in a temporary folder and moved into place; rebuilt when the code changes
-        fmu_dir = str(build_artifacts(out / "fmus", [f"{n}.fmu" for n in DEFAULT_NAMES], build_fmus,
+        # this machine's binaries of the FMUs the systems use, built in a temporary folder and moved into
+        # place; rebuilt when the code changes (``sarins build-fmus`` builds every platform)
+        fmu_dir = str(build_artifacts(out / "fmus", [f"{n}.fmu" for n in FMUS],
+                                      lambda folder: build_fmus(folder, list(FMUS), cross=False),
                                       code_hash())[0].parent)
     exps = {kind: s0.generate(kind, n_t, n_v, seed, thermal_scale=scale)
             for kind, n_t, n_v in (("hot", n_ht, n_hv), ("cold", n_ct, n_cv))}

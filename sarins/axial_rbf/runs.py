@@ -24,7 +24,7 @@ from sarins_fmu.identify.multitemp import MultiTemperatureTable, calibrate_axial
 from sarins_fmu.static_errors import azimuth_drift_errors, heading_error_errors
 from sarins_fmu.units import DEG_TO_RAD, DPH_TO_RPS, HOUR, NM, RAD_TO_DEG
 from sarins_fmu.experiments import axial_rbf as s0
-from sarins_fmu.experiments.static_run import run_static
+from sarins_fmu.experiments.static_run import StaticImuRecord, navigate_static, record_static, run_static
 
 SAMPLE = 60  # s between stored samples
 ENGINES = ("inprocess", "cosim")
@@ -37,12 +37,24 @@ def _exp(exp) -> s0.Experiment:
 
 
 # ------------------------------------------------------------------ in process
+def record_inprocess(exp, nav_hours: float, *, align_hours: float = s0.ALIGN_HOURS) -> StaticImuRecord:
+    """The experiment's turntable and IMU output over alignment + ``nav_hours`` (h), in process: what
+    every re-run of :func:`run_inprocess` shares (``record=``)."""
+    exp = _exp(exp)
+    return record_static(lat_deg=exp.lat_deg, align_hours=align_hours, nav_hours=nav_hours,
+                         model=s0.imu_model(exp), start=exp.start, ambient=s0.ambient(exp), seed=exp.seed)
+
+
 def run_inprocess(exp, nav_hours: float, *, correction_dph: float = 0.0, correction_from_hours: float = 0.0,
-                  align_hours: float = s0.ALIGN_HOURS, table: dict | None = None) -> dict:
+                  align_hours: float = s0.ALIGN_HOURS, table: dict | None = None,
+                  record: StaticImuRecord | None = None) -> dict:
     """One run of the experiment in process; navigation series every SAMPLE s.
 
     table : multi-temperature table (``MultiTemperatureTable.to_dict()``)
         compensating the z gyro in real time from switch-on, or None.
+    record : the experiment's IMU output (:func:`record_inprocess` with the same
+        ``nav_hours`` and ``align_hours``), navigated again instead of simulated
+        again: the same bits at the INS's cost alone.
 
     Returns dict: time_h (K,), lat_error, lon_error (rad), north_error,
     east_error (m), temp_z (K,) degC at the same times, temp_change_align
@@ -51,11 +63,15 @@ def run_inprocess(exp, nav_hours: float, *, correction_dph: float = 0.0, correct
     of the alignment).
     """
     exp = _exp(exp)
+    if record is None:
+        record = record_inprocess(exp, nav_hours, align_hours=align_hours)
+    elif not _record_fits(record, exp, nav_hours, align_hours):
+        raise ValueError("the IMU record's (seed, latitude, start, nav h, align h) "
+                         f"{tuple(record.info[k] for k in ('seed', 'lat_deg', 'start', 'nav_hours', 'align_hours'))} "
+                         f"are not this run's {exp.seed, exp.lat_deg, exp.start, nav_hours, align_hours}")
     axial_table = None if table is None else MultiTemperatureTable.from_dict(table)
-    r = run_static(lat_deg=exp.lat_deg, align_hours=align_hours, nav_hours=nav_hours,
-                   model=s0.imu_model(exp), start=exp.start, ambient=s0.ambient(exp), seed=exp.seed,
-                   correction_dph=correction_dph, correction_from_hours=correction_from_hours,
-                   axial_table=axial_table)
+    r = navigate_static(record, correction_dph=correction_dph, correction_from_hours=correction_from_hours,
+                        axial_table=axial_table)
     n_align = len(r.time_all) - len(r.time)
     k = np.arange(SAMPLE - 1, len(r.time), SAMPLE)
     temp_z = r.temperature[:, 2]
@@ -64,6 +80,13 @@ def run_inprocess(exp, nav_hours: float, *, correction_dph: float = 0.0, correct
             "temp_change_align": float(temp_z[n_align - 1] - temp_z[0]),
             "temp_align": (float(temp_z[:n_align].min()), float(temp_z[:n_align].max())),
             "align_heading_error": float(r.info["align_attitude_error"][2])}
+
+
+def _record_fits(record: StaticImuRecord, exp, nav_hours: float, align_hours: float) -> bool:
+    """Whether ``record`` is the IMU output of this experiment over these hours."""
+    info = record.info
+    return ((info["seed"], info["lat_deg"], info["start"]) == (exp.seed, exp.lat_deg, exp.start)
+            and abs(info["nav_hours"] - nav_hours) < 1e-9 and abs(info["align_hours"] - align_hours) < 1e-9)
 
 
 # ------------------------------------------------------------------ co-simulation
@@ -171,8 +194,9 @@ def train_task(exp: dict, engine: str = "inprocess", fmu_dir: str | None = None,
     truth = float("nan")
     if paper_truth:
         probe = 1e-3
-        err0 = window(run_inprocess(e, s0.NAV_HOURS), 0.0, s0.NAV_HOURS)
-        err1 = window(run_inprocess(e, s0.NAV_HOURS, correction_dph=probe), 0.0, s0.NAV_HOURS)
+        rec = record_inprocess(e, s0.NAV_HOURS)
+        err0 = window(run_inprocess(e, s0.NAV_HOURS, record=rec), 0.0, s0.NAV_HOURS)
+        err1 = window(run_inprocess(e, s0.NAV_HOURS, correction_dph=probe, record=rec), 0.0, s0.NAV_HOURS)
         truth = s0.paper_true_drift(err0, err1, probe)[0]
     out = {**e.to_dict(), **feats, "engine": engine, "paper_truth_dph": truth,
            "lon_error_deg": at_hours(run, "lon_error", s0.IDENTIFY_HOURS) * RAD_TO_DEG,
@@ -209,7 +233,8 @@ def test_task(exp: dict, models: dict, engine: str = "inprocess", fmu_dir: str |
     if engine not in ENGINES:
         raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
     nav = float(nav_hours)
-    r0 = run_inprocess(e, nav)
+    rec = record_inprocess(e, nav)  # the IMU output every in-process run below navigates
+    r0 = run_inprocess(e, nav, record=rec)
     feats = run_features(r0, min(s0.IDENTIFY_HOURS, nav))
     err0 = window(r0, 0.0, nav)
     sel12 = r0["time_h"] <= s0.IDENTIFY_HOURS + 1e-9
@@ -222,18 +247,18 @@ def test_task(exp: dict, models: dict, engine: str = "inprocess", fmu_dir: str |
     drifts = {kind: predict(models[kind], feats) for kind in (("cold", "hot") if own == "cold" else ("hot",))}
     probe = drifts[own]
     if abs(probe) < 2e-4:  # too small a lever for the affine map: compensate anyway, probe separately
-        err_own = window(run_inprocess(e, nav, correction_dph=probe), 0.0, nav)
-        err_p = window(run_inprocess(e, nav, correction_dph=1e-3), 0.0, nav)
+        err_own = window(run_inprocess(e, nav, correction_dph=probe, record=rec), 0.0, nav)
+        err_p = window(run_inprocess(e, nav, correction_dph=1e-3, record=rec), 0.0, nav)
         probe = 1e-3
     else:
-        err_own = err_p = window(run_inprocess(e, nav, correction_dph=probe), 0.0, nav)
+        err_own = err_p = window(run_inprocess(e, nav, correction_dph=probe, record=rec), 0.0, nav)
     out["slope_ne"] = (err_p - err0) / probe  # position error per deg/h subtracted, (K, 2) m
     out["err0_ne"] = err0
     for kind, drift in drifts.items():
         if kind == own:
             err1 = err_own
         elif rerun_all:
-            err1 = window(run_inprocess(e, nav, correction_dph=drift), 0.0, nav)
+            err1 = window(run_inprocess(e, nav, correction_dph=drift, record=rec), 0.0, nav)
         else:
             err1 = err0 + drift * out["slope_ne"]
         out[f"ident_{kind}_dph"] = drift
@@ -244,7 +269,7 @@ def test_task(exp: dict, models: dict, engine: str = "inprocess", fmu_dir: str |
     out["lon_error_deg"] = at_hours(r0, "lon_error", min(s0.IDENTIFY_HOURS, nav)) * RAD_TO_DEG
     out["align_heading_error"] = r0["align_heading_error"]
     if table is not None and e.start == "cold":
-        out.update(_multitemp(e, models, table, nav, out["slope_ne"], rerun_all))
+        out.update(_multitemp(e, models, table, nav, out["slope_ne"], rerun_all, rec))
     if live:
         out.update(_live(e, models[own], feats, engine, fmu_dir))
     out["wall_seconds"] = _time.perf_counter() - t0
@@ -254,15 +279,17 @@ def test_task(exp: dict, models: dict, engine: str = "inprocess", fmu_dir: str |
 MULTITEMP_MODELS = ("hot", "hot_mt", "cold_mt")  # networks applied after the multi-temperature compensation
 
 
-def _multitemp(e, models, table, nav, slope, rerun_all) -> dict:
+def _multitemp(e, models, table, nav, slope, rerun_all, record=None) -> dict:
     """Cold start with the multi-temperature compensation in real time from
     switch-on (seed 000 sec. 2.3), then identification by the networks of
     :data:`MULTITEMP_MODELS` present in ``models`` ('hot': trained on raw hot
     runs; '*_mt': trained on compensated runs).  ``mt_total_<kind>_dph`` is
     the drift removed over the 72 h window, table mean + identified
-    residual, to compare with the true drift like the other identifiers."""
+    residual, to compare with the true drift like the other identifiers; record: the experiment's IMU
+    output (:func:`record_inprocess`), made here when None."""
     tab = MultiTemperatureTable.from_dict(table)
-    run = run_inprocess(e, nav, table=table)
+    record = record_inprocess(e, nav) if record is None else record
+    run = run_inprocess(e, nav, table=table, record=record)
     feats = run_features(run, min(s0.IDENTIFY_HOURS, nav))
     err_a = window(run, 0.0, nav)
     mean_table = s0.window_mean_table_dph(e, tab, 0.0, nav)
@@ -271,7 +298,7 @@ def _multitemp(e, models, table, nav, slope, rerun_all) -> dict:
     for kind in (k for k in MULTITEMP_MODELS if k in models):
         drift = predict(models[kind], feats)
         if rerun_all:
-            err1 = window(run_inprocess(e, nav, correction_dph=drift, table=table), 0.0, nav)
+            err1 = window(run_inprocess(e, nav, correction_dph=drift, table=table, record=record), 0.0, nav)
         else:  # the error is affine in the subtracted drift with the slope of the uncompensated runs
             err1 = err_a + drift * slope
         out[f"mt_ident_{kind}_dph"] = drift

@@ -210,7 +210,7 @@ def record_all(profile_name: str, out: Path, *, workers=None, scheduler=None, pr
     names = ("Turntable", "IMUThermal")
     fmu_dir = out / "fmus"  # built in a temporary folder, moved into place, rebuilt when the code changes
     if engine == "cosim":
-        build_artifacts(fmu_dir, [f"{n}.fmu" for n in names], lambda tmp: build_fmus(tmp, list(names)), code_hash())
+        build_artifacts(fmu_dir, [f"{n}.fmu" for n in names], lambda tmp: build_fmus(tmp, list(names), cross=False), code_hash())
     common = dict(profile_name=profile_name, fmu_dir=str(fmu_dir), seed=seed)
     volatile = ("fmu_dir",)
     if engine != "cosim":

@@ -199,7 +199,7 @@ def run(args) -> int:
 
         # built in a temporary folder and moved into place; rebuilt when the code changes
         fmu_dir = str(build_artifacts(out / "fmus", [f"{n}.fmu" for n in FMUS],
-                                      lambda folder: build_fmus(folder, list(FMUS)), code_hash())[0].parent)
+                                      lambda folder: build_fmus(folder, list(FMUS), cross=False), code_hash())[0].parent)
     tasks = build_tasks(args.profile, args.forgetting_factor, args.seed, args.engine, fmu_dir)
     start = time.perf_counter()
     results = run_campaign(tasks, out / "runs", workers=args.workers, scheduler=args.scheduler,
