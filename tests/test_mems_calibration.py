@@ -842,6 +842,29 @@ def test_dataset_in_chunks_is_the_whole_recordings_bit_for_bit():
         mems_calibration.dataset(rec, SHORT, rows=0)
 
 
+def test_recordings_spooled_by_worker_processes_are_the_same_bits(tmp_path):
+    """The campaign records in process on every core: each worker spools its recording and sends back the
+    spool files, which the campaign streams into the result files -- the arrays of one process's recordings."""
+    from sarins.campaign import Task, run_campaign
+    from sarins.mems_calibration.recording import record_task
+    from sarins.results import load_result
+
+    changes = dict(step=0.1, warmup=20.0, train=dict(ramp_c_per_min=65.0, hold_min=0.5))
+    stored = {}
+    for workers in (1, 2):
+        folder = tmp_path / f"workers{workers}"
+        tasks = [Task(kind, record_task, dict(kind=kind, profile_name="quick", fmu_dir="", profile_changes=changes,
+                                              engine="inprocess", spool=str(folder)), volatile=("fmu_dir", "spool"))
+                 for kind in ("dynamic", "heldout")]
+        stored[workers] = run_campaign(tasks, folder, workers=workers, progress=False, keep=False)
+    for kind in ("dynamic", "heldout"):
+        one, two = load_result(stored[1][kind]), load_result(stored[2][kind])
+        assert set(one) == set(two) and len(one["time"]) > 1000
+        for key in set(one) - {"wall_s"}:
+            np.testing.assert_array_equal(two[key], one[key], err_msg=f"{kind}.{key}")
+    assert not list(tmp_path.rglob(".spool-*"))
+
+
 def test_streamed_recording_and_chunked_sets_are_the_whole_arrays_bit_for_bit(tmp_path, monkeypatch):
     """The campaign's low-memory path: the recording spooled chunk by chunk and streamed into its result file,
     read back a slice at a time, its data sets written a part at a time -- the same arrays, bit for bit, as the

@@ -232,12 +232,12 @@ def record_all(profile_name: str, out: Path, *, workers=None, scheduler=None, pr
 
 
 def recording_workers(engine: str, workers, scheduler):
-    """Worker processes of the recordings: as given; by default one (this process) for the in-process
-    engine, whose arrays would otherwise be pickled back from the workers at a cost above the recording
-    itself (quick profile: 22 s in this process, 40 s with two workers), else every core (None)."""
+    """Worker processes of the recordings: as given; by default every core (None).  The in-process
+    recordings are spooled to files in the recordings folder as they are computed, so a worker sends back
+    only the spool files' names; the recordings are the same bits with any number of workers."""
     if workers is not None or scheduler:
         return workers
-    return 1 if engine == "inprocess" else None
+    return None
 
 
 def evaluate(models: dict, test, floor, *, log=None, stream_samples: int = 300):
