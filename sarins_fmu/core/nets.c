@@ -168,6 +168,27 @@ int64_t sarins_grnn_eval_gathered(const sarins_grnn *net, const double *x, int64
     }
     sm_exp_lanes(kept, w, w); /* sm_exp's bits, as net_exp */
     double s_d = 0.0;
+    if (m == 6) { /* the compensator's outputs: the seven sums kept in registers (summed in y they go through
+                   * memory at every term, y possibly aliasing the scratch), the same additions in the same order */
+        double y0 = 0.0, y1 = 0.0, y2 = 0.0, y3 = 0.0, y4 = 0.0, y5 = 0.0;
+        for (int64_t j = 0; j < kept; j++) {
+            const double p = w[j], *yk = yb + (int64_t)idx[j] * 6;
+            s_d += p;
+            y0 += yk[0] * p;
+            y1 += yk[1] * p;
+            y2 += yk[2] * p;
+            y3 += yk[3] * p;
+            y4 += yk[4] * p;
+            y5 += yk[5] * p;
+        }
+        y[0] = y0 / s_d;
+        y[1] = y1 / s_d;
+        y[2] = y2 / s_d;
+        y[3] = y3 / s_d;
+        y[4] = y4 / s_d;
+        y[5] = y5 / s_d;
+        return kept;
+    }
     for (int64_t o = 0; o < m; o++)
         y[o] = 0.0;
     for (int64_t j = 0; j < kept; j++) {
