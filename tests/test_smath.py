@@ -131,6 +131,34 @@ def test_tanh_lanes_give_the_same_bits_in_every_lane_and_alone():
     assert np.all(np.abs(whole[~np.isnan(x)]) <= 1.0)
 
 
+def _exp_lane_arguments(seed: int) -> np.ndarray:
+    """sm_exp_lanes' test arguments: the GRNN weights' range, every class of double, and the edges of sm_exp's
+    ordinary case (|x| = 2^-60, 708) and of its result (overflow, subnormal, zero)."""
+    rng = np.random.default_rng(seed)
+    edges = [2.0 ** -60, 708.0, 709.782712893384, 709.7827128933841, 745.1332191019411, 745.1332191019412, 745.0,
+             746.0, 20.7, 20.723265836946411, 708.3964185322641, 1e-300, 0.0]
+    edges = np.array(edges + [math.nextafter(v, d) for v in edges for d in (0.0, math.inf)])
+    return np.concatenate([rng.uniform(-25.0, 0.0, 40_001), rng.uniform(-760.0, 760.0, 20_000),
+                           np.exp(rng.uniform(-60.0, 6.6, 20_000)) * rng.choice([-1, 1], 20_000),
+                           rng.uniform(-1e-17, 1e-17, 2_000), _random_doubles(20_000, 13), SPECIALS, -SPECIALS,
+                           edges, -edges])
+
+
+def test_exp_lanes_give_the_bits_of_exp():
+    """sm_exp_lanes (the truncated GRNN's weights): sm_exp's bits on every argument, wherever it falls (a SIMD
+    lane of a group of four, or the scalar rest; in place too)."""
+    x = _exp_lane_arguments(10)
+    ref = evaluate("exp", x)
+    assert _same(evaluate("expv", x), ref)
+    assert _same(evaluate("expv", np.concatenate([[-0.5, 1e-30, 710.0], x]))[3:], ref)
+    for start in range(4):  # each value in each lane, next to ordinary and special values
+        for fill in (-1.0, np.nan):
+            y = np.full(4 * 64, fill)
+            y[start::4] = x[:64]
+            assert _same(evaluate("expv", y)[start::4], ref[:64])
+    assert _same(np.array([evaluate("expv", x[i:i + 1])[0] for i in range(0, len(x), 97)]), ref[::97])
+
+
 def test_special_values_follow_annex_f():
     inf, nan = math.inf, math.nan
 
@@ -159,6 +187,8 @@ def test_special_values_follow_annex_f():
              ("tanhv", (-0.0,), -0.0), ("tanhv", (0.0,), 0.0), ("tanhv", (inf,), 1.0), ("tanhv", (-inf,), -1.0),
              ("tanhv", (nan,), nan), ("tanhv", (30.0,), 1.0), ("tanhv", (-22.0,), -1.0), ("tanhv", (5e-324,), 5e-324),
              ("tanhv", (1e-20,), 1e-20),
+             ("expv", (-0.0,), 1.0), ("expv", (-inf,), 0.0), ("expv", (inf,), inf), ("expv", (nan,), nan),
+             ("expv", (710.0,), inf), ("expv", (-746.0,), 0.0), ("expv", (-745.0,), 5e-324), ("expv", (0.0,), 1.0),
              ("pow", (nan, 0.0), 1.0), ("pow", (1.0, nan), 1.0), ("pow", (nan, 1.0), nan), ("pow", (-0.0, -3.0), -inf),
              ("pow", (0.0, -2.0), inf), ("pow", (-0.0, 3.0), -0.0), ("pow", (-0.0, 2.0), 0.0), ("pow", (-1.0, inf), 1.0),
              ("pow", (0.5, -inf), inf), ("pow", (2.0, -inf), 0.0), ("pow", (0.5, inf), 0.0), ("pow", (2.0, inf), inf),
@@ -180,13 +210,15 @@ TANHV_DRIVER = r"""
 #include <stdlib.h>
 int main(int argc, char **argv)
 {
-    (void)argc;
     FILE *f = fopen(argv[1], "rb");
     if (f == NULL) return 2;
-    static double x[1 << 16], y[1 << 16];
+    static double x[1 << 18], y[1 << 18];
     size_t n = fread(x, sizeof x[0], sizeof x / sizeof x[0], f);
     fclose(f);
-    sm_tanh_lanes((int64_t)n, x, y);
+    if (argc > 3)
+        sm_exp_lanes((int64_t)n, x, y);
+    else
+        sm_tanh_lanes((int64_t)n, x, y);
     f = fopen(argv[2], "wb");
     if (f == NULL || fwrite(y, sizeof y[0], n, f) != n) return 3;
     return fclose(f) != 0;
@@ -197,7 +229,7 @@ int main(int argc, char **argv)
 @pytest.mark.parametrize("line", [("gcc", "-O0"), ("gcc", "-O3", "-march=native"), ("clang", "-O2"),
                                   ("clang", "-O3", "-march=native")])
 def test_tanh_lanes_give_the_libraries_bits_on_other_compile_lines(line, tmp_path):
-    """sm_tanh_lanes compiled by another compiler / optimisation level / instruction set (-march=native: wider
+    """sm_tanh_lanes and sm_exp_lanes compiled by another compiler / optimisation level / instruction set (-march=native: wider
     vectors, FMA available but not contracted) gives the bits of the library's build."""
     import shutil
     import subprocess
@@ -217,3 +249,7 @@ def test_tanh_lanes_give_the_libraries_bits_on_other_compile_lines(line, tmp_pat
     x.tofile(tmp_path / "x.bin")
     subprocess.run([str(exe), str(tmp_path / "x.bin"), str(tmp_path / "y.bin")], check=True, timeout=60)
     assert _same(np.fromfile(tmp_path / "y.bin"), evaluate("tanhv", x))
+    x = _exp_lane_arguments(14)
+    x.tofile(tmp_path / "x.bin")
+    subprocess.run([str(exe), str(tmp_path / "x.bin"), str(tmp_path / "y.bin"), "exp"], check=True, timeout=60)
+    assert _same(np.fromfile(tmp_path / "y.bin"), evaluate("exp", x))

@@ -80,7 +80,7 @@ int64_t sarins_comp_state_size(const sarins_comp *c);
 /* doubles of the scratch a GRNN needs per evaluation (0 for the other kinds) */
 int64_t sarins_comp_scratch_size(const sarins_comp *c);
 
-/* Doubles of sarins_comp_run_grnn_blocks' scratch per candidate of the largest block (1 + d + 6; 0 when c is
+/* Doubles of sarins_comp_run_grnn_blocks' scratch per candidate of the largest block (2 + d + 6; 0 when c is
  * not a GRNN). */
 int64_t sarins_comp_grnn_per_candidate(const sarins_comp *c);
 
@@ -92,7 +92,7 @@ int sarins_comp_run(const sarins_comp *c, double *state, int64_t n, const double
 
 /* The truncated GRNN (sarins_grnn_eval_blocks, nets.h) of a GRNN compensator over the rows x[n][7] -> y[n][6],
  * row_ptr, cand_ptr, cand, log_cut, kept as there; scratch holds the largest block's candidate count times
- * (1 + d + 6) doubles, d the GRNN's inputs (sarins_grnn_block_scratch, nets.h).  The
+ * (2 + d + 6) doubles, d the GRNN's inputs (sarins_grnn_block_scratch, nets.h).  The
  * in-process batch evaluation (the IMUCompensator FMU runs the dense sarins_comp_run).  SARINS_NET_* status
  * (SARINS_NET_KIND when c is not a GRNN). */
 int sarins_comp_run_grnn_blocks(const sarins_comp *c, int64_t n_blocks, const int64_t *row_ptr,

@@ -5,11 +5,26 @@
 
 #include <string.h>
 
+/* The lane kernels (affine_t, sq_dists below): GCC or clang four-lane vectors, each lane the scalar operation
+ * (SSE2's and AVX's mulpd and addpd round as mulsd and addsd, and fp-contract is off, smath.h), compiled for
+ * AVX2 too where the loader can pick it, as smath.c's lane functions; other compilers: the scalar loops. */
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && defined(__GLIBC__) && defined(__has_attribute)
+#if __has_attribute(target_clones)
+#define NET_CLONES __attribute__((target_clones("avx2", "default")))
+#endif
+#endif
+#ifndef NET_CLONES
+#define NET_CLONES
+#endif
+#if defined(__GNUC__) || defined(__clang__)
+typedef double net_v4 __attribute__((vector_size(32)));
+#endif
+
 /* ln 2 as the double nearest to it (numpy's log(2.0)) */
 #define NET_LN2 0x1.62e42fefa39efp-1
 
-/* the networks' transcendental functions: the core's own (smath.h): sm_exp for the RBF and GRNN kernels,
- * sm_tanh_lanes (below 3 ulp, branch-free over SIMD lanes) for the recurrent gates */
+/* the networks' transcendental functions: the core's own (smath.h): sm_exp for the RBF and GRNN kernels
+ * (sm_exp_lanes, the same bits over SIMD lanes, for the truncated GRNN's kept terms), sm_tanh_lanes (below 3 ulp, branch-free over SIMD lanes) for the recurrent gates */
 static double net_exp(double x) { return sm_exp(x); }
 
 void sarins_standardize(int64_t n, int64_t d, const double *x, const double *mean, const double *scale, double *z)
@@ -83,11 +98,52 @@ void sarins_grnn_eval(const sarins_grnn *net, int64_t n, const double *x, double
 void sarins_grnn_gather(const sarins_grnn *net, int64_t n_cand, const int64_t *cand, double *scratch)
 {
     const int64_t d = net->d, m = net->m;
-    double *zb = scratch + n_cand, *yb = zb + n_cand * d;
+    double *zb = scratch + 2 * n_cand, *yb = zb + n_cand * d;
     for (int64_t k = 0; k < n_cand; k++) {
-        memcpy(zb + k * d, net->zt + cand[k] * d, (size_t)d * sizeof(double));
+        const double *zk = net->zt + cand[k] * d;
+        for (int64_t i = 0; i < d; i++)
+            zb[i * n_cand + k] = zk[i];
         memcpy(yb + k * m, net->y + cand[k] * m, (size_t)m * sizeof(double));
     }
+}
+
+/* d2[k] = sq_dist(z, candidate k) for the n candidates stored by coordinate (zb[i n + k]), the same sums in
+ * the same order (four candidates in the four lanes of a vector); returns the smallest d2[k] (INFINITY if
+ * none or all NaN, as the dense loop's d2 < d2_min; the d2 are >= +0, so the minimum's bits are unique) */
+NET_CLONES static double sq_dists(int64_t d, int64_t n, const double *z, const double *zb, double *d2)
+{
+    double d2_min = INFINITY;
+    int64_t k = 0;
+#if defined(__GNUC__) || defined(__clang__)
+    typedef int64_t net_v4i __attribute__((vector_size(32)));
+    net_v4 lo = {INFINITY, INFINITY, INFINITY, INFINITY};
+    for (; k + 4 <= n; k += 4) {
+        net_v4 s = {0.0, 0.0, 0.0, 0.0}, c;
+        for (int64_t i = 0; i < d; i++) {
+            const net_v4 zi = {z[i], z[i], z[i], z[i]};
+            memcpy(&c, zb + i * n + k, sizeof c);
+            net_v4 t = zi - c;
+            s += t * t;
+        }
+        memcpy(d2 + k, &s, sizeof s);
+        net_v4i lt = (net_v4i)(s < lo);
+        lo = (net_v4)((lt & (net_v4i)s) | (~lt & (net_v4i)lo));
+    }
+    for (int l = 0; l < 4; l++)
+        if (lo[l] < d2_min)
+            d2_min = lo[l];
+#endif
+    for (; k < n; k++) {
+        double s = 0.0;
+        for (int64_t i = 0; i < d; i++) {
+            double t = z[i] - zb[i * n + k];
+            s += t * t;
+        }
+        d2[k] = s;
+        if (s < d2_min)
+            d2_min = s;
+    }
+    return d2_min;
 }
 
 int64_t sarins_grnn_eval_gathered(const sarins_grnn *net, const double *x, int64_t n_cand, double log_cut, double *y,
@@ -95,30 +151,51 @@ int64_t sarins_grnn_eval_gathered(const sarins_grnn *net, const double *x, int64
 {
     const int64_t d = net->d, m = net->m;
     const double inv_two_var = 1.0 / (2.0 * (net->sigma * net->sigma));
-    const double *zb = scratch + n_cand, *yb = zb + n_cand * d;
-    double *d2 = scratch;
+    const double *zb = scratch + 2 * n_cand, *yb = zb + n_cand * d;
+    double *w = scratch, *idx = scratch + n_cand;
     double z[SARINS_NET_MAX_INPUTS];
     sarins_standardize(1, d, x, net->mean, net->scale, z);
-    double d2_min = INFINITY;
-    for (int64_t k = 0; k < n_cand; k++) {
-        d2[k] = sq_dist(d, z, zb + k * d);
-        if (d2[k] < d2_min)
-            d2_min = d2[k];
-    }
-    /* the dense sum's terms (sarins_grnn_eval), in the same pattern order, those below the cut left out */
-    double s_d = 0.0;
+    double d2_min = sq_dists(d, n_cand, z, zb, w);
+    /* the dense sum's terms (sarins_grnn_eval), in the same pattern order, those below the cut left out:
+     * the exponents of the kept ones packed to the front of w (in place: kept <= k), their candidate numbers
+     * in idx, without branches (each written, the count advanced by the test) */
     int64_t kept = 0;
+    for (int64_t k = 0; k < n_cand; k++) {
+        double e = (d2_min - w[k]) * inv_two_var; /* ln(P_j / max P) */
+        w[kept] = e;
+        idx[kept] = (double)k;
+        kept += !(e < log_cut);
+    }
+    sm_exp_lanes(kept, w, w); /* sm_exp's bits, as net_exp */
+    double s_d = 0.0;
+    if (m == 6) { /* the compensator's outputs: the seven sums kept in registers (summed in y they go through
+                   * memory at every term, y possibly aliasing the scratch), the same additions in the same order */
+        double y0 = 0.0, y1 = 0.0, y2 = 0.0, y3 = 0.0, y4 = 0.0, y5 = 0.0;
+        for (int64_t j = 0; j < kept; j++) {
+            const double p = w[j], *yk = yb + (int64_t)idx[j] * 6;
+            s_d += p;
+            y0 += yk[0] * p;
+            y1 += yk[1] * p;
+            y2 += yk[2] * p;
+            y3 += yk[3] * p;
+            y4 += yk[4] * p;
+            y5 += yk[5] * p;
+        }
+        y[0] = y0 / s_d;
+        y[1] = y1 / s_d;
+        y[2] = y2 / s_d;
+        y[3] = y3 / s_d;
+        y[4] = y4 / s_d;
+        y[5] = y5 / s_d;
+        return kept;
+    }
     for (int64_t o = 0; o < m; o++)
         y[o] = 0.0;
-    for (int64_t k = 0; k < n_cand; k++) {
-        double e = (d2_min - d2[k]) * inv_two_var; /* ln(P_j / max P) */
-        if (e < log_cut)
-            continue;
-        double p = net_exp(e);
+    for (int64_t j = 0; j < kept; j++) {
+        const double p = w[j], *yk = yb + (int64_t)idx[j] * m;
         s_d += p;
-        kept++;
         for (int64_t o = 0; o < m; o++)
-            y[o] += yb[k * m + o] * p;
+            y[o] += yk[o] * p;
     }
     for (int64_t o = 0; o < m; o++)
         y[o] = y[o] / s_d; /* no candidate: 0 / 0, NaN */
@@ -181,17 +258,6 @@ static void affine(int64_t rows, int64_t cols, const double *w, const double *v,
  * 32 rows at a time in registers (with GCC or clang as eight four-lane vectors, each lane the scalar
  * operation: SSE2's and AVX's mulpd and addpd round as mulsd and addsd, and fp-contract is off, smath.h;
  * compiled for AVX2 too where the loader can pick it, as smath.c's lane functions). */
-#if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && defined(__GLIBC__) && defined(__has_attribute)
-#if __has_attribute(target_clones)
-#define NET_CLONES __attribute__((target_clones("avx2", "default")))
-#endif
-#endif
-#ifndef NET_CLONES
-#define NET_CLONES
-#endif
-#if defined(__GNUC__) || defined(__clang__)
-typedef double net_v4 __attribute__((vector_size(32)));
-#endif
 
 NET_CLONES static void affine_t(int64_t rows, int64_t cols, const double *wt, const double *v, const double *b,
                                 double *g)

@@ -63,10 +63,11 @@ void sarins_rbf_eval(const sarins_rbf *net, int64_t n, const double *x, double *
 /* GRNN outputs y[n][m] of the inputs x[n][d]; scratch holds net->n doubles. */
 void sarins_grnn_eval(const sarins_grnn *net, int64_t n, const double *x, double *y, double *scratch);
 
-/* Candidates gathered for sarins_grnn_eval_gathered: scratch[n_cand .. n_cand (1 + d) - 1] the candidates'
- * standardised patterns zt[cand[k]][d] (cand[0 .. n_cand-1]: pattern indices, ascending, in [0, net->n)), then
- * n_cand m doubles their targets y[cand[k]][m] (scratch holds sarins_grnn_block_scratch(net, n_cand) doubles; the
- * first n_cand are sarins_grnn_eval_gathered's work space). */
+/* Candidates gathered for sarins_grnn_eval_gathered (cand[0 .. n_cand-1]: pattern indices, ascending, in
+ * [0, net->n)): scratch[2 n_cand .. 2 n_cand + d n_cand - 1] the candidates' standardised patterns by
+ * coordinate, zt[cand[k]][i] at 2 n_cand + i n_cand + k (so that the distances run in SIMD lanes), then n_cand m
+ * doubles their targets y[cand[k]][m] (scratch holds sarins_grnn_block_scratch(net, n_cand) doubles; the first
+ * 2 n_cand are sarins_grnn_eval_gathered's work space). */
 void sarins_grnn_gather(const sarins_grnn *net, int64_t n_cand, const int64_t *cand, double *scratch);
 
 /* Truncated GRNN (exact to a bound): the output y[m] of one input x[d] over the n_cand candidate patterns
@@ -79,10 +80,11 @@ void sarins_grnn_gather(const sarins_grnn *net, int64_t n_cand, const int64_t *c
 int64_t sarins_grnn_eval_gathered(const sarins_grnn *net, const double *x, int64_t n_cand, double log_cut, double *y,
                                   double *scratch);
 
-/* Doubles of scratch sarins_grnn_gather and sarins_grnn_eval_gathered need for n_cand candidates: n_cand (1 + d + m). */
+/* Doubles of scratch sarins_grnn_gather and sarins_grnn_eval_gathered need for n_cand candidates: n_cand (2 + d + m)
+ * (per query, the candidates' distances then kept weights, and the kept candidates' numbers). */
 static inline int64_t sarins_grnn_block_scratch(const sarins_grnn *net, int64_t n_cand)
 {
-    return n_cand * (1 + net->d + net->m);
+    return n_cand * (2 + net->d + net->m);
 }
 
 /* sarins_grnn_eval_gathered for the rows row_ptr[b] .. row_ptr[b+1]-1 of x[][d] and y[][m], block b's

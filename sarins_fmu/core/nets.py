@@ -106,7 +106,7 @@ def grnn_predict_dense(x, mean, scale, z_train, y_train, sigma: float) -> np.nda
 def _checked_blocks(blocks, n_rows: int, n_patterns: int, per_candidate: int):
     """The int64 arrays (row_ptr, cand_ptr, cand) of ``blocks`` (a :class:`~sarins_fmu.identify.grnn.Blocks`),
     checked against the rows and patterns they index (the C kernels trust them), and the kernels' scratch:
-    ``per_candidate`` doubles (1 + d + m, ``sarins_grnn_block_scratch``) per candidate of the largest block."""
+    ``per_candidate`` doubles (2 + d + m, ``sarins_grnn_block_scratch``) per candidate of the largest block."""
     row_ptr, cand_ptr, cand = (np.ascontiguousarray(a, dtype=np.int64)
                                for a in (blocks.row_ptr, blocks.cand_ptr, blocks.cand))
     nb = len(row_ptr) - 1
@@ -129,7 +129,7 @@ def grnn_predict_blocks(x, mean, scale, z_train, y_train, sigma: float, blocks) 
     m = yt.shape[1]
     yt = _arrays.read(yt, (p, m), "y_train")
     mean, scale = _arrays.read(mean, (d,), "mean"), _arrays.read(scale, (d,), "scale")
-    row_ptr, cand_ptr, cand, scratch = _checked_blocks(blocks, x.shape[0], p, 1 + d + m)
+    row_ptr, cand_ptr, cand, scratch = _checked_blocks(blocks, x.shape[0], p, 2 + d + m)
     out = np.empty((x.shape[0], m))
     kept = np.empty(x.shape[0], dtype=np.int64)
     _grnn_blocks(d, p, m, mean.ctypes.data, scale.ctypes.data, zt.ctypes.data, yt.ctypes.data, float(sigma),

@@ -872,6 +872,58 @@ void sm_tanh_lanes(int64_t n, const double *x, double *y)
         y[i] = tanh_lane(x[i]);
 }
 
+/* ---------------------------------------------------------------- exp over lanes */
+
+/* sm_exp of x[0..n-1] into y (y may be x), sm_exp's bits: its ordinary case (2^-60 < |x| < 708, a normal
+ * result) by the same operations in the same order in SIMD lanes, branch-free (2^(j/64) from the table by the
+ * low six bits of n = x 64/ln2 rounded, read from x 64/ln2 + SHIFTER as tanh_lanes4 reads it; 2^m by building
+ * its exponent bits, m = (n - j) / 64); a group of four holding another value (tiny, large, NaN, inf) has those
+ * lanes redone by sm_exp.  The GRNN kernels' weights (nets.c). */
+#if defined(__GNUC__) || defined(__clang__)
+SM_LANE_CLONES static void exp_lanes4(int64_t groups, const double *x, double *y)
+{
+    const double *c = SM_EXP_TAIL;
+    const sm_v4u sign = {SM_SIGN, SM_SIGN, SM_SIGN, SM_SIGN}, low6 = {63u, 63u, 63u, 63u};
+    const sm_v4u bias = {(uint64_t)1023u << 52, (uint64_t)1023u << 52, (uint64_t)1023u << 52, (uint64_t)1023u << 52};
+    const sm_v4d shifter = {SM_SHIFTER, SM_SHIFTER, SM_SHIFTER, SM_SHIFTER};
+    const sm_v4d tiny = {0x1p-60, 0x1p-60, 0x1p-60, 0x1p-60}, big = {708.0, 708.0, 708.0, 708.0};
+    const sm_v4d zero = {0.0, 0.0, 0.0, 0.0}, half = {0.5, 0.5, 0.5, 0.5};
+    for (int64_t g = 0; g < groups; g++) {
+        sm_v4d xv;
+        memcpy(&xv, x + 4 * g, sizeof xv);
+        sm_v4d a = (sm_v4d)((sm_v4u)xv & ~sign);
+        sm_v4i ok = (sm_v4i)(a > tiny) & (sm_v4i)(a < big);
+        sm_v4d kd = xv * SM_EXP_INV_L + shifter;
+        sm_v4d n = kd - shifter;
+        sm_v4u ni = (sm_v4u)kd - (sm_v4u)shifter; /* n as a two's complement integer */
+        sm_v4u j = ni & low6;
+        sm_v4d s = (sm_v4d)(((ni - j) << 46) + bias); /* 2^m: (64 m) << 46 = m << 52 */
+        sm_v4d rh = xv - n * SM_EXP_L1, rl = zero - n * SM_EXP_L2, r = rh + rl;
+        sm_v4d p = rh + (rl + r * r * (half + r * ((c[0] + r * c[1]) + (r * r) * (c[2] + r * c[3]))));
+        sm_v4d th = {SM_EXP_TAB[2 * j[0]], SM_EXP_TAB[2 * j[1]], SM_EXP_TAB[2 * j[2]], SM_EXP_TAB[2 * j[3]]};
+        sm_v4d tl = {SM_EXP_TAB[2 * j[0] + 1], SM_EXP_TAB[2 * j[1] + 1], SM_EXP_TAB[2 * j[2] + 1],
+                     SM_EXP_TAB[2 * j[3] + 1]};
+        sm_v4d v = (th + (tl + th * p)) * s;
+        memcpy(y + 4 * g, &v, sizeof v);
+        if ((ok[0] & ok[1] & ok[2] & ok[3]) == 0)
+            for (int l = 0; l < 4; l++)
+                if (ok[l] == 0)
+                    y[4 * g + l] = sm_exp(xv[l]);
+    }
+}
+#endif
+
+void sm_exp_lanes(int64_t n, const double *x, double *y)
+{
+    int64_t done = 0;
+#if defined(__GNUC__) || defined(__clang__)
+    exp_lanes4(n / 4, x, y);
+    done = n / 4 * 4;
+#endif
+    for (int64_t i = done; i < n; i++)
+        y[i] = sm_exp(x[i]);
+}
+
 /* ---------------------------------------------------------------- log, log10 */
 
 /* log x as hi + lo for finite x > 0: x = 2^k m, m in [1, 2) in cell j (its top 7 bits);
@@ -1180,6 +1232,10 @@ int sarins_smath_eval(int func, int64_t n, const double *x, const double *y, con
         case 30: /* tanhv over the whole array at once (SIMD groups of four, then the rest) */
             if (i == 0)
                 sm_tanh_lanes(n, x, out);
+            continue;
+        case 31: /* expv: sm_exp_lanes over the whole array at once */
+            if (i == 0)
+                sm_exp_lanes(n, x, out);
             continue;
         case 27: /* sincos4 over groups of four (the last group padded) */
             if (i % 4 == 0) {

@@ -118,14 +118,17 @@ double sm_pow(double x, double y); /* the special cases of C's Annex F */
  * can (the same bits in every lane and on every platform); the recurrent networks' gates (nets.c) */
 void sm_tanh_lanes(int64_t n, const double *x, double *y);
 
+/* sm_exp of x[0..n-1] into y (y may be x), the same bits: in SIMD lanes where it can (the GRNN kernels) */
+void sm_exp_lanes(int64_t n, const double *x, double *y);
+
 /* Every function above over n arguments, for the tests and benchmarks (through the Python binding):
  * func is the index of the function in SARINS_SMATH_NAMES (x, y, z: first, second, third argument, NULL
- * where unused); out[n] the results (sincos, sincos4: out[2n], sin then cos of each x; tanhv: sm_tanh_lanes; soft_sqrt, soft_fma: the
+ * where unused); out[n] the results (sincos, sincos4: out[2n], sin then cos of each x; tanhv: sm_tanh_lanes; expv: sm_exp_lanes; soft_sqrt, soft_fma: the
  * software versions of sm_sqrt and sm_fma, which use the hardware instruction where there is one).  Returns 0, or -1 for an unknown func
  * or n < 0. */
 #define SARINS_SMATH_NAMES                                                                                  \
     "sqrt fma fabs copysign fmin fmax floor ceil trunc round nearbyint fmod sin cos sincos tan exp exp10 "  \
-    "log log10 atan atan2 asin acos hypot soft_sqrt soft_fma sincos4 tanh pow tanhv"
+    "log log10 atan atan2 asin acos hypot soft_sqrt soft_fma sincos4 tanh pow tanhv expv"
 int sarins_smath_eval(int func, int64_t n, const double *x, const double *y, const double *z, double *out);
 
 #endif

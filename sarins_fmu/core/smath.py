@@ -15,7 +15,7 @@ from ._lib import c_double_p, function
 
 # SARINS_SMATH_NAMES in smath.h, in order
 NAMES = ("sqrt fma fabs copysign fmin fmax floor ceil trunc round nearbyint fmod sin cos sincos tan exp exp10 "
-         "log log10 atan atan2 asin acos hypot soft_sqrt soft_fma sincos4 tanh pow tanhv").split()
+         "log log10 atan atan2 asin acos hypot soft_sqrt soft_fma sincos4 tanh pow tanhv expv").split()
 ARITY = {"fma": 3, "soft_fma": 3, "copysign": 2, "fmin": 2, "fmax": 2, "fmod": 2, "atan2": 2, "hypot": 2, "pow": 2}
 
 _eval = function("sarins_smath_eval", ctypes.c_int, ctypes.c_int, ctypes.c_int64, c_double_p, c_double_p,
