@@ -24,7 +24,8 @@ typedef double net_v4 __attribute__((vector_size(32)));
 #define NET_LN2 0x1.62e42fefa39efp-1
 
 /* the networks' transcendental functions: the core's own (smath.h): sm_exp for the RBF and GRNN kernels
- * (sm_exp_lanes, the same bits over SIMD lanes, for the truncated GRNN's kept terms), sm_tanh_lanes (below 3 ulp, branch-free over SIMD lanes) for the recurrent gates */
+ * (sm_exp_lanes, the same bits over SIMD lanes, for the truncated GRNN's kept terms), sm_tanh_lanes (below
+ * 3 ulp, branch-free over SIMD lanes) for the recurrent gates */
 static double net_exp(double x) { return sm_exp(x); }
 
 void sarins_standardize(int64_t n, int64_t d, const double *x, const double *mean, const double *scale, double *z)
