@@ -861,15 +861,26 @@ SM_LANE_CLONES static void tanh_lanes4(int64_t groups, const double *x, double *
 }
 #endif
 
-void sm_tanh_lanes(int64_t n, const double *x, double *y)
+/* f of x[0..n-1] into y: the groups of four by four_lanes (NULL: none), the rest by one */
+static void over_lanes(int64_t n, const double *x, double *y, void (*four_lanes)(int64_t, const double *, double *),
+                       double (*one)(double))
 {
     int64_t done = 0;
-#if defined(__GNUC__) || defined(__clang__)
-    tanh_lanes4(n / 4, x, y);
-    done = n / 4 * 4;
-#endif
+    if (four_lanes != NULL) {
+        four_lanes(n / 4, x, y);
+        done = n / 4 * 4;
+    }
     for (int64_t i = done; i < n; i++)
-        y[i] = tanh_lane(x[i]);
+        y[i] = one(x[i]);
+}
+
+void sm_tanh_lanes(int64_t n, const double *x, double *y)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    over_lanes(n, x, y, tanh_lanes4, tanh_lane);
+#else
+    over_lanes(n, x, y, NULL, tanh_lane);
+#endif
 }
 
 /* ---------------------------------------------------------------- exp over lanes */
@@ -915,13 +926,11 @@ SM_LANE_CLONES static void exp_lanes4(int64_t groups, const double *x, double *y
 
 void sm_exp_lanes(int64_t n, const double *x, double *y)
 {
-    int64_t done = 0;
 #if defined(__GNUC__) || defined(__clang__)
-    exp_lanes4(n / 4, x, y);
-    done = n / 4 * 4;
+    over_lanes(n, x, y, exp_lanes4, sm_exp);
+#else
+    over_lanes(n, x, y, NULL, sm_exp);
 #endif
-    for (int64_t i = done; i < n; i++)
-        y[i] = sm_exp(x[i]);
 }
 
 /* ---------------------------------------------------------------- log, log10 */
