@@ -21,14 +21,13 @@ import numpy as np
 
 from fmus.build import build_fmus
 from orchestration import simulate_system
-from sarins.systems import standard_static_identified
+from sarins.systems import IDENTIFIED_STATIC_FMUS, standard_static_identified
 from sarins_fmu import imu as imu_mod
 from sarins_fmu.experiments import run_static
 from sarins_fmu.identify.axial import default_model_path
 from sarins_fmu.site import SITE_LAT_DEG
 from sarins_fmu.units import DEG_TO_RAD, DPH_TO_RPS, HOUR, NM
 
-DEMO_FMUS = ("Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier")  # the identified static system's FMUs
 
 #: navigation time (h) at which the shipped identifier models were trained
 MODEL_IDENTIFY_HOURS = 12.0
@@ -163,7 +162,7 @@ def run_demo(*, lat_deg: float = SITE_LAT_DEG, align_hours: float = 4.0, identif
                          "needs a --model-file trained at that time")
     t0 = time.perf_counter()
     phases.start("building the FMUs", str(fmu_dir))
-    fmu_dir = build_fmus(fmu_dir, DEMO_FMUS, cross=False)[0].parent  # for this machine: what the demo runs
+    fmu_dir = build_fmus(fmu_dir, IDENTIFIED_STATIC_FMUS, cross=False)[0].parent  # for this machine: what the demo runs
     params = demo_parameters(lat_deg=lat_deg, align_hours=align_hours, imu=imu, start=start, rotation=rotation,
                              seed=seed, axial_drift_dph=axial_drift_dph)
     model_path = model_file or str(default_model_path(model))

@@ -34,8 +34,6 @@ PROFILES = {  # (hot train, hot test, cold train, cold test)
     "paper": (16, 6, 24, 8),
 }
 DEFAULT_ENGINE = {"quick": "inprocess", "paper": "cosim"}
-# the FMUs of the co-simulated systems (sarins.systems.standard_static and standard_static_identified)
-FMUS = ("Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier")
 # the multi-temperature calibration (seed 000 sec. 2.3, ref. [15]): z-gyro temperature points and holds
 # (0..70 degC covers the gyro temperatures of every hot and cold experiment)
 MULTITEMP = {"points_c": [float(t) for t in range(0, 71, 10)], "settle_hours": 20.0, "average_hours": 4.0,
@@ -180,6 +178,7 @@ def _main(*, profile, engine, seed, out, common, truth, live, sizes, nav_hours, 
     fmu_dir = None
     if engine == "cosim" or check_cosim:
         from fmus.build import build_fmus
+        from sarins.systems import IDENTIFIED_STATIC_FMUS as FMUS
 
         # this machine's binaries of the FMUs the systems use, built in a temporary folder and moved into
         # place; rebuilt when the code changes (``sarins build-fmus`` builds every platform)

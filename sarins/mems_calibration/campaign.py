@@ -195,7 +195,9 @@ def record_all(profile_name: str, out: Path, *, workers=None, scheduler=None, pr
     ``scale``: factor on the unsourced time-correlated sizes of every recording (1: the sourced unit).
 
     Returns {id: recording} as a :class:`.storage.StoredRecordings`: each stored recording is loaded when
-    accessed, none is held here (the quick profile's five recordings are 0.7 GB)."""
+    accessed, none is held here (the quick profile's five recordings are 0.7 GB).  ``workers`` (default every
+    core): the in-process recordings are spooled to files in the recordings folder as they are computed, so a
+    worker sends back only the spool files' names; the recordings are the same bits with any number of workers."""
     from .storage import StoredRecordings
 
     from fmus.build import build_fmus
@@ -226,18 +228,9 @@ def record_all(profile_name: str, out: Path, *, workers=None, scheduler=None, pr
     tasks = [Task(kind, record_task, dict(kind=kind, **common), volatile=volatile) for kind in mc.KINDS]
     tasks += [Task(f"{kind}.no-{term}", record_task, dict(kind=kind, ablation=term, **common), volatile=volatile)
               for term in ablations for kind in ("dynamic", "heldout")]
-    return StoredRecordings(run_campaign(tasks, out / "recordings", workers=recording_workers(engine, workers, scheduler),
+    return StoredRecordings(run_campaign(tasks, out / "recordings", workers=workers,
                                          scheduler=scheduler, progress=progress, description="mems-calibration recordings",
                                          keep=False))
-
-
-def recording_workers(engine: str, workers, scheduler):
-    """Worker processes of the recordings: as given; by default every core (None).  The in-process
-    recordings are spooled to files in the recordings folder as they are computed, so a worker sends back
-    only the spool files' names; the recordings are the same bits with any number of workers."""
-    if workers is not None or scheduler:
-        return workers
-    return None
 
 
 def evaluate(models: dict, test, floor, *, log=None, stream_samples: int = 300):
@@ -611,7 +604,7 @@ def estimates(prof, kinds, engine, workers, check_samples, ablations, ablation_k
         return sum(EVAL_US_PER_SAMPLE.get(k.replace("-memoryless", ""), 1.0) for k in names) * samples / 1e6 / cores
 
     record = RECORD_S_PER_SAMPLE[engine] * (sum(n.values()) + 2 * len(ablations) * (n["dynamic"] + n["heldout"]))
-    record_parallel = recording_workers(engine, workers, None) or cores
+    record_parallel = workers or cores
     return {"recording": record / max(1, min(cores, record_parallel)) + 3.0, "datasets": DATASET_S_PER_SAMPLE * n_dyn + 2.0,
             "fitting": fits(kinds), "evaluation": evaluations(kinds, 2 * n["heldout"] + n_check),
             "ablation": len(ablations) * (fits(ablation_kinds) + evaluations(ablation_kinds, n["heldout"])),

@@ -45,6 +45,10 @@ def standard_static(fmu_dir: Path | str = "resources", *, hours: float = 88.0, t
                   start_time=0.0, stop_time=hours * 3600.0, step_size=1.0)
 
 
+# the FMUs of standard_static_identified (standard_static: the first three)
+IDENTIFIED_STATIC_FMUS = ("Turntable", "IMUThermal", "StrapdownINS", "RBFIdentifier")
+
+
 def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: float = 88.0, turntable=None,
                                imu=None, ins=None, identifier=None) -> System:
     """The standard static system with seed 000's RBFIdentifier closing the loop.

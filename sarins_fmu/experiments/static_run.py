@@ -120,9 +120,7 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
         called with each chunk of IMU output (e.g. to write a log,
         :mod:`sarins_fmu.imu_log`); time is the end of each interval.
     """
-    for name, value in (("correction_dph", correction_dph), ("correction_from_hours", correction_from_hours)):
-        if not math.isfinite(value):
-            raise ValueError(f"{name} must be finite, got {value}")
+    _check_corrections(correction_dph, correction_from_hours)
     record = record_static(lat_deg=lat_deg, lon_deg=lon_deg, align_hours=align_hours, nav_hours=nav_hours,
                            rotation=rotation, rate_dps=rate_dps, accel_dps2=accel_dps2, dwell=dwell,
                            align_dwell=align_dwell, imu=imu, model=model, axial_drift_dph=axial_drift_dph, start=start,
@@ -131,6 +129,13 @@ def run_static(*, lat_deg: float = SITE_LAT_DEG, lon_deg: float = 0.0, align_hou
                            initial_attitude_error=initial_attitude_error, on_increments=on_increments)
     return navigate_static(record, correction_dph=correction_dph, correction_from_hours=correction_from_hours,
                            axial_table=axial_table)
+
+
+def _check_corrections(correction_dph: float, correction_from_hours: float) -> None:
+    """ValueError unless the INS corrections of :func:`navigate_static` are finite."""
+    for name, value in (("correction_dph", correction_dph), ("correction_from_hours", correction_from_hours)):
+        if not math.isfinite(value):
+            raise ValueError(f"{name} must be finite, got {value}")
 
 
 @dataclass(frozen=True)
@@ -218,9 +223,7 @@ def navigate_static(record: StaticImuRecord, *, correction_dph: float = 0.0, cor
     ``correction_dph`` (deg/h) subtracted from the z gyro from ``correction_from_hours`` into navigation
     on, and ``axial_table`` compensating the z gyro by its temperature from the first sample (as in
     :func:`run_static`).  The record is not modified."""
-    for name, value in (("correction_dph", correction_dph), ("correction_from_hours", correction_from_hours)):
-        if not math.isfinite(value):
-            raise ValueError(f"{name} must be finite, got {value}")
+    _check_corrections(correction_dph, correction_from_hours)
     step, n_align, temps = record.step, record.n_align, record.temperature
     n_total = len(temps)
     n_nav = n_total - n_align
