@@ -152,6 +152,7 @@ def build_fmus(out_dir: Path | str = DEFAULT_OUT, names=None, cross: bool | None
             raise ValueError(f"{name} needs a trained model to run; build it with {NEEDS_MODEL[name]}")
     from sarins_fmu.files import refuse_links
 
+    from .cbuild import shared_cache
     from .native_fmu import NATIVE, build_native_fmu
 
     refuse_links([Path(out_dir) / f"{n}.fmu" for n in names], "FMU")
@@ -159,7 +160,8 @@ def build_fmus(out_dir: Path | str = DEFAULT_OUT, names=None, cross: bool | None
     missing = [n for n in names if n not in NATIVE]
     if missing:
         raise ValueError(f"{', '.join(missing)}: no native model (fmus.native_fmu.NATIVE)")
-    return [build_native_fmu(n, SLAVES[n], Path(out_dir), **platforms) for n in names]
+    with shared_cache():  # the core's files compiled once for all the FMUs
+        return [build_native_fmu(n, SLAVES[n], Path(out_dir), **platforms) for n in names]
 
 
 def fix_fmu_description(path: Path, components=()) -> None:

@@ -28,7 +28,6 @@ import html
 import importlib
 import re
 import shutil
-import subprocess
 import tempfile
 import zipfile
 from dataclasses import dataclass
@@ -294,19 +293,17 @@ def compile_line(identifier: str, cc: str = "cc", win64: bool = False) -> list[s
 
 
 def compile_sources(sources: Path, identifier: str, out: Path, win64: bool = False, cc: str | None = None) -> Path:
-    """Compile ``sources/`` with :func:`compile_line` into ``out`` (``cc``: another compiler, e.g. the aarch64
-    cross compiler); RuntimeError with the compiler's message."""
+    """Build ``sources/`` into ``out`` as :func:`compile_line` does (``cc``: another compiler, e.g. the aarch64
+    cross compiler), one object per file through :func:`fmus.cbuild.build` (side by side, cached when
+    ``$SARINS_CC_CACHE`` names a folder); RuntimeError with the compiler's message."""
+    from .cbuild import build
+
     cc = cc or (win64_compiler() if win64 else compiler())
-    cmd = compile_line(identifier, cc, win64)
+    line = compile_line(identifier, cc, win64)
+    link = [a for a in ("-shared", "-static") if a in line]
+    flags = [a for a in line[1:line.index("*.c")] if a not in link]
     files = sorted(p.name for p in sources.glob("*.c"))
-    cmd = [a for a in cmd if a != "*.c"]
-    cmd[cmd.index("-I.") + 1:cmd.index("-I.") + 1] = files
-    target = out / cmd[-1]
-    cmd[-1] = str(target)
-    proc = subprocess.run(cmd, cwd=sources, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(f"compiling {identifier} failed:\n{' '.join(cmd)}\n{proc.stderr}")
-    return target
+    return build(cc, files, out / line[-1], flags, link, cwd=sources)
 
 
 def model_description(slave, dependencies: dict, source_files: list[str]) -> bytes:
@@ -564,5 +561,8 @@ def build_native_fmus3(out_dir: Path | str = DEFAULT_OUT3, names=None) -> list[P
         raise ValueError(f"no native FMI 3.0 variant of {unknown}; native FMUs: {', '.join(NATIVE)}")
     from sarins_fmu.files import refuse_links
 
+    from .cbuild import shared_cache
+
     refuse_links([Path(out_dir) / f"{n}.fmu" for n in names], "FMU")
-    return [build_native_fmu(n, SLAVES[n], Path(out_dir), fmi=3) for n in names]
+    with shared_cache():
+        return [build_native_fmu(n, SLAVES[n], Path(out_dir), fmi=3) for n in names]

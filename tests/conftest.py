@@ -24,6 +24,8 @@ HERMETIC_ENV = {
     "XDG_DATA_HOME": HERMETIC_ROOT / "data",
     "SARINS_FMU_CACHE": HERMETIC_ROOT / "cache" / "sarins-fmu",
     "MPLCONFIGDIR": HERMETIC_ROOT / "config" / "matplotlib",
+    # one object cache for every C build of the run (fmus.cbuild): the core's files compiled once
+    "SARINS_CC_CACHE": HERMETIC_ROOT / "cache" / "cc",
 }
 for _name, _folder in HERMETIC_ENV.items():
     _folder.mkdir(parents=True, exist_ok=True)

@@ -14,6 +14,8 @@ from pathlib import Path
 import libfuzzer
 import pytest
 
+from fmus.cbuild import build_line
+
 ROOT = Path(__file__).resolve().parents[1]
 HARNESS = ROOT / "tests" / "fuzz" / "fuzz_log_parse.c"
 CORPUS = ROOT / "tests" / "fuzz" / "corpus_log_parse"
@@ -21,8 +23,8 @@ CORE = ROOT / "sarins_fmu" / "core"
 
 
 def _build(cc, parser: Path, out: Path, flags: list[str]) -> Path:
-    subprocess.run([cc, "-std=c11", "-g", "-O1", "-Wall", "-Wextra", "-Werror", *flags, f"-I{CORE}", str(HARNESS),
-                    str(parser), "-o", str(out)], check=True)
+    build_line([cc, "-std=c11", "-g", "-O1", "-Wall", "-Wextra", "-Werror", *flags, f"-I{CORE}", str(HARNESS),
+                    str(parser), "-o", str(out)])
     return out
 
 

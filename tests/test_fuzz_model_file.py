@@ -16,6 +16,8 @@ import libfuzzer
 import numpy as np
 import pytest
 
+from fmus.cbuild import build_line
+
 from sarins_fmu.identify import netfile
 from sarins_fmu.identify.modelfile import ModelFileError
 from sarins_fmu.identify.online import prior_covariance
@@ -114,9 +116,9 @@ def test_harness_under_sanitizers_on_mutated_files(tmp_path):
     truncation and one-byte extension of them: no sanitizer report, no abort (the harness aborts on an
     accepted model that fails the state check, before or after an update)."""
     exe = tmp_path / "fuzz_main"
-    subprocess.run([_cc(), "-std=c11", "-g", "-O1", "-fsanitize=address,undefined", "-fno-sanitize-recover=all",
+    build_line([_cc(), "-std=c11", "-g", "-O1", "-fsanitize=address,undefined", "-fno-sanitize-recover=all",
                     "-DSARINS_FUZZ_MAIN", NO_CHECKSUM, f"-I{CORE}", str(HARNESS), *map(str, CORE_FILES),
-                    "-o", str(exe)], check=True)
+                    "-o", str(exe)])
     corpus = tmp_path / "corpus"
     corpus.mkdir()
     n = 0
@@ -143,9 +145,9 @@ def test_libfuzzer_finds_nothing_in_a_minute(tmp_path):
     SARINS_FUZZ_SECONDS (default 60; .ci/run gives 60)."""
     clang = libfuzzer.clang_or_skip()
     exe = tmp_path / "fuzz"
-    subprocess.run([clang, "-std=c11", "-g", "-O1", "-fsanitize=fuzzer,address,undefined",
+    build_line([clang, "-std=c11", "-g", "-O1", "-fsanitize=fuzzer,address,undefined",
                     "-fno-sanitize-recover=all", NO_CHECKSUM, f"-I{CORE}", str(HARNESS), *map(str, CORE_FILES),
-                    "-o", str(exe)], check=True)
+                    "-o", str(exe)])
     corpus = tmp_path / "corpus"
     corpus.mkdir()
     for k, data in enumerate(_valid_files()):

@@ -7,11 +7,12 @@ only with an absolute path, "" on every error)."""
 from __future__ import annotations
 
 import shutil
-import subprocess
 from pathlib import Path
 
 import libfuzzer
 import pytest
+
+from fmus.cbuild import build_line
 
 ROOT = Path(__file__).resolve().parents[1]
 HARNESS = ROOT / "tests" / "fuzz" / "fuzz_uri.c"
@@ -22,9 +23,9 @@ CORPUS = ROOT / "tests" / "fuzz" / "corpus_uri"
 def test_libfuzzer_finds_nothing_in_the_uri_parser(tmp_path, defines):
     clang = libfuzzer.clang_or_skip()
     exe = tmp_path / "fuzz_uri"
-    subprocess.run([clang, "-std=c11", "-g", "-O1", "-Wall", "-Wextra", "-Werror",
+    build_line([clang, "-std=c11", "-g", "-O1", "-Wall", "-Wextra", "-Werror",
                     "-fsanitize=fuzzer,address,undefined", "-fno-sanitize-recover=all", *defines,
-                    f"-I{ROOT / 'fmus' / 'c'}", str(HARNESS), "-o", str(exe)], check=True)
+                    f"-I{ROOT / 'fmus' / 'c'}", str(HARNESS), "-o", str(exe)])
     corpus = tmp_path / "corpus"  # libFuzzer adds to its corpus folder: a copy, never the repository's
     shutil.copytree(CORPUS, corpus)
     assert len(list(corpus.iterdir())) >= 5

@@ -14,6 +14,8 @@ import libfuzzer
 import numpy as np
 import pytest
 
+from fmus.cbuild import build_line
+
 ROOT = Path(__file__).resolve().parents[1]
 CORE = ROOT / "sarins_fmu" / "core"
 HARNESS = ROOT / "tests" / "fuzz" / "fuzz_vehicle_legs.c"
@@ -70,9 +72,9 @@ def test_libfuzzer_finds_nothing_in_the_legs_parser(tmp_path):
     gives 60), seeded with the valid texts and a sample of the token soups."""
     clang = libfuzzer.clang_or_skip()
     exe = tmp_path / "fuzz"
-    subprocess.run([clang, "-std=c11", "-g", "-O1", "-Wall", "-Wextra", "-Werror",
+    build_line([clang, "-std=c11", "-g", "-O1", "-Wall", "-Wextra", "-Werror",
                     "-fsanitize=fuzzer,address,undefined", "-fno-sanitize-recover=all", f"-I{CORE}", str(HARNESS),
-                    *map(str, CORE_FILES), "-o", str(exe)], check=True)
+                    *map(str, CORE_FILES), "-o", str(exe)])
     corpus = tmp_path / "corpus"
     corpus.mkdir()
     for k, data in enumerate(_inputs()[::25]):

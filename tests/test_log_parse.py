@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fmus.cbuild import build_line
+
 from sarins_fmu.core.log_parse import parse_block
 from sarins_fmu.imu_log_text import Block, TextError, check_lines
 
@@ -225,8 +227,8 @@ def test_portable_multiply_gives_the_same_bits(tmp_path):
         pytest.skip("no C compiler")
     lib = tmp_path / "lp_portable.so"
     core = ROOT / "sarins_fmu" / "core"
-    subprocess.run([cc, "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-DSARINS_LOG_PARSE_PORTABLE",
-                    "-fPIC", "-shared", f"-I{core}", str(core / "log_parse.c"), "-o", str(lib)], check=True)
+    build_line([cc, "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-DSARINS_LOG_PARSE_PORTABLE",
+                    "-fPIC", "-shared", f"-I{core}", str(core / "log_parse.c"), "-o", str(lib)])
     fn = ctypes.CDLL(str(lib)).sarins_log_parse_block
     fn.restype = ctypes.c_int64
     fn.argtypes = [ctypes.c_char_p, ctypes.c_int64, ctypes.c_int32, ctypes.c_int32, ctypes.c_int32,

@@ -20,6 +20,7 @@ import pytest
 from fmpy import read_model_description
 
 from fmu_driver import Slave, check_parameter_error
+from fmus.cbuild import build_line
 from fmus.native_fmu import build_native_fmu
 from sarins_fmu import aided, gnss
 from sarins_fmu import trajectory as tr
@@ -375,10 +376,10 @@ def test_c_host_empty_environment_no_allocation(fmu, case, tmp_path):
 
     params, inputs = case.params, case.inputs
     host = tmp_path / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
-                    str(HOST_SRC), "-ldl", "-o", str(host)], check=True)
+    build_line([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
+                    str(HOST_SRC), "-ldl", "-o", str(host)])
     counter = tmp_path / "alloc_counter.so"
-    subprocess.run([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"], check=True)
+    build_line([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"])
     zipfile.ZipFile(fmu).extractall(tmp_path / "f")
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}

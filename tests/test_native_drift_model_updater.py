@@ -20,6 +20,8 @@ import zipfile
 
 import numpy as np
 import pytest
+
+from fmus.cbuild import build_line
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 
@@ -356,8 +358,8 @@ def host(tmp_path_factory):
     from test_native_fmus import HOST_SRC, _cc
 
     out = tmp_path_factory.mktemp("dmu_host") / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
-                    str(HOST_SRC), "-ldl", "-o", str(out)], check=True)
+    build_line([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
+                    str(HOST_SRC), "-ldl", "-o", str(out)])
     return out
 
 
@@ -405,9 +407,8 @@ def test_fmi3_variant_equals_fmi2_bit_for_bit(unzipped, host, tmp_path):
     folder3 = tmp_path / "f3"
     zipfile.ZipFile(fmu3).extractall(folder3)
     host3 = tmp_path / "host3"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}",
-                    str(Path(__file__).parent / "native_host" / "native_fmu3_host.c"), "-ldl", "-o", str(host3)],
-                   check=True)
+    build_line([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}",
+                    str(Path(__file__).parent / "native_host" / "native_fmu3_host.c"), "-ldl", "-o", str(host3)])
     folder, md = unzipped
     args, _ = _host_args(md, tmp_path, _rows(300))
     two = run_host(host, folder / "binaries" / "linux64" / "DriftModelUpdater.so", md, 300, *args, env={})
@@ -425,7 +426,7 @@ def test_no_heap_allocation_after_initialisation(unzipped, host, tmp_path):
 
     folder, md = unzipped
     counter = tmp_path / "alloc_counter.so"
-    subprocess.run([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"], check=True)
+    build_line([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"])
     args, _ = _host_args(md, tmp_path, _rows())
     proc = run_host(host, folder / "binaries" / "linux64" / "DriftModelUpdater.so", md, N, *args, "allocs",
                     env={"LD_PRELOAD": str(counter), "PATH": os.environ.get("PATH", "")})
@@ -461,11 +462,10 @@ def test_sanitized_build_runs_clean_through_the_c_host(unzipped, tmp_path):
     sources = folder / "sources"
     san = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O1"]
     lib = tmp_path / "dmu_san.so"
-    subprocess.run([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}",
-                    *sorted(str(p) for p in sources.glob("*.c")), "-lm", "-o", str(lib)], check=True)
+    build_line([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}",
+                    *sorted(str(p) for p in sources.glob("*.c")), "-lm", "-o", str(lib)])
     host = tmp_path / "host_san"
-    subprocess.run([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)],
-                   check=True)
+    build_line([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)])
     env = {"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1",
            "PATH": os.environ.get("PATH", "")}
     rows = _rows()
@@ -493,8 +493,7 @@ def test_win64_dll_under_wine_runs_and_agrees_with_linux64(unzipped, host, tmp_p
         pytest.skip(f"{', '.join(missing)} not installed (Debian: apt-get install gcc-mingw-w64-x86-64 wine64)")
     folder, md = unzipped
     exe = tmp_path / "host.exe"
-    subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
-                   check=True)
+    build_line([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)])
     env = wine_env
     rows = _rows()
     args, _ = _host_args(md, tmp_path, rows)

@@ -27,6 +27,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from fmu_driver import Slave
+from fmus.cbuild import build_line
 from fmus.build import NEEDS_MODEL
 from fmus.native_fmu import CFLAGS, MINGW, NATIVE, compile_line, fmi_headers_dir, slave_instance
 from orchestration import fmilog
@@ -65,8 +66,8 @@ def turntable(fmu_dir, tmp_path_factory):
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
     out = tmp_path_factory.mktemp("native_fmu_host") / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
-                    str(HOST_SRC), "-ldl", "-o", str(out)], check=True)
+    build_line([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
+                    str(HOST_SRC), "-ldl", "-o", str(out)])
     return out
 
 
@@ -393,10 +394,9 @@ def test_state_taken_before_initialisation_restores_values_and_the_state_machine
 def test_no_heap_allocation_after_initialisation(turntable, tmp_path):
     folder, md = turntable
     counter = tmp_path / "alloc_counter.so"
-    subprocess.run([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"], check=True)
+    build_line([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"])
     host = tmp_path / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)],
-                   check=True)
+    build_line([_cc(), "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)])
     proc = run_host(host, folder / "binaries" / "linux64" / "Turntable.so", md, 3000, "allocs",
                     *ops(md, CASES["dual-axis chamber"], outputs=[]),
                     env={"LD_PRELOAD": str(counter), "PATH": os.environ.get("PATH", "")})
@@ -413,11 +413,10 @@ def test_sanitized_build_runs_clean_through_the_c_host(turntable, tmp_path):
     san = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O1"]
     lib = tmp_path / "Turntable_san.so"
     files = sorted(str(p) for p in sources.glob("*.c"))
-    subprocess.run([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}", *files,
-                    "-lm", "-o", str(lib)], check=True)
+    build_line([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}", *files,
+                    "-lm", "-o", str(lib)])
     host = tmp_path / "host_san"
-    subprocess.run([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)],
-                   check=True)
+    build_line([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)])
     env = {"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1",
            "PATH": os.environ.get("PATH", "")}
     for values in CASES.values():
@@ -440,8 +439,7 @@ def test_win64_dll_under_wine_matches_linux64(fmu_dir, turntable, host, tmp_path
     dll = folder / "binaries" / "win64" / "Turntable.dll"
     assert dll.is_file(), "the build had mingw but shipped no win64 DLL"
     exe = tmp_path / "host.exe"
-    subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
-                   check=True)
+    build_line([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)])
     env = wine_env
     for values in CASES.values():
         win = run_host(exe, dll, md, 1000, "roundtrip=500", *ops(md, values), env=env, prefix=["wine"],

@@ -25,6 +25,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 from fmpy.validation import validate_fmu
 
+from fmus.cbuild import build_line
 from fmus.native_fmu import build_native_fmu
 
 pytestmark = pytest.mark.integration
@@ -320,8 +321,8 @@ def test_fmi3_win64_dlls_under_wine_match_linux(tmp_path, wine_env):
     cc = shutil.which("gcc") or shutil.which("cc")
     src = str(Path(__file__).resolve().parent / "native_host" / "native_fmu3_host.c")
     flags = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}"]
-    subprocess.run([cc, *flags, src, "-ldl", "-o", str(tmp_path / "host")], check=True)
-    subprocess.run([MINGW, *flags, src, "-static", "-o", str(tmp_path / "host.exe")], check=True)
+    build_line([cc, *flags, src, "-ldl", "-o", str(tmp_path / "host")])
+    build_line([MINGW, *flags, src, "-static", "-o", str(tmp_path / "host.exe")])
     env = wine_env
     fmus = {}
     for name, slave in (("IMUThermal", "imu_thermal_slave.py"), ("StrapdownINS", "strapdown_ins_slave.py")):

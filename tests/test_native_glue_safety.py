@@ -20,6 +20,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 
+from fmus.cbuild import build_line
 from fmus.native_fmu import build_native_fmu
 
 pytestmark = pytest.mark.integration
@@ -92,8 +93,8 @@ def _sanitized(fmu: Path, program: str, tmp_path: Path, fmi: int) -> Path:
         z.extractall(src)
     src = src / "sources"
     exe = tmp_path / f"{Path(program).stem}{fmi}"
-    subprocess.run([cc, "-std=c11", *SAN, *(["-DFMI3"] if fmi == 3 else []), f"-I{src}", str(HOST_DIR / program),
-                    *sorted(str(p) for p in src.glob("*.c")), "-o", str(exe)], check=True)
+    build_line([cc, "-std=c11", *SAN, *(["-DFMI3"] if fmi == 3 else []), f"-I{src}", str(HOST_DIR / program),
+                    *sorted(str(p) for p in src.glob("*.c")), "-o", str(exe)])
     return exe
 
 

@@ -13,6 +13,8 @@ import zipfile
 from pathlib import Path
 
 import pytest
+
+from fmus.cbuild import build_line
 from fmpy import read_model_description
 
 
@@ -34,8 +36,8 @@ def host(tmp_path_factory):
     import fmpy
 
     out = tmp_path_factory.mktemp("native_host") / "host"
-    subprocess.run([cc, "-O2", "-o", str(out), str(HERE / "native_host" / "host.c"),
-                    f"-I{Path(fmpy.__file__).parent / 'c-code'}", "-ldl"], check=True)
+    build_line([cc, "-O2", "-o", str(out), str(HERE / "native_host" / "host.c"),
+                    f"-I{Path(fmpy.__file__).parent / 'c-code'}", "-ldl"])
     return out
 
 

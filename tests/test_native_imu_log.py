@@ -23,6 +23,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 
 from fmu_driver import Slave, check_parameter_error
+from fmus.cbuild import build_line
 from fmus.native_fmu import build_native_fmu
 from sarins_fmu.imu_log import read_log, write_log
 
@@ -220,8 +221,8 @@ def host(tmp_path_factory):
     from test_native_fmus import HOST_SRC, _cc
 
     out = tmp_path_factory.mktemp("il_host") / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
-                    str(HOST_SRC), "-ldl", "-o", str(out)], check=True)
+    build_line([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
+                    str(HOST_SRC), "-ldl", "-o", str(out)])
     return out
 
 
@@ -244,7 +245,7 @@ def test_c_hosts_with_empty_environment_fmi2_and_fmi3_equal_in_process(fmu, host
         return [f"s{vr['log_file']}={long_log}", "out=" + ",".join(str(vr[n]) for n in OUT)]
 
     counter = tmp_path / "alloc_counter.so"
-    subprocess.run([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"], check=True)
+    build_line([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"])
     so = folder / "binaries" / "linux64" / "IMULog.so"
     allocs = subprocess.run([str(host), str(so), md.guid, str(K), repr(h), *args(md), "allocs"],
                             capture_output=True, text=True, timeout=120, env={"LD_PRELOAD": str(counter)})
@@ -260,9 +261,8 @@ def test_c_hosts_with_empty_environment_fmi2_and_fmi3_equal_in_process(fmu, host
     folder3 = tmp_path / "f3"
     zipfile.ZipFile(fmu3).extractall(folder3)
     host3 = tmp_path / "host3"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}",
-                    str(Path(__file__).parent / "native_host" / "native_fmu3_host.c"), "-ldl", "-o", str(host3)],
-                   check=True)
+    build_line([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}",
+                    str(Path(__file__).parent / "native_host" / "native_fmu3_host.c"), "-ldl", "-o", str(host3)])
     md3 = read_model_description(str(fmu3))
     three = subprocess.run([str(host3), str(folder3 / "binaries" / "x86_64-linux" / "IMULog.so"), md3.guid, str(K),
                             repr(h), *args(md3), f"nout={len(OUT)}", "nin=0"],
@@ -285,11 +285,10 @@ def test_sanitized_build_reads_good_and_bad_logs_clean(fmu, long_log, rate_log, 
     sources = folder / "sources"
     san = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O1"]
     lib = tmp_path / "IMULog_san.so"
-    subprocess.run([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}",
-                    *sorted(str(p) for p in sources.glob("*.c")), "-o", str(lib)], check=True)
+    build_line([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}",
+                    *sorted(str(p) for p in sources.glob("*.c")), "-o", str(lib)])
     host = tmp_path / "host_san"
-    subprocess.run([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)],
-                   check=True)
+    build_line([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)])
     env = {"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1", "PATH": os.environ.get("PATH", "")}
 
     def run(log, steps, h, *more):

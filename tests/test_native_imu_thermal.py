@@ -26,6 +26,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 
 from fmu_driver import Slave, check_parameter_error
+from fmus.cbuild import build_line
 from fmus.native_fmu import CFLAGS, MINGW, NATIVE, fmi_headers_dir
 from sarins_fmu import imu, imu_params
 from sarins_fmu.site import SITE_LAT
@@ -84,8 +85,8 @@ def unzipped(imu_fmu, tmp_path_factory):
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
     out = tmp_path_factory.mktemp("native_imu_host") / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
-                    str(HOST_SRC), "-ldl", "-o", str(out)], check=True)
+    build_line([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
+                    str(HOST_SRC), "-ldl", "-o", str(out)])
     return out
 
 
@@ -298,10 +299,9 @@ def test_state_keeps_which_coefficients_were_set(imu_fmu):
 def test_no_heap_allocation_after_initialisation(unzipped, tmp_path):
     folder, md = unzipped
     counter = tmp_path / "alloc_counter.so"
-    subprocess.run([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"], check=True)
+    build_line([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"])
     host = tmp_path / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)],
-                   check=True)
+    build_line([_cc(), "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)])
     proc = run_host(host, folder / "binaries" / "linux64" / "IMUThermal.so", md, 2000, "allocs",
                     *ops(md, HOST_CASES["mems x,z"], outputs=[]),
                     env={"LD_PRELOAD": str(counter), "PATH": os.environ.get("PATH", "")})
@@ -371,11 +371,10 @@ def test_sanitized_build_runs_clean_through_the_c_host(unzipped, tmp_path):
     san = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O1"]
     lib = tmp_path / "IMUThermal_san.so"
     files = sorted(str(p) for p in sources.glob("*.c"))
-    subprocess.run([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}", *files,
-                    "-lm", "-o", str(lib)], check=True)
+    build_line([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}", *files,
+                    "-lm", "-o", str(lib)])
     host = tmp_path / "host_san"
-    subprocess.run([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)],
-                   check=True)
+    build_line([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)])
     env = {"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1",
            "PATH": os.environ.get("PATH", "")}
     for values in HOST_CASES.values():
@@ -399,8 +398,7 @@ def test_win64_dll_under_wine_matches_linux64(unzipped, host, tmp_path, wine_env
     dll = folder / "binaries" / "win64" / "IMUThermal.dll"
     assert dll.is_file(), "the build had mingw but shipped no win64 DLL"
     exe = tmp_path / "host.exe"
-    subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
-                   check=True)
+    build_line([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)])
     env = wine_env
     for values in HOST_CASES.values():
         args = ("roundtrip=200", *ops(md, values, outputs=OUTPUTS))

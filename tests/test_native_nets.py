@@ -19,6 +19,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from fmu_driver import Slave
+from fmus.cbuild import build_line
 from fmus.compensator_export import export_compensator
 from sarins_fmu.identify import compensators
 from sarins_fmu.identify.axial import DEFAULT_MODELS, DriftIdentifier
@@ -218,8 +219,8 @@ def host(tmp_path_factory):
     import fmpy
 
     out = tmp_path_factory.mktemp("host") / "host"
-    subprocess.run([cc, "-O2", "-o", str(out), str(HERE / "native_host" / "host.c"),
-                    f"-I{Path(fmpy.__file__).parent / 'c-code'}", "-ldl"], check=True)
+    build_line([cc, "-O2", "-o", str(out), str(HERE / "native_host" / "host.c"),
+                    f"-I{Path(fmpy.__file__).parent / 'c-code'}", "-ldl"])
     return out
 
 
@@ -299,8 +300,7 @@ def portable_host(tmp_path_factory):
     from test_native_fmus import HOST_SRC, _cc
 
     out = tmp_path_factory.mktemp("portable") / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(out)],
-                   check=True)
+    build_line([_cc(), "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(out)])
     return out
 
 
@@ -311,7 +311,7 @@ def test_no_heap_allocation_after_initialisation(compensator_fmu, portable_host,
     from test_native_fmus import COUNTER_SRC, _cc
 
     counter = tmp_path / "alloc_counter.so"
-    subprocess.run([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"], check=True)
+    build_line([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"])
     proc = _portable_run(compensator_fmu, tmp_path, kind, "allocs", host=portable_host,
                          env={"LD_PRELOAD": str(counter), "PATH": os.environ.get("PATH", "")})
     assert "STATUS" not in proc.stdout, proc.stdout[-2000:]
@@ -332,11 +332,10 @@ def test_sanitized_build_runs_clean_through_the_c_host(compensator_fmu, tmp_path
     sources = sources / "sources"
     san = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O1"]
     lib = tmp_path / "IMUCompensator_san.so"
-    subprocess.run([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}",
-                    *sorted(str(p) for p in sources.glob("*.c")), "-lm", "-o", str(lib)], check=True)
+    build_line([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}",
+                    *sorted(str(p) for p in sources.glob("*.c")), "-lm", "-o", str(lib)])
     host = tmp_path / "host_san"
-    subprocess.run([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)],
-                   check=True)
+    build_line([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)])
     env = {"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1", "PATH": os.environ.get("PATH", "")}
     for kind in ("traditional", "rbf", "grnn", "lstm3", "gru"):
         proc = _portable_run(compensator_fmu, tmp_path, kind, "roundtrip=30", lib=lib, host=host, env=env)
@@ -367,8 +366,7 @@ def test_win64_dll_under_wine_agrees_with_linux64(compensator_fmu, portable_host
     fmu_win = export_compensator(models["gru"][0].save(tmp_path / "gru.npz"), win, win64=True)
     zipfile.ZipFile(fmu_win).extractall(win / "u")
     exe = tmp_path / "host.exe"
-    subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
-                   check=True)
+    build_line([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)])
     env = wine_env
 
     def value(bits):

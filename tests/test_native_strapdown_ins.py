@@ -21,6 +21,7 @@ import pytest
 from fmpy.fmi1 import FMICallException
 
 from fmu_driver import Slave, check_parameter_error
+from fmus.cbuild import build_line
 from fmus.strapdown_ins_slave import StrapdownINS
 from sarins_fmu.core import ins as core_ins
 
@@ -238,8 +239,8 @@ def host(tmp_path_factory):
     from test_native_fmus import HOST_SRC, _cc
 
     out = tmp_path_factory.mktemp("ins_host") / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
-                    str(HOST_SRC), "-ldl", "-o", str(out)], check=True)
+    build_line([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
+                    str(HOST_SRC), "-ldl", "-o", str(out)])
     return out
 
 
@@ -296,7 +297,7 @@ def test_no_heap_allocation_after_initialisation(fmu_dir, host, tmp_path):
     from test_native_fmus import COUNTER_SRC, _cc
 
     counter = tmp_path / "alloc_counter.so"
-    subprocess.run([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"], check=True)
+    build_line([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"])
     proc = _host_run(host, fmu_dir / "StrapdownINS.fmu", tmp_path, "allocs",
                      env={"LD_PRELOAD": str(counter), "PATH": os.environ.get("PATH", "")})
     assert "STATUS" not in proc.stdout, proc.stdout[-2000:]
@@ -318,11 +319,10 @@ def test_sanitized_build_runs_clean_through_the_c_host(fmu_dir, tmp_path):
     sources = sources / "sources"
     san = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-O1"]
     lib = tmp_path / "StrapdownINS_san.so"
-    subprocess.run([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}",
-                    *sorted(str(p) for p in sources.glob("*.c")), "-lm", "-o", str(lib)], check=True)
+    build_line([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}",
+                    *sorted(str(p) for p in sources.glob("*.c")), "-lm", "-o", str(lib)])
     host = tmp_path / "host_san"
-    subprocess.run([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)],
-                   check=True)
+    build_line([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)])
     env = {"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1", "PATH": os.environ.get("PATH", "")}
     proc = _host_run(host, fmu, tmp_path, "roundtrip=700", binary=lib, env=env, timeout=600)
     assert "STATUS" not in proc.stdout and "runtime error" not in proc.stderr, proc.stderr[-3000:]
@@ -348,8 +348,7 @@ def test_win64_dll_under_wine_runs_and_repeats_after_set_state(fmu_dir, host, tm
         pytest.skip(f"{', '.join(missing)} not installed (Debian: apt-get install gcc-mingw-w64-x86-64 wine64)")
     fmu = fmu_dir / "StrapdownINS.fmu"
     exe = tmp_path / "host.exe"
-    subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
-                   check=True)
+    build_line([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)])
     env = wine_env
     lin = _host_run(host, fmu, tmp_path, "roundtrip=700")
     dll = tmp_path / "ins" / "binaries" / "win64" / "StrapdownINS.dll"

@@ -17,6 +17,8 @@ from pathlib import Path
 
 import pytest
 
+from fmus.cbuild import build_line
+
 from sarins.systems import standard_static_identified
 
 pytestmark = pytest.mark.slow
@@ -58,8 +60,8 @@ def test_identified_system_in_50_c_host_processes(fmu_dir, tmp_path):
     import fmpy
 
     exe = tmp_path / "system"
-    subprocess.run([cc, "-O2", "-o", str(exe), str(HERE / "native_host" / "system.c"),
-                    f"-I{Path(fmpy.__file__).parent / 'c-code'}", "-ldl"], check=True)
+    build_line([cc, "-O2", "-o", str(exe), str(HERE / "native_host" / "system.c"),
+                    f"-I{Path(fmpy.__file__).parent / 'c-code'}", "-ldl"])
     plan = write_plan(_system(fmu_dir), fmu_dir, tmp_path / "unzipped", STEPS, 1.0,
                       [("identifier", "axial_drift"), ("ins", "position_error")])
 

@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 import os
 import struct
-import subprocess
 import zipfile
 from pathlib import Path
 
@@ -24,6 +23,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 
 from fmu_driver import Slave, check_parameter_error
+from fmus.cbuild import build_line
 from fmus.native_fmu import build_native_fmu
 from sarins_fmu.core.vehicle import COLUMNS
 from sarins_fmu.vehicle import BodyMotion, VehicleTrajectory, parse_legs
@@ -215,8 +215,8 @@ def host(tmp_path_factory):
     from test_native_fmus import HOST_SRC, _cc
 
     out = tmp_path_factory.mktemp("vm_host") / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
-                    str(HOST_SRC), "-ldl", "-o", str(out)], check=True)
+    build_line([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
+                    str(HOST_SRC), "-ldl", "-o", str(out)])
     return out
 
 
@@ -242,7 +242,7 @@ def test_c_hosts_with_empty_environment_fmi2_and_fmi3_equal_in_process(fmu, host
     tr = _trajectory()
     n = tr.n_steps
     counter = tmp_path / "alloc_counter.so"
-    subprocess.run([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"], check=True)
+    build_line([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"])
     so = folder / "binaries" / "linux64" / "VehicleMotion.so"
     allocs = run_host(host, so, md, n, *_host_args(md), "allocs", env={"LD_PRELOAD": str(counter)})
     assert "ALLOCS 0" in allocs.stdout.splitlines(), allocs.stdout[-2000:]
@@ -256,9 +256,8 @@ def test_c_hosts_with_empty_environment_fmi2_and_fmi3_equal_in_process(fmu, host
     folder3 = tmp_path / "f3"
     zipfile.ZipFile(fmu3).extractall(folder3)
     host3 = tmp_path / "host3"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}",
-                    str(Path(__file__).parent / "native_host" / "native_fmu3_host.c"), "-ldl", "-o", str(host3)],
-                   check=True)
+    build_line([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}",
+                    str(Path(__file__).parent / "native_host" / "native_fmu3_host.c"), "-ldl", "-o", str(host3)])
     md3 = read_model_description(str(fmu3))
     three = run_host(host3, folder3 / "binaries" / "x86_64-linux" / "VehicleMotion.so", md3, n, *_host_args(md3),
                      f"nout={len(OUT)}", "nin=0", env={})

@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
+from fmus.cbuild import build_line
 from fmus.native_fmu import AARCH64, ARM_PLATFORM, MINGW, NATIVE, build_native_fmu, fmi_headers_dir
 from sarins_fmu.core import _lib
 from test_native_fmus import CASES, HOST_SRC, ops, run_host, table
@@ -87,8 +88,8 @@ def native(fmu_dir, tmp_path_factory):
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
     out = tmp_path_factory.mktemp("portable_host") / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
-                    str(HOST_SRC), "-ldl", "-o", str(out)], check=True)
+    build_line([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
+                    str(HOST_SRC), "-ldl", "-o", str(out)])
     return out
 
 
@@ -275,8 +276,7 @@ def test_win64_dll_under_wine_gives_the_linux64_numbers(name, native, shipped, w
     dll = folder / "binaries" / "win64" / f"{name}.dll"
     assert dll.is_file(), "the build had mingw but shipped no win64 DLL"
     exe = tmp_path / "host.exe"
-    subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
-                   check=True)
+    build_line([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)])
     rows = run_fmu(name, native, exe, dll, tmp_path, prefix=["wine"], env=wine_env)
     assert _rows_differ(rows, shipped[name]) == ""
 
@@ -286,8 +286,8 @@ def _arm_host(tmp_path: Path, src: Path = HOST_SRC, fmi: int = 2) -> Path:
     if not Path(ARM_SYSROOT, "lib").is_dir():
         pytest.skip(f"{ARM_SYSROOT} missing (Debian: apt-get install libc6-dev-arm64-cross)")
     exe = tmp_path / "host_aarch64"
-    subprocess.run([AARCH64, "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror",
-                    f"-I{fmi_headers_dir(fmi)}", str(src), "-ldl", "-o", str(exe)], check=True)
+    build_line([AARCH64, "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror",
+                    f"-I{fmi_headers_dir(fmi)}", str(src), "-ldl", "-o", str(exe)])
     return exe
 
 
@@ -323,8 +323,8 @@ def test_fmi3_binaries_of_every_platform_give_the_x86_64_linux_numbers(tmp_path,
     _need(MINGW, "wine", AARCH64, "qemu-aarch64")
     cc = _cc()
     flags = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}"]
-    subprocess.run([cc, *flags, str(HOST3_SRC), "-ldl", "-o", str(tmp_path / "host")], check=True)
-    subprocess.run([MINGW, *flags, str(HOST3_SRC), "-static", "-o", str(tmp_path / "host.exe")], check=True)
+    build_line([cc, *flags, str(HOST3_SRC), "-ldl", "-o", str(tmp_path / "host")])
+    build_line([MINGW, *flags, str(HOST3_SRC), "-static", "-o", str(tmp_path / "host.exe")])
     arm = _arm_host(tmp_path, HOST3_SRC, fmi=3)
     env = wine_env
     for name, slave in (("IMUThermal", "imu_thermal_slave.py"), ("Turntable", "turntable_slave.py")):

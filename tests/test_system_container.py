@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
+from fmus.cbuild import build_line
 from fmus.native_fmu import AARCH64, MINGW, fmi_headers_dir
 
 HERE = Path(__file__).resolve().parent
@@ -74,8 +75,8 @@ def master(container):
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
     out = tmp_path_factory.mktemp("container_host") / "host"
-    subprocess.run([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
-                    str(HOST_SRC), "-ldl", "-o", str(out)], check=True)
+    build_line([_cc(), "-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir()}",
+                    str(HOST_SRC), "-ldl", "-o", str(out)])
     return out
 
 
@@ -172,7 +173,7 @@ def test_linux_binaries_need_nothing_newer_than_glibc_2_17(container):
 def test_nothing_allocates_after_initialisation(container, host, tmp_path):
     _, folder, md, _ = container
     counter = tmp_path / "alloc_counter.so"
-    subprocess.run([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"], check=True)
+    build_line([_cc(), "-O2", "-shared", "-fPIC", "-o", str(counter), str(COUNTER_SRC), "-ldl"])
     proc = _run(host, folder / "binaries" / "linux64" / "SystemContainer.so", md, folder, "allocs",
                 prefix=(), steps=300, env={"LD_PRELOAD": str(counter)})
     assert "STATUS" not in proc.stdout, proc.stdout[-3000:]
@@ -278,15 +279,13 @@ def test_win64_under_wine_and_aarch64_under_qemu_give_the_linux64_numbers(contai
     out = _out_arg(md)
     linux = _rows(_run(host, folder / "binaries" / "linux64" / "SystemContainer.so", md, folder, out))
     exe = tmp_path / "host.exe"
-    subprocess.run([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)],
-                   check=True)
+    build_line([MINGW, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-static", "-o", str(exe)])
     proc = _run(exe, folder / "binaries" / "win64" / "SystemContainer.dll", md, folder, out, prefix=("wine",),
                 env=wine_env, windows=True, timeout=1800)
     assert "STATUS" not in proc.stdout, proc.stdout[-3000:]
     assert _rows(proc) == linux
     arm = tmp_path / "host_aarch64"
-    subprocess.run([AARCH64, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(arm)],
-                   check=True)
+    build_line([AARCH64, "-std=c11", "-O2", f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(arm)])
     proc = _run(arm, folder / "binaries" / "aarch64-linux" / "SystemContainer.so", md, folder, out,
                 prefix=("env", "-i", "qemu-aarch64", "-L", ARM_SYSROOT), timeout=1800)
     assert "STATUS" not in proc.stdout, proc.stdout[-3000:]
@@ -304,11 +303,10 @@ def test_under_asan_and_ubsan_a_run_and_bad_plans_report_nothing(container, tmp_
     sources = folder / "sources"
     lib = tmp_path / "SystemContainer_san.so"
     files = sorted(str(p) for p in sources.glob("*.c"))
-    subprocess.run([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}", *files,
-                    "-ldl", "-o", str(lib)], check=True)
+    build_line([_cc(), *[f for f in CFLAGS if f != "-O2"], *san, "-fPIC", "-shared", f"-I{sources}", *files,
+                    "-ldl", "-o", str(lib)])
     host = tmp_path / "host_san"
-    subprocess.run([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)],
-                   check=True)
+    build_line([_cc(), "-std=c11", *san, f"-I{fmi_headers_dir()}", str(HOST_SRC), "-ldl", "-o", str(host)])
     env = {"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"}
     proc = _run(host, lib, md, folder, _out_arg(md), prefix=(), steps=50, env=env)
     assert "runtime error" not in proc.stderr and "AddressSanitizer" not in proc.stderr, proc.stderr[-3000:]
