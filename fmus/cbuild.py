@@ -57,11 +57,27 @@ def _include_dirs(flags: list[str]) -> list[Path]:
     return dirs
 
 
+def _without_include_dirs(flags: list[str]) -> list[str]:
+    kept, skip = [], False
+    for flag in flags:
+        if skip:
+            skip = False
+        elif flag == "-I":
+            skip = True
+        elif not flag.startswith("-I"):
+            kept.append(flag)
+    return kept
+
+
 def source_key(source: Path, flags: list[str], compiler_id: bytes, cwd: Path) -> str:
-    """The cache key of ``source`` compiled with ``flags``: a hash of the compiler, the flags, the file and
-    the headers it includes by quoted name, transitively (a header not found is keyed by its name)."""
-    digest = hashlib.sha256(compiler_id + b"\0" + "\0".join(flags).encode())
+    """The cache key of ``source`` compiled with ``flags``: a hash of the compiler, the flags (but the ``-I``
+    folders' names), the file and the headers it includes by quoted name, found as the compiler finds them
+    (the including file's folder, then the ``-I`` folders in order), transitively (a header not found there
+    is keyed by its name)."""
     dirs = [cwd / d for d in _include_dirs(flags)]
+    # the -I folders' names are not part of the key (their headers' bytes are): the same files unpacked into
+    # another temporary folder hit the cache
+    digest = hashlib.sha256(compiler_id + b"\0" + "\0".join(_without_include_dirs(flags)).encode())
     seen: set[Path] = set()
     todo = [cwd / source]
     while todo:

@@ -196,46 +196,15 @@ def linux_compile_line(cc: str = "cc") -> list[str]:
     return [*nf.compile_line(IDENTIFIER, cc), *LINUX_LIBS]
 
 
-# compiled objects of the system-independent sources, per compiler and sources: {key: object bytes} (every
-# container of a process shares the glue's and smath's objects; only model.c, which includes the system's
-# variables.h, is compiled for each system; the objects are those `cc ... *.c` compiles one by one)
-_OBJECTS: dict[str, bytes] = {}
-
-
-def _run(cmd: list[str], cwd: Path) -> None:
-    import subprocess
-
-    proc = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(f"compiling the system container failed:\n{' '.join(cmd)}\n{proc.stderr}")
-
-
 def _compile(sources: Path, out: Path, cc: str, win64: bool) -> Path:
-    """Compile ``sources/`` (each .c to an object, then one link) into ``out``; the binary's path."""
-    import hashlib
+    """Compile ``sources/`` (each .c to an object, the glue's and the core's from the build cache when one is
+    set: :mod:`fmus.cbuild`; only model.c holds the system) into ``out``; the binary's path."""
+    from .cbuild import build
 
-    flags = [*nf.CFLAGS] if win64 else [*nf.CFLAGS, "-fPIC"]
-    shared = sorted(p for p in sources.iterdir() if p.name not in ("model.c", "variables.h"))
-    digest = hashlib.sha256(repr((cc, flags)).encode())
-    for path in shared:
-        digest.update(path.name.encode() + b"\0" + path.read_bytes())
-    objects = []
-    for path in sorted(sources.glob("*.c")):
-        obj = out / f"{path.stem}.o"
-        key = f"{digest.hexdigest()}:{path.name}"
-        if path.name != "model.c" and key in _OBJECTS:
-            obj.write_bytes(_OBJECTS[key])
-        else:
-            _run([cc, *flags, "-I.", "-c", path.name, "-o", str(obj)], sources)
-            if path.name != "model.c":
-                _OBJECTS[key] = obj.read_bytes()
-        objects.append(str(obj))
+    flags = [*nf.CFLAGS, "-I."] if win64 else [*nf.CFLAGS, "-fPIC", "-I."]
+    link = ["-shared", "-static"] if win64 else ["-shared", *LINUX_LIBS]
     target = out / (f"{IDENTIFIER}.dll" if win64 else f"{IDENTIFIER}.so")
-    if win64:
-        _run([cc, *flags, "-shared", "-static", *objects, "-o", str(target)], sources)
-    else:
-        _run([cc, *flags, "-shared", *objects, "-o", str(target), *LINUX_LIBS], sources)
-    return target
+    return build(cc, sorted(p.name for p in sources.glob("*.c")), target, flags, link, cwd=sources)
 
 
 def _documentation(name: str, win64: bool, aarch64: bool) -> str:

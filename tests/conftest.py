@@ -12,6 +12,8 @@ import pytest
 # made for this session and removed at its end, before anything below can look them up.  Under
 # pytest-xdist the controller makes it and its workers (started after, with its environment) share it.
 _ROOT_VAR = "SARINS_TESTS_HERMETIC_ROOT"
+# the system's temporary folder, before the redirection below (the session folder is made in it)
+SYSTEM_TMP = Path(os.environ.setdefault("SARINS_TESTS_SYSTEM_TMP", tempfile.gettempdir()))
 if os.environ.get("PYTEST_XDIST_WORKER") and os.environ.get(_ROOT_VAR):
     HERMETIC_ROOT, _OWN_ROOT = Path(os.environ[_ROOT_VAR]), False
 else:
@@ -26,10 +28,13 @@ HERMETIC_ENV = {
     "MPLCONFIGDIR": HERMETIC_ROOT / "config" / "matplotlib",
     # one object cache for every C build of the run (fmus.cbuild): the core's files compiled once
     "SARINS_CC_CACHE": HERMETIC_ROOT / "cache" / "cc",
+    # what tempfile makes (FMPy's extract, pytest's own folders) is removed with the rest at the end
+    "TMPDIR": HERMETIC_ROOT / "tmp",
 }
 for _name, _folder in HERMETIC_ENV.items():
     _folder.mkdir(parents=True, exist_ok=True)
     os.environ[_name] = str(_folder)
+tempfile.tempdir = None  # looked up again, in TMPDIR
 
 from sarins_fmu.site import SITE_LAT_DEG  # noqa: E402 (after the environment is set)
 

@@ -7,10 +7,16 @@ from fmpy.fmi2 import FMU2Slave
 from orchestration import fmilog
 
 
+def unpack(path):
+    """(model description, extracted folder) of the FMU at ``path``."""
+    return read_model_description(str(path)), extract(str(path))
+
+
 class Slave:
-    def __init__(self, path, name, log=None):
-        self.md = read_model_description(str(path))
-        self.dir = extract(str(path))
+    def __init__(self, path, name, log=None, unpacked=None):
+        """``unpacked``: (model description, folder) of ``path`` read and extracted once by :func:`unpack`
+        for many instances (default: read and extracted for this one)."""
+        self.md, self.dir = unpacked or unpack(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.log = [] if log is None else log
         self.name = fmilog.register(name, lambda status, category, text: self.log.append((status, category, text)))

@@ -44,6 +44,11 @@ def test_a_cached_build_is_the_build_and_a_changed_header_is_compiled_again(cc, 
     again = cbuild.build(cc, ["a.c", "b.c"], tmp_path / "two.so", flags, ["-shared"], cwd=src, cache=cache)
     assert _value(again) == _value(whole) == 42
     assert len(list(cache.glob("*.o"))) == 2  # both from the cache
+    moved = tmp_path / "elsewhere"
+    shutil.copytree(src, moved)
+    there = cbuild.build(cc, ["a.c", "b.c"], tmp_path / "moved.so", [*flags[:-1], f"-I{moved / 'inc'}"], ["-shared"],
+                         cwd=moved, cache=cache)
+    assert _value(there) == 42 and len(list(cache.glob("*.o"))) == 2  # the same bytes in another folder
     _sources(src, 99)  # only the header changes
     changed = cbuild.build(cc, ["a.c", "b.c"], tmp_path / "three.so", flags, ["-shared"], cwd=src, cache=cache)
     assert _value(changed) == 100

@@ -15,6 +15,8 @@ from pathlib import Path
 import libfuzzer
 import pytest
 
+from fmus.cbuild import build_line
+
 from fuzz_fmus import MODELS, prepare
 
 pytestmark = pytest.mark.integration
@@ -28,7 +30,7 @@ def _compile(cc: str, src: Path, fmi: int, out: Path, sanitize: str, main: bool)
     cmd = [cc, *FLAGS, f"-fsanitize={sanitize}", *(["-DFMI3"] if fmi == 3 else []),
            *(["-DSARINS_FUZZ_MAIN"] if main else []), f"-I{src}", str(HARNESS),
            *sorted(str(p) for p in src.glob("*.c")), "-o", str(out)]
-    subprocess.run(cmd, check=True, capture_output=True)
+    build_line(cmd)
     return out
 
 

@@ -16,6 +16,7 @@ import numpy as np
 import libfuzzer
 import pytest
 
+from fmus.cbuild import build_line
 from fmus import SLAVES
 from fmus.native_fmu import build_native_fmu
 from sarins_fmu.imu_log import write_log
@@ -37,7 +38,7 @@ def _sources(tmp: Path) -> Path:
 def _compile(cc: str, src: Path, out: Path, sanitize: str, main: bool) -> Path:
     cmd = [cc, *FLAGS, f"-fsanitize={sanitize}", *(["-DSARINS_FUZZ_MAIN"] if main else []), f"-I{src}",
            str(HARNESS), *sorted(str(p) for p in src.glob("*.c")), "-o", str(out)]
-    subprocess.run(cmd, check=True, capture_output=True)
+    build_line(cmd)
     return out
 
 

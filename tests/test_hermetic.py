@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import HERMETIC_ENV, HERMETIC_ROOT
+from conftest import HERMETIC_ENV, HERMETIC_ROOT, SYSTEM_TMP
 
 ROOT = Path(__file__).resolve().parents[1]
 PRODUCT = ("sarins", "sarins_fmu", "orchestration", "fmus")
@@ -22,7 +22,19 @@ PRODUCT = ("sarins", "sarins_fmu", "orchestration", "fmus")
 @pytest.mark.parametrize("name", sorted(HERMETIC_ENV))
 def test_home_and_caches_point_into_the_sessions_temporary_folder(name):
     assert Path(os.environ[name]).resolve().is_relative_to(HERMETIC_ROOT.resolve())
-    assert HERMETIC_ROOT.resolve().is_relative_to(Path(os.path.realpath(__import__("tempfile").gettempdir())))
+    assert HERMETIC_ROOT.resolve().is_relative_to(SYSTEM_TMP.resolve())
+
+
+def test_temporary_files_go_into_the_sessions_folder(tmp_path):
+    """tempfile (FMPy's extract, pytest's tmp_path) makes its folders in the session's, removed at its end."""
+    import tempfile
+
+    made = Path(tempfile.mkdtemp())
+    try:
+        assert made.resolve().is_relative_to(HERMETIC_ROOT.resolve())
+    finally:
+        made.rmdir()
+    assert tmp_path.resolve().is_relative_to(HERMETIC_ROOT.resolve())
 
 
 def test_a_child_process_inherits_the_redirection():
