@@ -417,6 +417,9 @@ def test_win64_dll_under_wine_matches_linux64(unzipped, host, tmp_path, wine_env
         assert np.array_equal(a.view(np.uint64), b.view(np.uint64)), worst
 
 
+# slow: the default run runs the documented line on the Turntable's and DriftModelUpdater's sources and compiles
+# these with another line (tests/test_portable_fmus.py, the same numbers asserted)
+@pytest.mark.slow
 def test_sources_compiled_with_the_documented_line_give_the_shipped_outputs(unzipped, host, tmp_path):
     """sources/ built with nothing but documentation/index.html's compile line runs the mems case like the
     shipped linux64 binary, bit for bit (issue 19 item 2)."""

@@ -364,6 +364,9 @@ def test_win64_dll_under_wine_runs_and_repeats_after_set_state(fmu_dir, host, tm
     assert table(win) == table(lin), np.max(np.abs(values(table(win)) - values(table(lin))))
 
 
+# slow: the default run runs the documented line on the Turntable's and DriftModelUpdater's sources and compiles
+# these with another line (tests/test_portable_fmus.py, the same numbers asserted)
+@pytest.mark.slow
 def test_sources_compiled_with_the_documented_line_give_the_shipped_outputs(fmu_dir, host, tmp_path):
     """sources/ built with nothing but documentation/index.html's compile line runs the queued
     temperature-model run like the shipped linux64 binary, bit for bit (issue 19 item 2)."""

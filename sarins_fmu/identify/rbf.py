@@ -62,7 +62,6 @@ from pathlib import Path
 from typing import Literal, Sequence
 
 import numpy as np
-from scipy.spatial.distance import cdist
 
 from .modelfile import get_array, load_model_file, save_model_file
 from .preprocessing import Scaling, check_inputs, check_targets, fit_scaling
@@ -638,3 +637,11 @@ def _grow_residual(
         resid = t - (phi @ w + b)
         curve.append(float(np.mean(resid**2)))
     return np.asarray(chosen, dtype=int), curve, reason
+
+
+def cdist(a, b, metric):
+    """scipy.spatial.distance.cdist, imported on first use (scipy.spatial takes 0.5 s to import: the
+    command line starts without it)."""
+    from scipy.spatial.distance import cdist as scipy_cdist
+
+    return scipy_cdist(a, b, metric)

@@ -62,7 +62,6 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.linalg import solve_triangular
 
 from ..core import online as core_online
 from ..drift_model import drift_model_value
@@ -601,3 +600,11 @@ class ForgettingRLS:
         except OSError as exc:
             raise ModelFileError(path, f"cannot be read: {exc.strerror or exc}") from None
         return cls.from_binary(data, path)
+
+
+def solve_triangular(a, b, **options):
+    """scipy.linalg.solve_triangular, imported on first use (scipy.linalg takes 0.3 s to import: the command
+    line starts without it)."""
+    from scipy.linalg import solve_triangular as scipy_solve_triangular
+
+    return scipy_solve_triangular(a, b, **options)
