@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from fmus.cbuild import build_line
+
 
 def run(tmp_path: Path, script: str) -> None:
     """Build every core .c file with ASan + UBSan into ``tmp_path``, run ``script`` (its ``{lib}`` filled with the
@@ -17,8 +19,7 @@ def run(tmp_path: Path, script: str) -> None:
     lib = tmp_path / "_sarins_core_asan.so"
     flags = ["-std=c11", "-O1", "-g", "-fPIC", "-shared", "-Wall", "-Wextra", "-Wpedantic", "-Werror",
              "-ffp-contract=off", "-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
-    subprocess.run(["gcc", *flags, "-I", str(core_dir), *sorted(map(str, core_dir.glob("*.c"))), "-o", str(lib)],
-                   check=True, capture_output=True, text=True)
+    build_line(["gcc", *flags, "-I", str(core_dir), *sorted(map(str, core_dir.glob("*.c"))), "-o", str(lib)])
     libasan = subprocess.run(["gcc", "-print-file-name=libasan.so"], check=True, capture_output=True,
                              text=True).stdout.strip()
     env = {**os.environ, "SARINS_CORE_LIB": str(lib), "LD_PRELOAD": libasan, "PYTHONPATH": str(root),

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import struct
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -494,3 +495,67 @@ def test_threads_share_a_model_safely():
         threaded = list(pool.map(comp.predict, parts))
     for a, b in zip(serial, threaded):
         np.testing.assert_array_equal(a, b)
+
+
+# ------------------------------------------------------------------ several series side by side
+@pytest.mark.parametrize("kind", [*compensators.RECURRENT_KINDS, "gru-memoryless"])
+def test_series_side_by_side_are_each_series_alone_bit_for_bit(kind):
+    """sarins_comp_run_streams: three series of other inputs and lengths in lockstep (hidden 11: the 32-row
+    blocks, the four-row blocks and the single rows of the weight sums; a series that ends leaves the others,
+    chunks of other lengths), each series' rows those of its own run bit for bit, states advanced the same."""
+    memoryless = kind.endswith("-memoryless")
+    comp = _recurrent(kind.removesuffix("-memoryless"), hidden=11, memory=not memoryless)
+    native = comp.native()
+    series = [_toy(n, seed)[0] for n, seed in ((300, 1), (300, 2), (170, 4))]
+    alone = [native.run(x) for x in series]
+    states = [native.zero_state() for _ in series]
+    together = native.run_streams([x[:170] for x in series], states)
+    for a, b in zip(alone, together):
+        np.testing.assert_array_equal(a[:170].view(np.uint64), b.view(np.uint64))
+    chunked = {k: [] for k in range(3)}
+    sources = [[x[:100], x[100:130], x[130:]] for x in series[:2]] + [[series[2][:50], series[2][50:]]]
+    for step in comp.predict_batch_streams(sources):
+        for k, rows in step:
+            chunked[k].append(rows)
+    for k, a in enumerate(alone):
+        np.testing.assert_array_equal(np.concatenate(chunked[k]).view(np.uint64), a.view(np.uint64))
+    whole = native.zero_state()
+    native.run(series[0][:170], whole)
+    np.testing.assert_array_equal(states[0], whole)
+
+
+def test_side_by_side_refuses_what_it_cannot_run():
+    native = _recurrent("gru", hidden=11).native()
+    x = _toy(20)[0]
+    with pytest.raises(ValueError, match="one length"):
+        native.run_streams([x, x[:10]], [native.zero_state(), native.zero_state()])
+    with pytest.raises(ValueError, match="1 to 8 series"):
+        native.run_streams([x] * 9, [native.zero_state()] * 9)
+    with pytest.raises(ValueError, match="recurrent"):
+        fitted("rbf").native().run_streams([x], [np.zeros(0)])
+    bad = x.copy()
+    bad[7, 2] = np.nan
+    with pytest.raises(ValueError, match="not finite"):
+        native.run_streams([x, bad], [native.zero_state(), native.zero_state()])
+
+
+@pytest.mark.slow
+def test_series_side_by_side_run_clean_under_sanitizers(tmp_path):
+    """sarins_comp_run_streams on the core built with ASan + UBSan (tests/sanitized_core.py): one to eight
+    series of the LSTM-3 and the GRU-3 (hidden 11), the work the binding sizes; each series that of its own run."""
+    import sanitized_core
+
+    script = f"""
+import sys
+sys.path.insert(0, {str(Path(__file__).resolve().parent)!r})
+import numpy as np
+from test_nets import _recurrent, _toy
+for kind in ("lstm3", "gru3"):
+    native = _recurrent(kind, hidden=11).native()
+    for k in (1, 3, 8):
+        series = [_toy(60, seed)[0] for seed in range(k)]
+        together = native.run_streams(series, [native.zero_state() for _ in series])
+        assert all(np.array_equal(native.run(x), y) for x, y in zip(series, together))
+print("sanitized run ok")
+"""
+    sanitized_core.run(tmp_path, script)

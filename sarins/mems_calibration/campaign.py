@@ -285,22 +285,80 @@ def _residual_chunks(data, predict=None):
         yield np.subtract(out, targets.pop(0), out=out), seconds
 
 
+class _Summary:
+    """Every :func:`thinning`-th residual row, the :class:`.analysis.ResidualSums` of every row and the
+    prediction seconds of one model on one data set, fed a chunk of residual rows at a time in order."""
+
+    def __init__(self, n: int):
+        from . import analysis
+
+        self.step, self.start, self.seconds = thinning(n), 0, 0.0
+        self.sums, self.thinned = analysis.ResidualSums(), []
+
+    def add(self, residual, seconds: float) -> None:
+        self.thinned.append(residual[(-self.start) % self.step::self.step].copy())
+        self.sums.add(residual)
+        self.seconds += seconds
+        self.start += len(residual)
+
+    def result(self, floor) -> tuple:
+        """(thinned rows, :func:`.analysis.residual_stats` of every row, prediction seconds)."""
+        import numpy as np
+
+        rows = np.concatenate(self.thinned) if self.thinned else np.empty((0, 6))
+        return rows, self.sums.stats(floor), self.seconds
+
+
 def _residual_summary(data, floor, predict=None):
     """(every :func:`thinning`-th residual row, :func:`.analysis.residual_stats` of every row, prediction
     seconds) of one model on one data set, chunk by chunk (:class:`.analysis.ResidualSums`: the whole
     array's statistics bit for bit)."""
+    summary = _Summary(len(data))
+    for residual, dt in _residual_chunks(data, predict):
+        summary.add(residual, dt)
+    return summary.result(floor)
+
+
+def _streamed_summaries(model, sets: dict, floor) -> dict:
+    """{set name: :func:`_residual_summary`} of a recurrent model on every set of ``sets`` at once, the sets
+    advancing side by side (:meth:`~sarins_fmu.identify.compensators.RecurrentCompensator.predict_batch_streams`:
+    each set's rows bit for bit those of its own run); each call's seconds shared between the sets by rows."""
     import numpy as np
 
-    from . import analysis
+    keys = list(sets)
+    targets = {k: [] for k in keys}
+    reading = [0.0]
 
-    step = thinning(len(data))
-    sums, thinned, seconds, start = analysis.ResidualSums(), [], 0.0, 0
-    for residual, dt in _residual_chunks(data, predict):
-        thinned.append(residual[(-start) % step::step].copy())
-        sums.add(residual)
-        seconds += dt
-        start += len(residual)
-    return np.concatenate(thinned) if thinned else np.empty((0, 6)), sums.stats(floor), seconds
+    def inputs(key):
+        chunks = sets[key].chunks(EVAL_ROWS)
+        while True:
+            t0 = time.perf_counter()
+            try:
+                X, Y = next(chunks)
+            except StopIteration:
+                return
+            reading[0] += time.perf_counter() - t0
+            targets[key].append(Y)
+            yield X
+
+    summaries = {k: _Summary(len(sets[k])) for k in keys}
+    outputs = model.predict_batch_streams([inputs(k) for k in keys])
+    while True:
+        t0, read0 = time.perf_counter(), reading[0]
+        try:
+            step = next(outputs)
+        except StopIteration:
+            break
+        seconds = time.perf_counter() - t0 - (reading[0] - read0)
+        rows = sum(len(out) for _, out in step)
+        for index, out in step:
+            key = keys[index]
+            y = targets[key][0][:len(out)]
+            targets[key][0] = targets[key][0][len(out):]
+            if not len(targets[key][0]):
+                targets[key].pop(0)
+            summaries[key].add(np.subtract(out, y, out=out), seconds * len(out) / rows if rows else 0.0)
+    return {k: summaries[k].result(floor) for k in keys}
 
 
 def evaluate_sets(models: dict, sets: dict, floor, *, log=None, stream_samples=None, threads=None) -> dict:
@@ -315,21 +373,34 @@ def evaluate_sets(models: dict, sets: dict, floor, *, log=None, stream_samples=N
     from sarins_fmu.core.imu import thread_count
 
     stream_samples = stream_samples or {}
-    jobs = sorted(((name, key) for key in sets for name in models),
-                  key=lambda job: -EVAL_US_PER_SAMPLE.get(job[0].replace("-memoryless", ""), 1.0) * len(sets[job[1]]))
+    # a recurrent model runs on every set at once (the sets side by side in the C core, one job), the others
+    # a job per set
+    together = [name for name, model in models.items() if hasattr(model, "predict_batch_streams") and len(sets) > 1]
+    jobs = [(name, key) for key in sets for name in models if name not in together] + [(name, None) for name in together]
+    jobs.sort(key=lambda job: -EVAL_US_PER_SAMPLE.get(job[0].replace("-memoryless", ""), 1.0) * (
+        len(sets[job[1]]) if job[1] is not None else sum(len(d) for d in sets.values())))
 
     def one(job):
         name, key = job
+        cpu0 = time.thread_time()  # the C core runs on this thread (it releases the GIL, starts no threads)
+        if key is None:
+            if log:
+                log(f"mems-calibration: evaluating {name} on {' + '.join(str(len(d)) for d in sets.values())} "
+                    f"samples ({', '.join(sets)}, side by side)")
+            found = _streamed_summaries(models[name], sets, floor)
+            cpu = time.thread_time() - cpu0
+            total = sum(len(d) for d in sets.values())
+            return {k: (*found[k], cpu * len(sets[k]) / total) for k in sets}
         data = sets[key]
         if log:
             log(f"mems-calibration: evaluating {name} on {len(data)} samples ({key})")
-        cpu0 = time.thread_time()  # the C core runs on this thread (it releases the GIL, starts no threads)
         rows, stats, seconds = _residual_summary(data, floor, models[name].predict_batch_chunks)
-        return rows, stats, seconds, time.thread_time() - cpu0
+        return {key: (rows, stats, seconds, time.thread_time() - cpu0)}
 
     workers = max(1, min(len(jobs), thread_count() if threads is None else int(threads)))
     with ThreadPoolExecutor(workers) as pool:
-        done = dict(zip(jobs, pool.map(one, jobs)))
+        done = {(job[0], key): result for job, results in zip(jobs, pool.map(one, jobs))
+                for key, result in results.items()}
     out = {}
     for key, data in sets.items():
         raw_rows, raw_stats, _ = _residual_summary(data, floor)

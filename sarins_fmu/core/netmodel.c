@@ -439,6 +439,40 @@ int sarins_comp_run(const sarins_comp *c, double *state, int64_t n, const double
     return SARINS_NET_OK;
 }
 
+int64_t sarins_comp_streams_work(const sarins_comp *c, int64_t n_streams)
+{
+    if (c->kind < SARINS_NET_KIND_LSTM)
+        return 0;
+    return n_streams * (SARINS_COMP_N_IN + SARINS_COMP_N_OUT) + sarins_rnn_streams_work(&c->rnn, n_streams);
+}
+
+int sarins_comp_run_streams(const sarins_comp *c, int64_t n_streams, double *states, int64_t n, const double *x,
+                            double *y, double *work)
+{
+    if (c->kind < SARINS_NET_KIND_LSTM || n_streams < 1 || n_streams > SARINS_RNN_MAX_STREAMS)
+        return SARINS_NET_KIND;
+    const int64_t size = sarins_rnn_state_size(&c->rnn);
+    double *zin = work, *z = work + n_streams * SARINS_COMP_N_IN, *rest = z + n_streams * SARINS_COMP_N_OUT;
+    for (int64_t i = 0; i < n; i++) {
+        for (int64_t s = 0; s < n_streams; s++) {
+            const double *xs = x + (s * n + i) * SARINS_COMP_N_IN;
+            if (!inputs_finite(xs))
+                return SARINS_NET_INPUT;
+            if (!c->memory)
+                memset(states + s * size, 0, (size_t)size * sizeof(double));
+            sarins_standardize(1, SARINS_COMP_N_IN, xs, c->in_mean, c->in_scale, zin + s * SARINS_COMP_N_IN);
+        }
+        sarins_rnn_step_streams(&c->rnn, n_streams, states, zin, z, rest);
+        for (int64_t s = 0; s < n_streams; s++) {
+            int status = comp_finish(c, x + (s * n + i) * SARINS_COMP_N_IN, z + s * SARINS_COMP_N_OUT,
+                                     y + (s * n + i) * SARINS_COMP_N_OUT);
+            if (status != SARINS_NET_OK)
+                return status;
+        }
+    }
+    return SARINS_NET_OK;
+}
+
 /* ---------------------------------------------------------------- handles (ctypes binding) */
 
 sarins_axial *sarins_axial_open(const unsigned char *buf, size_t n, char *msg, size_t msg_len)

@@ -90,6 +90,17 @@ int64_t sarins_comp_grnn_per_candidate(const sarins_comp *c);
  * may share it).  SARINS_NET_* status (x non-finite: SARINS_NET_INPUT, nothing written for that row on). */
 int sarins_comp_run(const sarins_comp *c, double *state, int64_t n, const double *x, double *y, double *scratch);
 
+/* Doubles of sarins_comp_run_streams' work for n_streams series (0 when c is not recurrent). */
+int64_t sarins_comp_streams_work(const sarins_comp *c, int64_t n_streams);
+
+/* sarins_comp_run of n_streams (1 .. SARINS_RNN_MAX_STREAMS) independent series of a recurrent compensator side by
+ * side, n samples each: x[s][n][7] -> y[s][n][6], states[s][sarins_comp_state_size] advanced in place; each
+ * series' numbers are sarins_comp_run's bit for bit (the in-process batch evaluation: the series share the
+ * weights while they are in cache).  work: sarins_comp_streams_work doubles.  SARINS_NET_* status
+ * (SARINS_NET_KIND when c is not recurrent or n_streams is out of range; x non-finite: SARINS_NET_INPUT). */
+int sarins_comp_run_streams(const sarins_comp *c, int64_t n_streams, double *states, int64_t n, const double *x,
+                            double *y, double *work);
+
 /* The truncated GRNN (sarins_grnn_eval_blocks, nets.h) of a GRNN compensator over the rows x[n][7] -> y[n][6],
  * row_ptr, cand_ptr, cand, log_cut, kept as there; scratch holds the largest block's candidate count times
  * (2 + d + 6) doubles, d the GRNN's inputs (sarins_grnn_block_scratch, nets.h).  The

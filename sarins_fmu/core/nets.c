@@ -254,64 +254,84 @@ static void affine(int64_t rows, int64_t cols, const double *w, const double *v,
     }
 }
 
-/* g[rows] = W v + b with W given transposed, wt[cols][rows] (wt[j][i] = W[i][j]): each g[i] is summed from 0.0
- * in order j = 0 .. cols-1 and then b[i] added, exactly as affine does, so the result is the same bit for bit;
- * 32 rows at a time in registers (with GCC or clang as eight four-lane vectors, each lane the scalar
- * operation: SSE2's and AVX's mulpd and addpd round as mulsd and addsd, and fp-contract is off, smath.h;
- * compiled for AVX2 too where the loader can pick it, as smath.c's lane functions). */
+/* g[rows] = W v + b with W given transposed, wt[cols][rows] (wt[j][i] = W[i][j]), for n_streams vectors v (the
+ * s-th at v + s v_stride, its result at g + s g_stride; skip[s] != 0 (skip may be NULL): stream s left out):
+ * each g[i] is summed from 0.0 in order j = 0 .. cols-1 and then b[i] added, exactly as affine does, so the
+ * result is the same bit for bit; 32 rows at a time in registers (with GCC or clang as eight four-lane vectors,
+ * each lane the scalar operation: SSE2's and AVX's mulpd and addpd round as mulsd and addsd, and fp-contract is
+ * off, smath.h; compiled for AVX2 too where the loader can pick it, as smath.c's lane functions).  The streams
+ * take each block of rows in turn, so a block's weights (32 cols doubles) are read from memory once for all
+ * of them and from the first level of cache for the others. */
 
-NET_CLONES static void affine_t(int64_t rows, int64_t cols, const double *wt, const double *v, const double *b,
-                                double *g)
+NET_CLONES static void affine_t(int64_t rows, int64_t cols, const double *wt, int64_t n_streams, const double *v,
+                                int64_t v_stride, const double *b, double *g, int64_t g_stride,
+                                const unsigned char *skip)
 {
     int64_t i = 0;
 #if defined(__GNUC__) || defined(__clang__)
     for (; i + 32 <= rows; i += 32) { /* eight independent sums in flight: the adds' latency hidden */
-        net_v4 s0 = {0.0, 0.0, 0.0, 0.0}, s1 = s0, s2 = s0, s3 = s0, s4 = s0, s5 = s0, s6 = s0, s7 = s0;
-        for (int64_t j = 0; j < cols; j++) {
-            const net_v4 vj = {v[j], v[j], v[j], v[j]};
-            const double *col = wt + j * rows + i;
-            net_v4 w0, w1, w2, w3, w4, w5, w6, w7;
-            memcpy(&w0, col, sizeof w0);
-            memcpy(&w1, col + 4, sizeof w1);
-            memcpy(&w2, col + 8, sizeof w2);
-            memcpy(&w3, col + 12, sizeof w3);
-            memcpy(&w4, col + 16, sizeof w4);
-            memcpy(&w5, col + 20, sizeof w5);
-            memcpy(&w6, col + 24, sizeof w6);
-            memcpy(&w7, col + 28, sizeof w7);
-            s0 += vj * w0;
-            s1 += vj * w1;
-            s2 += vj * w2;
-            s3 += vj * w3;
-            s4 += vj * w4;
-            s5 += vj * w5;
-            s6 += vj * w6;
-            s7 += vj * w7;
-        }
-        net_v4 acc[8] = {s0, s1, s2, s3, s4, s5, s6, s7}, bias;
-        for (int q = 0; q < 8; q++) {
-            memcpy(&bias, b + i + 4 * q, sizeof bias);
-            acc[q] += bias;
-            memcpy(g + i + 4 * q, &acc[q], sizeof bias);
+        for (int64_t s = 0; s < n_streams; s++) {
+            if (skip != NULL && skip[s])
+                continue;
+            const double *vs = v + s * v_stride;
+            net_v4 s0 = {0.0, 0.0, 0.0, 0.0}, s1 = s0, s2 = s0, s3 = s0, s4 = s0, s5 = s0, s6 = s0, s7 = s0;
+            for (int64_t j = 0; j < cols; j++) {
+                const net_v4 vj = {vs[j], vs[j], vs[j], vs[j]};
+                const double *col = wt + j * rows + i;
+                net_v4 w0, w1, w2, w3, w4, w5, w6, w7;
+                memcpy(&w0, col, sizeof w0);
+                memcpy(&w1, col + 4, sizeof w1);
+                memcpy(&w2, col + 8, sizeof w2);
+                memcpy(&w3, col + 12, sizeof w3);
+                memcpy(&w4, col + 16, sizeof w4);
+                memcpy(&w5, col + 20, sizeof w5);
+                memcpy(&w6, col + 24, sizeof w6);
+                memcpy(&w7, col + 28, sizeof w7);
+                s0 += vj * w0;
+                s1 += vj * w1;
+                s2 += vj * w2;
+                s3 += vj * w3;
+                s4 += vj * w4;
+                s5 += vj * w5;
+                s6 += vj * w6;
+                s7 += vj * w7;
+            }
+            net_v4 acc[8] = {s0, s1, s2, s3, s4, s5, s6, s7}, bias;
+            double *gs = g + s * g_stride;
+            for (int q = 0; q < 8; q++) {
+                memcpy(&bias, b + i + 4 * q, sizeof bias);
+                acc[q] += bias;
+                memcpy(gs + i + 4 * q, &acc[q], sizeof bias);
+            }
         }
     }
     for (; i + 4 <= rows; i += 4) {
-        net_v4 s0 = {0.0, 0.0, 0.0, 0.0}, w0;
-        for (int64_t j = 0; j < cols; j++) {
-            const net_v4 vj = {v[j], v[j], v[j], v[j]};
-            memcpy(&w0, wt + j * rows + i, sizeof w0);
-            s0 += vj * w0;
+        for (int64_t s = 0; s < n_streams; s++) {
+            if (skip != NULL && skip[s])
+                continue;
+            const double *vs = v + s * v_stride;
+            net_v4 s0 = {0.0, 0.0, 0.0, 0.0}, w0;
+            for (int64_t j = 0; j < cols; j++) {
+                const net_v4 vj = {vs[j], vs[j], vs[j], vs[j]};
+                memcpy(&w0, wt + j * rows + i, sizeof w0);
+                s0 += vj * w0;
+            }
+            memcpy(&w0, b + i, sizeof w0);
+            s0 += w0;
+            memcpy(g + s * g_stride + i, &s0, sizeof s0);
         }
-        memcpy(&w0, b + i, sizeof w0);
-        s0 += w0;
-        memcpy(g + i, &s0, sizeof s0);
     }
 #endif
     for (; i < rows; i++) {
-        double s = 0.0;
-        for (int64_t j = 0; j < cols; j++)
-            s += v[j] * wt[j * rows + i];
-        g[i] = s + b[i];
+        for (int64_t s = 0; s < n_streams; s++) {
+            if (skip != NULL && skip[s])
+                continue;
+            const double *vs = v + s * v_stride;
+            double sum = 0.0;
+            for (int64_t j = 0; j < cols; j++)
+                sum += vs[j] * wt[j * rows + i];
+            g[s * g_stride + i] = sum + b[i];
+        }
     }
 }
 
@@ -325,18 +345,11 @@ static int all_zero(int64_t n, const double *v)
     return 1;
 }
 
-/* One layer: input in[n_in], hidden h[hid] and cell c[hid] advanced in place. */
-static void rnn_layer(const sarins_rnn *net, int l, const double *in, int64_t n_in, double *h, double *c)
+/* The gates of one layer of one stream from gi = W_ih in + b_ih and gh = W_hh h + b_hh (both [G hid], used as
+ * work space): hidden h[hid] and cell c[hid] advanced in place. */
+static void rnn_gates(const sarins_rnn *net, double *gi, double *gh, double *h, double *c)
 {
     const int64_t hid = net->hidden;
-    double gi[4 * SARINS_RNN_MAX_HIDDEN], gh[4 * SARINS_RNN_MAX_HIDDEN];
-    const int64_t g = net->cell == SARINS_RNN_LSTM ? 4 : 3;
-    affine_t(g * hid, n_in, net->w_ih[l], in, net->b_ih[l], gi);
-    if (all_zero(hid, h)) /* a zero state (a series' start, a memoryless control): the sums are exactly +0 */
-        for (int64_t k = 0; k < g * hid; k++)
-            gh[k] = 0.0 + net->b_hh[l][k]; /* what affine_t gives: 0.0 + (+-0) ... = +0, then + b */
-    else
-        affine_t(g * hid, hid, net->w_hh[l], h, net->b_hh[l], gh);
     /* the gate nonlinearities over all lanes at once (sm_tanh_lanes: SIMD, the same bits in every lane), in place
      * in gi and gh: the logistic function as 0.5 (1 + tanh(x / 2)): exact in form, no overflow of exp(-x) */
     if (net->cell == SARINS_RNN_LSTM) {
@@ -372,18 +385,48 @@ static void rnn_layer(const sarins_rnn *net, int l, const double *in, int64_t n_
     }
 }
 
+/* Layer l of every stream: input in + s in_stride [n_in], state + s state_size advanced in place; gi, gh:
+ * n_streams G hid doubles each. */
+static void rnn_layer(const sarins_rnn *net, int l, int64_t n_streams, const double *in, int64_t in_stride,
+                      int64_t n_in, double *state, int64_t state_size, double *gi, double *gh)
+{
+    const int64_t hid = net->hidden, rows = (net->cell == SARINS_RNN_LSTM ? 4 : 3) * hid;
+    unsigned char zero[SARINS_RNN_MAX_STREAMS];
+    double *h = state + l * hid, *c = state + ((int64_t)net->layers + l) * hid;
+    affine_t(rows, n_in, net->w_ih[l], n_streams, in, in_stride, net->b_ih[l], gi, rows, NULL);
+    for (int64_t s = 0; s < n_streams; s++) {
+        /* a zero state (a series' start, a memoryless control): the sums are exactly +0 */
+        zero[s] = (unsigned char)all_zero(hid, h + s * state_size);
+        if (zero[s])
+            for (int64_t k = 0; k < rows; k++)
+                gh[s * rows + k] = 0.0 + net->b_hh[l][k]; /* what affine_t gives: 0.0 + (+-0) ... = +0, then + b */
+    }
+    affine_t(rows, hid, net->w_hh[l], n_streams, h, state_size, net->b_hh[l], gh, rows, zero);
+    for (int64_t s = 0; s < n_streams; s++)
+        rnn_gates(net, gi + s * rows, gh + s * rows, h + s * state_size, c + s * state_size);
+}
+
+void sarins_rnn_step_streams(const sarins_rnn *net, int64_t n_streams, double *state, const double *x, double *y,
+                             double *work)
+{
+    const int64_t hid = net->hidden, size = sarins_rnn_state_size(net);
+    double *gi = work, *gh = work + n_streams * (net->cell == SARINS_RNN_LSTM ? 4 : 3) * hid;
+    const double *in = x;
+    int64_t n_in = net->n_in, in_stride = net->n_in;
+    for (int l = 0; l < net->layers; l++) {
+        rnn_layer(net, l, n_streams, in, in_stride, n_in, state, size, gi, gh);
+        in = state + l * hid;
+        n_in = hid;
+        in_stride = size;
+    }
+    for (int64_t s = 0; s < n_streams; s++)
+        affine(net->n_out, hid, net->w_out, in + s * size, net->b_out, y + s * net->n_out);
+}
+
 void sarins_rnn_step(const sarins_rnn *net, double *state, const double *x, double *y)
 {
-    const int64_t hid = net->hidden;
-    double *h = state, *c = state + (int64_t)net->layers * hid;
-    const double *in = x;
-    int64_t n_in = net->n_in;
-    for (int l = 0; l < net->layers; l++) {
-        rnn_layer(net, l, in, n_in, h + l * hid, c + l * hid);
-        in = h + l * hid;
-        n_in = hid;
-    }
-    affine(net->n_out, hid, net->w_out, in, net->b_out, y);
+    double work[2 * 4 * SARINS_RNN_MAX_HIDDEN];
+    sarins_rnn_step_streams(net, 1, state, x, y, work);
 }
 
 int sarins_triad_compensate(const double *k, const double *b, int64_t n, const double *y, double *u)

@@ -14,6 +14,7 @@
 
 #define SARINS_RNN_MAX_HIDDEN 256 /* most units of a recurrent layer */
 #define SARINS_RNN_MAX_LAYERS 3   /* most stacked recurrent layers */
+#define SARINS_RNN_MAX_STREAMS 8  /* most series one call of sarins_rnn_step_streams advances */
 #define SARINS_RNN_MAX_IO 64      /* most inputs / outputs of a recurrent network */
 #define SARINS_NET_MAX_INPUTS 64  /* most inputs d of an RBF or GRNN row */
 
@@ -103,6 +104,19 @@ void sarins_rnn_transpose(int64_t rows, int64_t cols, const double *src, double 
 
 /* One time step: input x[n_in], state advanced in place, output y[n_out]. */
 void sarins_rnn_step(const sarins_rnn *net, double *state, const double *x, double *y);
+
+/* One time step of n_streams (1 .. SARINS_RNN_MAX_STREAMS) independent series side by side: inputs x[s][n_in],
+ * states state[s][sarins_rnn_state_size] advanced in place, outputs y[s][n_out]; each stream's numbers are those
+ * of sarins_rnn_step bit for bit (the streams share each block of weights while it is in cache); work holds
+ * sarins_rnn_streams_work(net, n_streams) doubles. */
+void sarins_rnn_step_streams(const sarins_rnn *net, int64_t n_streams, double *state, const double *x, double *y,
+                             double *work);
+
+/* Doubles of sarins_rnn_step_streams' work: 2 n_streams G hidden (G = 4 for the LSTM, 3 for the GRU). */
+static inline int64_t sarins_rnn_streams_work(const sarins_rnn *net, int64_t n_streams)
+{
+    return 2 * n_streams * (net->cell == SARINS_RNN_LSTM ? 4 : 3) * net->hidden;
+}
 
 /* u[n][3] = K^-1 (y[n][3] - b), K (3 x 3, row-major) by LU with partial pivoting.  Returns 0, or 1 when K is
  * singular (u untouched). */

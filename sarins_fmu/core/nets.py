@@ -20,6 +20,7 @@ from ._lib import function
 _I64, _F64, _P, _SZ = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p, ctypes.c_size_t
 
 MAX_INPUTS = 64  # SARINS_NET_MAX_INPUTS
+MAX_STREAMS = 8  # SARINS_RNN_MAX_STREAMS
 COMP_N_IN, COMP_N_OUT = 7, 6
 STATUS = {1: "an input is not finite", 2: "the result is not finite", 3: "a calibration matrix K is singular",
           4: "not a GRNN compensator"}
@@ -40,6 +41,8 @@ _comp_state = function("sarins_comp_state_size", _I64, _P)
 _comp_scratch = function("sarins_comp_scratch_size", _I64, _P)
 _comp_per_candidate = function("sarins_comp_grnn_per_candidate", _I64, _P)
 _comp_run = function("sarins_comp_run", ctypes.c_int, _P, _P, _I64, _P, _P, _P)
+_comp_streams_work = function("sarins_comp_streams_work", _I64, _P, _I64)
+_comp_run_streams = function("sarins_comp_run_streams", ctypes.c_int, _P, _I64, _P, _I64, _P, _P, _P)
 _comp_grnn_blocks = function("sarins_comp_run_grnn_blocks", ctypes.c_int, _P, _I64, _P, _P, _P, _F64, _P, _P, _P, _P)
 
 
@@ -204,6 +207,33 @@ class CompensatorModel(_Handle):
         if status:
             raise ValueError(f"compensator: {STATUS[status]}")
         return out
+
+    def run_streams(self, xs, states) -> list[np.ndarray]:
+        """:meth:`run` of up to :data:`MAX_STREAMS` independent series side by side (a recurrent compensator):
+        ``xs`` a list of (n, 7) row arrays of one length n, ``states`` one state each (advanced in place);
+        returns each series' rows (n, 6), bit for bit those of :meth:`run` (``sarins_comp_run_streams``: the
+        series share each block of the weights while it is in cache)."""
+        if not 1 <= len(xs) == len(states) <= MAX_STREAMS:
+            raise ValueError(f"1 to {MAX_STREAMS} series with one state each expected, got {len(xs)} and "
+                             f"{len(states)}")
+        rows = [_rows(x, COMP_N_IN) for x in xs]
+        if len({r.shape[0] for r in rows}) != 1:
+            raise ValueError(f"the series must have one length, got {[r.shape[0] for r in rows]}")
+        if self.state_size == 0:
+            raise ValueError("run_streams needs a recurrent compensator")
+        states = [_arrays.written(st, (self.state_size,), "state") for st in states]
+        n, k = rows[0].shape[0], len(rows)
+        x = np.stack(rows)
+        packed = np.stack(states)
+        out = np.empty((k, n, COMP_N_OUT))
+        work = np.empty(int(_comp_streams_work(self.ptr, k)))
+        status = _comp_run_streams(self.ptr, k, packed.ctypes.data, n, x.ctypes.data, out.ctypes.data,
+                                   work.ctypes.data)
+        for state, new in zip(states, packed):
+            state[:] = new
+        if status:
+            raise ValueError(f"compensator: {STATUS[status]}")
+        return list(out)
 
     def run_grnn_blocks(self, x, blocks) -> tuple[np.ndarray, np.ndarray]:
         """Compensated rows (n, 6) of x (n, 7) by the truncated GRNN (``sarins_comp_run_grnn_blocks``) over the

@@ -500,6 +500,34 @@ class RecurrentCompensator(_Residual):
         z /= self.input_scale  # in place: the same numbers as (x - mean) / scale
         return z
 
+    def predict_batch_streams(self, sources):
+        """:meth:`predict_batch_chunks` of up to eight independent series side by side (the campaign's test
+        sets): ``sources`` a list of iterables of (m, 7) chunks, one per series.  Yields, for each call of
+        the C core, a list of (series index, output rows), each series' rows in its order and bit for bit
+        those :meth:`predict_batch_chunks` gives it alone (``sarins_comp_run_streams``: the series advance
+        in lockstep, sharing each block of the weights while it is in cache; a series that ends leaves the
+        others to go on)."""
+        native = self.native()
+        chunks = [iter(source) for source in sources]
+        states = [native.zero_state() for _ in chunks]
+        pending: list = [np.empty((0, N_IN)) for _ in chunks]
+        active = list(range(len(chunks)))
+        while active:
+            for k in list(active):
+                while len(pending[k]) == 0:
+                    chunk = next(chunks[k], None)
+                    if chunk is None:
+                        active.remove(k)
+                        break
+                    pending[k] = _check_xy(chunk)
+            if not active:
+                return
+            m = min(len(pending[k]) for k in active)
+            outs = native.run_streams([pending[k][:m] for k in active], [states[k] for k in active])
+            yield list(zip(active, outs))
+            for k in active:
+                pending[k] = pending[k][m:]
+
     def predict_reference(self, X) -> np.ndarray:
         """:meth:`predict` by the numpy cells (:meth:`.recurrent.RecurrentWeights.step`, float64, BLAS sums):
         the reference the C core is tested against (equal to rounding, bound in tests/test_nets.py)."""
