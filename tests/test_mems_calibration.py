@@ -806,24 +806,38 @@ def test_parallel_fits_and_evaluations_give_the_sequential_numbers():
 
 
 # ------------------------------------------------------------- memory: chunks
+@pytest.mark.parametrize("spool", [None, 0, 1000])
 @pytest.mark.parametrize("rows", [1, 7, 1000, 1 << 16])
-def test_residual_sums_in_chunks_are_the_whole_arrays_statistics_bit_for_bit(rows):
+def test_residual_sums_in_chunks_are_the_whole_arrays_statistics_bit_for_bit(rows, spool, tmp_path, monkeypatch):
+    """Rows kept in memory, all in the temporary file (spool 0) or the first 1000 in memory and the rest in the
+    file: the whole array's statistics bit for bit; the file is in the temporary folder and goes with the
+    object."""
+    import gc
+    import tempfile
+
     from sarins.mems_calibration import analysis
 
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     rng = np.random.default_rng(4)
     r = rng.standard_normal((3001, 6)) * [1e-3, 1.0, 1e3, 1e-6, 5.0, 7.0] + [1.0, 0.0, -3.0, 1e-3, 0.0, 0.0]
     floor = np.array([0.3, 0.0, 10.0, 1e-7, 1.0, 0.1])
-    sums = analysis.ResidualSums()
+    sums = analysis.ResidualSums(spool)
     for a in range(0, len(r), rows):
         sums.add(r[a:a + rows])
     sums.add(r[:0])  # an empty chunk adds nothing
+    assert (sums._spool is not None) == (spool is not None and len(r) > spool)
     got, whole = sums.stats(floor), analysis.residual_stats(r, floor)
     for key in whole:
         np.testing.assert_array_equal(got[key], whole[key], err_msg=key)
-    with pytest.raises(ValueError, match="no residual rows"):
-        analysis.ResidualSums().stats(floor)
+    again = sums.stats(floor)  # the file is read again from its start
+    assert all(np.array_equal(again[key], got[key]) for key in got)
     with pytest.raises(ValueError, match="residual rows"):
         sums.add(r[:3, :4])
+    with pytest.raises(ValueError, match="no residual rows"):
+        analysis.ResidualSums().stats(floor)
+    del sums
+    gc.collect()
+    assert not list(tmp_path.iterdir())  # an unnamed file: nothing left behind
 
 
 def test_dataset_in_chunks_is_the_whole_recordings_bit_for_bit():

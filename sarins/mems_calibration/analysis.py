@@ -45,32 +45,58 @@ def _add_rows(total: np.ndarray | None, rows: np.ndarray) -> np.ndarray:
     return np.add.reduce(np.concatenate([total[None], rows]), axis=0)
 
 
+# rows a ResidualSums keeps in memory; the later ones go to a temporary file (a paper test set's residuals are
+# 135 MB, and the campaign evaluates a recurrent model on three sets at once, two models at a time)
+SPOOL_ROWS = 1 << 18
+
+
 class ResidualSums:
     """:func:`residual_stats` of (n, 6) residuals fed a chunk of rows at a time, in row order, equal to the
     whole array's bit for bit (the same sums in the same order, tests/test_mems_calibration.py).
 
     The std is numpy's two-pass one (the mean first, then the squared deviations from it), so the rows are
-    kept until :meth:`stats` (n x 6 floats; the callers' other temporaries are a chunk long).
+    kept until :meth:`stats`: the first ``spool_rows`` (default :data:`SPOOL_ROWS`) in memory, the rest in an
+    unnamed temporary file (``tempfile.TemporaryFile``, gone when this object is) read back a chunk at a time.
     """
 
-    def __init__(self):
+    def __init__(self, spool_rows: int | None = None):
         self.n = 0
         self._sum = self._abs = self._square = None
         self._chunks = []
+        self._spool_rows = SPOOL_ROWS if spool_rows is None else int(spool_rows)
+        self._spool = None  # the temporary file of the rows after the in-memory ones
+        self._spooled = []  # lengths of the chunks in the file, in order
 
     def add(self, rows: np.ndarray) -> None:
         """Rows (m, 6) following those added so far (m may be 0)."""
         r = np.ascontiguousarray(rows, dtype=float)
-        if r.ndim != 2 or (self._chunks and r.shape[1] != self._chunks[0].shape[1]):
-            raise ValueError(f"residual rows must be (m, {self._chunks[0].shape[1] if self._chunks else 'k'}), "
-                             f"got {r.shape}")
+        if r.ndim != 2 or (self.n and r.shape[1] != self._width):
+            raise ValueError(f"residual rows must be (m, {self._width if self.n else 'k'}), got {r.shape}")
         if not len(r):
             return
+        self._width = r.shape[1]
         self._sum = _add_rows(self._sum, r)
         self._abs = _add_rows(self._abs, np.abs(r))
         self._square = _add_rows(self._square, r * r)
-        self._chunks.append(r)
+        if self._spool is None and self.n + len(r) <= self._spool_rows:
+            self._chunks.append(r)
+        else:
+            if self._spool is None:
+                import tempfile
+
+                self._spool = tempfile.TemporaryFile()
+            r.tofile(self._spool)
+            self._spooled.append(len(r))
         self.n += len(r)
+
+    def _kept(self):
+        """The rows added, a chunk at a time, in order."""
+        yield from self._chunks
+        if self._spool is not None:
+            self._spool.flush()
+            self._spool.seek(0)
+            for m in self._spooled:
+                yield np.fromfile(self._spool, dtype=float, count=m * self._width).reshape(m, self._width)
 
     def stats(self, floor: np.ndarray) -> dict:
         """:func:`residual_stats` of every row added (at least one)."""
@@ -78,7 +104,7 @@ class ResidualSums:
             raise ValueError("no residual rows were added")
         mean = self._sum / self.n
         deviation = None
-        for r in self._chunks:
+        for r in self._kept():
             d = r - mean
             deviation = _add_rows(deviation, np.multiply(d, d, out=d))
         return {"mean": mean, "std": np.sqrt(deviation / self.n), "mae": self._abs / self.n,
