@@ -114,6 +114,8 @@ def _cases():
     mems = ["campaign", "mems-calibration", "--out", "{tmp}/c"]
     cases += [("mems --models bogus", mems + ["--models", "bogus"], "bogus"),
               ("mems --models empty", mems + ["--models", ","], "model"),
+              ("mems --device tpu", mems + ["--device", "tpu"], "--device"),
+              ("mems --device cuda:99", mems + ["--device", "cuda:99"], "--device"),
               ("mems --rnn-steps 0", mems + ["--rnn-steps", "0"], "--rnn-steps"),
               ("mems --rnn-steps huge", mems + ["--rnn-steps", str(10**12)], "--rnn-steps"),
               ("mems --grnn-patterns -1", mems + ["--grnn-patterns", "-1"], "--grnn-patterns"),

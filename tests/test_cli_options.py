@@ -32,6 +32,8 @@ IGNORED = [
      "--grnn-patterns"),
     (["campaign", "mems-calibration", "--out", "{tmp}/c", "--models", "grnn", "--rbf-samples", "5"],
      "--rbf-samples"),
+    (["campaign", "mems-calibration", "--out", "{tmp}/c", "--models", "traditional,grnn", "--device", "cpu"],
+     "--device"),
     (["build-fmus", "--out", "{tmp}/fmus", "--only", "IMUCompensator"], "--only IMUCompensator"),
 ]
 

@@ -357,6 +357,65 @@ def test_recurrent_without_torch_names_the_extra(monkeypatch):
     assert not recurrent.torch_available()
 
 
+def test_training_device_names(monkeypatch):
+    """cpu as given, auto by what torch sees, CUDA names checked against the devices torch sees; every other
+    name refused; without torch auto is the CPU and a CUDA name asks for the extra."""
+    assert recurrent.training_device() == "cpu" and recurrent.training_device(" CPU ") == "cpu"
+    for bad in ("gpu", "tpu", "mps", "cuda:x", "cpu:0", "cuda:", ""):
+        with pytest.raises(ValueError, match="unknown training device"):
+            recurrent.training_device(bad)
+    if recurrent.torch_available():
+        import torch
+
+        seen = torch.cuda.device_count() if torch.cuda.is_available() else 0
+        assert recurrent.training_device("auto") == ("cuda" if seen else "cpu")
+        with pytest.raises(ValueError, match=f"sees {seen} CUDA device"):
+            recurrent.training_device(f"cuda:{seen}")
+        monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
+        monkeypatch.setattr(torch.cuda, "device_count", lambda: 2)
+        assert recurrent.training_device("auto") == "cuda" and recurrent.training_device("cuda:1") == "cuda:1"
+        with pytest.raises(ValueError, match="sees 2 CUDA device"):
+            recurrent.training_device("cuda:2")
+        monkeypatch.undo()
+    monkeypatch.setitem(sys.modules, "torch", None)
+    assert recurrent.training_device("auto") == "cpu"
+    with pytest.raises(ImportError, match=r"sarins-fmu\[deep\]"):
+        recurrent.training_device("cuda")
+
+
+@needs_torch
+def test_training_on_the_cpu_device_is_the_default():
+    """device='cpu' (and 'auto' where torch sees no GPU) trains the very weights of the default."""
+    import torch
+
+    z, t = _toy_series(400)
+    runs = [recurrent.train("gru", z, t[:, :6], hidden=8, steps=5, seq_len=50, streams=4, threads=1, **extra)
+            for extra in ({}, {"device": "cpu"}) + (({"device": "auto"},) if not torch.cuda.is_available() else ())]
+    for weights, losses in runs[1:]:
+        assert np.array_equal(losses, runs[0][1])
+        assert all(np.array_equal(a, runs[0][0].arrays()[k]) for k, a in weights.arrays().items())
+
+
+@needs_torch
+@pytest.mark.skipif(not recurrent.torch_available() or not __import__("torch").cuda.is_available(),
+                    reason="no CUDA GPU that torch sees (a CPU build of torch, or no GPU)")
+@pytest.mark.parametrize("cell", ["lstm", "gru"])
+def test_training_on_a_gpu_learns_what_the_cpu_learns(cell):
+    """On a GPU: the same initial weights (first loss equal to float32 rounding), the same fit of a tiny
+    sequence that needs memory (both below 0.01, from above 0.2), and the same weights from run to run
+    (cuDNN's deterministic kernels)."""
+    rng = np.random.default_rng(1)
+    z = rng.standard_normal((64, 7))
+    t = np.column_stack([np.tanh(np.cumsum(z[:, :3], axis=0) / 4), z[:, 3:6] * 0.5])
+    opts = dict(hidden=16, steps=150, seq_len=64, streams=1, lr=2e-2, seed=0, threads=1)
+    cpu, cpu_losses = recurrent.train(cell, z, t, **opts)
+    gpu, gpu_losses = recurrent.train(cell, z, t, device="cuda", **opts)
+    again, _ = recurrent.train(cell, z, t, device="cuda", **opts)
+    assert abs(gpu_losses[0] - cpu_losses[0]) <= 1e-5 * cpu_losses[0]
+    assert gpu_losses[0] > 0.2 and gpu_losses[-1] < 0.01 and cpu_losses[-1] < 0.01
+    assert all(np.array_equal(a, gpu.arrays()[k]) for k, a in again.arrays().items())
+
+
 # --------------------------------------------------------------- co-simulation
 @pytest.mark.integration
 def test_cosimulated_recording_equals_in_process(fmu_dir, tmp_path):

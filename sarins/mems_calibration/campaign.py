@@ -82,6 +82,10 @@ def add_arguments(parser) -> None:
                              "traditional model's held-out std reduction is seed 003 Table 3's 4.7 %% (quick-profile "
                              "trials, in process) and run the campaign on that calibrated unit too (report section "
                              "'Calibrated unit'; the headline stays the sourced unit's)")
+    parser.add_argument("--device", default="auto",
+                        help="where torch trains the recurrent models: auto (default: a CUDA GPU when torch sees "
+                             "one, else the CPU), cpu, cuda or cuda:N; the networks are evaluated on the CPU either "
+                             "way (docs/mems-calibration.md, 'Training device')")
     parser.add_argument("--refit", action="store_true",
                         help="fit the models again even if <out>/models holds them from a run with the same options")
 
@@ -118,6 +122,7 @@ def run(args) -> int:
     for key in ("rnn_steps", "grnn_patterns", "rbf_samples"):
         if getattr(args, key) is not None:
             options[key] = getattr(args, key)
+    options["device"] = _device(args, kinds + ablation_kinds)
     skipped = []
     if any(k in RECURRENT for k in kinds + ablation_kinds) and not recurrent.torch_available():
         skipped = sorted({k for k in kinds + ablation_kinds if k in RECURRENT})
@@ -172,6 +177,22 @@ def run_calibrated(profile_name: str, out: Path, *, kinds, seed=3, progress=True
     sub = run_mems_calibration(profile_name, folder, kinds=kinds, seed=seed, progress=progress, scale=fit.k, **campaign)
     keep = ("profile", "n_test", "reductions", "order", "table3", "report", "reductions_repowered", "scale")
     return {"fit": asdict(fit), "summary": {key: sub[key] for key in keep}}
+
+
+def _device(args, kinds) -> str:
+    """The training device of the recurrent models (``--device`` resolved before any fitting process
+    forks; 'cpu' when no recurrent model is fitted or torch is missing).  UsageError for a device torch
+    lacks, and for ``--device`` given when no recurrent model is fitted."""
+    from sarins.cli import UsageError, refuse_unless
+    from sarins_fmu.identify import recurrent
+
+    fitted = any(k in RECURRENT for k in kinds)
+    refuse_unless(args, {"device": "--device"}, fitted,
+                  "applies to the recurrent models, none of which --models (or the ablation models) fits")
+    try:
+        return recurrent.training_device(args.device) if fitted else "cpu"
+    except (ValueError, ImportError) as exc:
+        raise UsageError(f"--device: {exc}") from None
 
 
 def _refuse_unused(args, kinds, ablation_kinds, ablating: bool) -> None:
@@ -531,7 +552,7 @@ def _lazy(recs, key: str) -> dict:
 def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, scheduler=None, progress=True, seed=3,
                          report_dir=None, rnn_steps=400, grnn_patterns=5000, rbf_samples=10000, skipped=(),
                          refit=False, ablations=(), ablation_kinds=(), engine="inprocess", check_samples=None,
-                         scale: float = 1.0, calibrated: dict | None = None) -> dict:
+                         scale: float = 1.0, calibrated: dict | None = None, device: str = "cpu") -> dict:
     """The whole campaign; returns the summary (also written to ``<out>/summary.json``).
 
     Like the recordings, fitted models are reused: ``<out>/models/<kind>.npz``
@@ -542,6 +563,7 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     preset's unsourced time-correlated sizes
     (:data:`~sarins_fmu.experiments.mems_calibration.CALIBRATED_TERMS`; 1: the sourced unit).
     ``calibrated``: the result of :func:`run_calibrated`, reported in the section 'Calibrated unit'.
+    ``device``: where torch trains the recurrent models (resolved, :func:`.recurrent.training_device`).
 
     Memory: the recordings are streamed to disk as they are recorded and read back a slice at a time; the
     data sets are written to ``<out>/datasets`` a part at a time and read back a chunk at a time; the
@@ -576,7 +598,7 @@ def run_mems_calibration(profile_name: str, out: Path, *, kinds, workers=None, s
     progress_lines.start("datasets", "truth of every sample, the traditional calibration")
     report_dir = Path(report_dir) if report_dir else out
     report_dir.mkdir(parents=True, exist_ok=True)
-    options = dict(rnn_steps=rnn_steps, grnn_patterns=grnn_patterns, rbf_samples=rbf_samples)
+    options = dict(rnn_steps=rnn_steps, grnn_patterns=grnn_patterns, rbf_samples=rbf_samples, device=device)
     train, sets, fit, key, series = build_datasets(recs, prof, out / "datasets", options, check_samples)
     figures = [rep.programme_figure(report_dir / "fig_programmes.png", series, prof).name]
     del series

@@ -27,7 +27,7 @@ _TRAIN = None  # the training set a forked fitting process inherits (not pickled
 
 
 def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_samples: int, seed: int = 0,
-               log=None, workers: int | None = None) -> dict:
+               log=None, workers: int | None = None, device: str = "cpu") -> dict:
     """Fitted compensators by name (the traditional one from the calibration fit ``fit``; the controls of
     :data:`CONTROLS` as memoryless recurrent compensators) on ``train``: a data set in memory, or a
     :class:`.storage.StoredSet`, which every fit (in the fitting processes and in this one) reads from disk a
@@ -36,7 +36,9 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
     The recurrent fits (one torch thread each) run side by side in ``workers`` forked processes (default
     ``SARINS_THREADS`` or every core), longest first; the others in this process meanwhile.  Each fit is
     seeded, so the models do not depend on ``workers``.  ``log``: optional callable taking one line of
-    progress text.
+    progress text.  ``device``: where torch trains the recurrent models (a name
+    :func:`sarins_fmu.identify.recurrent.training_device` has resolved); on a GPU they are fitted one after
+    another in this process (one GPU, and CUDA does not survive a fork), the other models after them.
     """
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -45,10 +47,12 @@ def fit_models(kinds, train, fit, *, rnn_steps: int, grnn_patterns: int, rbf_sam
 
     global _TRAIN
     stored = hasattr(train, "column")  # a StoredSet: the fitting processes read it from disk
-    rnn = dict(steps=rnn_steps, seed=seed, seq_len=RNN_WINDOW, streams=RNN_STREAMS)
+    rnn = dict(steps=rnn_steps, seed=seed, seq_len=RNN_WINDOW, streams=RNN_STREAMS, device=device)
     options = {"rbf": dict(max_samples=rbf_samples), "grnn": dict(max_patterns=grnn_patterns)}
     recurrent_kinds = sorted((k for k in kinds if k in RECURRENT), key=lambda k: -STEP_MS.get(k, 100.0))
     workers = min(len(recurrent_kinds), thread_count() if workers is None else int(workers))
+    if device != "cpu":
+        workers = 1
     models, pending = {}, {}
     pool = None
     if workers > 1 and "fork" in multiprocessing.get_all_start_methods():

@@ -585,7 +585,9 @@ def markdown(summary: dict, fit_tables: str, figures: list[str]) -> str:
               f"RBF trained on at most {o['rbf_samples']} evenly spaced "
               f"samples (2000 centre candidates). Recurrent models: {o['rnn_steps']} NAdam steps on windows of "
               f"{s['rnn_window']} samples read by {s['rnn_streams']} parallel streams, state carried; prediction "
-              "runs the test series statefully from a zero state. All networks learn the correction y - x "
+              "runs the test series statefully from a zero state"
+              + (f" (trained on {o['device']}, evaluated on the CPU)" if o.get("device", "cpu") != "cpu" else "")
+              + ". All networks learn the correction y - x "
               "(standardised), see docs/mems-calibration.md."
               + (f" The third power-up is evaluated on its first {s['n_check']} samples."
                  if s.get("n_check") not in (None, s["n_test"]) else "")]

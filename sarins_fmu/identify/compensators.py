@@ -465,11 +465,13 @@ class RecurrentCompensator(_Residual):
     network is small, and on a shared machine more threads mostly contend).
     ``memory=False``: the control without memory (every sample from a zero
     state, :func:`.recurrent.train`), not seed 003's method.
+    ``device``: where torch trains it (:func:`.recurrent.training_device`;
+    the prediction always runs on the CPU, in the C core).
     """
 
     def __init__(self, cell: str = "gru", *, hidden: int = 60, layers: int = 1, steps: int = 4000,
                  seq_len: int = 100, streams: int = 32, lr: float = 2e-3, seed: int = 0, threads: int = 1,
-                 memory: bool = True):
+                 memory: bool = True, device: str = "cpu"):
         super().__init__()
         self.cell = recurrent._check_cell(cell)
         if (self.cell, int(layers)) not in RECURRENT_KINDS.values():
@@ -477,7 +479,7 @@ class RecurrentCompensator(_Residual):
                              f"layer'), got {layers}")
         self.options = dict(hidden=int(hidden), layers=int(layers), steps=int(steps), seq_len=int(seq_len),
                             streams=int(streams), lr=float(lr), seed=int(seed), threads=int(threads),
-                            memory=bool(memory))
+                            memory=bool(memory), device=str(device))
         self.weights: recurrent.RecurrentWeights | None = None
         self.losses: np.ndarray | None = None
         self.input_mean: np.ndarray | None = None

@@ -37,6 +37,8 @@ step).  Model weights are plain arrays (npz/JSON via the compensator file).
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 
 CELLS = ("lstm", "gru")
@@ -166,6 +168,48 @@ class RecurrentWeights:
         return out
 
 
+DEVICES = ("auto", "cpu", "cuda")
+
+
+def training_device(device: str = "cpu") -> str:
+    """The torch device recurrent training runs on: ``'cpu'``; ``'cuda'`` or ``'cuda:N'`` (a CUDA GPU torch
+    sees, else ValueError); ``'auto'``: ``'cuda'`` when torch is installed and sees a CUDA GPU, else ``'cpu'``.
+
+    Only ``'auto'`` and the CUDA names ask torch about the GPU (which starts the CUDA driver in this process:
+    resolve the device before forking fitting processes, not in them)."""
+    name = str(device).strip().lower()
+    kind, colon, index = name.partition(":")
+    if kind not in DEVICES or (colon and (kind != "cuda" or not index.isdigit())):
+        raise ValueError(f"unknown training device {device!r}; choose auto, cpu, cuda or cuda:N")
+    if kind == "cpu":
+        return "cpu"
+    if kind == "auto" and not torch_available():
+        return "cpu"
+    torch = require_torch()
+    count = torch.cuda.device_count() if torch.cuda.is_available() else 0
+    if kind == "auto":
+        return "cuda" if count else "cpu"
+    if int(index or 0) >= count:
+        raise ValueError(f"training device {device!r}: torch {torch.__version__} sees {count} CUDA device(s)"
+                         + ("" if count else " (a CPU build, or no GPU or driver); use --device cpu"))
+    return name
+
+
+@contextlib.contextmanager
+def _deterministic_gpu(torch, device: str):
+    """cuDNN's deterministic kernels while training on a GPU (the same weights from run to run on one GPU and
+    library version; not the CPU's weights: the sums are ordered differently)."""
+    if device == "cpu":
+        yield
+        return
+    before = torch.backends.cudnn.deterministic, torch.backends.cudnn.benchmark
+    torch.backends.cudnn.deterministic, torch.backends.cudnn.benchmark = True, False
+    try:
+        yield
+    finally:
+        torch.backends.cudnn.deterministic, torch.backends.cudnn.benchmark = before
+
+
 def _torch_module(torch, cell: str, n_in: int, hidden: int, n_out: int, layers: int = 1):
     rnn_cls = torch.nn.LSTM if cell == "lstm" else torch.nn.GRU
 
@@ -215,7 +259,7 @@ def _stream_windows(torch, series, streams: int, piece: int, length: int):
 
 def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, layers: int = 1, steps: int = 4000,
           seq_len: int = 100, streams: int = 32, lr: float = 2e-3, seed: int = 0, threads: int | None = None,
-          memory: bool = True):
+          memory: bool = True, device: str = "cpu"):
     """Train a recurrent network on one standardised time series.
 
     Parameters
@@ -232,6 +276,10 @@ def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, layers: 
         length one starting from a zero state, so the network is a
         feed-forward map of the current input with the same cells, units
         and number of samples per step; predict it with ``memory=False``
+    device : torch device of the training (:func:`training_device`: ``'cpu'`` default, ``'cuda'``,
+        ``'cuda:N'``, ``'auto'``).  The network is initialised on the CPU (the same initial weights on
+        every device) and its weights come back as float64 arrays; on a GPU the sums are ordered
+        otherwise, so the weights are not the CPU's bits (docs/mems-calibration.md, *Training device*).
 
     Returns
     -------
@@ -252,17 +300,27 @@ def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, layers: 
         if int(threads) < 1:
             raise ValueError(f"threads must be at least 1, got {threads}")
         torch.set_num_threads(int(threads))
+    device = training_device(device)
     torch.manual_seed(int(seed))
-    net = _torch_module(torch, cell, z.shape[1], int(hidden), t.shape[1], int(layers))
+    net = _torch_module(torch, cell, z.shape[1], int(hidden), t.shape[1], int(layers)).to(device)
     opt = torch.optim.NAdam(net.parameters(), lr=float(lr))
     piece = n // streams
     windows = piece // seq_len
     # (streams, windows * seq_len, d): contiguous pieces read side by side
-    zs = _stream_windows(torch, z, streams, piece, windows * seq_len)
-    ts = _stream_windows(torch, t, streams, piece, windows * seq_len)
-    losses = np.empty(int(steps))
+    zs = _stream_windows(torch, z, streams, piece, windows * seq_len).to(device)
+    ts = _stream_windows(torch, t, streams, piece, windows * seq_len).to(device)
+    with _deterministic_gpu(torch, device):
+        losses = _optimise(net, opt, zs, ts, int(steps), int(seq_len), windows, memory)
+    return _to_weights(cell, net), losses
+
+
+def _optimise(net, opt, zs, ts, steps: int, seq_len: int, windows: int, memory: bool) -> np.ndarray:
+    """The training loop of :func:`train`: one NAdam step per window of every stream; the losses (steps,)."""
+    import torch
+
+    losses = np.empty(steps)
     state = None
-    for k in range(int(steps)):  # one optimisation step per window
+    for k in range(steps):  # one optimisation step per window
         w = k % windows
         if w == 0:
             state = None  # a new pass over the series starts from a zero state
@@ -279,7 +337,7 @@ def train(cell: str, z: np.ndarray, t: np.ndarray, *, hidden: int = 60, layers: 
         opt.step()
         state = tuple(s.detach() for s in state) if isinstance(state, tuple) else state.detach()
         losses[k] = loss.item()
-    return _to_weights(cell, net), losses
+    return losses
 
 
 RUN_CHUNK = 1 << 16  # samples per forward call of :func:`run` (bounds torch's workspace: ~0.1 GB a layer)
