@@ -271,6 +271,21 @@ def evaluate(models: dict, test, floor, *, log=None, stream_samples: int = 300):
 EVAL_ROWS = 1 << 17
 
 
+def _inputs(data, targets: list, reading: list):
+    """The inputs X of ``data``, :data:`EVAL_ROWS` rows at a time, in order; each chunk's targets Y appended to
+    ``targets`` and the seconds spent reading added to ``reading[0]``."""
+    chunks = data.chunks(EVAL_ROWS)
+    while True:
+        t0 = time.perf_counter()
+        try:
+            X, Y = next(chunks)
+        except StopIteration:
+            return
+        reading[0] += time.perf_counter() - t0
+        targets.append(Y)
+        yield X
+
+
 def _residual_chunks(data, predict=None):
     """(residual chunk, prediction seconds) over ``data`` :data:`EVAL_ROWS` rows at a time, in order:
     ``predict`` (a model's :meth:`predict_batch_chunks`) minus the targets, or the raw output X[:, :6] - Y
@@ -278,24 +293,11 @@ def _residual_chunks(data, predict=None):
     import numpy as np
 
     targets, reading = [], [0.0]
-
-    def inputs():
-        chunks = data.chunks(EVAL_ROWS)
-        while True:
-            t0 = time.perf_counter()
-            try:
-                X, Y = next(chunks)
-            except StopIteration:
-                return
-            reading[0] += time.perf_counter() - t0
-            targets.append(Y)
-            yield X
-
     if predict is None:
-        for X in inputs():
+        for X in _inputs(data, targets, reading):
             yield X[:, :6] - targets.pop(0), 0.0
         return
-    outputs = predict(inputs())
+    outputs = predict(_inputs(data, targets, reading))
     while True:
         t0, read0 = time.perf_counter(), reading[0]
         try:
@@ -349,21 +351,8 @@ def _streamed_summaries(model, sets: dict, floor) -> dict:
     keys = list(sets)
     targets = {k: [] for k in keys}
     reading = [0.0]
-
-    def inputs(key):
-        chunks = sets[key].chunks(EVAL_ROWS)
-        while True:
-            t0 = time.perf_counter()
-            try:
-                X, Y = next(chunks)
-            except StopIteration:
-                return
-            reading[0] += time.perf_counter() - t0
-            targets[key].append(Y)
-            yield X
-
     summaries = {k: _Summary(len(sets[k])) for k in keys}
-    outputs = model.predict_batch_streams([inputs(k) for k in keys])
+    outputs = model.predict_batch_streams([_inputs(sets[k], targets[k], reading) for k in keys])
     while True:
         t0, read0 = time.perf_counter(), reading[0]
         try:
