@@ -5,7 +5,8 @@ names one, so nothing is reused) and prints, from the campaign's ``summary.json`
 
 * the whole run: wall, CPU (user + system of the campaign and its fitting processes) and peak resident set
   (``/usr/bin/time -v``), and the machine's 1-min load average at the start and the end;
-* per phase: wall and CPU seconds (this process and its finished children, ``summary['phases']``);
+* per phase: wall and CPU seconds (this process and its finished children, ``summary['phases']``) and the
+  campaign's up-front estimate (the reference machine's cost model, before the progress display scales it);
 * per fitted model: the fitting thread's CPU seconds and the fit's wall time (the recurrent fits run side by
   side in forked processes, one torch thread each);
 * per (model, evaluated set): the evaluating thread's CPU seconds (``summary['evaluation_cpu_s']``).
@@ -59,7 +60,8 @@ def tables(summary: dict, whole: dict) -> dict:
     fits = {name: dict(cpu_s=info.get("fit_cpu_s"), wall_s=info.get("fit_s")) for name, info in models.items()}
     evaluation = summary.get("evaluation_cpu_s", {})
     return dict(whole=whole, load_average=summary.get("load_average"), fit_load_average=summary.get("fit_load_average"),
-                phases={k: dict(wall_s=v["wall_s"], cpu_s=v["cpu_s"], peak_rss_mb=v.get("peak_rss_mb"))
+                phases={k: dict(wall_s=v["wall_s"], cpu_s=v["cpu_s"], peak_rss_mb=v.get("peak_rss_mb"),
+                                estimate_s=v.get("estimate_s"))
                         for k, v in summary.get("phases", {}).items()},
                 fits=fits, evaluation=evaluation)
 
@@ -79,10 +81,10 @@ def report(numbers: dict) -> str:
         lines.append(f"1-min load average: {load[0]:.2f} at the start, {load[1]:.2f} at the end "
                      f"(fits: {numbers.get('fit_load_average')})")
     lines.append("")
-    lines.append(f"{'phase':12s} {'wall s':>8s} {'CPU s':>8s} {'peak RSS MB':>12s}")
+    lines.append(f"{'phase':12s} {'wall s':>8s} {'CPU s':>8s} {'peak RSS MB':>12s} {'estimate s':>11s}")
     for name, row in numbers["phases"].items():
         lines.append(f"{name:12s} {_num(row['wall_s'], '8.1f')} {_num(row['cpu_s'], '8.1f')} "
-                     f"{_num(row['peak_rss_mb'], '12.0f')}")
+                     f"{_num(row['peak_rss_mb'], '12.0f')} {_num(row.get('estimate_s'), '11.1f')}")
     lines.append("")
     lines.append(f"{'fit':16s} {'CPU s':>8s} {'wall s':>8s}")
     for name, row in numbers["fits"].items():

@@ -831,7 +831,9 @@ def test_campaign_estimates_cover_every_phase():
                     ["rbf"], rnn_steps=400, grnn_patterns=5000, rbf_samples=10000)
     assert list(est) == ["recording", "datasets", "fitting", "evaluation", "ablation", "report", "done"]
     assert all(v > 0 for k, v in est.items() if k != "done")
-    assert est["fitting"] >= 400 * 0.108  # the GRU-3's steps at least (one process each)
+    from sarins.mems_calibration.fitting import STEP_MS
+
+    assert est["fitting"] >= 400 * STEP_MS["gru3"] / 1e3  # the GRU-3's steps at least (one process each)
 
 
 def test_parallel_fits_and_evaluations_give_the_sequential_numbers():

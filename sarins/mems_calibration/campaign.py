@@ -387,7 +387,7 @@ def evaluate_sets(models: dict, sets: dict, floor, *, log=None, stream_samples=N
     # a job per set
     together = [name for name, model in models.items() if hasattr(model, "predict_batch_streams") and len(sets) > 1]
     jobs = [(name, key) for key in sets for name in models if name not in together] + [(name, None) for name in together]
-    jobs.sort(key=lambda job: -EVAL_US_PER_SAMPLE.get(job[0].replace("-memoryless", ""), 1.0) * (
+    jobs.sort(key=lambda job: -_eval_us(job[0]) * (
         len(sets[job[1]]) if job[1] is not None else sum(len(d) for d in sets.values())))
 
     def one(job):
@@ -439,8 +439,18 @@ def thinning(n: int) -> int:
 # CPU cost of evaluating one sample (us, this machine: the evaluating thread's CPU seconds per sample of the quick
 # campaign, reading and residual sums included, benchmarks/bench_mems_phases.py): orders the evaluations, longest
 # first, and estimates the phase (the memoryless controls are charged their recurrent model's cost)
-EVAL_US_PER_SAMPLE = {"traditional": 0.2, "rbf": 0.3, "grnn": 0.8, "lstm": 2.9, "gru": 2.1, "lstm3": 12.0,
-                      "gru3": 7.3}
+# C-core evaluation, CPU us per sample, one thread (the reference machine: the 2-core machine of 2026-12-07,
+# paper campaign, summary['evaluation_cpu_s'] / samples; the GRNN's grows with its patterns, :func:`_eval_us`)
+EVAL_US_PER_SAMPLE = {"traditional": 0.17, "rbf": 0.24, "lstm": 2.2, "gru": 1.6, "lstm3": 7.0, "gru3": 5.6,
+                      "lstm-memoryless": 1.4, "gru-memoryless": 1.0}
+GRNN_US = (0.15, 0.042)  # GRNN: us per sample, fixed + per 1000 patterns (quick 5000: 0.35, paper 20000: 0.98)
+
+
+def _eval_us(name: str, grnn_patterns: int = 20000) -> float:
+    """Estimated evaluation CPU us per sample of model ``name`` (:data:`EVAL_US_PER_SAMPLE`)."""
+    if name == "grnn":
+        return GRNN_US[0] + GRNN_US[1] * grnn_patterns / 1e3
+    return EVAL_US_PER_SAMPLE.get(name, EVAL_US_PER_SAMPLE.get(name.replace("-memoryless", ""), 1.0))
 
 
 def _stream_us(model, rows) -> float | None:
@@ -654,10 +664,12 @@ def _wall_s(path: Path) -> float:
         return float(data["wall_s"]) if "wall_s" in data.files else float("nan")
 
 
-# in-process recording, CPU s per recorded sample (this machine; co-simulated: about 150 us per master step)
-RECORD_S_PER_SAMPLE = {"inprocess": 5e-6, "cosim": 150e-6}
-DATASET_S_PER_SAMPLE = 2.0e-6  # truth and inputs of one dynamic sample, s
-RBF_FIT_S_PER_SAMPLE = 9e-4  # RBF fit (2000 candidates, 30 neurons), s per training sample
+# The campaign's cost model on the reference machine (the 2-core machine of 2026-12-07: quick and paper
+# campaigns, benchmarks/bench_mems_phases.py).  Recording, CPU s per recorded sample: in process measured;
+# co-simulated hypothetical (150 us per master step on an earlier machine, scaled by the in-process ratio 2.2/5)
+RECORD_S_PER_SAMPLE = {"inprocess": 2.2e-6, "cosim": 66e-6}
+DATASET_S_PER_SAMPLE = 0.68e-6  # truth and inputs of one dynamic sample, s
+RBF_FIT_S_PER_SAMPLE = 1.4e-4  # RBF fit (2000 candidates, 30 neurons), CPU s per training sample
 
 
 def estimates(prof, kinds, engine, workers, check_samples, ablations, ablation_kinds, *, rnn_steps, grnn_patterns,
@@ -677,17 +689,17 @@ def estimates(prof, kinds, engine, workers, check_samples, ablations, ablation_k
     n_dyn = n["dynamic"] + n["heldout"] + n["repowered"]
     n_check = n["heldout"] if check_samples is None else min(check_samples, n["heldout"])
 
-    def fits(names):
+    def fits(names):  # the recurrent fits in the fitting processes, the RBF in this one beside them
         steps = [rnn_steps * STEP_MS.get(k, 100.0) / 1e3 for k in names if k in RECURRENT]
         rbf = RBF_FIT_S_PER_SAMPLE * min(rbf_samples, n["dynamic"]) if "rbf" in names else 0.0
-        return max(sum(steps) / parallel, max(steps, default=0.0)) + rbf
+        return max((sum(steps) + rbf) / parallel, max(steps, default=0.0), rbf) + 1.0
 
     def evaluations(names, samples):
-        return sum(EVAL_US_PER_SAMPLE.get(k.replace("-memoryless", ""), 1.0) for k in names) * samples / 1e6 / cores
+        return sum(_eval_us(k, grnn_patterns) for k in names) * samples / 1e6 / cores
 
     record = RECORD_S_PER_SAMPLE[engine] * (sum(n.values()) + 2 * len(ablations) * (n["dynamic"] + n["heldout"]))
     record_parallel = workers or cores
-    return {"recording": record / max(1, min(cores, record_parallel)) + 3.0, "datasets": DATASET_S_PER_SAMPLE * n_dyn + 2.0,
+    return {"recording": record / max(1, min(cores, record_parallel)) + 0.5, "datasets": DATASET_S_PER_SAMPLE * n_dyn,
             "fitting": fits(kinds), "evaluation": evaluations(kinds, 2 * n["heldout"] + n_check),
             "ablation": len(ablations) * (fits(ablation_kinds) + evaluations(ablation_kinds, n["heldout"])),
-            "report": 5.0 + (3.0 if any(k in RECURRENT for k in kinds) else 0.0), "done": 0.0}
+            "report": 1.0 + (1.2 if any(k in RECURRENT for k in kinds) else 0.0), "done": 0.0}

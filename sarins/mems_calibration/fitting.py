@@ -20,9 +20,10 @@ RECURRENT = ("lstm", "gru", "lstm3", "gru3") + tuple(CONTROLS)
 RNN_WINDOW, RNN_STREAMS = 100, 32  # truncated-BPTT window (samples) and parallel streams (seed 003 gives neither)
 
 
-# one training step (ms, window 100, 32 streams, one thread, this machine): orders the fits, longest first
-STEP_MS = {"lstm": 13.0, "gru": 47.0, "lstm3": 91.0, "gru3": 108.0, "lstm-memoryless": 13.0,
-           "gru-memoryless": 13.0}
+# one training step, CPU ms (window 100, 32 streams, one thread; the 2-core machine of 2026-12-07, the paper
+# campaign's fit CPU / 4000 steps, the quick campaign's within 10 %): the campaign's time estimate, and the
+# order of the fits, longest first
+STEP_MS = {"lstm": 5.7, "gru": 14.9, "lstm3": 16.0, "gru3": 49.8, "lstm-memoryless": 5.9, "gru-memoryless": 6.1}
 _TRAIN = None  # the training set a forked fitting process inherits (not pickled to it)
 
 
