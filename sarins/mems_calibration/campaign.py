@@ -190,7 +190,7 @@ def _device(args, kinds) -> str:
     refuse_unless(args, {"device": "--device"}, fitted,
                   "applies to the recurrent models, none of which --models (or the ablation models) fits")
     try:
-        return recurrent.training_device(args.device) if fitted else "cpu"
+        return recurrent.training_device(getattr(args, "device", "auto")) if fitted else "cpu"
     except (ValueError, ImportError) as exc:
         raise UsageError(f"--device: {exc}") from None
 
