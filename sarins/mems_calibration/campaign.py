@@ -297,15 +297,20 @@ def _residual_chunks(data, predict=None):
         for X in _inputs(data, targets, reading):
             yield X[:, :6] - targets.pop(0), 0.0
         return
-    outputs = predict(_inputs(data, targets, reading))
+    for out, seconds in _timed(predict(_inputs(data, targets, reading)), reading):
+        yield np.subtract(out, targets.pop(0), out=out), seconds
+
+
+def _timed(outputs, reading: list):
+    """(item, seconds) for each item of the iterator ``outputs``: the seconds its making took, less the
+    seconds of input reading counted in ``reading[0]`` meanwhile."""
     while True:
         t0, read0 = time.perf_counter(), reading[0]
         try:
-            out = next(outputs)
+            item = next(outputs)
         except StopIteration:
             return
-        seconds = time.perf_counter() - t0 - (reading[0] - read0)
-        yield np.subtract(out, targets.pop(0), out=out), seconds
+        yield item, time.perf_counter() - t0 - (reading[0] - read0)
 
 
 class _Summary:
@@ -353,13 +358,7 @@ def _streamed_summaries(model, sets: dict, floor) -> dict:
     reading = [0.0]
     summaries = {k: _Summary(len(sets[k])) for k in keys}
     outputs = model.predict_batch_streams([_inputs(sets[k], targets[k], reading) for k in keys])
-    while True:
-        t0, read0 = time.perf_counter(), reading[0]
-        try:
-            step = next(outputs)
-        except StopIteration:
-            break
-        seconds = time.perf_counter() - t0 - (reading[0] - read0)
+    for step, seconds in _timed(outputs, reading):
         rows = sum(len(out) for _, out in step)
         for index, out in step:
             key = keys[index]
