@@ -61,6 +61,7 @@ class ResidualSums:
 
     def __init__(self, spool_rows: int | None = None):
         self.n = 0
+        self._width = None  # columns of the rows, set by the first non-empty chunk
         self._sum = self._abs = self._square = None
         self._chunks = []
         self._spool_rows = SPOOL_ROWS if spool_rows is None else int(spool_rows)
@@ -70,8 +71,8 @@ class ResidualSums:
     def add(self, rows: np.ndarray) -> None:
         """Rows (m, 6) following those added so far (m may be 0)."""
         r = np.ascontiguousarray(rows, dtype=float)
-        if r.ndim != 2 or (self.n and r.shape[1] != self._width):
-            raise ValueError(f"residual rows must be (m, {self._width if self.n else 'k'}), got {r.shape}")
+        if r.ndim != 2 or (self._width is not None and r.shape[1] != self._width):
+            raise ValueError(f"residual rows must be (m, {self._width or 'k'}), got {r.shape}")
         if not len(r):
             return
         self._width = r.shape[1]

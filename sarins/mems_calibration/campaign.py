@@ -435,21 +435,21 @@ def thinning(n: int) -> int:
     return max(1, n // FIGURE_POINTS)
 
 
-# CPU cost of evaluating one sample (us, this machine: the evaluating thread's CPU seconds per sample of the quick
-# campaign, reading and residual sums included, benchmarks/bench_mems_phases.py): orders the evaluations, longest
-# first, and estimates the phase (the memoryless controls are charged their recurrent model's cost)
-# C-core evaluation, CPU us per sample, one thread (the reference machine: the 2-core machine of 2026-12-07,
-# paper campaign, summary['evaluation_cpu_s'] / samples; the GRNN's grows with its patterns, :func:`_eval_us`)
+# CPU cost of evaluating one sample, us (the evaluating thread's CPU seconds per sample, reading and residual
+# sums included: the reference machine, the 2-core machine of 2026-12-07, paper campaign,
+# summary['evaluation_cpu_s'] / samples, benchmarks/bench_mems_phases.py): orders the evaluations, longest
+# first, and estimates the phase; the GRNN's grows with its patterns (:func:`_eval_us`)
 EVAL_US_PER_SAMPLE = {"traditional": 0.17, "rbf": 0.24, "lstm": 2.2, "gru": 1.6, "lstm3": 7.0, "gru3": 5.6,
                       "lstm-memoryless": 1.4, "gru-memoryless": 1.0}
 GRNN_US = (0.15, 0.042)  # GRNN: us per sample, fixed + per 1000 patterns (quick 5000: 0.35, paper 20000: 0.98)
 
 
 def _eval_us(name: str, grnn_patterns: int = 20000) -> float:
-    """Estimated evaluation CPU us per sample of model ``name`` (:data:`EVAL_US_PER_SAMPLE`)."""
+    """Estimated evaluation CPU us per sample of model ``name`` (:data:`EVAL_US_PER_SAMPLE`; 1 for a name it
+    lacks)."""
     if name == "grnn":
         return GRNN_US[0] + GRNN_US[1] * grnn_patterns / 1e3
-    return EVAL_US_PER_SAMPLE.get(name, EVAL_US_PER_SAMPLE.get(name.replace("-memoryless", ""), 1.0))
+    return EVAL_US_PER_SAMPLE.get(name, 1.0)
 
 
 def _stream_us(model, rows) -> float | None:
