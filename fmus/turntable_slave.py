@@ -7,6 +7,7 @@ contract.  ``fmus/native_fmu.py`` writes the model description and the C variabl
 
 from pythonfmu import Fmi2Slave
 
+from fmus.native_fmu import ArrayVariable
 from fmus.slave_support import declare, default_experiment, OUTPUT, PARAMETER
 from sarins_fmu import turntable
 from sarins_fmu.units import DEG_TO_RAD
@@ -29,8 +30,29 @@ class Turntable(Fmi2Slave):
         "are state outputs (no direct feedthrough). A connected IMU rebuilds the motion over its step [t, t+h] "
         "exactly from the set tagged t: under Jacobi it receives that set, under Gauss-Seidel (turntable "
         "stepped first) it receives the set tagged t + h and uses the one it kept from its previous step. "
-        "Angles are not wrapped. Nothing but the schedule and the time is held between steps.")
+        "Angles are not wrapped. Nothing but the schedule and the time is held between steps. "
+        "Sub-intervals (n_sub = K, default 1; the *_sub arrays are FMI 3.0 only, and the FMI 2.0 variant refuses "
+        "K > 1): element k of each *_sub array is the output of the same name that this turntable with n_sub = 1 "
+        "stepped at h / K shows at motion_time + k h / K (times on the master's grid begin + j h / K), so the "
+        "schedule breakpoints need only lie on the grid of h / K (a step may span them; the chamber profile's "
+        "corners need not: each sub-interval's ambient is the chord of the profile, as at n_sub = 1). The "
+        "scalars keep their meaning at motion_time: angle and rate there, accel the acceleration holding from "
+        "there to the first sub-interval boundary (= accel_j_sub[0]; not constant over a step that spans a "
+        "breakpoint: read the arrays), ambient_temp_rate the slope over the whole step [motion_time, "
+        "motion_time + h] (= ambient_temp_rate_sub[0] only if K = 1 or the ambient is linear over the step). "
+        "At initialisation, before h is known, the sub-intervals are taken grid long (exact for h = K grid).")
     default_experiment = default_experiment(1.0)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
+    # FMI 3.0 only (fmus/native_fmu.py): every sub-interval of the coming step, n_sub elements each
+    fmi3_arrays = tuple(
+        ArrayVariable(f"{name}_sub", "n_sub", "output", f"{what} at the start of each of the n_sub sub-intervals "
+                      f"of the coming step, in time order [{unit}]")
+        for name, what, unit in (
+            *((f"angle_{j}", f"angle of gimbal {j}", "rad") for j in (1, 2, 3)),
+            *((f"rate_{j}", f"angular rate of gimbal {j}", "rad/s") for j in (1, 2, 3)),
+            *((f"accel_{j}", f"angular acceleration of gimbal {j} (holding over the sub-interval)", "rad/s2")
+              for j in (1, 2, 3)),
+            ("ambient_temp", "ambient / chamber temperature", "degC"),
+            ("ambient_temp_rate", "slope of the ambient over the sub-interval", "degC/s")))
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -79,6 +101,12 @@ class Turntable(Fmi2Slave):
                 "slope of the ambient over the step from motion_time [degC/s]", 0.0)
         declare(self, "real", "motion_time", OUTPUT, "time tag: start of the segment the outputs describe [s]", 0.0)
         declare(self, "integer", "n_gimbals", OUTPUT, "number of gimbals in use [1]", 1)
+        # last, so that the value references of the variables above stay those of the earlier builds
+        declare(self, "integer", "n_sub", PARAMETER,
+                "sub-intervals per communication step [1]: the *_sub arrays describe the K sub-intervals of "
+                "h / K of the coming step, and the schedule's breakpoints need only lie on the grid of h / K. "
+                "1: one interval per step. FMI 3.0: a structural parameter, the length of the *_sub arrays; "
+                "FMI 2.0 (no arrays): 1 only", 1)
 
     def do_step(self, current_time, step_size):
         raise NotImplementedError("the Turntable FMU is native: fmus/c/turntable/model.c computes it (this class "

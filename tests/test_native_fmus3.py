@@ -1,10 +1,11 @@
 """FMI 3.0 variants of the native FMUs (fmus/c/fmi3_glue.c over glue_core.c, the same model.c as FMI 2.0).
 
-Checked on the Turntable: fmpy validate and the FMI 3.0 model description (same variables as FMI 2.0, plus
-time); FMPy's simulate_fmu of the FMI 3.0 FMU equals the FMI 2.0 FMU bit for bit; the master runs it in a
-system beside the FMI 2.0 one with the same numbers; FMU state get/set and serialisation round trips, and
-refused blobs; calls out of order or with bad arguments give fmi3Error with a logged reason; the binary
-imports no Python and exports fmi3* only; sources/ builds with its documented line.
+Checked on the Turntable: fmpy validate and the FMI 3.0 model description (same variables as FMI 2.0, n_sub
+a structural parameter, plus the *_sub arrays and time); FMPy's simulate_fmu of the FMI 3.0 FMU equals
+the FMI 2.0 FMU bit for bit; the master runs it in a system beside the FMI 2.0 one with the same numbers;
+FMU state get/set and serialisation round trips, and refused blobs; calls out of order or with bad
+arguments give fmi3Error with a logged reason; the binary imports no Python and exports fmi3* only;
+sources/ builds with its documented line.
 """
 
 from __future__ import annotations
@@ -91,10 +92,15 @@ def test_fmi3_turntable_validates_and_declares_the_fmi2_variables(turntables, un
     assert (cs["canGetAndSetFMUState"], cs["canSerializeFMUState"], cs["needsExecutionTool"]) == ("true", "true",
                                                                                                 "false")
     kinds = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": "String"}
-    v2 = [(v.name, v.valueReference, kinds[v.type], v.causality, v.variability) for v in md2.modelVariables]
+    structural = {"n_sub": ("UInt64", "structuralParameter")}  # sizes the *_sub arrays (FMI 3.0 only)
+    v2 = [(v.name, v.valueReference, *structural.get(v.name, (kinds[v.type], v.causality)), v.variability)
+          for v in md2.modelVariables]
     v3 = [(v.name, v.valueReference, v.type, v.causality, v.variability) for v in md3.modelVariables]
-    assert v3[:-1] == v2
-    assert v3[-1] == ("time", len(v2), "Float64", "independent", "continuous")
+    assert v3[:len(v2)] == v2
+    sub = [f"{name}_sub" for name in [f"{q}_{j}" for q in ("angle", "rate", "accel") for j in (1, 2, 3)]
+           + ["ambient_temp", "ambient_temp_rate"]]
+    assert v3[len(v2):-1] == [(name, len(v2) + k, "Float64", "output", "continuous") for k, name in enumerate(sub)]
+    assert v3[-1] == ("time", len(v2) + len(sub), "Float64", "independent", "continuous")
     outputs = [v.valueReference for v in md3.modelVariables if v.causality == "output"]
     assert [u.variable.valueReference for u in md3.outputs] == outputs
     assert sorted(u.variable.valueReference for u in md3.initialUnknowns) == outputs
@@ -193,7 +199,7 @@ def test_bad_calls_return_fmi3_error_with_a_logged_reason(turntables, unzipped):
     refused(lambda: s.setInt32([t.vr["rate"]], [1]), "rate", "not an Integer")
     refused(lambda: s.setFloat64([len(t.md.modelVariables) - 1], [3.0]), "time", "cannot be set")
     refused(lambda: s.setString([t.vr["scheme"]], ["x" * 5000]), "scheme", "at most 4095")
-    refused(lambda: s.enterConfigurationMode(), "no structural parameters")
+    refused(lambda: s.setUInt64([t.vr["n_sub"]], [2]), "n_sub", "cannot be set in state 'instantiated'")
     refused(lambda: s.enterEventMode(), "fmi3EnterEventMode", "hasEventMode is false")
     refused(lambda: s.getFloat32([vr_out]), "fmi3GetFloat32", "no Float32 variables")
     values = (fmi3Float64 * 2)(1.0, 2.0)

@@ -6,6 +6,14 @@
  * the motion segment that starts at motion_time: the state at motion_time and the acceleration holding from
  * there; ambient_temp at motion_time and its slope over [motion_time, motion_time + h] (before the first
  * step over [start, start + grid]).  Units: rad, rad/s, rad/s^2, s, degC, degC/s.
+ *
+ * Sub-intervals (n_sub = K, default 1).  The *_sub arrays (FMI 3.0 outputs, c->a in both versions) hold
+ * the outputs this turntable with n_sub = 1 stepped at s = h / K shows at each communication point of the
+ * coming step: element 0 at motion_time, element k >= 1 at (start + (m - 1) s) + s, m the index of that
+ * point on the grid of s (a master's begin + j s, then the turntable's t + s), each with the ambient's slope
+ * over [time, time + s].  The breakpoints of the schedule need only lie on the grid of s.  The scalars are
+ * element 0's but for ambient_temp_rate, still the slope over the whole step (element 0's when K = 1).
+ * Before the first step s is taken as grid.  The FMI 2.0 variant, which has no arrays, refuses K > 1.
  */
 #include "smath.h"
 
@@ -48,7 +56,24 @@ static int refuse(sarins_ctx *c, const char *fmt, const char *name, double value
     return SARINS_ERROR;
 }
 
-/* Every parameter check of the Python slave, in its order and with its messages' meaning. */
+/* n_sub in 1 .. max_dim; above 1 only where the arrays are visible (FMI 3.0). */
+static int check_n_sub(const sarins_ctx *c)
+{
+    int n_sub = c->i[SARINS_I_n_sub];
+    if (n_sub < 1 || n_sub > SARINS_TABLE.max_dim) {
+        sarins_log(c, SARINS_ERROR, "parameter n_sub = %d must be an integer in [1, %d]", n_sub,
+                   SARINS_TABLE.max_dim);
+        return SARINS_ERROR;
+    }
+    if (n_sub > 1 && !sarins_arrays_visible(c)) {
+        sarins_log(c, SARINS_ERROR, "parameter n_sub = %d describes the sub-intervals in the *_sub array outputs, "
+                   "which only the FMI 3.0 variant of this FMU has; use 1 here", n_sub);
+        return SARINS_ERROR;
+    }
+    return SARINS_OK;
+}
+
+/* Every parameter check of the Python slave, in its order and with its messages' meaning; then n_sub. */
 static int check_parameters(sarins_ctx *c)
 {
     static const struct { const char *name; int slot; } finite[] = {
@@ -97,7 +122,7 @@ static int check_parameters(sarins_ctx *c)
                    c->i[SARINS_I_revolutions], INT32_LIMIT);
         return SARINS_ERROR;
     }
-    return SARINS_OK;
+    return check_n_sub(c);
 }
 
 static void schedule_params(const sarins_ctx *c, sarins_schedule_params *p)
@@ -141,8 +166,19 @@ static void chamber_params(const sarins_ctx *c, sarins_chamber_params *p)
     p->step_hold = (r[SARINS_R_chamber_step_hold] / 60.0) * 60.0;
 }
 
-/* Outputs at `time` (s): gimbal state, ambient and its slope over [time, time + span]. */
-static int publish(sarins_ctx *c, const tt_work *w, double time, double span)
+/* The outputs at one time, in the order of OUT_SLOTS and SUB_ARRAYS. */
+enum { N_OUT = 11, OUT_AMBIENT = 9, OUT_AMBIENT_RATE = 10 };
+static const int OUT_SLOTS[N_OUT] = {
+    SARINS_R_angle_1, SARINS_R_angle_2, SARINS_R_angle_3, SARINS_R_rate_1, SARINS_R_rate_2, SARINS_R_rate_3,
+    SARINS_R_accel_1, SARINS_R_accel_2, SARINS_R_accel_3, SARINS_R_ambient_temp, SARINS_R_ambient_temp_rate};
+static const int SUB_ARRAYS[N_OUT] = {
+    SARINS_A_angle_1_sub, SARINS_A_angle_2_sub, SARINS_A_angle_3_sub, SARINS_A_rate_1_sub, SARINS_A_rate_2_sub,
+    SARINS_A_rate_3_sub, SARINS_A_accel_1_sub, SARINS_A_accel_2_sub, SARINS_A_accel_3_sub,
+    SARINS_A_ambient_temp_sub, SARINS_A_ambient_temp_rate_sub};
+
+/* The outputs at `time` (s) into out: gimbal angles, rates and the acceleration holding from there (0
+ * beyond the gimbals in use), the ambient and its slope over [time, time + span]. */
+static int motion_at(const sarins_ctx *c, const tt_work *w, double time, double span, double out[N_OUT])
 {
     const sarins_schedule *s = &w->schedule;
     double angle[SARINS_SCHEDULE_MAX_AXES], rate[SARINS_SCHEDULE_MAX_AXES], acc[SARINS_SCHEDULE_MAX_AXES];
@@ -150,26 +186,49 @@ static int publish(sarins_ctx *c, const tt_work *w, double time, double span)
         sarins_log(c, SARINS_ERROR, "ValueError: time must be finite (motion time %g)", time);
         return SARINS_ERROR;
     }
-    double value, slope;
     char msg[256];
-    if (sarins_ambient_segment(&w->ambient, time, span, &value, &slope, msg, sizeof msg) != SARINS_SCHEDULE_OK) {
+    if (sarins_ambient_segment(&w->ambient, time, span, &out[OUT_AMBIENT], &out[OUT_AMBIENT_RATE], msg,
+                               sizeof msg) != SARINS_SCHEDULE_OK) {
         sarins_log(c, SARINS_ERROR, "ValueError: %s", msg);
         return SARINS_ERROR;
     }
     sarins_turntable_state(1, &time, s->n_times, s->n_axes, s->times, s->angle_bp, s->rate_bp, s->accel,
                            s->angle0, s->rate0, angle, rate, acc);
-    static const int angles[3] = {SARINS_R_angle_1, SARINS_R_angle_2, SARINS_R_angle_3};
-    static const int rates[3] = {SARINS_R_rate_1, SARINS_R_rate_2, SARINS_R_rate_3};
-    static const int accels[3] = {SARINS_R_accel_1, SARINS_R_accel_2, SARINS_R_accel_3};
-    for (int64_t j = 0; j < SARINS_SCHEDULE_MAX_AXES; j++) { /* 0 beyond the gimbals in use */
+    for (int64_t j = 0; j < SARINS_SCHEDULE_MAX_AXES; j++) {
         int used = j < s->n_axes;
-        c->r[angles[j]] = used ? angle[j] : 0.0;
-        c->r[rates[j]] = used ? rate[j] : 0.0;
-        c->r[accels[j]] = used ? acc[j] : 0.0;
+        out[j] = used ? angle[j] : 0.0;
+        out[3 + j] = used ? rate[j] : 0.0;
+        out[6 + j] = used ? acc[j] : 0.0;
     }
-    c->r[SARINS_R_ambient_temp] = value;
-    c->r[SARINS_R_ambient_temp_rate] = slope;
+    return SARINS_OK;
+}
+
+/* Scalar outputs at `time` (s), the ambient's slope over [time, time + span]. */
+static int publish(sarins_ctx *c, const tt_work *w, double time, double span)
+{
+    double out[N_OUT];
+    if (motion_at(c, w, time, span, out) != SARINS_OK)
+        return SARINS_ERROR;
+    for (int i = 0; i < N_OUT; i++)
+        c->r[OUT_SLOTS[i]] = out[i];
     c->r[SARINS_R_motion_time] = time;
+    return SARINS_OK;
+}
+
+/* The *_sub arrays: element 0 at `first` (the scalars' motion_time), element k >= 1 at the communication
+ * point (start + (index + k - 1) sub) + sub of a turntable stepped at sub (s) from start; each slope over
+ * sub.  With one element and sub the span of the scalars, the arrays are the scalars. */
+static int publish_sub(sarins_ctx *c, const tt_work *w, double first, double index, double sub)
+{
+    int n_sub = c->i[SARINS_I_n_sub];
+    for (int k = 0; k < n_sub; k++) {
+        double time = k == 0 ? first : (c->start_time + (index + (double)k - 1.0) * sub) + sub;
+        double out[N_OUT];
+        if (motion_at(c, w, time, sub, out) != SARINS_OK)
+            return SARINS_ERROR;
+        for (int i = 0; i < N_OUT; i++)
+            c->a[SUB_ARRAYS[i]][k] = out[i];
+    }
     return SARINS_OK;
 }
 
@@ -270,20 +329,29 @@ static int tt_initialize(sarins_ctx *c)
     c->work = w;
     memset(c->state, 0, sizeof(tt_state));
     c->i[SARINS_I_n_gimbals] = (int)w->schedule.n_axes;
-    return publish(c, w, c->start_time, c->r[SARINS_R_grid]);
+    double grid = c->r[SARINS_R_grid];
+    if (publish(c, w, c->start_time, grid) != SARINS_OK)
+        return SARINS_ERROR;
+    return publish_sub(c, w, c->start_time, 0.0, grid);
 }
 
-/* Every breakpoint on the grid of the communication step (from t = 0), as the IMU needs to rebuild the
- * motion inside a step exactly. */
-static int check_grid(sarins_ctx *c, const sarins_schedule *s, double step)
+/* Every breakpoint on the grid of the sub-interval h / n_sub (from t = 0), as the IMU needs to rebuild the
+ * motion inside a (sub-)interval exactly. */
+static int check_grid(sarins_ctx *c, const sarins_schedule *s, double h, int n_sub)
 {
+    double step = n_sub > 1 ? h / (double)n_sub : h;
     for (int64_t m = 0; m < s->n_times; m++) {
         double n = s->times[m] / step;
-        if (sm_fabs(n - sm_nearbyint(n)) > GRID_TOL * sm_fmax(1.0, sm_fabs(n))) {
+        if (sm_fabs(n - sm_nearbyint(n)) <= GRID_TOL * sm_fmax(1.0, sm_fabs(n)))
+            continue;
+        if (n_sub > 1)
+            sarins_log(c, SARINS_ERROR, "ValueError: turntable breakpoint at t=%.9g s is not on the output grid of "
+                       "step %.17g s / n_sub %d = %.17g s: the IMU cannot rebuild the motion inside a sub-interval "
+                       "exactly", s->times[m], h, n_sub, step);
+        else
             sarins_log(c, SARINS_ERROR, "ValueError: turntable breakpoint at t=%.9g s is not on the output grid of "
                        "step %.17g s: the IMU cannot rebuild the motion inside a step exactly", s->times[m], step);
-            return SARINS_ERROR;
-        }
+        return SARINS_ERROR;
     }
     return SARINS_OK;
 }
@@ -292,9 +360,18 @@ static int tt_do_step(sarins_ctx *c, double t, double h)
 {
     tt_work *w = c->work;
     tt_state *st = c->state;
+    int n_sub = c->i[SARINS_I_n_sub];
     if (!st->have_step) {
-        if (check_grid(c, &w->schedule, h) != SARINS_OK)
+        if (check_grid(c, &w->schedule, h, n_sub) != SARINS_OK)
             return SARINS_ERROR;
+        double grid = c->r[SARINS_R_grid];
+        if (n_sub > 1 && sm_fabs(h / (double)n_sub - grid) > STEP_TOL * grid) {
+            /* the arrays of initialisation (read by a Gauss-Seidel IMU in its first step) are laid out on grid */
+            sarins_log(c, SARINS_ERROR, "ValueError: step %.17g s / n_sub %d = %.17g s must equal grid = %.17g s "
+                       "(the sub-intervals of the arrays at initialisation are grid long)", h, n_sub,
+                       h / (double)n_sub, grid);
+            return SARINS_ERROR;
+        }
     } else if (sm_fabs(h - st->step) > STEP_TOL * st->step) {
         sarins_log(c, SARINS_ERROR, "ValueError: communication step changed from %.17g s to %.17g s; this FMU needs a "
                    "fixed step", st->step, h);
@@ -302,7 +379,13 @@ static int tt_do_step(sarins_ctx *c, double t, double h)
     }
     st->step = h; /* the step as given (the library's check_step keeps the latest) */
     st->have_step = 1;
-    return publish(c, w, t + h, h);
+    if (publish(c, w, t + h, h) != SARINS_OK)
+        return SARINS_ERROR;
+    if (n_sub == 1)
+        return publish_sub(c, w, t + h, 0.0, h);
+    /* the coming step's first sub-interval is number (i + 1) n_sub on the grid of h / n_sub, t = start + i h */
+    double index = (sm_nearbyint((t - c->start_time) / h) + 1.0) * (double)n_sub;
+    return publish_sub(c, w, t + h, index, h / (double)n_sub);
 }
 
 /* Every field of the state within what do_step relies on (model.h, State validation). */
