@@ -59,7 +59,17 @@ class IMUThermal(Fmi2Slave):
                               ("dv", "velocity increment along body", "m/s"))
         for a in "xyz") + (
         ArrayVariable("temp_gyro_z_sub", "n_sub", "output",
-                      "temperature of the gyro_z sensor at the end of each sub-interval of the last step [degC]"),)
+                      "temperature of the gyro_z sensor at the end of each sub-interval of the last step [degC]"),
+    ) + tuple(  # the motion of every sub-interval of the coming step (a Turntable's n_sub arrays), sub_inputs = 1
+        ArrayVariable(f"{q}_{j}_sub", "n_sub", "input", f"sub_inputs = 1: gimbal {j} {what} at the start of each "
+                      f"of the n_sub sub-intervals of the step starting at motion_time, in time order [{unit}]")
+        for q, what, unit in (("angle", "angle", "rad"), ("rate", "rate", "rad/s"),
+                              ("accel", "angular acceleration holding over the sub-interval", "rad/s2"))
+        for j in (1, 2, 3)) + (
+        ArrayVariable("ambient_temp_sub", "n_sub", "input",
+                      "sub_inputs = 1: ambient temperature at the start of each sub-interval [degC]"),
+        ArrayVariable("ambient_temp_rate_sub", "n_sub", "input",
+                      "sub_inputs = 1: slope of the ambient temperature over each sub-interval [degC/s]"))
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -122,6 +132,15 @@ class IMUThermal(Fmi2Slave):
                 "structural parameter, the length of the *_sub arrays", 1)
         for name in imu_params.PERIODIC_NAMES:  # after n_sub, for the same reason
             self._declare_coefficient(name, defaults[name], units[name])
+        # last, for the same reason
+        declare(self, "integer", "sub_inputs", PARAMETER,
+                "0: the scalar motion set, carried forward over the n_sub sub-intervals with its accelerations; "
+                "1 (FMI 3.0 only, static base): the motion of each sub-interval from the *_sub array inputs (a "
+                "Turntable with the same n_sub), tagged motion_time like the scalar set; the same numbers as "
+                "this IMU stepped at h / n_sub with the scalar inputs [1]", 0)
+        declare(self, "integer", "threads", PARAMETER,
+                "threads of a step's sub-interval minor loops, this FMU's own included (1: none started; "
+                "at most 64); the results do not depend on it [1]", 1)
 
     def _declare_coefficient(self, name, start, unit):
         """A model coefficient: setting it overrides the preset (model.c reads the glue's set flag)."""

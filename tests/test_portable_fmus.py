@@ -352,3 +352,47 @@ def test_fmi3_binaries_of_every_platform_give_the_x86_64_linux_numbers(tmp_path,
             runs[system] = table(proc)
         for system in ("x86_64-windows", ARM_PLATFORM):
             assert _rows_differ(runs[system], runs["x86_64-linux"]) == "", (name, system)
+
+
+@pytest.mark.slow
+def test_fmi3_imu_on_its_own_threads_on_every_platform(tmp_path, wine_env):
+    """The FMI 3.0 IMUThermal reading every second's motion from arrays (sub_inputs = 1, 8 s steps) on 2
+    threads (pthreads; the Windows API under wine) from binaries/x86_64-windows and binaries/aarch64-linux:
+    the x86_64-linux bits of its 1 thread run."""
+    from test_native_imu_given_motion import K, MOTION, PARAMS, SUB_OUT, arrays_of
+
+    _need(MINGW, "wine", AARCH64, "qemu-aarch64")
+    cc = _cc()
+    flags = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}"]
+    build_line([cc, *flags, str(HOST3_SRC), "-ldl", "-o", str(tmp_path / "host")])
+    build_line([MINGW, *flags, str(HOST3_SRC), "-static", "-o", str(tmp_path / "host.exe")])
+    arm = _arm_host(tmp_path, HOST3_SRC, fmi=3)
+    fmu = build_native_fmu("IMUThermal", "imu_thermal_slave.py", tmp_path, fmi=3, win64=True, aarch64=True)
+    folder = tmp_path / "IMUThermal"
+    zipfile.ZipFile(fmu).extractall(folder)
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    steps = 12
+    ins = ["motion_time"] + [f"{name}_sub" for name in MOTION]
+    rows = tmp_path / "rows.bin"  # Jacobi: before the step from k K s, the set tagged k K
+    np.array([[j * K] + [x for name in ins[1:] for x in arrays_of(j)[name]] for j in range(steps)],
+             dtype=np.float64).tofile(rows)
+    common = [f"u{vr['n_sub']}={K}", f"i{vr['sub_inputs']}=1", f"s{vr['gimbals']}={PARAMS['gimbals']}",
+              "in=" + ",".join(str(vr[n]) for n in ins), f"nin={1 + 11 * K}", f"rows={rows}",
+              "out=" + ",".join(str(vr[n]) for n in ["increment_end_time", *SUB_OUT]), f"nout={1 + 7 * K}"]
+    runs = {}
+    for system, exe, binary, prefix, threads in (
+            ("one thread", tmp_path / "host", folder / "binaries" / "x86_64-linux" / "IMUThermal.so", [], 1),
+            ("x86_64-linux", tmp_path / "host", folder / "binaries" / "x86_64-linux" / "IMUThermal.so", [], 2),
+            ("x86_64-windows", tmp_path / "host.exe", folder / "binaries" / "x86_64-windows" / "IMUThermal.dll",
+             ["wine"], 2),
+            (ARM_PLATFORM, arm, folder / "binaries" / ARM_PLATFORM / "IMUThermal.so", QEMU, 2)):
+        proc = subprocess.run([*prefix, str(exe), str(binary), md.guid, str(steps), f"{K:.1f}", *common,
+                               f"i{vr['threads']}={threads}"], capture_output=True, text=True, timeout=900,
+                              env=wine_env)
+        assert proc.returncode == 0 and "STATUS" not in proc.stdout, proc.stdout[-2000:] + proc.stderr[-2000:]
+        runs[system] = table(proc)
+    one = runs["one thread"]
+    assert len(one) == steps + 1 and len({tuple(row) for row in one.values()}) == steps + 1  # every step differs
+    for system in ("x86_64-linux", "x86_64-windows", ARM_PLATFORM):
+        assert _rows_differ(runs[system], runs["one thread"]) == "", system

@@ -11,6 +11,7 @@
 #include "imu.h"
 #include "imu_build.h"
 #include "thermal.h"
+#include "workers.h"
 
 #define PI 3.14159265358979323846
 
@@ -1073,17 +1074,34 @@ int sarins_imu_white_noise(const int64_t *table, int64_t rows, int64_t n_steps, 
     return white_noise_view(&v, n_steps, dtheta, dv);
 }
 
+/* The arguments of sarins_imu_increments for one batch, run in chunks by the workers. */
+typedef struct {
+    const ImuView *v;
+    const double *angle0, *rate0, *accel, *w_t, *f_t, *g_sf, *g_bias, *a_sf, *a_bias;
+    double *dtheta, *dv;
+} IncrementsJob;
+
+static void increments_chunk(void *arg, int64_t k0, int64_t k1) {
+    const IncrementsJob *j = arg;
+    const ImuView *v = j->v;
+    /* triad rows: drift poly, gyro quadratic, low-rate gain, low-rate width, accel quadratic, random walks;
+       mats rows: gyro misalignment, g-sensitivity, accel misalignment */
+    sarins_imu_increments(k0, k1, v->n_axes, v->axes, j->angle0, j->rate0, j->accel, j->w_t, j->f_t, v->consts[1],
+                          (int64_t)v->consts[5], j->g_sf, v->mats, j->g_bias, v->triad + 3, v->triad + 6,
+                          v->triad + 9, v->mats + 9, j->a_sf, v->mats + 18, j->a_bias, v->triad + 12, j->dtheta,
+                          j->dv);
+}
+
+/* n_steps intervals: advance, the minor loops (on the workers' threads when pool is not NULL: the intervals
+ * are independent, so the same bits), output dynamics, white noise. */
 static int steps_view(ImuView *v, int64_t n_steps, const double *angle0, const double *rate0,
                       const double *accel, const double *w_t, const double *f_t, const double *amb_end,
-                      double *dtheta, double *dv, double *temps, double *work) {
+                      double *dtheta, double *dv, double *temps, double *work, sarins_workers *pool) {
     double *g_bias = work, *g_sf = work + 3 * n_steps, *a_bias = work + 6 * n_steps, *a_sf = work + 9 * n_steps;
     int status = advance_view(v, n_steps, amb_end, temps, work + 12 * n_steps, g_bias, g_sf, a_bias, a_sf);
     if (status != SARINS_IMU_OK) return status;
-    /* triad rows: drift poly, gyro quadratic, low-rate gain, low-rate width, accel quadratic, random walks;
-       mats rows: gyro misalignment, g-sensitivity, accel misalignment */
-    sarins_imu_increments(0, n_steps, v->n_axes, v->axes, angle0, rate0, accel, w_t, f_t, v->consts[1],
-                          (int64_t)v->consts[5], g_sf, v->mats, g_bias, v->triad + 3, v->triad + 6, v->triad + 9,
-                          v->mats + 9, a_sf, v->mats + 18, a_bias, v->triad + 12, dtheta, dv);
+    IncrementsJob job = {v, angle0, rate0, accel, w_t, f_t, g_sf, g_bias, a_sf, a_bias, dtheta, dv};
+    sarins_workers_run(pool, increments_chunk, &job, n_steps);
     dynamics_view(v, n_steps, temps, dtheta, dv);
     return white_noise_view(v, n_steps, dtheta, dv);
 }
@@ -1095,14 +1113,15 @@ int sarins_imu_steps(const int64_t *table, int64_t rows, int64_t n_steps, const 
     int status = imu_view(table, rows, &v);
     if (status != SARINS_IMU_OK) return status;
     if (n_steps < 1) return SARINS_IMU_BAD_TABLE;
-    return steps_view(&v, n_steps, angle0, rate0, accel, w_t, f_t, amb_end, dtheta, dv, temps, work);
+    return steps_view(&v, n_steps, angle0, rate0, accel, w_t, f_t, amb_end, dtheta, dv, temps, work, NULL);
 }
 
 /* One interval with the base motion of the view's base row (sarins_imu_one_interval). */
 static int one_interval_view(ImuView *v, const double *angle0, const double *rate0, const double *accel,
                              double amb_end, double *dtheta, double *dv, double *temps) {
     double work[18];
-    return steps_view(v, 1, angle0, rate0, accel, v->base, v->base + 3, &amb_end, dtheta, dv, temps, work);
+    return steps_view(v, 1, angle0, rate0, accel, v->base, v->base + 3, &amb_end, dtheta, dv, temps, work,
+                      NULL);
 }
 
 int sarins_imu_one_interval(const int64_t *table, int64_t rows, const double *angle0, const double *rate0,
@@ -1230,10 +1249,62 @@ static void sub_motion(int64_t k_sub, int m, double h_sub, double motion[3][SARI
     }
 }
 
-/* The FMU step of sarins_imu_fmu_step (k_sub = 1, the arguments after it unused) or of
- * sarins_imu_fmu_step_sub (k_sub > 1). */
+/* The step's outputs into buf: the increments the sums of the k_sub sub-intervals', in order (no coning or
+ * sculling across them), the temperatures the last one's, the end time t + h. */
+static void write_outputs(double *buf, const double *io, double t, double h, int64_t k_sub, const double *dtheta,
+                          const double *dv, const double *temps) {
+    for (int i = 0; i < 3; i++) {
+        double sum_theta = k_sub == 1 ? dtheta[i] : 0.0, sum_v = k_sub == 1 ? dv[i] : 0.0;
+        for (int64_t k = 0; k_sub > 1 && k < k_sub; k++) {
+            sum_theta += dtheta[3 * k + i];
+            sum_v += dv[3 * k + i];
+        }
+        buf[(int64_t)io[IO_OUT + i]] = sum_theta;
+        buf[(int64_t)io[IO_OUT + 3 + i]] = sum_v;
+    }
+    for (int i = 0; i < 6; i++) buf[(int64_t)io[IO_OUT + 6 + i]] = temps[6 * (k_sub - 1) + i];
+    buf[(int64_t)io[IO_END_TIME]] = t + h;
+}
+
+/* Sub-interval k's start-of-interval motion given by the set (k_sub rows of count = 3 na + 2 values: angles,
+ * rates, accelerations, ambient, its slope); the base row held; the ambient at each end as a step of h_sub
+ * would take it (ambient + slope h_sub).  Scratch laid out as sub_motion's; 0 when an ambient end is out of
+ * range. */
+static int given_motion(int64_t k_sub, int na, double h_sub, const double *set, const double *base,
+                        double *scratch) {
+    int count = 3 * na + 2;
+    double *angle0 = scratch, *rate0 = angle0 + k_sub * na, *accel = rate0 + k_sub * na;
+    double *w_t = accel + k_sub * na, *f_t = w_t + 3 * k_sub, *amb_end = f_t + 3 * k_sub;
+    for (int64_t k = 0; k < k_sub; k++) {
+        const double *row = set + k * count;
+        memcpy(angle0 + k * na, row, (size_t)na * sizeof *angle0);
+        memcpy(rate0 + k * na, row + na, (size_t)na * sizeof *rate0);
+        memcpy(accel + k * na, row + 2 * na, (size_t)na * sizeof *accel);
+        memcpy(w_t + 3 * k, base, 3 * sizeof *w_t);
+        memcpy(f_t + 3 * k, base + 3, 3 * sizeof *f_t);
+        amb_end[k] = row[3 * na] + row[3 * na + 1] * h_sub;
+        if (!(amb_end[k] >= -273.15 && amb_end[k] <= SARINS_IMU_AMBIENT_MAX)) return 0; /* imu_build.h */
+    }
+    return 1;
+}
+
+/* The set tagged t (the given one or the held one) for the given-motion step; NULL when neither is. */
+static const double *given_set(const double *held, const double *given, int64_t size, int fixed, double tag,
+                               double t, double h) {
+    for (int64_t i = 0; i < size; i++) {
+        if (!isfinite(given[i])) return NULL;
+    }
+    if (fixed || same_time(tag, t, h)) return given;
+    if (held[0] != 0.0 && same_time(held[1], t, h)) return held + 2;
+    return NULL;
+}
+
+/* The FMU step of sarins_imu_fmu_step (k_sub = 1, the arguments after it unused), of sarins_imu_fmu_step_sub
+ * (k_sub > 1, given NULL) or of sarins_imu_fmu_step_given (k_sub >= 1, given the motion of every
+ * sub-interval); pool NULL or the workers of the minor loops. */
 static int fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h, int64_t k_sub,
-                    double *sub_dtheta, double *sub_dv, double *sub_temps, double *scratch) {
+                    const double *given, double *sub_dtheta, double *sub_dv, double *sub_temps, double *scratch,
+                    sarins_workers *pool) {
     ImuView v;
     if (buf == NULL || rows < SARINS_IMU_N_ARRAYS + 3 || imu_view(table, rows, &v) != SARINS_IMU_OK) return 1;
     if (!has_shape(table, SARINS_IMU_N_ARRAYS, IO_SIZE, 1)) return 1;
@@ -1247,23 +1318,38 @@ static int fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double
     if (!(io[IO_GIMBALS] >= 1.0 && io[IO_GIMBALS] <= 3.0)) return 1;
     int na = (int)io[IO_GIMBALS];
     int count = 3 * na + 2;
+    int64_t set_size = given != NULL ? k_sub * count : count;
     int moving = io[IO_VEHICLE] != 0.0;
     int m = moving ? na + 3 : na; /* the vehicle's attitude gimbals carry the table's */
-    if (!has_shape(table, SARINS_IMU_N_ARRAYS + 1, count + 2, 1) || v.n_axes != m
-        || (moving && !has_shape(table, SARINS_IMU_N_ARRAYS + 2, VEHICLE_SET + 2, 1)))
+    if (!has_shape(table, SARINS_IMU_N_ARRAYS + 1, set_size + 2, 1) || v.n_axes != m
+        || (moving && (given != NULL || !has_shape(table, SARINS_IMU_N_ARRAYS + 2, VEHICLE_SET + 2, 1))))
         return 1;
     for (int i = IO_OUT; i <= IO_END_TIME; i++) {
         if (slot_index(io[i], n) < 0) return 1;
+    }
+    int64_t tag_at = slot_index(io[IO_MOTION_TIME], n);
+    if (tag_at < 0) return 1;
+    double tag = buf[tag_at];
+    if (!isfinite(tag)) return 1;
+    int fixed = tag == NO_TAG && held[0] != 0.0 && held[1] == NO_TAG; /* no turntable connected */
+    if (given != NULL) {
+        const double *set = given_set(held, given, set_size, fixed, tag, t, h);
+        if (set == NULL || !given_motion(k_sub, na, consts[1], set, v.base, scratch)) return 1;
+        /* every check passed: from here on the step happens */
+        if (!fixed) keep(held, given, (int)set_size, tag);
+        double *angle0 = scratch, *amb = scratch + 3 * k_sub * na + 6 * k_sub;
+        if (steps_view(&v, k_sub, angle0, angle0 + k_sub * na, angle0 + 2 * k_sub * na, angle0 + 3 * k_sub * na,
+                       angle0 + 3 * k_sub * na + 3 * k_sub, amb, sub_dtheta, sub_dv, sub_temps, amb + k_sub, pool)
+            != SARINS_IMU_OK)
+            return 1; /* not reached: the table and its stream states were checked above */
+        write_outputs(buf, io, t, h, k_sub, sub_dtheta, sub_dv, sub_temps);
+        return 0;
     }
     double slots[11], current[11], chosen[11];
     for (int k = 0; k < 3; k++) memcpy(slots + k * na, io + IO_MOTION + 3 * k, (size_t)na * sizeof *slots);
     slots[3 * na] = io[IO_AMBIENT];
     slots[3 * na + 1] = io[IO_AMBIENT + 1];
-    int64_t tag_at = slot_index(io[IO_MOTION_TIME], n);
-    if (tag_at < 0) return 1;
-    double tag = buf[tag_at];
-    if (!(read_slots(buf, n, slots, count, current) && isfinite(tag))) return 1;
-    int fixed = tag == NO_TAG && held[0] != 0.0 && held[1] == NO_TAG; /* no turntable connected */
+    if (!read_slots(buf, n, slots, count, current)) return 1;
     if (fixed) {
         memcpy(chosen, current, (size_t)count * sizeof *chosen);
     } else if (!choose(held, current, count, tag, t, h, chosen)) {
@@ -1292,43 +1378,36 @@ static int fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double
         memcpy(v.base, v_chosen + 9, 3 * sizeof *v.base);
         memcpy(v.base + 3, v_chosen + 12, 3 * sizeof *v.base);
     }
-    double dtheta[3], dv[3], temps[6];
     if (k_sub == 1) {
+        double dtheta[3], dv[3], temps[6];
         if (one_interval_view(&v, motion[0], motion[1], motion[2], amb_end, dtheta, dv, temps) != SARINS_IMU_OK)
             return 1; /* not reached: the table and its stream states were checked above */
-    } else {
-        sub_motion(k_sub, m, consts[1], motion, v.base, chosen[3 * na], chosen[3 * na + 1], scratch);
-        double *angle0 = scratch, *amb = scratch + 3 * k_sub * m + 6 * k_sub;
-        if (steps_view(&v, k_sub, angle0, angle0 + k_sub * m, angle0 + 2 * k_sub * m, angle0 + 3 * k_sub * m,
-                       angle0 + 3 * k_sub * m + 3 * k_sub, amb, sub_dtheta, sub_dv, sub_temps, amb + k_sub)
-            != SARINS_IMU_OK)
-            return 1; /* not reached, as above */
-        /* the step's increments: the sums of the sub-intervals', in order; the temperatures at its end */
-        for (int i = 0; i < 3; i++) {
-            dtheta[i] = 0.0;
-            dv[i] = 0.0;
-            for (int64_t k = 0; k < k_sub; k++) {
-                dtheta[i] += sub_dtheta[3 * k + i];
-                dv[i] += sub_dv[3 * k + i];
-            }
-        }
-        memcpy(temps, sub_temps + 6 * (k_sub - 1), sizeof temps);
+        write_outputs(buf, io, t, h, 1, dtheta, dv, temps);
+        return 0;
     }
-    for (int i = 0; i < 3; i++) {
-        buf[(int64_t)io[IO_OUT + i]] = dtheta[i];
-        buf[(int64_t)io[IO_OUT + 3 + i]] = dv[i];
-    }
-    for (int i = 0; i < 6; i++) buf[(int64_t)io[IO_OUT + 6 + i]] = temps[i];
-    buf[(int64_t)io[IO_END_TIME]] = t + h;
+    sub_motion(k_sub, m, consts[1], motion, v.base, chosen[3 * na], chosen[3 * na + 1], scratch);
+    double *angle0 = scratch, *amb = scratch + 3 * k_sub * m + 6 * k_sub;
+    if (steps_view(&v, k_sub, angle0, angle0 + k_sub * m, angle0 + 2 * k_sub * m, angle0 + 3 * k_sub * m,
+                   angle0 + 3 * k_sub * m + 3 * k_sub, amb, sub_dtheta, sub_dv, sub_temps, amb + k_sub, pool)
+        != SARINS_IMU_OK)
+        return 1; /* not reached, as above */
+    write_outputs(buf, io, t, h, k_sub, sub_dtheta, sub_dv, sub_temps);
     return 0;
 }
 
 int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h) {
-    return fmu_step(table, rows, buf, n, t, h, 1, NULL, NULL, NULL, NULL);
+    return fmu_step(table, rows, buf, n, t, h, 1, NULL, NULL, NULL, NULL, NULL, NULL);
 }
 
 int sarins_imu_fmu_step_sub(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h,
                             int64_t k_sub, double *dtheta, double *dv, double *temps, double *scratch) {
     if (k_sub < 2 || dtheta == NULL || dv == NULL || temps == NULL || scratch == NULL) return 1;
-    return fmu_step(table, rows, buf, n, t, h, k_sub, dtheta, dv, temps, scratch);
+    return fmu_step(table, rows, buf, n, t, h, k_sub, NULL, dtheta, dv, temps, scratch, NULL);
+}
+
+int sarins_imu_fmu_step_given(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h,
+                              int64_t k_sub, const double *motion, double *dtheta, double *dv, double *temps,
+                              double *scratch, sarins_workers *pool) {
+    if (k_sub < 1 || motion == NULL || dtheta == NULL || dv == NULL || temps == NULL || scratch == NULL) return 1;
+    return fmu_step(table, rows, buf, n, t, h, k_sub, motion, dtheta, dv, temps, scratch, pool);
 }

@@ -45,6 +45,7 @@
 #include <stdint.h>
 
 #include "rng.h"
+#include "workers.h"
 
 enum {
     SARINS_IMU_CONSTS, SARINS_IMU_CLOCK, SARINS_IMU_SENSOR_PAR, SARINS_IMU_STATE, SARINS_IMU_COEF,
@@ -242,6 +243,17 @@ int sarins_imu_fmu_step(int64_t *table, int64_t rows, double *buf, int64_t n, do
 int sarins_imu_fmu_step_sub(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h,
                             int64_t k_sub, double *dtheta, double *dv, double *temps, double *scratch);
 #define SARINS_IMU_SUB_SCRATCH(k_sub, n_axes) ((k_sub) * (3 * (n_axes) + 7 + 18))
+
+/* sarins_imu_fmu_step_sub with the motion of every sub-interval given (k_sub >= 1, static base): motion
+ * (k_sub, 3 A + 2), row k the start of sub-interval k as a step of h / k_sub would read it: the A gimbal
+ * angles (rad), rates (rad/s), accelerations holding over it (rad/s^2), the ambient (degC) and its slope
+ * (degC/s); the set is tagged by buf's motion_time and the table's held row holds k_sub (3 A + 2) values.
+ * Sub-interval k's ambient at its end is ambient + slope h / k_sub.  pool: NULL (the caller's thread) or
+ * workers running the sub-intervals' minor loops side by side (the same bits).  dtheta, dv, temps, scratch
+ * as sarins_imu_fmu_step_sub.  Returns 0 when it did the step, 1 when it changed nothing. */
+int sarins_imu_fmu_step_given(int64_t *table, int64_t rows, double *buf, int64_t n, double t, double h,
+                              int64_t k_sub, const double *motion, double *dtheta, double *dv, double *temps,
+                              double *scratch, sarins_workers *pool);
 
 /* The io row of sarins_imu_fmu_step: the expected step (s), the start time (s), the gimbal count A (1-3),
  * the buf slots of motion_time, ambient_temp, ambient_temp_rate, angle_1..3, rate_1..3, accel_1..3, the 12

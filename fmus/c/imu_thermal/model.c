@@ -32,6 +32,7 @@
 #include "imu_params.h"
 #include "model.h"
 #include "variables.h"
+#include "workers.h"
 
 #define PI 3.14159265358979323846
 #define LAT_LIMIT (89.9 * PI / 180.0) /* rad: fmus.slave_support.LAT_LIMIT */
@@ -58,7 +59,11 @@ typedef struct {
     size_t n_doubles;
     double *block;
     int64_t n_sub;                  /* sub-intervals per step (the parameter n_sub) */
-    double *sub_dtheta, *sub_dv, *sub_temps, *scratch; /* (n_sub, 3), (n_sub, 3), (n_sub, 6), scratch; n_sub > 1 */
+    int given;                      /* sub_inputs = 1: each sub-interval's motion from the *_sub arrays */
+    double *sub_dtheta, *sub_dv, *sub_temps, *scratch; /* (n_sub, 3), (n_sub, 3), (n_sub, 6), scratch; n_sub > 1
+                                                        * or given */
+    double *motion_sub;             /* given: (n_sub, 3 A + 2), the arrays' set of this step (rewritten each step) */
+    sarins_workers *pool;           /* threads > 1: the workers of the sub-intervals' minor loops, else NULL */
 } imu_work;
 
 static const int MOTION_SLOTS[3][MAX_GIMBALS] = {
@@ -70,6 +75,11 @@ static const int VEHICLE_SLOTS[SARINS_IMU_VEHICLE_SET] = {
     SARINS_R_vehicle_pitch_rate, SARINS_R_vehicle_roll_rate, SARINS_R_vehicle_yaw_accel,
     SARINS_R_vehicle_pitch_accel, SARINS_R_vehicle_roll_accel, SARINS_R_base_rate_e, SARINS_R_base_rate_n,
     SARINS_R_base_rate_u, SARINS_R_base_force_e, SARINS_R_base_force_n, SARINS_R_base_force_u};
+/* the arrays of the sub-intervals' motion (sub_inputs = 1), in MOTION_SLOTS' order, then the ambient's */
+static const int MOTION_ARRAYS[3][MAX_GIMBALS] = {
+    {SARINS_A_angle_1_sub, SARINS_A_angle_2_sub, SARINS_A_angle_3_sub},
+    {SARINS_A_rate_1_sub, SARINS_A_rate_2_sub, SARINS_A_rate_3_sub},
+    {SARINS_A_accel_1_sub, SARINS_A_accel_2_sub, SARINS_A_accel_3_sub}};
 static const int OUT_SLOTS[12] = {
     SARINS_R_dtheta_x, SARINS_R_dtheta_y, SARINS_R_dtheta_z, SARINS_R_dv_x, SARINS_R_dv_y, SARINS_R_dv_z,
     SARINS_R_temp_gyro_x, SARINS_R_temp_gyro_y, SARINS_R_temp_gyro_z, SARINS_R_temp_accel_x,
@@ -208,6 +218,27 @@ static int check_parameters(sarins_ctx *c, double axes[MAX_GIMBALS][3], int *n_g
                    SARINS_TABLE.max_dim);
         return SARINS_ERROR;
     }
+    int given = c->i[SARINS_I_sub_inputs];
+    if (given != 0 && given != 1) {
+        sarins_log(c, SARINS_ERROR, "parameter sub_inputs = %d must be 0 (the scalar motion set) or 1 (the *_sub "
+                   "arrays)", given);
+        return SARINS_ERROR;
+    }
+    if (given == 1 && !sarins_arrays_visible(c)) {
+        sarins_log(c, SARINS_ERROR, "parameter sub_inputs = 1 needs the *_sub array inputs, which only the FMI 3.0 "
+                   "variant of this FMU has; use 0 here");
+        return SARINS_ERROR;
+    }
+    if (given == 1 && strcmp(c->s[SARINS_S_base], "static") != 0) {
+        sarins_log(c, SARINS_ERROR, "parameter sub_inputs = 1 needs base = static (the vehicle's motion is one set "
+                   "per step)");
+        return SARINS_ERROR;
+    }
+    if (c->i[SARINS_I_threads] < 1 || c->i[SARINS_I_threads] > SARINS_WORKERS_MAX) {
+        sarins_log(c, SARINS_ERROR, "parameter threads = %d must be an integer in [1, %d]", c->i[SARINS_I_threads],
+                   SARINS_WORKERS_MAX);
+        return SARINS_ERROR;
+    }
     if (c->i[SARINS_I_seed] < 0) {
         sarins_log(c, SARINS_ERROR, "parameter seed = %d must be an integer in [0, %d]", c->i[SARINS_I_seed],
                    INT32_LIMIT);
@@ -244,14 +275,19 @@ static void static_base(double lat, double height, double yaw, double *base)
     }
 }
 
-static void imu_release(sarins_ctx *c)
+static void imu_free(imu_work *w)
 {
-    imu_work *w = c->work;
     if (w != NULL) {
+        sarins_workers_stop(w->pool);
         free(w->sub_dtheta);
         free(w->block);
         free(w);
     }
+}
+
+static void imu_release(sarins_ctx *c)
+{
+    imu_free(c->work);
     c->work = NULL;
 }
 
@@ -280,7 +316,7 @@ static void layout(imu_work *w, int64_t n_axes, int64_t n_flicker)
         place(w, i, rows, shapes[i][1], &used);
     }
     w->io = place(w, SARINS_IMU_N_ARRAYS, SARINS_IMU_IO_SIZE, 1, &used);
-    w->held = place(w, SARINS_IMU_N_ARRAYS + 1, 3 * w->n_gimbals + 4, 1, &used);
+    w->held = place(w, SARINS_IMU_N_ARRAYS + 1, (w->given ? w->n_sub : 1) * (3 * w->n_gimbals + 2) + 2, 1, &used);
     w->v_held = place(w, SARINS_IMU_N_ARRAYS + 2, SARINS_IMU_VEHICLE_SET + 2, 1, &used);
     w->n_doubles = used;
 }
@@ -320,6 +356,24 @@ static int read_motion(const sarins_ctx *c, int n_gimbals, double *out)
     out[3 * n_gimbals + 1] = c->r[SARINS_R_ambient_temp_rate];
     for (int i = 0; i < 3 * n_gimbals + 2; i++)
         ok = ok && isfinite(out[i]);
+    return ok;
+}
+
+/* sub_inputs = 1: the motion of the n_sub sub-intervals from the *_sub arrays into out (n_sub rows of
+ * read_motion's layout); 0 when a value is not finite. */
+static int read_given(const sarins_ctx *c, int n_gimbals, int64_t n_sub, double *out)
+{
+    int count = 3 * n_gimbals + 2, ok = 1;
+    for (int64_t k = 0; k < n_sub; k++) {
+        double *row = out + k * count;
+        for (int q = 0; q < 3; q++)
+            for (int j = 0; j < n_gimbals; j++)
+                row[q * n_gimbals + j] = c->a[MOTION_ARRAYS[q][j]][k];
+        row[3 * n_gimbals] = c->a[SARINS_A_ambient_temp_sub][k];
+        row[3 * n_gimbals + 1] = c->a[SARINS_A_ambient_temp_rate_sub][k];
+        for (int i = 0; i < count; i++)
+            ok = ok && isfinite(row[i]);
+    }
     return ok;
 }
 
@@ -376,6 +430,8 @@ static int imu_initialize(sarins_ctx *c)
     w->n_gimbals = n_gimbals;
     w->moving = moving;
     w->hot = strcmp(c->s[SARINS_S_thermal_start], "hot") == 0;
+    w->n_sub = c->i[SARINS_I_n_sub];
+    w->given = c->i[SARINS_I_sub_inputs] == 1;
     int64_t n_axes = n_gimbals + (moving ? 3 : 0);
     layout(w, n_axes, n_flicker); /* counts only: the block is not there yet */
     w->block = calloc(w->n_doubles, sizeof(double));
@@ -385,9 +441,10 @@ static int imu_initialize(sarins_ctx *c)
         return SARINS_ERROR;
     }
     layout(w, n_axes, n_flicker);
-    w->n_sub = c->i[SARINS_I_n_sub];
-    if (w->n_sub > 1) { /* the sub-interval rows and the scratch of sarins_imu_fmu_step_sub, one allocation */
-        size_t n_sub_doubles = (size_t)(12 * w->n_sub + SARINS_IMU_SUB_SCRATCH(w->n_sub, n_axes));
+    int count = 3 * n_gimbals + 2;
+    if (w->n_sub > 1 || w->given) { /* the sub-interval rows, the scratch of the step and the arrays' set */
+        size_t n_sub_doubles = (size_t)(12 * w->n_sub + SARINS_IMU_SUB_SCRATCH(w->n_sub, n_axes)
+                                        + (w->given ? w->n_sub * count : 0));
         w->sub_dtheta = calloc(n_sub_doubles, sizeof(double));
         if (w->sub_dtheta == NULL) {
             sarins_log(c, SARINS_ERROR, "out of memory for n_sub = %d sub-intervals", (int)w->n_sub);
@@ -398,6 +455,32 @@ static int imu_initialize(sarins_ctx *c)
         w->sub_dv = w->sub_dtheta + 3 * w->n_sub;
         w->sub_temps = w->sub_dv + 3 * w->n_sub;
         w->scratch = w->sub_temps + 6 * w->n_sub;
+        w->motion_sub = w->given ? w->scratch + SARINS_IMU_SUB_SCRATCH(w->n_sub, n_axes) : NULL;
+    }
+    if (w->given && !read_given(c, n_gimbals, w->n_sub, w->motion_sub)) {
+        sarins_log(c, SARINS_ERROR, "ValueError: the *_sub motion inputs contain NaN or infinity");
+        imu_free(w);
+        return SARINS_ERROR;
+    }
+    if (w->given) { /* the ambient of the arrays' set at its start */
+        ambient = w->motion_sub[3 * n_gimbals];
+        if (!(ambient >= ABSOLUTE_ZERO && ambient <= SARINS_IMU_AMBIENT_MAX)) {
+            sarins_log(c, SARINS_ERROR, "ValueError: ambient_temp_sub: " AMBIENT_RANGE);
+            imu_free(w);
+            return SARINS_ERROR;
+        }
+    }
+    if (c->i[SARINS_I_threads] > 1) {
+        int started = 0;
+        w->pool = sarins_workers_start(c->i[SARINS_I_threads], &started);
+        if (w->pool == NULL) {
+            sarins_log(c, SARINS_ERROR, "out of memory for %d threads", c->i[SARINS_I_threads]);
+            imu_free(w);
+            return SARINS_ERROR;
+        }
+        if (started < c->i[SARINS_I_threads])
+            sarins_log(c, SARINS_WARNING, "threads = %d: %d started (the system refused more, or has no thread "
+                       "functions); the same numbers, later", c->i[SARINS_I_threads], started);
     }
     double *ax = row(w, SARINS_IMU_AXES);
     for (int64_t j = 0; j < n_axes; j++)
@@ -405,7 +488,10 @@ static int imu_initialize(sarins_ctx *c)
     if (!moving)
         static_base(c->r[SARINS_R_lat], c->r[SARINS_R_height], c->r[SARINS_R_base_yaw], row(w, SARINS_IMU_BASE));
     fill_io(c, w);
-    keep(w->held, motion, 3 * n_gimbals + 2, c->r[SARINS_R_motion_time]);
+    if (w->given)
+        keep(w->held, w->motion_sub, (int)(w->n_sub * count), c->r[SARINS_R_motion_time]);
+    else
+        keep(w->held, motion, count, c->r[SARINS_R_motion_time]);
     if (moving)
         keep(w->v_held, vehicle, SARINS_IMU_VEHICLE_SET, c->r[SARINS_R_base_motion_time]);
     c->work = w;
@@ -463,8 +549,9 @@ static int explain(const sarins_ctx *c, const imu_work *w, double t, double h)
         return step_error(c, msg);
     }
     double motion[3 * MAX_GIMBALS + 2], vehicle[SARINS_IMU_VEHICLE_SET];
-    if (!read_motion(c, w->n_gimbals, motion))
-        return step_error(c, "motion or ambient inputs contain NaN or infinity");
+    if (w->given ? !read_given(c, w->n_gimbals, w->n_sub, w->motion_sub) : !read_motion(c, w->n_gimbals, motion))
+        return step_error(c, w->given ? "the *_sub motion inputs contain NaN or infinity"
+                                      : "motion or ambient inputs contain NaN or infinity");
     int from_held = 0;
     double tag = c->r[SARINS_R_motion_time];
     int fixed = tag == SARINS_IMU_NO_TAG && w->held[1] == SARINS_IMU_NO_TAG;
@@ -485,10 +572,15 @@ static int explain(const sarins_ctx *c, const imu_work *w, double t, double h)
                         &v_from_held))
             return SARINS_ERROR;
     }
-    const double *chosen = from_held ? w->held + 2 : motion;
-    double amb_end = chosen[3 * w->n_gimbals] + chosen[3 * w->n_gimbals + 1] * h;
-    if (!(amb_end >= ABSOLUTE_ZERO && amb_end <= SARINS_IMU_AMBIENT_MAX))
-        return step_error(c, AMBIENT_RANGE);
+    const double *chosen = from_held ? w->held + 2 : w->given ? w->motion_sub : motion;
+    int64_t sets = w->given ? w->n_sub : 1, count = 3 * w->n_gimbals + 2;
+    double h_set = h / (double)(w->given ? w->n_sub : 1);
+    for (int64_t k = 0; k < sets; k++) {
+        const double *set = chosen + k * count;
+        double amb_end = set[3 * w->n_gimbals] + set[3 * w->n_gimbals + 1] * h_set;
+        if (!(amb_end >= ABSOLUTE_ZERO && amb_end <= SARINS_IMU_AMBIENT_MAX))
+            return step_error(c, AMBIENT_RANGE);
+    }
     return step_error(c, "the IMU step refused its inputs");
 }
 
@@ -514,15 +606,16 @@ static int start(sarins_ctx *c, imu_work *w, double t, double h)
         return SARINS_ERROR;
     }
     double motion[3 * MAX_GIMBALS + 2];
-    if (!read_motion(c, w->n_gimbals, motion))
-        return step_error(c, "motion or ambient inputs contain NaN or infinity");
+    if (w->given ? !read_given(c, w->n_gimbals, w->n_sub, w->motion_sub) : !read_motion(c, w->n_gimbals, motion))
+        return step_error(c, w->given ? "the *_sub motion inputs contain NaN or infinity"
+                                      : "motion or ambient inputs contain NaN or infinity");
     double tag = c->r[SARINS_R_motion_time];
-    const double *chosen = motion;
+    const double *current = w->given ? w->motion_sub : motion, *chosen = current;
     if (!(tag == SARINS_IMU_NO_TAG && w->held[1] == SARINS_IMU_NO_TAG)) {
         int from_held = 0;
         if (!select_set(c, w->held, tag, t, h, "turntable motion", "motion_time", &from_held))
             return SARINS_ERROR;
-        chosen = from_held ? w->held + 2 : motion;
+        chosen = from_held ? w->held + 2 : current;
     }
     double ambient0 = chosen[3 * w->n_gimbals];
     if (!(ambient0 >= ABSOLUTE_ZERO && ambient0 <= SARINS_IMU_AMBIENT_MAX))
@@ -539,6 +632,18 @@ static int start(sarins_ctx *c, imu_work *w, double t, double h)
     return SARINS_OK;
 }
 
+/* Every sub-interval's increments and gyro_z temperature into the *_sub output arrays. */
+static void sub_arrays_out(sarins_ctx *c, const imu_work *w)
+{
+    for (int64_t k = 0; k < w->n_sub; k++) {
+        for (int i = 0; i < 3; i++) {
+            c->a[SUB_ARRAYS[i]][k] = w->sub_dtheta[3 * k + i];
+            c->a[SUB_ARRAYS[3 + i]][k] = w->sub_dv[3 * k + i];
+        }
+        c->a[SARINS_A_temp_gyro_z_sub][k] = w->sub_temps[6 * k + 2];
+    }
+}
+
 static int imu_do_step(sarins_ctx *c, double t, double h)
 {
     imu_work *w = c->work;
@@ -547,6 +652,15 @@ static int imu_do_step(sarins_ctx *c, double t, double h)
         int status = start(c, w, t, h);
         if (status != SARINS_OK)
             return status;
+    }
+    if (w->given) {
+        if (!read_given(c, w->n_gimbals, w->n_sub, w->motion_sub)
+            || sarins_imu_fmu_step_given(w->table, TABLE_ROWS, c->r, (int64_t)SARINS_TABLE.n_real, t, h, w->n_sub,
+                                         w->motion_sub, w->sub_dtheta, w->sub_dv, w->sub_temps, w->scratch,
+                                         w->pool) != 0)
+            return explain(c, w, t, h);
+        sub_arrays_out(c, w);
+        return SARINS_OK;
     }
     if (w->n_sub == 1) {
         if (sarins_imu_fmu_step(w->table, TABLE_ROWS, c->r, (int64_t)SARINS_TABLE.n_real, t, h) != 0)
@@ -559,13 +673,7 @@ static int imu_do_step(sarins_ctx *c, double t, double h)
     if (sarins_imu_fmu_step_sub(w->table, TABLE_ROWS, c->r, (int64_t)SARINS_TABLE.n_real, t, h, w->n_sub,
                                 w->sub_dtheta, w->sub_dv, w->sub_temps, w->scratch) != 0)
         return explain(c, w, t, h);
-    for (int64_t k = 0; k < w->n_sub; k++) {
-        for (int i = 0; i < 3; i++) {
-            c->a[SUB_ARRAYS[i]][k] = w->sub_dtheta[3 * k + i];
-            c->a[SUB_ARRAYS[3 + i]][k] = w->sub_dv[3 * k + i];
-        }
-        c->a[SARINS_A_temp_gyro_z_sub][k] = w->sub_temps[6 * k + 2];
-    }
+    sub_arrays_out(c, w);
     return SARINS_OK;
 }
 
