@@ -20,11 +20,15 @@ GIMBAL_LINKS = [f"{q}_{j}" for j in (1, 2, 3) for q in ("angle", "rate", "accel"
 RAW_LINKS = [(f"dtheta_{a}", f"raw_dtheta_{a}") for a in "xyz"] + [(f"dv_{a}", f"raw_dv_{a}") for a in "xyz"]  # IMU -> IMUCompensator
 TEMPS = ["temp_gyro_x", "temp_gyro_y", "temp_gyro_z", "temp_accel_x", "temp_accel_y", "temp_accel_z"]
 INCREMENT_LINKS = ["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z", "temp_gyro_z", "increment_end_time"]
+# K-second steps (FMI 3.0): the motion and the increments of every second of a step in arrays
+GIMBAL_SUB_LINKS = [f"{name}_sub" for name in GIMBAL_LINKS if name != "motion_time"] + ["motion_time"]
+INCREMENT_SUB_LINKS = [f"{name}_sub" for name in INCREMENT_LINKS if name != "increment_end_time"] + [
+    "increment_end_time"]
 SHIPPED = Path(__file__).resolve().parent
 
 
 def standard_static(fmu_dir: Path | str = "resources", *, hours: float = 88.0, turntable=None, imu=None,
-                    ins=None) -> System:
+                    ins=None, seconds_per_step: int = 1, threads: int = 1) -> System:
     """Turntable -> IMUThermal -> StrapdownINS on a static base (seed 000 set-up).
 
     Parameters
@@ -32,17 +36,38 @@ def standard_static(fmu_dir: Path | str = "resources", *, hours: float = 88.0, t
     fmu_dir : folder of the FMUs (relative paths stay relative in the SSD)
     hours : default stop time of the system, h
     turntable, imu, ins : dict of extra start values per component
+    seconds_per_step : K > 1 needs the FMI 3.0 FMUs (``sarins build-fmus --fmi 3``): a communication step
+        of K s, every 1 s sub-interval of it in arrays (the Turntable's motion of each second to the IMU,
+        the IMU's increments of each second to the INS, all three with ``n_sub`` = K): the numbers of the
+        1 s system, bit for bit, with K times fewer FMI calls
+    threads : the IMU's threads for the minor loops of a step's K seconds (K > 1; the same numbers)
     """
     fmu_dir = Path(fmu_dir)
+    k = _seconds_per_step(seconds_per_step)
+    sub = {"n_sub": k} if k > 1 else {}
+    imu_sub = {**sub, "sub_inputs": 1, "threads": int(threads), **SUB_SCALARS_HELD_IMU} if k > 1 else {}
+    ins_sub = {**sub, "sub_inputs": 1, **SUB_SCALARS_HELD_INS} if k > 1 else {}
     components = [
-        Component("turntable", fmu_dir / "Turntable.fmu", dict(turntable or {})),
-        Component("imu", fmu_dir / "IMUThermal.fmu", {**STATIC_BASE_HELD, **dict(imu or {})}),
-        Component("ins", fmu_dir / "StrapdownINS.fmu", {**NO_CORRECTION, **dict(ins or {})}),
+        Component("turntable", fmu_dir / "Turntable.fmu", {**sub, **dict(turntable or {})}),
+        Component("imu", fmu_dir / "IMUThermal.fmu", {**STATIC_BASE_HELD, **imu_sub, **dict(imu or {})}),
+        Component("ins", fmu_dir / "StrapdownINS.fmu", {**NO_CORRECTION, **ins_sub, **dict(ins or {})}),
     ]
-    connections = [Connection("turntable", v, "imu", v) for v in GIMBAL_LINKS]
-    connections += [Connection("imu", v, "ins", v) for v in INCREMENT_LINKS]
+    if k > 1:  # the arrays carry every second; the scalars they replace stay unconnected (held start values)
+        connections = [Connection("turntable", v, "imu", v) for v in GIMBAL_SUB_LINKS]
+        connections += [Connection("imu", v, "ins", v) for v in INCREMENT_SUB_LINKS]
+    else:
+        connections = [Connection("turntable", v, "imu", v) for v in GIMBAL_LINKS]
+        connections += [Connection("imu", v, "ins", v) for v in INCREMENT_LINKS]
     return System(name="standard_static", components=components, connections=connections,
-                  start_time=0.0, stop_time=hours * 3600.0, step_size=1.0)
+                  start_time=0.0, stop_time=hours * 3600.0, step_size=float(k))
+
+
+def _seconds_per_step(value) -> int:
+    """K of a K-second communication step: a whole number of seconds, 1 .. 100000 (the FMUs' array limit)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != int(value) \
+            or not 1 <= int(value) <= 100_000:
+        raise ValueError(f"seconds_per_step must be a whole number of seconds in 1 .. 100000, got {value!r}")
+    return int(value)
 
 
 # the FMUs of standard_static_identified (standard_static: the first three)
@@ -50,7 +75,8 @@ IDENTIFIED_STATIC_FMUS = ("Turntable", "IMUThermal", "StrapdownINS", "RBFIdentif
 
 
 def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: float = 88.0, turntable=None,
-                               imu=None, ins=None, identifier=None) -> System:
+                               imu=None, ins=None, identifier=None, seconds_per_step: int = 1,
+                               threads: int = 1) -> System:
     """The standard static system with seed 000's RBFIdentifier closing the loop.
 
     Turntable -> IMUThermal -> StrapdownINS -> RBFIdentifier -> (axial drift
@@ -64,8 +90,11 @@ def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: floa
     direct feedthrough; the result is the same under Gauss-Seidel and
     Jacobi.  Default stop: 4 h alignment + 84 h.  A JSON/npz ``model_file`` in ``identifier`` is
     converted into the binary model file the FMU reads, in ``fmu_dir/identifier_models``.
+    ``seconds_per_step``, ``threads``: as :func:`standard_static` (the identifier then reads the INS every
+    K s; its trigger and apply_from must lie on that grid).
     """
-    base = standard_static(fmu_dir, hours=hours, turntable=turntable, imu=imu, ins=ins)
+    base = standard_static(fmu_dir, hours=hours, turntable=turntable, imu=imu, ins=ins,
+                           seconds_per_step=seconds_per_step, threads=threads)
     for name in IDENTIFIED_CORRECTION:  # fed by the identifier here
         base.components[2].parameters.pop(name, None)
     params = dict(identifier or {})
@@ -97,6 +126,12 @@ NO_CORRECTION = {"axial_drift_correction": 0.0, "axial_drift_apply_from": 0.0, "
                  "axial_drift_correction_a": 0.0}
 IDENTIFIED_CORRECTION = ("axial_drift_correction", "axial_drift_apply_from")  # the RBFIdentifier sends a constant
 STATIC_BASE_HELD = {name: (NO_TAG if name == "base_motion_time" else 0.0) for name in VEHICLE_LINKS}
+# K-second steps: the scalar inputs the arrays replace (unread with sub_inputs = 1) held at their declared
+# start values, so that no input is left unconnected by accident
+SUB_SCALARS_HELD_IMU = {name: (20.0 if name == "ambient_temp" else 0.0) for name in GIMBAL_LINKS
+                        if name != "motion_time"}
+SUB_SCALARS_HELD_INS = {name: (20.0 if name == "temp_gyro_z" else 0.0) for name in INCREMENT_LINKS
+                        if name != "increment_end_time"}
 
 
 def vehicle_rins(fmu_dir: Path | str = "resources", *, hours: float = 2.0, vehicle=None, turntable=None, imu=None,
