@@ -122,7 +122,7 @@ def measure(kind: str, hours: float, fmu_dir: Path, k: int = 1, threads: int = 1
     make = standard_static_identified if kind == "identified" else standard_static
     system = make(fmu_dir, hours=hours, turntable=dict(align_time=align * 3600), ins=dict(align_time=align * 3600),
                   seconds_per_step=k, threads=threads)
-    cosimulate(system, 0.2)  # the FMUs' caches too
+    cosimulate(system, k * max(1, 720 // k) / 3600)  # the FMUs' caches too (a whole number of steps)
     res, t_cosim = cosimulate(system, hours)
     correction = _identified_correction(res) if kind == "identified" else {}
     ref, t_inproc = in_process(hours, align, **correction)
