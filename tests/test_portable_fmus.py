@@ -313,17 +313,22 @@ def test_aarch64_turntable_under_qemu_quick(native, shipped, tmp_path):
     assert _rows_differ(run_fmu("Turntable", native, exe, so, tmp_path, prefix=QEMU), shipped["Turntable"]) == ""
 
 
+def _fmi3_hosts(tmp_path: Path) -> Path:
+    """The FMI 3.0 C host built for x86-64 Linux (tmp_path/host), win64 (tmp_path/host.exe) and aarch64 (returned);
+    a skip when a cross tool is missing."""
+    _need(MINGW, "wine", AARCH64, "qemu-aarch64")
+    flags = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}"]
+    build_line([_cc(), *flags, str(HOST3_SRC), "-ldl", "-o", str(tmp_path / "host")])
+    build_line([MINGW, *flags, str(HOST3_SRC), "-static", "-o", str(tmp_path / "host.exe")])
+    return _arm_host(tmp_path, HOST3_SRC, fmi=3)
+
+
 @pytest.mark.slow
 def test_fmi3_binaries_of_every_platform_give_the_x86_64_linux_numbers(tmp_path, wine_env):
     """The FMI 3.0 IMUThermal (n_sub = 200: every minor interval in arrays) and Turntable from
     binaries/x86_64-windows under wine and binaries/aarch64-linux under qemu, through the FMI 3.0 C host:
     the x86_64-linux bits."""
-    _need(MINGW, "wine", AARCH64, "qemu-aarch64")
-    cc = _cc()
-    flags = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}"]
-    build_line([cc, *flags, str(HOST3_SRC), "-ldl", "-o", str(tmp_path / "host")])
-    build_line([MINGW, *flags, str(HOST3_SRC), "-static", "-o", str(tmp_path / "host.exe")])
-    arm = _arm_host(tmp_path, HOST3_SRC, fmi=3)
+    arm = _fmi3_hosts(tmp_path)
     env = wine_env
     for name, slave in (("IMUThermal", "imu_thermal_slave.py"), ("Turntable", "turntable_slave.py")):
         fmu = build_native_fmu(name, slave, tmp_path, fmi=3, win64=True, aarch64=True)
@@ -361,12 +366,7 @@ def test_fmi3_imu_on_its_own_threads_on_every_platform(tmp_path, wine_env):
     the x86_64-linux bits of its 1 thread run."""
     from test_native_imu_given_motion import K, MOTION, PARAMS, SUB_OUT, arrays_of
 
-    _need(MINGW, "wine", AARCH64, "qemu-aarch64")
-    cc = _cc()
-    flags = ["-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", f"-I{fmi_headers_dir(3)}"]
-    build_line([cc, *flags, str(HOST3_SRC), "-ldl", "-o", str(tmp_path / "host")])
-    build_line([MINGW, *flags, str(HOST3_SRC), "-static", "-o", str(tmp_path / "host.exe")])
-    arm = _arm_host(tmp_path, HOST3_SRC, fmi=3)
+    arm = _fmi3_hosts(tmp_path)
     fmu = build_native_fmu("IMUThermal", "imu_thermal_slave.py", tmp_path, fmi=3, win64=True, aarch64=True)
     folder = tmp_path / "IMUThermal"
     zipfile.ZipFile(fmu).extractall(folder)

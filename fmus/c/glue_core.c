@@ -75,6 +75,20 @@ int sarins_arrays_visible(const sarins_ctx *c)
     return c != NULL && c->glue != NULL && c->glue->arrays_visible;
 }
 
+int sarins_check_sub_switch(const sarins_ctx *c, const char *name, int value, const char *zero)
+{
+    if (value != 0 && value != 1) {
+        sarins_log(c, SARINS_ERROR, "parameter %s = %d must be 0 (%s) or 1 (the *_sub arrays)", name, value, zero);
+        return SARINS_ERROR;
+    }
+    if (value == 1 && !sarins_arrays_visible(c)) {
+        sarins_log(c, SARINS_ERROR, "parameter %s = 1 needs the *_sub array inputs, which only the FMI 3.0 variant "
+                   "of this FMU has; use 0 here", name);
+        return SARINS_ERROR;
+    }
+    return SARINS_OK;
+}
+
 void sarins_log(const sarins_ctx *c, int status, const char *fmt, ...)
 {
     if (c == NULL || c->glue == NULL || c->quiet)

@@ -184,4 +184,9 @@ int sarins_state_finite(const sarins_ctx *c, const char *field, const double *x,
  * an array input is never set there, so a model that needs one refuses its parameters). */
 int sarins_arrays_visible(const sarins_ctx *c);
 
+/* The Integer parameter `name` (value) choosing between 0 (`zero`, what it means) and 1 (read the *_sub array
+ * inputs): SARINS_OK, or SARINS_ERROR with the reason logged (another value; 1 where the arrays are not
+ * visible). */
+int sarins_check_sub_switch(const sarins_ctx *c, const char *name, int value, const char *zero);
+
 #endif

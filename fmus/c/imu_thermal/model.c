@@ -219,16 +219,8 @@ static int check_parameters(sarins_ctx *c, double axes[MAX_GIMBALS][3], int *n_g
         return SARINS_ERROR;
     }
     int given = c->i[SARINS_I_sub_inputs];
-    if (given != 0 && given != 1) {
-        sarins_log(c, SARINS_ERROR, "parameter sub_inputs = %d must be 0 (the scalar motion set) or 1 (the *_sub "
-                   "arrays)", given);
+    if (sarins_check_sub_switch(c, "sub_inputs", given, "the scalar motion set") != SARINS_OK)
         return SARINS_ERROR;
-    }
-    if (given == 1 && !sarins_arrays_visible(c)) {
-        sarins_log(c, SARINS_ERROR, "parameter sub_inputs = 1 needs the *_sub array inputs, which only the FMI 3.0 "
-                   "variant of this FMU has; use 0 here");
-        return SARINS_ERROR;
-    }
     if (given == 1 && strcmp(c->s[SARINS_S_base], "static") != 0) {
         sarins_log(c, SARINS_ERROR, "parameter sub_inputs = 1 needs base = static (the vehicle's motion is one set "
                    "per step)");

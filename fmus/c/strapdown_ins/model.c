@@ -126,18 +126,7 @@ static int check_parameters(const sarins_ctx *c)
                    SARINS_TABLE.max_dim);
         return SARINS_ERROR;
     }
-    int sub = c->i[SARINS_I_sub_inputs];
-    if (sub != 0 && sub != 1) {
-        sarins_log(c, SARINS_ERROR, "parameter sub_inputs = %d must be 0 (scalar increments) or 1 (the *_sub "
-                   "arrays)", sub);
-        return SARINS_ERROR;
-    }
-    if (sub == 1 && !sarins_arrays_visible(c)) {
-        sarins_log(c, SARINS_ERROR, "parameter sub_inputs = 1 needs the *_sub array inputs, which only the FMI 3.0 "
-                   "variant of this FMU has; use 0 here");
-        return SARINS_ERROR;
-    }
-    return SARINS_OK;
+    return sarins_check_sub_switch(c, "sub_inputs", c->i[SARINS_I_sub_inputs], "scalar increments");
 }
 
 static int initialize(sarins_ctx *c)
