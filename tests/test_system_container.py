@@ -319,3 +319,24 @@ def test_under_asan_and_ubsan_a_run_and_bad_plans_report_nothing(container, tmp_
         proc = _run(host, lib, md, copy, prefix=(), steps=3, env=env)
         assert "runtime error" not in proc.stderr and "AddressSanitizer" not in proc.stderr, proc.stderr[-3000:]
         assert "STATUS fmi2ExitInitializationMode 3" in proc.stdout and expected in proc.stdout, case
+
+
+@pytest.mark.slow
+def test_its_sources_compile_warning_free_at_every_compile_line(container, tmp_path):
+    """The container's own sources/ (model.c, the glue) under gcc and clang, -O0/-O2/-O3, with and without
+    -march=native, C11 and GNU C11, -Wall -Wextra -Wpedantic -Werror (the lines the FMUs' sources pass)."""
+    from test_portable_fmus import LINES
+
+    _, folder, _, _ = container
+    sources = folder / "sources"
+    failed = []
+    for cc, opt, arch, std in LINES:
+        if shutil.which(cc) is None:
+            continue
+        for c_file in sorted(sources.glob("*.c")):
+            cmd = [cc, std, opt, *([arch] if arch else []), "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-fPIC",
+                   f"-I{sources}", "-c", str(c_file), "-o", str(tmp_path / "x.o")]
+            proc = subprocess.run(cmd, capture_output=True, text=True)
+            if proc.returncode != 0:
+                failed.append(f"{' '.join(cmd)}\n{proc.stderr[-1500:]}")
+    assert not failed, "\n".join(failed[:3])

@@ -413,7 +413,7 @@ static int parse_plan(sarins_ctx *c, sc_work *w)
         *nl = '\0';
         if (nl > line && nl[-1] == '\r')
             nl[-1] = '\0';
-        char *f[8];
+        char *f[8] = {NULL}; /* (split sets f[0 .. nf - 1]; gcc -O3 cannot see it) */
         size_t nf = split(line, f, 7);
         if (ended)
             return plan_error(c, line_no, "text after 'end'");
