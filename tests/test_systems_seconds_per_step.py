@@ -67,6 +67,13 @@ def test_the_identified_system_at_k_seconds_is_the_1s_system(fmus3, fmu_dir):
         assert fast[name].tobytes() == slow[name][::K].tobytes(), name
 
 
+def test_the_imu_threads_default_to_the_in_process_run(fmus3, monkeypatch):
+    monkeypatch.setenv("SARINS_THREADS", "3")
+    imu = standard_static(fmus3, seconds_per_step=K).components[1]
+    assert imu.parameters["threads"] == 3 and imu.parameters["sub_inputs"] == 1
+    assert "threads" not in standard_static(fmus3).components[1].parameters  # 1 s steps: no threads
+
+
 @pytest.mark.parametrize("bad", [0, 2.5, -60, 100_001, True, "60"])
 def test_bad_seconds_per_step_are_refused(fmus3, bad):
     with pytest.raises(ValueError, match="seconds_per_step must be a whole number of seconds in 1 .. 100000"):

@@ -28,7 +28,7 @@ SHIPPED = Path(__file__).resolve().parent
 
 
 def standard_static(fmu_dir: Path | str = "resources", *, hours: float = 88.0, turntable=None, imu=None,
-                    ins=None, seconds_per_step: int = 1, threads: int = 1) -> System:
+                    ins=None, seconds_per_step: int = 1, threads: int | None = None) -> System:
     """Turntable -> IMUThermal -> StrapdownINS on a static base (seed 000 set-up).
 
     Parameters
@@ -40,12 +40,13 @@ def standard_static(fmu_dir: Path | str = "resources", *, hours: float = 88.0, t
         of K s, every 1 s sub-interval of it in arrays (the Turntable's motion of each second to the IMU,
         the IMU's increments of each second to the INS, all three with ``n_sub`` = K): the numbers of the
         1 s system, bit for bit, with K times fewer FMI calls
-    threads : the IMU's threads for the minor loops of a step's K seconds (K > 1; the same numbers)
+    threads : the IMU's threads for the minor loops of a step's K seconds (K > 1; the same numbers); default
+        the in-process run's (``SARINS_THREADS``, else the machine's cores), at most 64
     """
     fmu_dir = Path(fmu_dir)
     k = _seconds_per_step(seconds_per_step)
     sub = {"n_sub": k} if k > 1 else {}
-    imu_sub = {**sub, "sub_inputs": 1, "threads": int(threads), **SUB_SCALARS_HELD_IMU} if k > 1 else {}
+    imu_sub = {**sub, "sub_inputs": 1, "threads": _imu_threads(threads), **SUB_SCALARS_HELD_IMU} if k > 1 else {}
     ins_sub = {**sub, "sub_inputs": 1, **SUB_SCALARS_HELD_INS} if k > 1 else {}
     components = [
         Component("turntable", fmu_dir / "Turntable.fmu", {**sub, **dict(turntable or {})}),
@@ -62,6 +63,15 @@ def standard_static(fmu_dir: Path | str = "resources", *, hours: float = 88.0, t
                   start_time=0.0, stop_time=hours * 3600.0, step_size=float(k))
 
 
+def _imu_threads(value) -> int:
+    """The IMU FMU's thread count: ``value``, or the in-process run's (at most the FMU's 64)."""
+    if value is None:
+        from sarins_fmu.core.imu import thread_count
+
+        return min(thread_count(), 64)
+    return int(value)
+
+
 def _seconds_per_step(value) -> int:
     """K of a K-second communication step: a whole number of seconds, 1 .. 100000 (the FMUs' array limit)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or value != int(value) \
@@ -76,7 +86,7 @@ IDENTIFIED_STATIC_FMUS = ("Turntable", "IMUThermal", "StrapdownINS", "RBFIdentif
 
 def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: float = 88.0, turntable=None,
                                imu=None, ins=None, identifier=None, seconds_per_step: int = 1,
-                               threads: int = 1) -> System:
+                               threads: int | None = None) -> System:
     """The standard static system with seed 000's RBFIdentifier closing the loop.
 
     Turntable -> IMUThermal -> StrapdownINS -> RBFIdentifier -> (axial drift
