@@ -78,3 +78,26 @@ def test_the_imu_threads_default_to_the_in_process_run(fmus3, monkeypatch):
 def test_bad_seconds_per_step_are_refused(fmus3, bad):
     with pytest.raises(ValueError, match="seconds_per_step must be a whole number of seconds in 1 .. 100000"):
         standard_static(fmus3, seconds_per_step=bad)
+
+
+def test_the_written_60s_systems_run_from_their_ssp_files(fmus3, tmp_path):
+    """write_systems3 (``sarins build-fmus --fmi 3``): each .ssp read back runs as the system it was written
+    from, bit for bit."""
+    import shutil
+
+    from orchestration.ssp_reader import read_system
+    from sarins.systems import SECONDS_PER_STEP, SYSTEMS3, write_systems3
+
+    for fmu in fmus3.glob("*.fmu"):
+        shutil.copy2(fmu, tmp_path / fmu.name)
+    paths = write_systems3(tmp_path)
+    assert [p.name for p in paths] == [f"{name}.ssp" for name in SYSTEMS3]
+    written = read_system(paths[0])
+    assert written.step_size == SECONDS_PER_STEP
+    shorter = [standard_static(tmp_path, seconds_per_step=K), written]  # the defaults: 4 h of alignment
+    for system in shorter:
+        system.stop_time = HOURS * 3600
+    a, b = (simulate(s) for s in shorter)
+    for name in RECORD:
+        assert a[name].tobytes() == b[name].tobytes(), name
+    assert np.ptp(a["ins.yaw"]) > 0  # the alignment's heading estimate moves

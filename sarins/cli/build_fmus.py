@@ -18,7 +18,9 @@ def register(subparsers) -> None:
                     "when its compiler is installed) and sources/; the project's systems as .ssp beside them. FMI 3.0 "
                     "(--fmi 3, into build/fmus3): the "
                     "native FMUs only, binaries/x86_64-linux, x86_64-windows and aarch64-linux the same way, and "
-                    "sources/. --system adds the static systems as one container FMU each (FMI 2.0).")
+                    "sources/, with the static systems stepped at 60 s as .ssp beside them (standard_static_60s, "
+                    "standard_static_identified_60s: every second in arrays, the 1 s systems' numbers). --system "
+                    "adds the static systems as one container FMU each (FMI 2.0).")
     p.add_argument("--out", type=Path, default=None,
                    help="output folder (default build/fmus; with --fmi 3 build/fmus3)")
     p.add_argument("--fmi", type=int, choices=(2, 3), default=2,
@@ -54,6 +56,11 @@ def run_fmi3(args) -> int:
     out = args.out or DEFAULT_OUT3
     for path in build_native_fmus3(out, names) if names != [] else []:
         print(path)
+    if not args.only:
+        from sarins.systems import write_systems3
+
+        for path in write_systems3(out):
+            print(path)
     if args.compensator is not None:
         from fmus.compensator_export import export_compensator
 

@@ -362,6 +362,23 @@ def write_systems(fmu_dir: Path | str) -> list[Path]:
     return [write_ssp(make(fmu_dir), fmu_dir / f"{name}.ssp") for name, make in SYSTEMS.items()]
 
 
+# The FMI 3.0 systems stepped at K s (``sarins build-fmus --fmi 3`` writes them beside its FMUs)
+SECONDS_PER_STEP = 60
+SYSTEMS3 = {f"standard_static_{SECONDS_PER_STEP}s": standard_static,
+            f"standard_static_identified_{SECONDS_PER_STEP}s": standard_static_identified}
+
+
+def write_systems3(fmu_dir: Path | str) -> list[Path]:
+    """Write ``<fmu_dir>/<name>.ssp`` for the FMI 3.0 systems of :data:`SYSTEMS3` (FMI 3.0 FMUs in ``fmu_dir``,
+    ``SECONDS_PER_STEP``-second steps, the IMU's threads the in-process run's count); returns the paths."""
+    from sarins_fmu.files import refuse_links
+
+    fmu_dir = Path(fmu_dir)
+    refuse_links([fmu_dir / f"{name}.ssp" for name in SYSTEMS3], "system file")
+    return [write_ssp(make(fmu_dir, seconds_per_step=SECONDS_PER_STEP), fmu_dir / f"{name}.ssp")
+            for name, make in SYSTEMS3.items()]
+
+
 def write_shipped_ssds(root: Path = SHIPPED) -> list[Path]:
     """(Re)write the shipped SSD files (sources resources/<FMU>.fmu); the
     writer reads the FMUs, so they are built into a scratch folder first."""
