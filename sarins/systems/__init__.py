@@ -73,10 +73,12 @@ def _imu_threads(value) -> int:
 
 
 def _seconds_per_step(value) -> int:
-    """K of a K-second communication step: a whole number of seconds, 1 .. 100000 (the FMUs' array limit)."""
+    """K of a K-second communication step: a whole number of seconds, 1 .. the FMUs' array limit."""
+    from fmus.native_fmu import MAX_DIM
+
     if isinstance(value, bool) or not isinstance(value, (int, float)) or value != int(value) \
-            or not 1 <= int(value) <= 100_000:
-        raise ValueError(f"seconds_per_step must be a whole number of seconds in 1 .. 100000, got {value!r}")
+            or not 1 <= int(value) <= MAX_DIM:
+        raise ValueError(f"seconds_per_step must be a whole number of seconds in 1 .. {MAX_DIM}, got {value!r}")
     return int(value)
 
 

@@ -506,6 +506,17 @@ static int step_error(const sarins_ctx *c, const char *what)
     return SARINS_ERROR;
 }
 
+/* The current motion set: the *_sub arrays' (sub_inputs = 1, read into w->motion_sub) or the scalars' (read into
+ * motion); NULL with the reason logged when a value is not finite. */
+static const double *current_set(const sarins_ctx *c, const imu_work *w, double *motion)
+{
+    if (w->given ? read_given(c, w->n_gimbals, w->n_sub, w->motion_sub) : read_motion(c, w->n_gimbals, motion))
+        return w->given ? w->motion_sub : motion;
+    step_error(c, w->given ? "the *_sub motion inputs contain NaN or infinity"
+                           : "motion or ambient inputs contain NaN or infinity");
+    return NULL;
+}
+
 /* The set tagged t among the current one and the held one: *from_held, or 0 with the reason logged. */
 static int select_set(const sarins_ctx *c, const double *held, double tag, double t, double h, const char *what,
                       const char *tag_name, int *from_held)
@@ -541,9 +552,9 @@ static int explain(const sarins_ctx *c, const imu_work *w, double t, double h)
         return step_error(c, msg);
     }
     double motion[3 * MAX_GIMBALS + 2], vehicle[SARINS_IMU_VEHICLE_SET];
-    if (w->given ? !read_given(c, w->n_gimbals, w->n_sub, w->motion_sub) : !read_motion(c, w->n_gimbals, motion))
-        return step_error(c, w->given ? "the *_sub motion inputs contain NaN or infinity"
-                                      : "motion or ambient inputs contain NaN or infinity");
+    const double *current = current_set(c, w, motion);
+    if (current == NULL)
+        return SARINS_ERROR;
     int from_held = 0;
     double tag = c->r[SARINS_R_motion_time];
     int fixed = tag == SARINS_IMU_NO_TAG && w->held[1] == SARINS_IMU_NO_TAG;
@@ -564,7 +575,7 @@ static int explain(const sarins_ctx *c, const imu_work *w, double t, double h)
                         &v_from_held))
             return SARINS_ERROR;
     }
-    const double *chosen = from_held ? w->held + 2 : w->given ? w->motion_sub : motion;
+    const double *chosen = from_held ? w->held + 2 : current;
     int64_t sets = w->given ? w->n_sub : 1, count = 3 * w->n_gimbals + 2;
     double h_set = h / (double)(w->given ? w->n_sub : 1);
     for (int64_t k = 0; k < sets; k++) {
@@ -598,11 +609,10 @@ static int start(sarins_ctx *c, imu_work *w, double t, double h)
         return SARINS_ERROR;
     }
     double motion[3 * MAX_GIMBALS + 2];
-    if (w->given ? !read_given(c, w->n_gimbals, w->n_sub, w->motion_sub) : !read_motion(c, w->n_gimbals, motion))
-        return step_error(c, w->given ? "the *_sub motion inputs contain NaN or infinity"
-                                      : "motion or ambient inputs contain NaN or infinity");
+    const double *current = current_set(c, w, motion), *chosen = current;
+    if (current == NULL)
+        return SARINS_ERROR;
     double tag = c->r[SARINS_R_motion_time];
-    const double *current = w->given ? w->motion_sub : motion, *chosen = current;
     if (!(tag == SARINS_IMU_NO_TAG && w->held[1] == SARINS_IMU_NO_TAG)) {
         int from_held = 0;
         if (!select_set(c, w->held, tag, t, h, "turntable motion", "motion_time", &from_held))
