@@ -40,7 +40,8 @@ class Turntable(Fmi2Slave):
         "there to the first sub-interval boundary (= accel_j_sub[0]; not constant over a step that spans a "
         "breakpoint: read the arrays), ambient_temp_rate the slope over the whole step [motion_time, "
         "motion_time + h] (= ambient_temp_rate_sub[0] only if K = 1 or the ambient is linear over the step). "
-        "At initialisation, before h is known, the sub-intervals are taken grid long (exact for h = K grid).")
+        "At initialisation, before h is known, the sub-intervals are taken grid long, so a first step with h / K "
+        "other than grid is refused.")
     default_experiment = default_experiment(1.0)  # HOST_DEFAULT_STEPS steps: runs on a host's defaults
     # FMI 3.0 only (fmus/native_fmu.py): every sub-interval of the coming step, n_sub elements each
     fmi3_arrays = tuple(
