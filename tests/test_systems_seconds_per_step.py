@@ -56,6 +56,18 @@ def test_k_second_steps_give_the_in_process_run(fmus3, threads):
     assert np.max(np.abs(ref.lat_error)) > 0  # navigation errors grew
 
 
+def test_an_alignment_off_the_step_grid_still_gives_the_in_process_run(fmus3):
+    """930 s of alignment with 60 s steps: navigation starts inside a step; every recorded row in navigation
+    is the in-process run's at that time, bit for bit."""
+    align = 930.0
+    res = simulate(standard_static(fmus3, seconds_per_step=K, threads=2, hours=HOURS,
+                                   turntable=dict(align_time=align), ins=dict(align_time=align)))
+    ref = run_static(align_hours=align / 3600, nav_hours=HOURS - align / 3600, seed=0)
+    nav = res["time"] > align
+    second = (res["time"][nav] - align).astype(int)  # in-process row i ends navigation second i + 1
+    assert second[0] == 30 and res["ins.lat_error"][nav].tobytes() == ref.lat_error[second - 1].tobytes()
+
+
 def test_the_identified_system_at_k_seconds_is_the_1s_system(fmus3, fmu_dir):
     identifier = dict(trigger_time=1200.0)  # s of navigation: on the grid of K, the network evaluated once
     record = RECORD + ["identifier.axial_drift", "identifier.apply_from"]

@@ -103,7 +103,8 @@ def standard_static_identified(fmu_dir: Path | str = "resources", *, hours: floa
     Jacobi.  Default stop: 4 h alignment + 84 h.  A JSON/npz ``model_file`` in ``identifier`` is
     converted into the binary model file the FMU reads, in ``fmu_dir/identifier_models``.
     ``seconds_per_step``, ``threads``: as :func:`standard_static` (the identifier then reads the INS every
-    K s; its trigger and apply_from must lie on that grid).
+    K s, so its trigger_time must be a navigation time the INS reports at a communication point; apply_from
+    may fall inside a step).
     """
     base = standard_static(fmu_dir, hours=hours, turntable=turntable, imu=imu, ins=ins,
                            seconds_per_step=seconds_per_step, threads=threads)
